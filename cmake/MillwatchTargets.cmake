@@ -1,0 +1,23 @@
+# Helpers shared by every millwatch target.
+
+# Warnings (as errors) for the project's own code only; third-party headers are SYSTEM.
+function(millwatch_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Werror -Wshadow
+                                           -Wnon-virtual-dtor -Wold-style-cast)
+endfunction()
+
+if(MILLWATCH_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# millwatch_test(<source>): one GoogleTest executable per *_test.cpp, registered with CTest.
+function(millwatch_test source)
+  get_filename_component(name ${source} NAME_WE)
+  add_executable(${name} ${source})
+  target_link_libraries(${name} PRIVATE millwatch::test_support GTest::gtest_main)
+  millwatch_warnings(${name})
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
+                       PROPERTIES ENVIRONMENT "MILLWATCH_SHARED_DIR=${MILLWATCH_SHARED_DIR}")
+endfunction()

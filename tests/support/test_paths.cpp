@@ -1,0 +1,36 @@
+#include "tests/support/test_paths.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+namespace millwatch::test {
+
+std::filesystem::path source_dir() { return MILLWATCH_SOURCE_DIR; }
+
+std::filesystem::path shared_dir() {
+  if (const char* env = std::getenv("MILLWATCH_SHARED_DIR"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  return source_dir() / ".." / "shared";
+}
+
+std::filesystem::path fresh_temp_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = "millwatch_test";
+  if (info != nullptr) {
+    name += std::string("_") + info->test_suite_name() + "_" + info->name();
+  }
+  for (char& c : name) {
+    if (c == '/') {
+      c = '_';
+    }
+  }
+  const auto dir = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+}  // namespace millwatch::test
