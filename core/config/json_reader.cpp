@@ -48,7 +48,9 @@ std::string describe_json(const nlohmann::json& value) {
   return std::string(value.type_name()) + " " + dumped;
 }
 
-void fail(const std::string& path, const std::string& message) { throw ConfigError(path, message); }
+void fail(const std::string& path, const std::string& message) {
+  throw ConfigError(path, message);
+}
 
 ObjectReader::ObjectReader(const nlohmann::json& value, std::string path)
     : value_(value.is_null() ? empty_object() : value), path_(std::move(path)) {
@@ -61,7 +63,9 @@ std::string ObjectReader::path_of(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
-bool ObjectReader::has(std::string_view key) const { return value_.contains(std::string(key)); }
+bool ObjectReader::has(std::string_view key) const {
+  return value_.contains(std::string(key));
+}
 
 const nlohmann::json* ObjectReader::find(std::string_view key) {
   known_.emplace_back(key);
@@ -95,20 +99,20 @@ double ObjectReader::required_number(std::string_view key, const Range& range) {
   return number(key, 0.0, range);
 }
 
-std::int64_t ObjectReader::integer64(std::string_view key, std::int64_t fallback,
-                                     std::int64_t min, std::int64_t max) {
+std::int64_t ObjectReader::integer64(std::string_view key, std::int64_t fallback, std::int64_t min,
+                                     std::int64_t max) {
   const nlohmann::json* v = find(key);
   if (v == nullptr) {
     return fallback;
   }
-  const bool integral_float =
-      v->is_number_float() && std::isfinite(v->get<double>()) &&
-      std::floor(v->get<double>()) == v->get<double>() && std::fabs(v->get<double>()) < 9e15;
+  const bool integral_float = v->is_number_float() && std::isfinite(v->get<double>()) &&
+                              std::floor(v->get<double>()) == v->get<double>() &&
+                              std::fabs(v->get<double>()) < 9e15;
   if (!v->is_number_integer() && !integral_float) {
     fail(path_of(key), "expected an integer, got " + describe_json(*v));
   }
-  const std::int64_t x = integral_float ? static_cast<std::int64_t>(v->get<double>())
-                                        : v->get<std::int64_t>();
+  const std::int64_t x =
+      integral_float ? static_cast<std::int64_t>(v->get<double>()) : v->get<std::int64_t>();
   if (x < min || x > max) {
     fail(path_of(key), "value " + std::to_string(x) + " is out of range [" + std::to_string(min) +
                            ", " + std::to_string(max) + "]");

@@ -10,10 +10,9 @@
 //   tool.flutes: expected an integer, got string "two"
 //   process.spindel_rpm: unknown key (allowed: operation, spindle_rpm, ...)
 
-#include <nlohmann/json.hpp>
-
 #include <cstdint>
 #include <initializer_list>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -48,7 +47,9 @@ struct Range {
 inline Range closed(double lo, double hi, std::string_view unit = "") {
   return {lo, hi, false, false, unit};
 }
-inline Range positive(double hi, std::string_view unit = "") { return {0.0, hi, true, false, unit}; }
+inline Range positive(double hi, std::string_view unit = "") {
+  return {0.0, hi, true, false, unit};
+}
 inline Range non_negative(double hi, std::string_view unit = "") {
   return {0.0, hi, false, false, unit};
 }

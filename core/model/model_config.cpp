@@ -98,7 +98,8 @@ LinearEdge read_linear_edge(ObjectReader r) {
 
 Kronenberg read_kronenberg(ObjectReader r) {
   Kronenberg c;
-  c.k_s0_N_per_mm2 = r.number("k_s0_N_per_mm2", c.k_s0_N_per_mm2, positive(kBigCoefficient, "N/mm^2"));
+  c.k_s0_N_per_mm2 =
+      r.number("k_s0_N_per_mm2", c.k_s0_N_per_mm2, positive(kBigCoefficient, "N/mm^2"));
   c.m = r.number("m", c.m, {1.0, 100.0, true, false, ""});
   c.radial_ratio = r.number("radial_ratio", c.radial_ratio, non_negative(10.0));
   c.axial_ratio = r.number("axial_ratio", c.axial_ratio, closed(-10.0, 10.0));
@@ -155,8 +156,8 @@ Effects read_effects(ObjectReader r, int flutes) {
   {
     auto s = r.object("deflection");
     e.deflection.enabled = s.boolean("enabled", e.deflection.enabled);
-    e.deflection.stiffness_N_per_um = s.number("stiffness_N_per_um", e.deflection.stiffness_N_per_um,
-                                               positive(1e6, "N/um"));
+    e.deflection.stiffness_N_per_um =
+        s.number("stiffness_N_per_um", e.deflection.stiffness_N_per_um, positive(1e6, "N/um"));
     s.finish();
   }
   {
@@ -168,8 +169,8 @@ Effects read_effects(ObjectReader r, int flutes) {
   {
     auto s = r.object("flank_wear");
     e.flank_wear.enabled = s.boolean("enabled", e.flank_wear.enabled);
-    e.flank_wear.wear_um = s.numbers("wear_um", e.flank_wear.wear_um, non_negative(2000.0, "um"),
-                                     1, static_cast<std::size_t>(flutes));
+    e.flank_wear.wear_um = s.numbers("wear_um", e.flank_wear.wear_um, non_negative(2000.0, "um"), 1,
+                                     static_cast<std::size_t>(flutes));
     e.flank_wear.k_wt_N_per_mm2 = s.number("k_wt_N_per_mm2", e.flank_wear.k_wt_N_per_mm2,
                                            non_negative(kBigCoefficient, "N/mm^2"));
     e.flank_wear.k_wn_N_per_mm2 = s.number("k_wn_N_per_mm2", e.flank_wear.k_wn_N_per_mm2,
@@ -227,8 +228,9 @@ std::string to_string(ForceLawKind law) {
 std::vector<double> flute_pitch_angles_rad(const Tool& tool) {
   std::vector<double> psi(static_cast<std::size_t>(tool.flutes), 0.0);
   for (int j = 1; j < tool.flutes; ++j) {
-    const double step_deg = tool.pitch_deg.empty() ? 360.0 / tool.flutes
-                                                   : tool.pitch_deg[static_cast<std::size_t>(j - 1)];
+    const double step_deg = tool.pitch_deg.empty()
+                                ? 360.0 / tool.flutes
+                                : tool.pitch_deg[static_cast<std::size_t>(j - 1)];
     psi[static_cast<std::size_t>(j)] =
         psi[static_cast<std::size_t>(j - 1)] + step_deg * std::numbers::pi / 180.0;
   }
@@ -239,9 +241,9 @@ void validate(const ModelConfig& c, const std::string& path) {
   const auto& tool = c.tool;
   if (!tool.pitch_deg.empty()) {
     if (static_cast<int>(tool.pitch_deg.size()) != tool.flutes) {
-      config::fail(join(path, "tool.pitch_deg"),
-                   "has " + std::to_string(tool.pitch_deg.size()) + " entries; needs one per flute (" +
-                       std::to_string(tool.flutes) + ")");
+      config::fail(join(path, "tool.pitch_deg"), "has " + std::to_string(tool.pitch_deg.size()) +
+                                                     " entries; needs one per flute (" +
+                                                     std::to_string(tool.flutes) + ")");
     }
     double sum = 0.0;
     for (double p : tool.pitch_deg) {
@@ -267,8 +269,8 @@ void validate(const ModelConfig& c, const std::string& path) {
   if (c.process.feed_per_tooth_um >= 0.5 * radius_um) {
     config::fail(join(path, "process.feed_per_tooth_um"),
                  "value " + std::to_string(c.process.feed_per_tooth_um) +
-                     " um must stay below half the tool radius (" + std::to_string(0.5 * radius_um) +
-                     " um)");
+                     " um must stay below half the tool radius (" +
+                     std::to_string(0.5 * radius_um) + " um)");
   }
   if (c.effects.accumulation.enabled && !c.effects.min_chip.enabled) {
     config::fail(join(path, "effects.accumulation.enabled"),
@@ -329,20 +331,39 @@ nlohmann::json to_json(const ModelConfig& c) {
        {{"name", c.material.name},
         {"law", to_string(c.material.law)},
         {"power_law",
-         {{"k_tc_Nmm", pl.k_tc_Nmm}, {"a_tc", pl.a_tc}, {"k_nc_Nmm", pl.k_nc_Nmm},
-          {"a_nc", pl.a_nc}, {"k_tp_Nmm", pl.k_tp_Nmm}, {"a_tp", pl.a_tp},
-          {"k_np_Nmm", pl.k_np_Nmm}, {"a_np", pl.a_np}, {"k_ac_Nmm", pl.k_ac_Nmm},
-          {"a_ac", pl.a_ac}, {"k_ap_Nmm", pl.k_ap_Nmm}, {"a_ap", pl.a_ap}}},
+         {{"k_tc_Nmm", pl.k_tc_Nmm},
+          {"a_tc", pl.a_tc},
+          {"k_nc_Nmm", pl.k_nc_Nmm},
+          {"a_nc", pl.a_nc},
+          {"k_tp_Nmm", pl.k_tp_Nmm},
+          {"a_tp", pl.a_tp},
+          {"k_np_Nmm", pl.k_np_Nmm},
+          {"a_np", pl.a_np},
+          {"k_ac_Nmm", pl.k_ac_Nmm},
+          {"a_ac", pl.a_ac},
+          {"k_ap_Nmm", pl.k_ap_Nmm},
+          {"a_ap", pl.a_ap}}},
         {"linear_edge",
-         {{"k_tc_N_per_mm2", le.k_tc_N_per_mm2}, {"k_nc_N_per_mm2", le.k_nc_N_per_mm2},
-          {"k_ac_N_per_mm2", le.k_ac_N_per_mm2}, {"k_te_N_per_mm", le.k_te_N_per_mm},
-          {"k_ne_N_per_mm", le.k_ne_N_per_mm}, {"k_ae_N_per_mm", le.k_ae_N_per_mm},
+         {{"k_tc_N_per_mm2", le.k_tc_N_per_mm2},
+          {"k_nc_N_per_mm2", le.k_nc_N_per_mm2},
+          {"k_ac_N_per_mm2", le.k_ac_N_per_mm2},
+          {"k_te_N_per_mm", le.k_te_N_per_mm},
+          {"k_ne_N_per_mm", le.k_ne_N_per_mm},
+          {"k_ae_N_per_mm", le.k_ae_N_per_mm},
           {"ploughing", le.ploughing_area ? "area" : "edge"},
-          {"k_tp_N_per_mm3", le.k_tp_N_per_mm3}, {"k_np_N_per_mm3", le.k_np_N_per_mm3},
-          {"k_ap_N_per_mm3", le.k_ap_N_per_mm3}, {"a_t_Nmm", le.a_t_Nmm}, {"b_t", le.b_t},
-          {"a_n_Nmm", le.a_n_Nmm}, {"b_n", le.b_n}, {"a_a_Nmm", le.a_a_Nmm}, {"b_a", le.b_a}}},
+          {"k_tp_N_per_mm3", le.k_tp_N_per_mm3},
+          {"k_np_N_per_mm3", le.k_np_N_per_mm3},
+          {"k_ap_N_per_mm3", le.k_ap_N_per_mm3},
+          {"a_t_Nmm", le.a_t_Nmm},
+          {"b_t", le.b_t},
+          {"a_n_Nmm", le.a_n_Nmm},
+          {"b_n", le.b_n},
+          {"a_a_Nmm", le.a_a_Nmm},
+          {"b_a", le.b_a}}},
         {"kronenberg",
-         {{"k_s0_N_per_mm2", kr.k_s0_N_per_mm2}, {"m", kr.m}, {"radial_ratio", kr.radial_ratio},
+         {{"k_s0_N_per_mm2", kr.k_s0_N_per_mm2},
+          {"m", kr.m},
+          {"radial_ratio", kr.radial_ratio},
           {"axial_ratio", kr.axial_ratio}}}}},
       {"effects",
        {{"runout",

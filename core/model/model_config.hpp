@@ -16,9 +16,8 @@
 //
 // Defaults are [000]'s cp-Ti case (0.4 mm 2-flute 30° helix, 25,000 rpm, a_p 40 µm, Table 2).
 
-#include <nlohmann/json.hpp>
-
 #include <array>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -96,8 +95,8 @@ struct Material {
 struct Effects {
   struct Runout {
     bool enabled = true;
-    double offset_um = 1.82;   ///< ρ, tool-centre offset from the spindle axis
-    double angle_rad = 0.58;   ///< γ, offset direction relative to flute 0 ([000] "α")
+    double offset_um = 1.82;  ///< ρ, tool-centre offset from the spindle axis
+    double angle_rad = 0.58;  ///< γ, offset direction relative to flute 0 ([000] "α")
   } runout;
   /// Exact trochoidal flute path by Newton-Raphson ([002] eqs 2-10, [000] eqs 9-18); off: the
   /// circular path h = f_t·sin θ + (r_j − r_{j−1}).
@@ -162,7 +161,7 @@ struct ModelConfig {
 
 /// Names of the switchable effects, in the order the diagnosis adds them.
 inline constexpr std::array<const char*, 10> kEffectNames = {
-    "runout",     "trochoidal", "multi_pass", "min_chip",  "accumulation",
+    "runout",     "trochoidal", "multi_pass", "min_chip",    "accumulation",
     "deflection", "helix_lag",  "flank_wear", "dynamometer", "ploughing_area"};
 
 /// Turns the named effect on or off. @throws std::invalid_argument for an unknown name.
@@ -185,7 +184,9 @@ nlohmann::json to_json(const ModelConfig& config);
 void validate(const ModelConfig& config, const std::string& path = "");
 
 /// Tool radius in µm.
-inline double tool_radius_um(const ModelConfig& c) { return c.tool.diameter_mm * 500.0; }
+inline double tool_radius_um(const ModelConfig& c) {
+  return c.tool.diameter_mm * 500.0;
+}
 /// Cumulative pitch angle ψ_j (rad) of each flute, ψ_0 = 0.
 std::vector<double> flute_pitch_angles_rad(const Tool& tool);
 

@@ -62,15 +62,16 @@ TEST(JsonReader, UnknownKeyIsRejectedWithAllowedList) {
   const json j = {{"diamter_mm", 0.4}};
   ObjectReader r(j, "tool");
   r.number("diameter_mm", 1.0, positive(50.0, "mm"));
-  EXPECT_EQ(error_of([&] { r.finish(); }),
-            "tool.diamter_mm: unknown key (allowed: diameter_mm)");
+  EXPECT_EQ(error_of([&] { r.finish(); }), "tool.diamter_mm: unknown key (allowed: diameter_mm)");
 }
 
 TEST(JsonReader, NestedObjectPathsAndChoices) {
   const json j = {{"process", {{"operation", "climb"}}}};
   ObjectReader r(j, "");
   auto p = r.object("process");
-  EXPECT_EQ(error_of([&] { p.choice("operation", "slot", {"slot", "up", "down"}); }),
+  EXPECT_EQ(error_of([&] {
+              p.choice("operation", "slot", {"slot", "up", "down"});
+            }),
             "process.operation: value \"climb\" is not one of: slot, up, down");
 }
 

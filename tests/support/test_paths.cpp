@@ -7,7 +7,9 @@
 
 namespace millwatch::test {
 
-std::filesystem::path source_dir() { return MILLWATCH_SOURCE_DIR; }
+std::filesystem::path source_dir() {
+  return MILLWATCH_SOURCE_DIR;
+}
 
 std::filesystem::path shared_dir() {
   if (const char* env = std::getenv("MILLWATCH_SHARED_DIR"); env != nullptr && *env != '\0') {
