@@ -5,17 +5,22 @@
 
 namespace millwatch::model {
 
+void flute_positions(double tool_radius_um, std::span<const double> pitch_rad, double offset_um,
+                     double offset_angle_rad, std::vector<FlutePosition>& out) {
+  out.resize(pitch_rad.size());
+  for (std::size_t j = 0; j < pitch_rad.size(); ++j) {
+    const double c = std::cos(offset_angle_rad + pitch_rad[j]);
+    const double s = std::sin(offset_angle_rad + pitch_rad[j]);
+    const double along = tool_radius_um + offset_um * c;  // component along the flute direction
+    const double across = offset_um * s;                  // component in the rotation direction
+    out[j] = {std::hypot(along, across), std::atan2(across, along)};
+  }
+}
+
 std::vector<FlutePosition> flute_positions(double tool_radius_um, std::span<const double> pitch_rad,
                                            double offset_um, double offset_angle_rad) {
   std::vector<FlutePosition> out;
-  out.reserve(pitch_rad.size());
-  for (double psi : pitch_rad) {
-    const double c = std::cos(offset_angle_rad + psi);
-    const double s = std::sin(offset_angle_rad + psi);
-    const double along = tool_radius_um + offset_um * c;  // component along the flute direction
-    const double across = offset_um * s;                  // component in the rotation direction
-    out.push_back({std::hypot(along, across), std::atan2(across, along)});
-  }
+  flute_positions(tool_radius_um, pitch_rad, offset_um, offset_angle_rad, out);
   return out;
 }
 

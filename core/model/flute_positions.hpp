@@ -26,6 +26,10 @@ struct FlutePosition {
 std::vector<FlutePosition> flute_positions(double tool_radius_um, std::span<const double> pitch_rad,
                                            double offset_um, double offset_angle_rad);
 
+/// The same into `out` (resized; no allocation when it already fits).
+void flute_positions(double tool_radius_um, std::span<const double> pitch_rad, double offset_um,
+                     double offset_angle_rad, std::vector<FlutePosition>& out);
+
 /// Angle (rad) by which flute `next` follows flute `prev` in the direction of rotation, in (0, 2π).
 double flute_spacing_rad(std::span<const double> pitch_rad, std::span<const FlutePosition> flutes,
                          int prev, int next);

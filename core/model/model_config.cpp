@@ -225,8 +225,9 @@ std::string to_string(ForceLawKind law) {
   return "power_law";
 }
 
-std::vector<double> flute_pitch_angles_rad(const Tool& tool) {
-  std::vector<double> psi(static_cast<std::size_t>(tool.flutes), 0.0);
+void flute_pitch_angles_rad(const Tool& tool, std::vector<double>& psi) {
+  psi.resize(static_cast<std::size_t>(tool.flutes));
+  psi[0] = 0.0;
   for (int j = 1; j < tool.flutes; ++j) {
     const double step_deg = tool.pitch_deg.empty()
                                 ? 360.0 / tool.flutes
@@ -234,6 +235,11 @@ std::vector<double> flute_pitch_angles_rad(const Tool& tool) {
     psi[static_cast<std::size_t>(j)] =
         psi[static_cast<std::size_t>(j - 1)] + step_deg * std::numbers::pi / 180.0;
   }
+}
+
+std::vector<double> flute_pitch_angles_rad(const Tool& tool) {
+  std::vector<double> psi;
+  flute_pitch_angles_rad(tool, psi);
   return psi;
 }
 

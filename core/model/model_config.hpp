@@ -189,5 +189,7 @@ inline double tool_radius_um(const ModelConfig& c) {
 }
 /// Cumulative pitch angle ψ_j (rad) of each flute, ψ_0 = 0.
 std::vector<double> flute_pitch_angles_rad(const Tool& tool);
+/// The same into `out` (resized to the flute count; no allocation when it already fits).
+void flute_pitch_angles_rad(const Tool& tool, std::vector<double>& out);
 
 }  // namespace millwatch::model

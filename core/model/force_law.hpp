@@ -1,0 +1,71 @@
+#pragma once
+// Mechanistic force laws: elemental tangential, normal (radial) and axial force on one axial disc
+// of one flute for a given uncut chip thickness.
+//
+//   power law   [000] eq 5 (Table 2), [002] eq 17:  dF = K·h^a·dz, h and dz in mm
+//   linear edge [002] eq 18, [001] eqs 18-21:       dF = (K_c·h + K_e)·dz, or K_c·h·dz + K_p·A_p·dz
+//   Kronenberg  [003] eqs 7-8:                      dF_t = K_s0·S^(−1/m)·h·dz, S = h·a_p
+//
+// Tangential opposes the cutting velocity, normal points from the edge towards the tool axis
+// (both as forces on the tool; see model_config.hpp for the projection, [000] eq 7).
+
+#include "core/model/model_config.hpp"
+
+namespace millwatch::model {
+
+/// Forces on one disc element, newtons.
+struct ElementForce {
+  double tangential_N = 0.0;
+  double normal_N = 0.0;
+  double axial_N = 0.0;
+};
+
+/// Evaluates the material's force law for one element. Precomputes what does not depend on h.
+class ForceLaw {
+ public:
+  ForceLaw() = default;
+  /// @param material force law and coefficients
+  /// @param axial_depth_mm a_p (Kronenberg's chip section uses the full depth)
+  /// @param h_min_um minimum chip thickness; ploughing coefficients apply below it when
+  ///        `regimes` is true
+  ForceLaw(const Material& material, double axial_depth_mm, double h_min_um, bool regimes);
+
+  /// Whether a chip of h_um is in the ploughing regime.
+  [[nodiscard]] bool ploughing(double h_um) const { return regimes_ && h_um < h_min_um_; }
+
+  /// Force on one disc of thickness dz_mm for chip h_um ≥ 0 (zero chip: zero force).
+  /// @param ploughed_area_mm2 A_p for the [001] ploughing-area variant (ignored otherwise)
+  [[nodiscard]] ElementForce element(double h_um, double dz_mm,
+                                     double ploughed_area_mm2 = 0.0) const;
+
+  /// Normal force only, same arguments; used by the deflection balance ([000] eq 22).
+  [[nodiscard]] double normal_N(double h_um, double dz_mm, double ploughed_area_mm2 = 0.0) const;
+
+  /// Normal force and its slope dF_n/dh (N/µm) at h_um > 0 given also ln(h_um), for Newton on
+  /// [000] eq 22 in logarithmic chip coordinates.
+  struct NormalSlope {
+    double force_N = 0.0;
+    double slope_N_per_um = 0.0;
+  };
+  [[nodiscard]] NormalSlope normal_with_slope(double h_um, double log_h_um, double dz_mm,
+                                              double ploughed_area_mm2 = 0.0) const;
+
+  [[nodiscard]] bool uses_ploughed_area() const {
+    return material_.law == ForceLawKind::kLinearEdge && material_.linear_edge.ploughing_area;
+  }
+
+ private:
+  /// The coefficients of Material without its name, so that copying allocates nothing.
+  struct Coefficients {
+    ForceLawKind law = ForceLawKind::kPowerLaw;
+    PowerLaw power_law;
+    LinearEdge linear_edge;
+    Kronenberg kronenberg;
+  };
+  Coefficients material_;
+  double axial_depth_mm_ = 0.0;
+  double h_min_um_ = 0.0;
+  bool regimes_ = false;
+};
+
+}  // namespace millwatch::model

@@ -1,0 +1,181 @@
+#include "core/model/chip_geometry.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace millwatch::model {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+PathGeometry path(double radius_um, double feed_per_tooth_um, int flutes, double offset_um = 0.0,
+                  double offset_angle_rad = 0.0) {
+  return {radius_um, feed_per_tooth_um * flutes / (2.0 * kPi), offset_um, offset_angle_rad};
+}
+
+std::vector<double> uniform_pitch(int flutes) {
+  std::vector<double> p(static_cast<std::size_t>(flutes));
+  for (int j = 0; j < flutes; ++j) {
+    p[static_cast<std::size_t>(j)] = 2.0 * kPi * j / flutes;
+  }
+  return p;
+}
+
+// Without runout the exact trochoidal chip differs from f_t·sin θ by second-order terms. The
+// earlier flute's path is a circle around the centre as it was when that flute crossed the ray,
+// f' = f_t·(1 − f_t·cos θ/(πR)) behind (N_z = 2: the crossing is f_t·cos θ/R of rotation off
+// one pitch), so h ≈ f'·sin θ + f'²·cos²θ/(2R). The curvature term alone is the classic
+// f_t²/(2R) bound; the feed-phase term f_t²·sin θ·cos θ/(πR) adds up to 1/π² of it near the
+// entry and exit: max over θ of sin θ·cos θ/π + cos²θ/2 is 1/4 + √(1/(4π²) + 1/16), so the
+// deviation is bounded by c₂·f_t²/(2R), c₂ = 1.0927, plus third-order terms O(f_t³/R²).
+TEST(ChipGeometry, TrochoidalMatchesCircularWithinSecondOrderTermWithoutRunout) {
+  for (double ft : {1.0, 5.0, 10.0, 20.0}) {
+    const double radius = 200.0;
+    const auto p = path(radius, ft, 2);
+    double worst = 0.0;
+    double worst_central = 0.0;
+    for (int k = 0; k <= 1800; ++k) {
+      const double theta = k * kPi / 1800.0;
+      const auto c = trochoidal_chip(p, theta, 0.0, -kPi, -kPi);
+      ASSERT_TRUE(c.converged);
+      const double f_eff = ft * (1.0 - ft * std::cos(theta) / (kPi * radius));
+      const double second_order = f_eff * std::sin(theta) +
+                                  f_eff * f_eff * std::cos(theta) * std::cos(theta) / (2 * radius);
+      EXPECT_NEAR(c.chip_um, second_order, 2.0 * ft * ft * ft / (radius * radius)) << theta;
+      const double dev = std::fabs(c.chip_um - ft * std::sin(theta));
+      worst = std::max(worst, dev);
+      if (theta > kPi / 4 && theta < 3 * kPi / 4) {
+        worst_central = std::max(worst_central, dev);
+      }
+    }
+    const double classic = ft * ft / (2.0 * radius);
+    EXPECT_LE(worst_central, classic) << "f_t = " << ft;
+    const double c2 = 2.0 * (0.25 + std::sqrt(1.0 / (4.0 * kPi * kPi) + 1.0 / 16.0));
+    EXPECT_LE(worst, c2 * classic + 2.0 * ft * ft * ft / (radius * radius)) << "f_t = " << ft;
+    EXPECT_GT(worst, 0.9 * classic);  // the trochoid really differs, by about that much
+  }
+}
+
+// The Newton solution reproduces [000] eqs 16-18 (with atan2, physics-notes) evaluated at the
+// solved time: the same crossing point, computed through the circle around the old centre.
+TEST(ChipGeometry, NewtonSolutionSatisfiesPaperEquations16To18) {
+  const auto p = path(200.0, 4.0, 2, 1.82, 0.58);
+  for (double tau : {0.3, 1.0, 1.57, 2.2, 2.9}) {
+    const auto c = trochoidal_chip(p, tau, 0.0, -kPi, -kPi);
+    ASSERT_TRUE(c.converged);
+    const double t_prev = tau + c.delta_rad;
+    // [000] eq 9 (feed along x) at both times
+    const double xc = p.feed_per_rad_um * tau + p.offset_um * std::sin(tau + p.offset_angle_rad);
+    const double yc = p.offset_um * std::cos(tau + p.offset_angle_rad);
+    const double xcp =
+        p.feed_per_rad_um * t_prev + p.offset_um * std::sin(t_prev + p.offset_angle_rad);
+    const double ycp = p.offset_um * std::cos(t_prev + p.offset_angle_rad);
+    const double L = std::hypot(xc - xcp, yc - ycp);        // eq 17
+    const double alpha_o = std::atan2(yc - ycp, xc - xcp);  // eq 18 (atan2)
+    const double theta = tau;                               // flute 0
+    const double h16 = p.radius_um + L * std::sin(theta + alpha_o) -
+                       std::sqrt(p.radius_um * p.radius_um -
+                                 L * L * std::cos(theta + alpha_o) * std::cos(theta + alpha_o));
+    EXPECT_NEAR(c.chip_um, h16, 1e-9) << "tau " << tau;
+    EXPECT_LE(c.iterations, 6);
+  }
+}
+
+// [000] Fig. 4: runout angle 30°, ρ = 3 µm. At f_t = 10 µm both flutes cut; at f_t = 5 µm the
+// short flute never engages (f_t < 2ρ·cos 30° = 5.2 µm, physics-notes).
+TEST(ChipGeometry, Figure4ShortToothDoesNotCutAtFiveMicrons) {
+  const auto pitch = uniform_pitch(2);
+  for (double ft : {5.0, 10.0}) {
+    ChipGeometry g;
+    g.configure(path(200.0, ft, 2, 3.0, 30.0 * kPi / 180.0), pitch, 2, 720, true);
+    // flute 0 is the long one here (cos(γ + ψ_0) > 0)
+    EXPECT_GT(g.flutes_at()[0].radius_um, g.flutes_at()[1].radius_um);
+    double short_max = -1e9;
+    double long_max = -1e9;
+    for (int k = 0; k < 720; ++k) {
+      const int k1 = (k + 360) % 720;  // flute 1's immersion equals flute 0's at k
+      short_max = std::max(short_max, std::min(g.at(1, 1, k1), g.at(1, 2, k1)));
+      long_max = std::max(long_max, std::min(g.at(0, 1, k), g.at(0, 2, k)));
+    }
+    if (ft == 5.0) {
+      EXPECT_LE(short_max, 0.0) << "short tooth must not cut at 5 um/tooth";
+      EXPECT_NEAR(long_max, 2.0 * ft, 0.05);  // the long tooth removes both feeds
+    } else {
+      EXPECT_GT(short_max, 1.0);
+      EXPECT_NEAR(long_max + short_max, 2.0 * ft, 0.2);
+    }
+  }
+}
+
+// With zero runout angle the short flute stops cutting at f_t/ρ = N_z exactly ([000] Sect. 2.1).
+TEST(ChipGeometry, ShortToothThresholdAtZeroRunoutAngleIsFlutesTimesOffset) {
+  const double rho = 3.0;
+  for (int flutes : {2, 3, 4}) {
+    const auto pitch = uniform_pitch(flutes);
+    for (double ratio : {0.97, 1.03}) {
+      const double ft = ratio * flutes * rho;
+      ChipGeometry g;
+      g.configure(path(400.0, ft, flutes, rho, 0.0), pitch, flutes, 720 * flutes, true);
+      // With γ = 0 flute 0 is the long one; the flute after it is the shortest for N_z = 2 only,
+      // so look at the flute at the largest radius deficit.
+      int shortest = 0;
+      for (int j = 1; j < flutes; ++j) {
+        if (g.flutes_at()[static_cast<std::size_t>(j)].radius_um <
+            g.flutes_at()[static_cast<std::size_t>(shortest)].radius_um) {
+          shortest = j;
+        }
+      }
+      double best = -1e9;
+      for (int k = 0; k < g.steps(); ++k) {
+        double h = 1e9;
+        for (int n = 1; n <= flutes; ++n) {
+          h = std::min(h, g.at(shortest, n, k));
+        }
+        best = std::max(best, h);
+      }
+      if (flutes == 2) {
+        if (ratio < 1.0) {
+          EXPECT_LE(best, 0.0) << "N_z=2 f_t/rho=" << ft / rho;
+        } else {
+          EXPECT_GT(best, 0.0) << "N_z=2 f_t/rho=" << ft / rho;
+        }
+      } else {
+        EXPECT_GT(best, -1.0);  // N_z > 2: the shortest flute's threshold is not N_z·ρ
+      }
+    }
+  }
+}
+
+// Without looking back more than one pass the long flute is credited with material the short
+// flute never removed: f_t + Δr instead of the 2·f_t it really cuts.
+TEST(ChipGeometry, SinglePassOverestimatesTheLongFluteWhenTheShortOneMisses) {
+  const auto pitch = uniform_pitch(2);
+  ChipGeometry g;
+  g.configure(path(200.0, 2.0, 2, 3.0, 0.0), pitch, 2, 720, false);
+  const int centre = 180;  // θ = π/2 for flute 0
+  const double dr = g.flutes_at()[0].radius_um - g.flutes_at()[1].radius_um;
+  EXPECT_NEAR(g.at(0, 1, centre), 2.0 + dr, 1e-9);
+  EXPECT_NEAR(g.at(0, 2, centre), 4.0, 1e-9);
+}
+
+TEST(ChipGeometry, InterpolationBetweenGridStepsIsLinearAndWraps) {
+  const auto pitch = uniform_pitch(2);
+  ChipGeometry g;
+  g.configure(path(200.0, 4.0, 2), pitch, 2, 720, true);
+  EXPECT_NEAR(g.chip_um(0, 1, 10.25), 0.75 * g.at(0, 1, 10) + 0.25 * g.at(0, 1, 11), 1e-12);
+  EXPECT_NEAR(g.chip_um(0, 1, -0.5), 0.5 * g.at(0, 1, 719) + 0.5 * g.at(0, 1, 0), 1e-12);
+}
+
+TEST(ChipGeometry, PitchBackSumsIntervalsForUnequalPitch) {
+  const std::vector<double> pitch = {0.0, 170.0 * kPi / 180.0};
+  EXPECT_NEAR(pitch_back_rad(pitch, 1, 1), 170.0 * kPi / 180.0, 1e-12);
+  EXPECT_NEAR(pitch_back_rad(pitch, 0, 1), 190.0 * kPi / 180.0, 1e-12);
+  EXPECT_NEAR(pitch_back_rad(pitch, 0, 2), 2.0 * kPi, 1e-12);
+}
+
+}  // namespace
+}  // namespace millwatch::model

@@ -1,0 +1,86 @@
+#include "core/model/force_law.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace millwatch::model {
+namespace {
+
+// [000] eq 5 with Table 2 in mm units: at f_t = 4 µm per mm of depth the tangential force is
+// K_tc·0.004^a_tc ≈ 25 N/mm, so a_p = 40 µm gives ≈ 1 N (the paper's 0.5-2 N).
+TEST(ForceLaw, PowerLawUsesMillimetreUnitsOfTable2) {
+  Material m;  // cp-Ti, Table 2
+  const ForceLaw law(m, 0.04, 0.2, true);
+  const auto f = law.element(4.0, 0.04);
+  EXPECT_NEAR(f.tangential_N, 465.4 * std::pow(0.004, 0.5288) * 0.04, 1e-12);
+  EXPECT_GT(f.tangential_N, 0.9);
+  EXPECT_LT(f.tangential_N, 1.1);
+  EXPECT_EQ(f.axial_N, 0.0);  // Table 2 has no axial coefficients
+}
+
+TEST(ForceLaw, PowerLawSwitchesRegimeAtMinimumChip) {
+  Material m;
+  const ForceLaw law(m, 0.04, 0.2, true);
+  EXPECT_TRUE(law.ploughing(0.19));
+  EXPECT_FALSE(law.ploughing(0.2));
+  EXPECT_NEAR(law.element(0.19, 1.0).normal_N, 79.64 * std::pow(0.19e-3, 0.2577), 1e-12);
+  EXPECT_NEAR(law.element(0.21, 1.0).normal_N, 122.8 * std::pow(0.21e-3, 0.32), 1e-12);
+  const ForceLaw single(m, 0.04, 0.2, false);  // min_chip off: cutting coefficients always
+  EXPECT_NEAR(single.element(0.19, 1.0).normal_N, 122.8 * std::pow(0.19e-3, 0.32), 1e-12);
+}
+
+TEST(ForceLaw, ForceScalesWithDiscThicknessAndVanishesWithoutChip) {
+  Material m;
+  const ForceLaw law(m, 0.04, 0.2, true);
+  EXPECT_NEAR(law.element(3.0, 0.02).tangential_N * 2.0, law.element(3.0, 0.04).tangential_N,
+              1e-14);
+  EXPECT_EQ(law.element(0.0, 0.04).tangential_N, 0.0);
+  EXPECT_EQ(law.element(-1.0, 0.04).normal_N, 0.0);
+}
+
+TEST(ForceLaw, LinearEdgeIsAffineInChip) {
+  Material m;
+  m.law = ForceLawKind::kLinearEdge;
+  const ForceLaw law(m, 0.1, 0.0, false);
+  const auto f1 = law.element(1.0, 1.0);
+  const auto f3 = law.element(3.0, 1.0);
+  // slope K_c (per mm of chip) and intercept K_e
+  EXPECT_NEAR((f3.tangential_N - f1.tangential_N) / 2e-3, m.linear_edge.k_tc_N_per_mm2, 1e-9);
+  EXPECT_NEAR(f1.tangential_N - 1e-3 * m.linear_edge.k_tc_N_per_mm2, m.linear_edge.k_te_N_per_mm,
+              1e-12);
+}
+
+// [003] eqs 7-8: F_t = K_s0·S^(1 − 1/m): doubling the chip multiplies F_t by 2^(1 − 1/m).
+TEST(ForceLaw, KronenbergScalesWithSectionToThePowerOneMinusInverseM) {
+  Material m;
+  m.law = ForceLawKind::kKronenberg;
+  m.kronenberg.m = 4.0;
+  const double ap = 0.15;
+  const ForceLaw law(m, ap, 0.0, false);
+  const double f1 = law.element(5.0, ap).tangential_N;
+  const double f2 = law.element(10.0, ap).tangential_N;
+  EXPECT_NEAR(f2 / f1, std::pow(2.0, 0.75), 1e-12);
+  // Full-depth section S = h·a_p: F_t = K_s0·S^(1−1/m)
+  EXPECT_NEAR(f1, m.kronenberg.k_s0_N_per_mm2 * std::pow(5e-3 * ap, 0.75), 1e-12);
+  EXPECT_NEAR(law.element(5.0, ap).normal_N, 0.5 * f1, 1e-12);
+}
+
+TEST(ForceLaw, NormalSlopeMatchesFiniteDifference) {
+  for (auto kind :
+       {ForceLawKind::kPowerLaw, ForceLawKind::kLinearEdge, ForceLawKind::kKronenberg}) {
+    Material m;
+    m.law = kind;
+    const ForceLaw law(m, 0.04, 0.2, true);
+    for (double h : {0.5, 2.0, 7.0}) {
+      const auto s = law.normal_with_slope(h, std::log(h), 0.004);
+      const double d = 1e-6;
+      const double fd = (law.normal_N(h + d, 0.004) - law.normal_N(h - d, 0.004)) / (2 * d);
+      EXPECT_NEAR(s.force_N, law.normal_N(h, 0.004), 1e-15);
+      EXPECT_NEAR(s.slope_N_per_um, fd, 1e-6 * std::fabs(fd) + 1e-12);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace millwatch::model
