@@ -105,10 +105,13 @@ void MillingModel::derive(bool keep_state) {
   }
 
   // Pitch snapped to the grid so that every flute passes the same immersion steps.
+  bool pitch_changed = pitch_steps_.size() != static_cast<std::size_t>(flutes_);
   flute_pitch_angles_rad(c.tool, pitch_rad_);
   pitch_steps_.resize(pitch_rad_.size());
   for (std::size_t j = 0; j < pitch_rad_.size(); ++j) {
-    pitch_steps_[j] = static_cast<int>(std::lround(pitch_rad_[j] / d_phi_rad_)) % steps_;
+    const int snapped = static_cast<int>(std::lround(pitch_rad_[j] / d_phi_rad_)) % steps_;
+    pitch_changed = pitch_changed || snapped != pitch_steps_[j];
+    pitch_steps_[j] = snapped;
     pitch_rad_[j] = pitch_steps_[j] * d_phi_rad_;
   }
 
@@ -134,8 +137,14 @@ void MillingModel::derive(bool keep_state) {
           ? helix_lag_rad(c.tool.diameter_mm / 2.0, c.process.axial_depth_mm, c.tool.helix_deg)
           : 0.0;
   const double margin_rad = 4.0 * d_phi_rad_;
-  geometry_.configure(path, pitch_rad_, passes_, steps_, e.trochoidal.enabled,
-                      engage_from_rad_ - margin_rad, engage_to_rad_ + beta + margin_rad);
+  const GeometryKey key{path,   e.trochoidal.enabled,          passes_,
+                        steps_, engage_from_rad_ - margin_rad, engage_to_rad_ + beta + margin_rad};
+  if (!keep_state || !(key == geometry_key_) || pitch_changed) {
+    // The Newton tables are the costly part of an update: redo them only when the path changed.
+    geometry_.configure(path, pitch_rad_, passes_, steps_, e.trochoidal.enabled,
+                        key.window_from_rad, key.window_to_rad);
+    geometry_key_ = key;
+  }
 
   h_min_um_ = e.min_chip.enabled ? e.min_chip.h_min_um : 0.0;
   law_ = ForceLaw(c.material, c.process.axial_depth_mm, h_min_um_, e.min_chip.enabled);

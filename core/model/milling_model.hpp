@@ -88,7 +88,25 @@ class MillingModel {
                           double area_mm2) const;
   void march_step(int k);
 
+  /// What the chip tables depend on.
+  struct GeometryKey {
+    PathGeometry path;
+    bool trochoidal = false;
+    int passes = 0;
+    int steps = 0;
+    double window_from_rad = 0.0;
+    double window_to_rad = 0.0;
+    bool operator==(const GeometryKey& o) const {
+      return path.radius_um == o.path.radius_um && path.feed_per_rad_um == o.path.feed_per_rad_um &&
+             path.offset_um == o.path.offset_um &&
+             path.offset_angle_rad == o.path.offset_angle_rad && trochoidal == o.trochoidal &&
+             passes == o.passes && steps == o.steps && window_from_rad == o.window_from_rad &&
+             window_to_rad == o.window_to_rad;
+    }
+  };
+
   ModelConfig config_;
+  GeometryKey geometry_key_;
   ForceLaw law_;
   ChipGeometry geometry_;
   std::vector<double> pitch_rad_;

@@ -1,0 +1,53 @@
+#include "replay/output_file.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <system_error>
+
+namespace millwatch::shell {
+
+OutputFile::OutputFile(std::filesystem::path path)
+    : path_(std::move(path)), partial_(path_.string() + ".partial") {
+  file_ = std::fopen(partial_.c_str(), "wb");
+  if (file_ == nullptr) {
+    throw std::runtime_error("cannot write " + partial_.string() + ": " + std::strerror(errno));
+  }
+  constexpr std::size_t kBufferBytes = 1 << 16;
+  buffer_ = std::make_unique<char[]>(kBufferBytes);
+  std::setvbuf(file_, buffer_.get(), _IOFBF, kBufferBytes);
+}
+
+OutputFile::~OutputFile() {
+  if (file_ != nullptr) {
+    std::fclose(file_);
+  }
+  if (!committed_) {
+    std::error_code ignored;
+    std::filesystem::remove(partial_, ignored);
+  }
+}
+
+void OutputFile::write(const std::string& text) {
+  if (std::fwrite(text.data(), 1, text.size(), file_) != text.size()) {
+    throw std::runtime_error("write to " + partial_.string() + " failed: " + std::strerror(errno));
+  }
+}
+
+void OutputFile::commit() {
+  const bool flushed = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!flushed || !closed) {
+    throw std::runtime_error("write to " + partial_.string() + " failed: " + std::strerror(errno));
+  }
+  std::error_code ec;
+  std::filesystem::rename(partial_, path_, ec);
+  if (ec) {
+    throw std::runtime_error("cannot rename " + partial_.string() + " to " + path_.string() + ": " +
+                             ec.message());
+  }
+  committed_ = true;
+}
+
+}  // namespace millwatch::shell

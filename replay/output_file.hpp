@@ -1,0 +1,34 @@
+#pragma once
+// An output file written under a temporary name and renamed into place only when complete,
+// so that an error or an interrupted run never leaves a partial file behind.
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace millwatch::shell {
+
+class OutputFile {
+ public:
+  /// Opens `<path>.partial` for writing. @throws std::runtime_error naming the path.
+  explicit OutputFile(std::filesystem::path path);
+  ~OutputFile();  ///< removes the partial file unless commit() succeeded
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  [[nodiscard]] std::FILE* stream() { return file_; }
+  void write(const std::string& text);
+  /// Flushes, closes and renames to the final path. @throws std::runtime_error on failure.
+  void commit();
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  std::filesystem::path partial_;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<char[]> buffer_;
+  bool committed_ = false;
+};
+
+}  // namespace millwatch::shell

@@ -1,0 +1,231 @@
+#include "replay/simulate_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "core/config/json_reader.hpp"
+#include "core/model/flute_positions.hpp"
+#include "core/sim/channel_stats.hpp"
+#include "core/sim/cut_simulator.hpp"
+#include "replay/json_file.hpp"
+#include "replay/output_file.hpp"
+
+namespace millwatch::shell {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+
+extern "C" void on_interrupt(int /*signal*/) {
+  g_interrupted = true;
+}
+
+struct SimulateOptions {
+  std::string scenario_path;
+  std::string output_csv;
+  double duration_s = 0.0;
+  long long seed = -1;
+  std::string summary_json;
+};
+
+nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simulator) {
+  nlohmann::json rev;
+  std::vector<double> start, rpm, ft, offset, angle;
+  std::vector<std::vector<double>> wear;
+  std::vector<bool> cutting;
+  double rpm_sum = 0.0;
+  int cutting_revs = 0;
+  for (const auto& t : simulator.truth()) {
+    if (t.start_s > s.duration_s) {
+      break;  // prepared ahead, never reached
+    }
+    start.push_back(t.start_s);
+    rpm.push_back(t.spindle_rpm);
+    ft.push_back(t.feed_per_tooth_um);
+    offset.push_back(t.runout_offset_um);
+    angle.push_back(t.runout_angle_rad);
+    wear.push_back(t.wear_um);
+    cutting.push_back(t.cutting);
+    if (t.cutting) {
+      rpm_sum += t.spindle_rpm;
+      ++cutting_revs;
+    }
+  }
+  const auto& r = s.model.effects.runout;
+  return {
+      {"spindle_rpm_actual", sim::actual_rpm(s)},
+      {"spindle_rpm_mean_while_cutting", cutting_revs > 0 ? rpm_sum / cutting_revs : 0.0},
+      {"runout", {{"enabled", r.enabled}, {"offset_um", r.offset_um}, {"angle_rad", r.angle_rad}}},
+      {"revolutions",
+       {{"start_s", start},
+        {"spindle_rpm", rpm},
+        {"feed_per_tooth_um", ft},
+        {"runout_offset_um", offset},
+        {"runout_angle_rad", angle},
+        {"wear_um", wear},
+        {"cutting", cutting}}}};
+}
+
+nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& simulator,
+                            const std::string& csv_name) {
+  const nlohmann::json model = model::to_json(s.model);
+  return {{"format", "millwatch-cut/1"},
+          {"csv", csv_name},
+          {"columns", {"t_s", "fx_N", "fy_N", "fz_N"}},
+          {"samples", simulator.samples_done()},
+          {"sample_rate_hz", s.sample_rate_hz},
+          {"duration_s", static_cast<double>(simulator.samples_done()) / s.sample_rate_hz},
+          {"tool", model["tool"]},
+          {"process", model["process"]},
+          {"material", model["material"]},
+          {"force_sign_convention",
+           {{"columns",
+             "what a dynamometer under the workpiece reads: the force on the workpiece, i.e. minus "
+             "the force on the tool, in its own channel order"},
+            {"model_frame",
+             "force on the tool; x feed, y cross-feed, z from the workpiece towards the spindle"},
+            {"axis_map", signal::to_json(s.axis_map)},
+            {"axis_map_meaning", "model[axis] = sign * column[channel]"}}},
+          {"model", model},
+          {"truth", truth_json(s, simulator)},
+          {"scenario", sim::to_json(s)}};
+}
+
+void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
+                   const sim::ChannelStats& clean, const std::string& csv_path,
+                   const std::string& sidecar_path) {
+  const auto& m = s.model;
+  const auto pitch = model::flute_pitch_angles_rad(m.tool);
+  const auto& r = m.effects.runout;
+  const auto flutes =
+      model::flute_positions(m.tool.diameter_mm * 500.0, pitch, r.enabled ? r.offset_um : 0.0,
+                             r.enabled ? r.angle_rad : 0.0);
+  std::printf("simulated cut \"%s\"\n", s.name.c_str());
+  std::printf("  tool            %.3f mm, %d flutes, helix %.0f deg; %s, a_p %.3f mm\n",
+              m.tool.diameter_mm, m.tool.flutes, m.tool.helix_deg,
+              model::to_string(m.process.operation).c_str(), m.process.axial_depth_mm);
+  std::printf(
+      "  spindle         %.0f rpm commanded, %.0f rpm actual; feed %.2f um/tooth commanded\n",
+      m.process.spindle_rpm, sim::actual_rpm(s), m.process.feed_per_tooth_um);
+  std::printf("  runout          %.2f um at %.2f rad: flute radii", r.enabled ? r.offset_um : 0.0,
+              r.enabled ? r.angle_rad : 0.0);
+  for (const auto& f : flutes) {
+    std::printf(" %.3f", f.radius_um);
+  }
+  std::printf(" um\n");
+  std::printf("  recording       %lld samples at %.0f Hz = %.3f s, %zu revolutions\n",
+              static_cast<long long>(simulator.samples_done()), s.sample_rate_hz,
+              static_cast<double>(simulator.samples_done()) / s.sample_rate_hz,
+              simulator.truth().size() - 1);
+  std::printf(
+      "  force on tool   peak |Fxy| %.3f N; Fx [%.3f, %.3f] Fy [%.3f, %.3f] Fz [%.3f, %.3f] N\n",
+      clean.peak_resultant_xy(), clean.min(0), clean.max(0), clean.min(1), clean.max(1),
+      clean.min(2), clean.max(2));
+  std::printf("  wrote           %s\n                  %s\n", csv_path.c_str(),
+              sidecar_path.c_str());
+}
+
+int run_simulate(const SimulateOptions& o) {
+  sim::Scenario scenario;
+  try {
+    scenario = sim::scenario_from_json(read_json_file(o.scenario_path));
+  } catch (const config::ConfigError& e) {
+    spdlog::error("{}: {}", o.scenario_path, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  if (o.duration_s > 0.0) {
+    scenario.duration_s = o.duration_s;
+  }
+  if (o.seed >= 0) {
+    scenario.seed = static_cast<std::uint64_t>(o.seed);
+  }
+  const std::filesystem::path csv_path = o.output_csv;
+  std::filesystem::path sidecar_path = csv_path;
+  sidecar_path.replace_extension(".json");
+  if (sidecar_path == csv_path) {
+    sidecar_path += ".json";
+  }
+
+  g_interrupted = false;
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  try {
+    sim::CutSimulator simulator(scenario);
+    OutputFile csv(csv_path);
+    OutputFile sidecar(sidecar_path);
+    std::fputs("t_s,fx_N,fy_N,fz_N\n", csv.stream());
+    constexpr std::size_t kBlock = 4096;
+    std::vector<double> t(kBlock), fx(kBlock), fy(kBlock), fz(kBlock);
+    while (!g_interrupted) {
+      const std::size_t n = simulator.next_block(t, fx, fy, fz);
+      if (n == 0) {
+        break;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        std::fprintf(csv.stream(), "%.9f,%.6g,%.6g,%.6g\n", t[i], fx[i], fy[i], fz[i]);
+      }
+    }
+    if (g_interrupted) {
+      spdlog::error("interrupted: no output written");
+      return 130;
+    }
+    sidecar.write(sidecar_json(scenario, simulator, csv_path.filename().string()).dump(2) + "\n");
+    csv.commit();
+    sidecar.commit();
+    print_summary(scenario, simulator, simulator.clean_stats(), csv_path.string(),
+                  sidecar_path.string());
+    if (!o.summary_json.empty()) {
+      OutputFile summary(o.summary_json);
+      summary.write(
+          sidecar_json(scenario, simulator, csv_path.filename().string())["truth"].dump(2));
+      summary.commit();
+    }
+  } catch (const config::ConfigError& e) {
+    spdlog::error("{}: {}", o.scenario_path, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_simulate_command(CLI::App& app) {
+  auto options = std::make_shared<SimulateOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "simulate",
+      "Simulate a dynamometer recording of a cut with known truth (CSV + JSON sidecar)");
+  cmd->add_option("scenario", options->scenario_path, "Scenario JSON (see config/presets)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", options->output_csv,
+                  "Output CSV; the sidecar is written beside it")
+      ->required();
+  cmd->add_option("--duration", options->duration_s, "Override the recording's duration (s)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", options->seed, "Override the noise seed")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--truth-json", options->summary_json, "Also write the truth block to this file");
+  cmd->callback([options] {
+    const int rc = run_simulate(*options);
+    if (rc != 0) {
+      throw CLI::RuntimeError(rc);
+    }
+  });
+}
+
+}  // namespace millwatch::shell

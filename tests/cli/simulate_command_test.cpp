@@ -1,0 +1,106 @@
+// End-to-end tests of `millwatch simulate` as a user runs it.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path write_file(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(SimulateCommand, WritesCsvAndSidecarForEveryPreset) {
+  const fs::path dir = test::fresh_temp_dir();
+  for (const auto& entry : fs::directory_iterator(test::source_dir() / "config" / "presets")) {
+    const fs::path csv = dir / (entry.path().stem().string() + ".csv");
+    const auto r = test::run_command(test::millwatch_cli() + " simulate " + entry.path().string() +
+                                     " --duration 0.05 -o " + csv.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(csv);
+    std::string header, first;
+    std::getline(in, header);
+    std::getline(in, first);
+    EXPECT_EQ(header, "t_s,fx_N,fy_N,fz_N");
+    EXPECT_EQ(first.rfind("0.000000000,", 0), 0u) << first;
+    fs::path sidecar = csv;
+    sidecar.replace_extension(".json");
+    std::ifstream sj(sidecar);
+    const auto j = nlohmann::json::parse(sj);
+    EXPECT_EQ(j["format"], "millwatch-cut/1");
+    EXPECT_EQ(j["csv"], csv.filename().string());
+    for (const char* key : {"diameter_mm", "flutes", "helix_deg", "edge_radius_um"}) {
+      EXPECT_TRUE(j["tool"].contains(key)) << key;
+    }
+    for (const char* key :
+         {"operation", "spindle_rpm", "feed_per_tooth_um", "axial_depth_mm", "radial_depth_mm"}) {
+      EXPECT_TRUE(j["process"].contains(key)) << key;
+    }
+    EXPECT_TRUE(j.contains("sample_rate_hz"));
+    EXPECT_TRUE(j["material"].contains("law"));
+    EXPECT_TRUE(j["force_sign_convention"].contains("axis_map"));
+    EXPECT_TRUE(j["truth"]["revolutions"].contains("spindle_rpm"));
+    EXPECT_EQ(
+        j["samples"].get<long>() + 1,
+        static_cast<long>(std::count(std::istreambuf_iterator<char>(std::ifstream(csv).rdbuf()),
+                                     std::istreambuf_iterator<char>(), '\n')));
+  }
+}
+
+// Bad input: a clear error naming the field, value and range; non-zero exit; no files left.
+TEST(SimulateCommand, BadScenarioFailsCleanlyWithoutPartialOutput) {
+  const fs::path dir = test::fresh_temp_dir();
+  struct Case {
+    std::string json;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {R"({"model": {"tool": {"diameter_mm": -0.4}}})",
+       "model.tool.diameter_mm: value -0.4 is out of range (0, 50] mm"},
+      {R"({"model": {"tool": {"flutes": 0}}})",
+       "model.tool.flutes: value 0 is out of range [1, 8]"},
+      {R"({"model": {"process": {"spindle_rpm": 1e999}}})",
+       "model.process.spindle_rpm: value 1e999 is not a finite number"},
+      {R"({"recording": {"duration_s": "long"}})",
+       "recording.duration_s: expected a number, got string \"long\""},
+      {R"({"recording": {"sample_rate": 50000}})", "recording.sample_rate: unknown key"},
+      {R"({"model": {"tool": {"diameter_mm": 0.4,}})", "JSON syntax error at line 1"},
+  };
+  int i = 0;
+  for (const auto& c : cases) {
+    const fs::path scenario = write_file(dir / ("bad" + std::to_string(i) + ".json"), c.json);
+    const fs::path csv = dir / ("out" + std::to_string(i) + ".csv");
+    const auto r = test::run_command(test::millwatch_cli() + " simulate " + scenario.string() +
+                                     " -o " + csv.string());
+    EXPECT_NE(r.exit_code, 0) << c.json;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(scenario.filename().string()), std::string::npos) << r.output;
+    ++i;
+  }
+  // Nothing but the scenarios remains: no CSV, sidecar or .partial file.
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().extension(), ".json") << entry.path();
+    EXPECT_EQ(entry.path().stem().string().rfind("bad", 0), 0u) << entry.path();
+  }
+}
+
+TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
+  const auto r = test::run_command(test::millwatch_cli() + " simulate " +
+                                   (test::source_dir() / "config" / "demo.json").string() +
+                                   " --duration 0.01 -o /nonexistent/dir/cut.csv");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("/nonexistent/dir/cut.csv"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace millwatch
