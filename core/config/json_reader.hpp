@@ -57,8 +57,10 @@ inline Range non_negative(double hi, std::string_view unit = "") {
 /// Reads fields of one JSON object. Call finish() after the last field to reject unknown keys.
 class ObjectReader {
  public:
-  /// @throws ConfigError if `value` is not an object.
+  /// @throws ConfigError if `value` is not an object. The reader refers to `value`, which must
+  /// outlive it (hence no temporaries).
   ObjectReader(const nlohmann::json& value, std::string path);
+  ObjectReader(nlohmann::json&& value, std::string path) = delete;
 
   [[nodiscard]] bool has(std::string_view key) const;
 

@@ -21,9 +21,8 @@ double power_log(double k, double a, double log_h_mm) {
   return k == 0.0 ? 0.0 : k * std::exp(a * log_h_mm);
 }
 
-ElementForce power_law(const PowerLaw& c, double h_mm, double dz_mm, bool ploughing) {
-  // [000] eq 5a/5b; the axial pair is [002] eq 17.
-  const double log_h = std::log(h_mm);
+ElementForce power_law(const PowerLaw& c, double log_h, double dz_mm, bool ploughing) {
+  // [000] eq 5a/5b; the axial pair is [002] eq 17. log_h = ln(h / 1 mm).
   if (ploughing) {
     return {power_log(c.k_tp_Nmm, c.a_tp, log_h) * dz_mm,
             power_log(c.k_np_Nmm, c.a_np, log_h) * dz_mm,
@@ -71,6 +70,12 @@ ForceLaw::ForceLaw(const Material& material, double axial_depth_mm, double h_min
       regimes_(regimes) {}
 
 ElementForce ForceLaw::element(double h_um, double dz_mm, double ploughed_area_mm2) const {
+  return h_um > 0.0 ? element_given_log(h_um, std::log(h_um), dz_mm, ploughed_area_mm2)
+                    : ElementForce{};
+}
+
+ElementForce ForceLaw::element_given_log(double h_um, double log_h_um, double dz_mm,
+                                         double ploughed_area_mm2) const {
   if (h_um <= 0.0) {
     return {};
   }
@@ -83,7 +88,7 @@ ElementForce ForceLaw::element(double h_um, double dz_mm, double ploughed_area_m
     case ForceLawKind::kPowerLaw:
       break;
   }
-  return power_law(material_.power_law, h_mm, dz_mm, ploughing(h_um));
+  return power_law(material_.power_law, log_h_um + kLogMmPerUm, dz_mm, ploughing(h_um));
 }
 
 double ForceLaw::normal_N(double h_um, double dz_mm, double ploughed_area_mm2) const {

@@ -38,6 +38,10 @@ class ForceLaw {
   [[nodiscard]] ElementForce element(double h_um, double dz_mm,
                                      double ploughed_area_mm2 = 0.0) const;
 
+  /// The same with ln(h_um) already known (saves a logarithm in the model's inner loop).
+  [[nodiscard]] ElementForce element_given_log(double h_um, double log_h_um, double dz_mm,
+                                               double ploughed_area_mm2 = 0.0) const;
+
   /// Normal force only, same arguments; used by the deflection balance ([000] eq 22).
   [[nodiscard]] double normal_N(double h_um, double dz_mm, double ploughed_area_mm2 = 0.0) const;
 

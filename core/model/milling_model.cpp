@@ -271,7 +271,7 @@ bool MillingModel::straddles_regime_jump(double h_rigid_um, double lo_log_um, do
 }
 
 double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double wear_normal_N,
-                                      double area_mm2) const {
+                                      double area_mm2, double* log_h_um) const {
   // [000] eq 22 (plus the rubbing normal force), as h + (F_n(h) + F_w)/k = h_r for the cut chip
   // h ∈ (0, h_r]. The left side increases with h. F_n ∝ h^a with a < 1 is steep near zero, so
   // Newton runs on u = ln h, where it is well conditioned; a bracket in u catches the jump of
@@ -298,10 +298,12 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
     const double next = u - step;
     if (next > lo && next < hi) {
       if (std::fabs(step) < 1e-4) {
+        *log_h_um = next;
         return std::exp(next);  // quadratic convergence: the relative error left is ~step²
       }
       u = next;
     } else if (straddles_regime_jump(h_rigid_um, lo, hi, wear_normal_N, area_mm2)) {
+      *log_h_um = std::log(h_min_um_);
       return h_min_um_;  // the root sits in F_n's jump: the chip stays at h_min
     } else if (!floor_checked && lo == floor_log) {
       floor_checked = true;
@@ -317,6 +319,7 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
       }
     }
   }
+  *log_h_um = u;
   return u <= floor_log + 1e-6 ? 0.0 : std::exp(u);
 }
 
@@ -398,9 +401,11 @@ void MillingModel::march_step(int k) {
                        : std::max(0.0, area_total_prev_mm2_[ij] - area_cut_mm2_[ij]);
           }
         }
+        double log_h = 0.0;
         if (deflect) {
           // Start from this element's deflection one step earlier: it varies smoothly.
-          h = solve_deflection(h_rigid, h_rigid - last_deflection_um_[ij], wear_n_N_[uj], area);
+          h = solve_deflection(h_rigid, h_rigid - last_deflection_um_[ij], wear_n_N_[uj], area,
+                               &log_h);
           last_deflection_um_[ij] = h_rigid - h;
         } else {
           h = h_rigid;
@@ -408,7 +413,10 @@ void MillingModel::march_step(int k) {
         const bool ploughing = law_.ploughing(h);
         removed = !(accumulate && ploughing);
         new_deficit = removed ? h_rigid - h : kNoCut;
-        ElementForce f = law_.element(h, dz_mm_, area);
+        if (!deflect || h <= 0.0) {
+          log_h = h > 0.0 ? std::log(h) : 0.0;
+        }
+        ElementForce f = law_.element_given_log(h, log_h, dz_mm_, area);
         f.tangential_N += wear_t_N_[uj];
         f.normal_N += wear_n_N_[uj];
         // [000] eq 7: force on the tool in the workpiece frame.

@@ -84,8 +84,9 @@ class MillingModel {
   void allocate();
   bool straddles_regime_jump(double h_rigid_um, double lo_log_um, double hi_log_um,
                              double wear_normal_N, double area_mm2) const;
-  double solve_deflection(double h_rigid_um, double guess_um, double wear_normal_N,
-                          double area_mm2) const;
+  /// The cut chip h (µm) of [000] eq 22; also returns ln h in *log_h_um.
+  double solve_deflection(double h_rigid_um, double guess_um, double wear_normal_N, double area_mm2,
+                          double* log_h_um) const;
   void march_step(int k);
 
   /// What the chip tables depend on.

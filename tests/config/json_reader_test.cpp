@@ -83,13 +83,15 @@ TEST(JsonReader, ArraysCheckEachElement) {
 }
 
 TEST(JsonReader, MissingRequiredNumber) {
-  ObjectReader r(json::object(), "daq");
+  const json empty = json::object();
+  ObjectReader r(empty, "daq");
   EXPECT_EQ(error_of([&] { r.required_number("sample_rate_hz", positive(1e6, "Hz")); }),
             "daq.sample_rate_hz: missing required number in (0, 1000000] Hz");
 }
 
 TEST(JsonReader, NonObjectIsRejected) {
-  EXPECT_EQ(error_of([] { ObjectReader r(json::array(), "tool"); }),
+  const json array = json::array();
+  EXPECT_EQ(error_of([&] { ObjectReader r(array, "tool"); }),
             "tool: expected an object, got array []");
 }
 
