@@ -1,0 +1,82 @@
+#pragma once
+// Sub-sample location of a valley or peak from a least-squares polynomial through the 2h+1
+// samples around the discrete extreme (u in samples from it).
+
+#include <cmath>
+#include <cstdint>
+
+namespace millwatch::monitor {
+
+struct Extremum {
+  double position = 0.0;  ///< absolute sample index, fractional
+  double value = 0.0;     ///< the parabola's value there
+  bool valid = false;     ///< false when the fit is not curved the right way
+};
+
+/// `signal(n)` returns the sample at absolute index n for n in [center − h, center + h].
+/// h = 1: three-point parabola. h ≥ 2: least-squares cubic a + b·u + c·u² + d·u³, whose
+/// stationary point nearest the centre is the extreme — the cubic term absorbs the asymmetry of
+/// a valley between a long and a short flute, which biases a parabola.
+template <typename Signal>
+Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_width, bool minimum) {
+  // Normal equations of the centred fit decouple (odd moments vanish by symmetry):
+  //   [s0 s2; s2 s4]·[a c] = [y0 y2],  [s2 s4; s4 s6]·[b d] = [y1 y3].
+  double s0 = 0.0, s2 = 0.0, s4 = 0.0, s6 = 0.0, y0 = 0.0, y1 = 0.0, y2 = 0.0, y3 = 0.0;
+  for (int u = -half_width; u <= half_width; ++u) {
+    const double y = signal(center + u);
+    const double u1 = u;
+    const double u2 = u1 * u1;
+    s0 += 1.0;
+    s2 += u2;
+    s4 += u2 * u2;
+    s6 += u2 * u2 * u2;
+    y0 += y;
+    y1 += u1 * y;
+    y2 += u2 * y;
+    y3 += u2 * u1 * y;
+  }
+  const double det_even = s0 * s4 - s2 * s2;
+  const double a = (s4 * y0 - s2 * y2) / det_even;
+  const double c = (s0 * y2 - s2 * y0) / det_even;
+  double b = y1 / s2;
+  double d = 0.0;
+  if (half_width >= 2) {
+    const double det_odd = s2 * s6 - s4 * s4;
+    b = (s6 * y1 - s4 * y3) / det_odd;
+    d = (s2 * y3 - s4 * y1) / det_odd;
+  }
+  Extremum e;
+  e.position = static_cast<double>(center);
+  e.value = signal(center);
+  // Stationary points: 3d·u² + 2c·u + b = 0; the extreme needs curvature 2c + 6d·u of the
+  // right sign.
+  double u = 0.0;
+  if (std::fabs(d) < 1e-12 * (std::fabs(c) + 1e-300)) {
+    if (c == 0.0) {
+      return e;
+    }
+    u = -b / (2.0 * c);
+  } else {
+    const double disc = c * c - 3.0 * d * b;
+    if (disc < 0.0) {
+      return e;
+    }
+    const double r = std::sqrt(disc);
+    // The two roots, computed without cancellation; take the one nearest the centre.
+    const double q = -(c + std::copysign(r, c));
+    const double u1 = q / (3.0 * d);
+    const double u2 = q != 0.0 ? b / q : u1;
+    u = std::fabs(u1) < std::fabs(u2) ? u1 : u2;
+  }
+  const double curvature = 2.0 * c + 6.0 * d * u;
+  if ((minimum && curvature <= 0.0) || (!minimum && curvature >= 0.0) || u < -half_width ||
+      u > half_width) {
+    return e;
+  }
+  e.position = static_cast<double>(center) + u;
+  e.value = a + u * (b + u * (c + u * d));
+  e.valid = true;
+  return e;
+}
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,102 @@
+#include "core/monitor/input_check.hpp"
+
+#include <cmath>
+
+namespace millwatch::monitor {
+
+InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
+  for (auto& channel : out_) {
+    channel.resize(config_.max_block_samples);
+  }
+  flags_.resize(config_.max_block_samples);
+}
+
+std::int64_t InputCheck::utime_of(std::int64_t sample) const {
+  return start_utime_us_ + std::llround(static_cast<double>(sample) * 1e6 / config_.sample_rate_hz);
+}
+
+void InputCheck::restart() {
+  started_ = false;
+}
+
+CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) {
+  counters_.samples_dropped += static_cast<std::int64_t>(block.fx_N.size());
+  ++counters_.blocks_rejected;
+  CheckedBlock out;
+  out.verdict = BlockVerdict::kRejected;
+  out.problem = why;
+  return out;
+}
+
+CheckedBlock InputCheck::check(const SampleBlock& block) {
+  const std::size_t n = block.fx_N.size();
+  counters_.samples_in += static_cast<std::int64_t>(n);
+  if (n == 0) {
+    return reject(block, "empty block");
+  }
+  if (block.fy_N.size() != n || block.fz_N.size() != n) {
+    return reject(block, "channels of unequal length");
+  }
+  if (n > config_.max_block_samples) {
+    return reject(block, "block longer than max_block_samples");
+  }
+  if (std::fabs(block.sample_rate_hz - config_.sample_rate_hz) > 1e-6 * config_.sample_rate_hz) {
+    return reject(block, "sample rate differs from the configured one");
+  }
+
+  CheckedBlock out;
+  if (!started_) {
+    started_ = true;
+    start_utime_us_ = block.utime_us - std::llround(static_cast<double>(next_sample_) * 1e6 /
+                                                    config_.sample_rate_hz);
+  }
+  const double offset_samples =
+      static_cast<double>(block.utime_us - utime_of(next_sample_)) * config_.sample_rate_hz / 1e6;
+  if (offset_samples < -config_.tolerance_samples) {
+    ++counters_.out_of_order_blocks;
+    return reject(block, "block older than expected (out of order or repeated)");
+  }
+  if (offset_samples > config_.tolerance_samples) {
+    const auto missing = static_cast<std::int64_t>(std::llround(offset_samples));
+    ++counters_.gaps;
+    counters_.samples_dropped += missing;
+    next_sample_ += missing;
+    out.gap_samples = missing;
+    out.problem = "gap before block";
+  }
+
+  const std::array<std::span<const double>, 3> in = {block.fx_N, block.fy_N, block.fz_N};
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint8_t flag = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      double v = in[a][i];
+      if (!std::isfinite(v)) {
+        flag |= kFlagNonFinite;
+        v = last_good_[a];
+      } else {
+        if (std::fabs(v) >= config_.saturation_N[a]) {
+          flag |= kFlagSaturated;
+        }
+        last_good_[a] = v;
+      }
+      out_[a][i] = v;
+    }
+    flags_[i] = flag;
+    if (flag != 0) {
+      ++counters_.samples_flagged;
+      counters_.nonfinite_samples += (flag & kFlagNonFinite) != 0 ? 1 : 0;
+      counters_.saturated_samples += (flag & kFlagSaturated) != 0 ? 1 : 0;
+    }
+  }
+  counters_.samples_accepted += static_cast<std::int64_t>(n);
+  out.verdict = BlockVerdict::kAccepted;
+  out.first_sample = next_sample_;
+  out.fx_N = {out_[0].data(), n};
+  out.fy_N = {out_[1].data(), n};
+  out.fz_N = {out_[2].data(), n};
+  out.flags = {flags_.data(), n};
+  next_sample_ += static_cast<std::int64_t>(n);
+  return out;
+}
+
+}  // namespace millwatch::monitor

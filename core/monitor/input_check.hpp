@@ -1,0 +1,89 @@
+#pragma once
+// First stage of the pipeline: checks each block and each sample, counts what is wrong, and
+// hands on a clean block. Nothing is thrown; everything is counted.
+//
+//  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected
+//  - block older than expected (out of order, duplicate): rejected
+//  - block later than expected: the missing samples are counted as dropped and reported as a
+//    gap so that downstream stages can restart
+//  - non-finite sample: replaced by the channel's last good value, flagged
+//  - sample at or beyond the channel's saturation level (charge-amplifier range): kept, flagged
+// Sample time is kept as a sample index from the first block (utime of the first block + index
+// / rate), so that gaps keep later samples at their true time.
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/monitor/sample_block.hpp"
+
+namespace millwatch::monitor {
+
+struct InputCheckConfig {
+  double sample_rate_hz = 50000.0;
+  /// |reading| at or above this is saturated (the charge amplifier's range), per channel, N.
+  std::array<double, 3> saturation_N = {std::numeric_limits<double>::infinity(),
+                                        std::numeric_limits<double>::infinity(),
+                                        std::numeric_limits<double>::infinity()};
+  /// Timing mismatch tolerated before a block counts as a gap or out of order, in samples.
+  double tolerance_samples = 0.5;
+  std::size_t max_block_samples = 65536;
+};
+
+struct InputCounters {
+  std::int64_t samples_in = 0;        ///< samples received in blocks (accepted or not)
+  std::int64_t samples_accepted = 0;  ///< samples handed on
+  std::int64_t samples_dropped = 0;   ///< rejected blocks' samples plus samples missing in gaps
+  std::int64_t samples_flagged = 0;   ///< handed on but marked bad
+  std::int64_t nonfinite_samples = 0;
+  std::int64_t saturated_samples = 0;
+  std::int64_t gaps = 0;
+  std::int64_t out_of_order_blocks = 0;
+  std::int64_t blocks_rejected = 0;  ///< malformed or out of order
+};
+
+enum class BlockVerdict { kAccepted, kRejected };
+
+/// Sample flags (bit set).
+enum SampleFlag : std::uint8_t { kFlagNonFinite = 1, kFlagSaturated = 2 };
+
+struct CheckedBlock {
+  BlockVerdict verdict = BlockVerdict::kRejected;
+  std::int64_t first_sample = 0;  ///< index of the block's first sample since the stream began
+  std::int64_t gap_samples = 0;   ///< samples missing just before this block
+  std::span<const double> fx_N, fy_N, fz_N;
+  std::span<const std::uint8_t> flags;
+  std::string_view problem;  ///< why a block was rejected or what was wrong (static text)
+};
+
+class InputCheck {
+ public:
+  explicit InputCheck(const InputCheckConfig& config);
+
+  /// Checks a block; the returned spans point into this stage's buffers until the next call.
+  CheckedBlock check(const SampleBlock& block);
+
+  [[nodiscard]] const InputCounters& counters() const { return counters_; }
+  /// utime (µs) of sample index n.
+  [[nodiscard]] std::int64_t utime_of(std::int64_t sample) const;
+  /// Index of the next sample expected.
+  [[nodiscard]] std::int64_t next_sample() const { return next_sample_; }
+  /// Forget the stream's timing (the next block starts a new stream); counters are kept.
+  void restart();
+
+ private:
+  CheckedBlock reject(const SampleBlock& block, std::string_view why);
+
+  InputCheckConfig config_;
+  InputCounters counters_;
+  bool started_ = false;
+  std::int64_t start_utime_us_ = 0;
+  std::int64_t next_sample_ = 0;
+  std::array<double, 3> last_good_{};
+  std::array<std::vector<double>, 3> out_;
+  std::vector<std::uint8_t> flags_;
+};
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,151 @@
+#include "core/monitor/revolution_meter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/monitor/extremum.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+double wrap_pi(double a) {
+  return a - kTwoPi * std::round(a / kTwoPi);
+}
+
+}  // namespace
+
+RevolutionMeter::RevolutionMeter(const RevolutionMeterConfig& config, int channel_offset)
+    : config_(config), offset_(channel_offset) {}
+
+void RevolutionMeter::restart() {
+  started_ = false;
+  valleys_found_ = 0;
+}
+
+bool RevolutionMeter::find_valley(const SampleRing& ring, const PhaseModel& phase, double* position,
+                                  bool* ok) {
+  const int flutes = config_.flutes;
+  const int j = static_cast<int>(next_valley_ % flutes);
+  const double turns = base_revolution_ + static_cast<double>(next_valley_ / flutes);
+  const double angle = template_.angle_rad[static_cast<std::size_t>(j)] + kTwoPi * turns;
+  const double predicted = phase.sample_at(angle);
+  const double pitch_samples = phase.samples_per_revolution() / flutes;
+  const auto half =
+      static_cast<std::int64_t>(std::ceil(config_.search_fraction_of_pitch * pitch_samples));
+  const int h = config_.fit_half_width > 0
+                    ? config_.fit_half_width
+                    : std::max(1, static_cast<int>(std::lround(pitch_samples / 16.0)));
+  const auto center = static_cast<std::int64_t>(std::llround(predicted));
+  if (center + half + h > ring.newest()) {
+    *ok = false;
+    return false;  // not all samples yet
+  }
+  if (center - half - h < ring.oldest()) {
+    *ok = false;
+    *position = predicted;
+    return true;  // gone: the valley cannot be measured any more
+  }
+  const int resultant = offset_ + 3;
+  std::int64_t best = center - half;
+  for (std::int64_t n = center - half; n <= center + half; ++n) {
+    if (ring.at(resultant, n) < ring.at(resultant, best)) {
+      best = n;
+    }
+  }
+  const bool interior = best > center - half && best < center + half;
+  const Extremum e =
+      refine_extremum([&](std::int64_t n) { return ring.at(resultant, n); }, best, h, true);
+  *position = e.position;
+  *ok = interior && e.valid;
+  if (*ok) {
+    // Follow slow drift of the valley relative to the tracked angle.
+    const double measured = phase.angle_at(e.position) - kTwoPi * turns;
+    double& a = template_.angle_rad[static_cast<std::size_t>(j)];
+    a += config_.template_gain * wrap_pi(measured - a);
+  }
+  return true;
+}
+
+RevolutionMeter::Step RevolutionMeter::step(const SampleRing& ring, const PhaseModel& phase) {
+  const int flutes = config_.flutes;
+  if (!phase.valid || !template_.valid || ring.empty()) {
+    return Step::kWait;
+  }
+  if (!started_) {
+    // Start at the first CE1 valley comfortably inside the ring.
+    const double margin = 0.5 * phase.samples_per_revolution() / flutes;
+    const double oldest_angle = phase.angle_at(static_cast<double>(ring.oldest()) + margin);
+    base_revolution_ = std::ceil((oldest_angle - template_.angle_rad[0]) / kTwoPi);
+    next_valley_ = 0;
+    valleys_found_ = 0;
+    started_ = true;
+  }
+  double position = 0.0;
+  bool ok = false;
+  if (!find_valley(ring, phase, &position, &ok)) {
+    return Step::kWait;
+  }
+  valleys_[static_cast<std::size_t>(valleys_found_)] = position;
+  valley_ok_[static_cast<std::size_t>(valleys_found_)] = ok;
+  ++valleys_found_;
+  ++next_valley_;
+  if (valleys_found_ < flutes + 1) {
+    return Step::kValley;
+  }
+  measure(ring);
+  // The next revolution starts at this one's closing valley.
+  valleys_[0] = valleys_[static_cast<std::size_t>(flutes)];
+  valley_ok_[0] = valley_ok_[static_cast<std::size_t>(flutes)];
+  valleys_found_ = 1;
+  return Step::kRevolution;
+}
+
+void RevolutionMeter::measure(const SampleRing& ring) {
+  const int flutes = config_.flutes;
+  RevolutionMeasurement& m = measurement_;
+  ++m.sequence;
+  m.flutes = flutes;
+  m.valid = true;
+  for (int j = 0; j <= flutes; ++j) {
+    m.valley_sample[static_cast<std::size_t>(j)] = valleys_[static_cast<std::size_t>(j)];
+    m.valid = m.valid && valley_ok_[static_cast<std::size_t>(j)];
+  }
+  const double dt = 1.0 / config_.sample_rate_hz;
+  m.period_s = (valleys_[static_cast<std::size_t>(flutes)] - valleys_[0]) * dt;
+  for (int j = 0; j < flutes; ++j) {
+    const auto uj = static_cast<std::size_t>(j);
+    m.flute_period_s[uj] = (valleys_[uj + 1] - valleys_[uj]) * dt;
+    // Peaks within the flute's period.
+    const auto from = static_cast<std::int64_t>(std::ceil(valleys_[uj]));
+    const auto to = static_cast<std::int64_t>(std::floor(valleys_[uj + 1]));
+    for (int c = 0; c < 4; ++c) {
+      std::int64_t best = from;
+      for (std::int64_t n = from; n <= to; ++n) {
+        if (std::fabs(ring.at(offset_ + c, n)) > std::fabs(ring.at(offset_ + c, best))) {
+          best = n;
+        }
+      }
+      double peak = ring.at(offset_ + c, best);
+      if (best > from && best < to) {
+        const bool negative = peak < 0.0;
+        const Extremum e = refine_extremum([&](std::int64_t n) { return ring.at(offset_ + c, n); },
+                                           best, 1, negative);
+        if (e.valid) {
+          peak = e.value;
+        }
+      }
+      if (c < 3) {
+        m.peak_N[uj][static_cast<std::size_t>(c)] = peak;
+      } else {
+        m.peak_resultant_N[uj] = peak;
+      }
+    }
+  }
+  m.alpha_deg = flutes >= 2 ? 360.0 * m.flute_period_s[1] / m.period_s : 360.0;
+  m.delta_fy_N = flutes >= 2 ? std::fabs(m.peak_N[0][1]) - std::fabs(m.peak_N[1][1]) : 0.0;
+}
+
+}  // namespace millwatch::monitor

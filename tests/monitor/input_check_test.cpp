@@ -1,0 +1,130 @@
+#include "core/monitor/input_check.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "tests/support/allocation_counter.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+struct Block {
+  std::vector<double> fx, fy, fz;
+  SampleBlock view(std::int64_t utime_us, double rate = 50000.0) const {
+    return {utime_us, 0, rate, fx, fy, fz};
+  }
+};
+
+Block ramp(std::size_t n, double start = 0.0) {
+  Block b;
+  for (std::size_t i = 0; i < n; ++i) {
+    b.fx.push_back(start + static_cast<double>(i));
+    b.fy.push_back(-1.0);
+    b.fz.push_back(0.5);
+  }
+  return b;
+}
+
+InputCheckConfig config() {
+  InputCheckConfig c;
+  c.sample_rate_hz = 50000.0;  // 20 µs per sample
+  c.saturation_N = {100.0, 100.0, 100.0};
+  return c;
+}
+
+TEST(InputCheck, ContinuousBlocksPassUnchanged) {
+  InputCheck check(config());
+  const Block a = ramp(100);
+  const Block b = ramp(100, 100.0);
+  const auto ca = check.check(a.view(1'000'000));
+  EXPECT_EQ(ca.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(ca.first_sample, 0);
+  const auto cb = check.check(b.view(1'002'000));
+  EXPECT_EQ(cb.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(cb.first_sample, 100);
+  EXPECT_EQ(cb.gap_samples, 0);
+  EXPECT_EQ(cb.fx_N[5], 105.0);
+  EXPECT_EQ(check.counters().samples_accepted, 200);
+  EXPECT_EQ(check.counters().samples_dropped, 0);
+  EXPECT_EQ(check.utime_of(150), 1'003'000);
+}
+
+TEST(InputCheck, NonFiniteSamplesAreReplacedFlaggedAndCounted) {
+  InputCheck check(config());
+  Block a = ramp(10);
+  a.fx[3] = std::numeric_limits<double>::quiet_NaN();
+  a.fy[7] = std::numeric_limits<double>::infinity();
+  const auto c = check.check(a.view(0));
+  EXPECT_EQ(c.fx_N[3], 2.0);  // last good value of the channel
+  EXPECT_EQ(c.fy_N[7], -1.0);
+  EXPECT_EQ(c.flags[3], kFlagNonFinite);
+  EXPECT_EQ(c.flags[4], 0);
+  EXPECT_EQ(check.counters().nonfinite_samples, 2);
+  EXPECT_EQ(check.counters().samples_flagged, 2);
+  EXPECT_EQ(check.counters().samples_accepted, 10);
+}
+
+TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
+  InputCheck check(config());
+  Block a = ramp(5);
+  a.fz[2] = -100.0;
+  const auto c = check.check(a.view(0));
+  EXPECT_EQ(c.fz_N[2], -100.0);
+  EXPECT_EQ(c.flags[2], kFlagSaturated);
+  EXPECT_EQ(check.counters().saturated_samples, 1);
+}
+
+TEST(InputCheck, GapsAreCountedAsDroppedSamplesAndKeepTime) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  const auto c = check.check(ramp(100).view(2000 + 50 * 20));  // 50 samples missing
+  EXPECT_EQ(c.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(c.gap_samples, 50);
+  EXPECT_EQ(c.first_sample, 150);
+  EXPECT_EQ(check.counters().gaps, 1);
+  EXPECT_EQ(check.counters().samples_dropped, 50);
+}
+
+TEST(InputCheck, OutOfOrderAndRepeatedBlocksAreRejected) {
+  InputCheck check(config());
+  check.check(ramp(100).view(10'000));
+  check.check(ramp(100).view(12'000));
+  const auto repeated = check.check(ramp(100).view(12'000));
+  EXPECT_EQ(repeated.verdict, BlockVerdict::kRejected);
+  const auto older = check.check(ramp(100).view(10'000));
+  EXPECT_EQ(older.verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(check.counters().out_of_order_blocks, 2);
+  EXPECT_EQ(check.counters().samples_dropped, 200);
+  // The stream continues where it was.
+  EXPECT_EQ(check.check(ramp(100).view(14'000)).gap_samples, 0);
+}
+
+TEST(InputCheck, MalformedBlocksAreRejectedWithAReason) {
+  InputCheck check(config());
+  Block bad = ramp(10);
+  bad.fy.pop_back();
+  const auto c = check.check(bad.view(0));
+  EXPECT_EQ(c.verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(c.problem, "channels of unequal length");
+  EXPECT_EQ(check.check(ramp(10).view(0, 20000.0)).problem,
+            "sample rate differs from the configured one");
+  EXPECT_EQ(check.check(Block{}.view(0)).problem, "empty block");
+  EXPECT_EQ(check.counters().blocks_rejected, 3);
+}
+
+TEST(InputCheck, SteadyStateAllocatesNothing) {
+  InputCheck check(config());
+  const Block a = ramp(1000);
+  check.check(a.view(0));
+  test::AllocationCounter counter;
+  for (int i = 1; i < 10; ++i) {
+    check.check(a.view(i * 20'000));
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+}
+
+}  // namespace
+}  // namespace millwatch::monitor
