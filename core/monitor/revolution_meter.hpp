@@ -14,11 +14,13 @@
 #include <array>
 #include <cstdint>
 
-#include "core/monitor/phase_model.hpp"
+#include "core/signal/phase_model.hpp"
 #include "core/monitor/sample_ring.hpp"
 #include "core/monitor/valley_template.hpp"
 
 namespace millwatch::monitor {
+
+using signal::PhaseModel;
 
 struct RevolutionMeasurement {
   std::int64_t sequence = 0;  ///< revolutions measured by this meter since its last restart

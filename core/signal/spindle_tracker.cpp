@@ -1,0 +1,347 @@
+#include "core/signal/spindle_tracker.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "core/config/json_reader.hpp"
+
+namespace millwatch::signal {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+double wrap_pi(double a) {
+  return a - kTwoPi * std::round(a / kTwoPi);
+}
+
+/// DTFT of x at `cycles_per_sample`, evaluated at the block's first sample (phasor recursion).
+std::complex<double> dtft(std::span<const double> x, double cycles_per_sample) {
+  const std::complex<double> step = std::polar(1.0, -kTwoPi * cycles_per_sample);
+  std::complex<double> rot = 1.0;
+  std::complex<double> sum = 0.0;
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    sum += x[n] * rot;
+    rot *= step;
+    if ((n & 1023) == 1023) {
+      rot /= std::abs(rot);  // keep the phasor on the unit circle
+    }
+  }
+  return sum;
+}
+
+}  // namespace
+
+SpindleTrackerConfig spindle_tracker_config_from_json(const nlohmann::json& j,
+                                                      const std::string& path) {
+  config::ObjectReader r(j, path);
+  SpindleTrackerConfig c;
+  c.search_fraction = r.number("search_fraction", c.search_fraction, {0.0, 0.45, true, false, ""});
+  c.window_s = r.number("window_s", c.window_s, config::closed(0.02, 10.0, "s"));
+  c.hop_s = r.number("hop_s", c.hop_s, config::closed(0.001, 10.0, "s"));
+  c.max_harmonic = r.integer("max_harmonic", c.max_harmonic, 0, 64);
+  c.min_snr_db = r.number("min_snr_db", c.min_snr_db, config::closed(0.0, 80.0, "dB"));
+  c.phase_gain = r.number("phase_gain", c.phase_gain, {0.0, 1.0, true, false, ""});
+  r.finish();
+  if (c.hop_s > c.window_s) {
+    config::fail(r.path_of("hop_s"), "value " + std::to_string(c.hop_s) +
+                                         " s must not exceed window_s (" +
+                                         std::to_string(c.window_s) + " s)");
+  }
+  return c;
+}
+
+nlohmann::json to_json(const SpindleTrackerConfig& c) {
+  return {{"search_fraction", c.search_fraction},
+          {"window_s", c.window_s},
+          {"hop_s", c.hop_s},
+          {"max_harmonic", c.max_harmonic},
+          {"min_snr_db", c.min_snr_db},
+          {"phase_gain", c.phase_gain}};
+}
+
+void validate(const SpindleTrackerConfig& c, const std::string& path) {
+  const std::string at = path.empty() ? "" : path + ".";
+  if (!(c.sample_rate_hz > 0.0)) {
+    config::fail(at + "sample_rate_hz", "must be > 0");
+  }
+  if (c.flutes < 1 || c.flutes > 8) {
+    config::fail(at + "flutes", "value " + std::to_string(c.flutes) + " is out of range [1, 8]");
+  }
+  if (!(c.commanded_rpm > 0.0)) {
+    config::fail(at + "commanded_rpm", "value " + std::to_string(c.commanded_rpm) + " must be > 0");
+  }
+  const double f_max = c.commanded_rpm / 60.0 * (1.0 + c.search_fraction);
+  if (f_max >= 0.45 * c.sample_rate_hz) {
+    config::fail(at + "sample_rate_hz", "value " + std::to_string(c.sample_rate_hz) +
+                                            " Hz is too low for a spindle at up to " +
+                                            std::to_string(f_max) + " Hz");
+  }
+  if (c.window_s * c.commanded_rpm / 60.0 < 8.0) {
+    config::fail(at + "window_s",
+                 "value " + std::to_string(c.window_s) + " s must hold at least 8 revolutions");
+  }
+}
+
+SpindleTracker::~SpindleTracker() {
+  release();
+}
+
+void SpindleTracker::release() {
+  if (plan_ != nullptr) {
+    fftw_destroy_plan(plan_);
+    plan_ = nullptr;
+  }
+  fftw_free(fft_in_);
+  fftw_free(fft_out_);
+  fft_in_ = nullptr;
+  fft_out_ = nullptr;
+}
+
+void SpindleTracker::setup(const SpindleTrackerConfig& config) {
+  validate(config, "spindle");
+  release();
+  config_ = config;
+  window_ = static_cast<std::size_t>(std::llround(config_.window_s * config_.sample_rate_hz));
+  hop_ = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::llround(config_.hop_s * config_.sample_rate_hz)));
+  fft_size_ = std::bit_ceil(2 * window_);  // zero-padded: finer bins for the interpolation
+  const double f_max = config_.commanded_rpm / 60.0 * (1.0 + config_.search_fraction);
+  const int auto_harmonics = 4 * config_.flutes;
+  harmonics_ = config_.max_harmonic > 0 ? config_.max_harmonic : auto_harmonics;
+  harmonics_ =
+      std::max(1, std::min(harmonics_, static_cast<int>(0.45 * config_.sample_rate_hz / f_max)));
+  ring_.assign(window_, 0.0);
+  hann_.resize(window_);
+  for (std::size_t n = 0; n < window_; ++n) {
+    hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
+  }
+  magnitude_.assign(fft_size_ / 2 + 1, 0.0);
+  scratch_.reserve(fft_size_ / 2 + 1);
+  fft_in_ = fftw_alloc_real(fft_size_);
+  fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
+  plan_ = fftw_plan_dft_r2c_1d(static_cast<int>(fft_size_), fft_in_, fft_out_, FFTW_ESTIMATE);
+  restart(0);
+}
+
+void SpindleTracker::restart(std::int64_t next_sample) {
+  next_sample_ = next_sample;
+  stream_start_ = next_sample;
+  since_hop_ = 0;
+  locked_ = false;
+  recent_count_ = 0;
+  estimate_ = {};
+  phase_ = {};
+}
+
+int SpindleTracker::process(std::span<const double> samples) {
+  int updates = 0;
+  for (double x : samples) {
+    ring_[static_cast<std::size_t>(next_sample_ % static_cast<std::int64_t>(window_))] = x;
+    ++next_sample_;
+    ++since_hop_;
+    if (since_hop_ >= hop_ && next_sample_ - stream_start_ >= static_cast<std::int64_t>(window_)) {
+      since_hop_ = 0;
+      update();
+      ++updates;
+    }
+  }
+  return updates;
+}
+
+double SpindleTracker::magnitude_at(double f_hz) const {
+  const double pos = f_hz * static_cast<double>(fft_size_) / config_.sample_rate_hz;
+  const auto k = static_cast<std::size_t>(pos);
+  if (k + 1 >= magnitude_.size()) {
+    return 0.0;
+  }
+  const double w = pos - static_cast<double>(k);
+  return (1.0 - w) * magnitude_[k] + w * magnitude_[k + 1];
+}
+
+double SpindleTracker::harmonic_score(double f_hz) const {
+  double sum = 0.0;
+  for (int h = 1; h <= harmonics_; ++h) {
+    sum += magnitude_at(h * f_hz);
+  }
+  return sum / harmonics_;
+}
+
+void SpindleTracker::update() {
+  // The window, oldest sample first, without its mean, Hann-weighted, zero-padded.
+  const auto w = static_cast<std::int64_t>(window_);
+  const std::int64_t first = next_sample_ - w;
+  double mean = 0.0;
+  for (std::int64_t n = first; n < next_sample_; ++n) {
+    mean += ring_[static_cast<std::size_t>(n % w)];
+  }
+  mean /= static_cast<double>(window_);
+  for (std::size_t i = 0; i < window_; ++i) {
+    fft_in_[i] =
+        (ring_[static_cast<std::size_t>((first + static_cast<std::int64_t>(i)) % w)] - mean) *
+        hann_[i];
+  }
+  std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
+  fftw_execute(plan_);
+  for (std::size_t k = 0; k < magnitude_.size(); ++k) {
+    magnitude_[k] = std::hypot(fft_out_[k][0], fft_out_[k][1]);
+  }
+
+  // Coarse search over the commanded range, a quarter of a (padded) bin at a time.
+  const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
+  const double f_cmd = config_.commanded_rpm / 60.0;
+  const double f_lo = f_cmd * (1.0 - config_.search_fraction);
+  const double f_hi = f_cmd * (1.0 + config_.search_fraction);
+  double best_f = f_lo;
+  double best_score = -1.0;
+  for (double f = f_lo; f <= f_hi; f += 0.25 * bin_hz) {
+    const double s = harmonic_score(f);
+    if (s > best_score) {
+      best_score = s;
+      best_f = f;
+    }
+  }
+
+  // Noise floor: median magnitude over the band the harmonics span.
+  scratch_.clear();
+  const auto k_lo = static_cast<std::size_t>(0.5 * best_f / bin_hz);
+  const auto k_hi = std::min(magnitude_.size() - 1,
+                             static_cast<std::size_t>((harmonics_ + 0.5) * best_f / bin_hz));
+  for (std::size_t k = k_lo; k <= k_hi; ++k) {
+    scratch_.push_back(magnitude_[k]);
+  }
+  std::nth_element(scratch_.begin(),
+                   scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2),
+                   scratch_.end());
+  const double floor = std::max(scratch_[scratch_.size() / 2], 1e-300);
+
+  // Refine with every harmonic standing clear of the floor.
+  double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, strongest = 0.0;
+  int used = 0;
+  for (int h = 1; h <= harmonics_; ++h) {
+    const auto center = static_cast<std::size_t>(std::lround(h * best_f / bin_hz));
+    if (center < 3 || center + 3 >= magnitude_.size()) {
+      continue;
+    }
+    std::size_t k = center;
+    for (std::size_t c = center - 2; c <= center + 2; ++c) {
+      if (magnitude_[c] > magnitude_[k]) {
+        k = c;
+      }
+    }
+    const double m = magnitude_[k];
+    strongest = std::max(strongest, m);
+    if (m < 4.0 * floor) {
+      continue;
+    }
+    const double l0 = std::log(magnitude_[k - 1]);
+    const double l1 = std::log(m);
+    const double l2 = std::log(magnitude_[k + 1]);
+    const double denom = l0 - 2.0 * l1 + l2;
+    const double delta = denom < 0.0 ? 0.5 * (l0 - l2) / denom : 0.0;
+    const double f_h = (static_cast<double>(k) + delta) * bin_hz / h;
+    const double weight = (h * m) * (h * m);
+    sum_w += weight;
+    sum_wf += weight * f_h;
+    sum_wff += weight * f_h * f_h;
+    ++used;
+  }
+
+  SpindleEstimate& e = estimate_;
+  ++e.updates;
+  e.relocked = false;
+  e.center_sample = first + w / 2;
+  e.snr_db = 20.0 * std::log10(std::max(strongest, 1e-300) / floor);
+  e.cutting = e.snr_db >= config_.min_snr_db && used > 0;
+  if (!e.cutting) {
+    e.valid = false;
+    locked_ = false;
+    recent_count_ = 0;
+    phase_.valid = false;
+    return;
+  }
+  const double f = sum_wf / sum_w;
+  const double spread = std::sqrt(std::max(0.0, sum_wff / sum_w - f * f));
+  e.spindle_hz = f;
+  e.spindle_rpm = 60.0 * f;
+  e.uncertainty_rpm = 60.0 * spread / std::sqrt(static_cast<double>(used));
+  e.valid = true;
+
+  // Phase at the window centre from the fundamental and the tooth harmonic (exact DTFTs of the
+  // windowed block; the Hann window is symmetric, so it adds no phase at the centre).
+  const std::span<const double> block(fft_in_, window_);
+  const double centre = static_cast<double>(w / 2);
+  const std::complex<double> c1 = dtft(block, f / config_.sample_rate_hz);
+  const int z = config_.flutes;
+  const std::complex<double> cz = dtft(block, z * f / config_.sample_rate_hz);
+  const double phi1 = std::arg(c1) + kTwoPi * f * centre / config_.sample_rate_hz;
+  const double phiz = std::arg(cz) + kTwoPi * z * f * centre / config_.sample_rate_hz;
+  double angle = phi1;
+  if (z > 1) {
+    double best = 1e9;
+    for (int m = 0; m < z; ++m) {
+      const double candidate = (phiz + kTwoPi * m) / z;
+      const double miss = std::fabs(wrap_pi(candidate - phi1));
+      if (miss < best) {
+        best = miss;
+        angle = candidate;
+      }
+    }
+  }
+  e.angle_rad = std::fmod(std::fmod(angle, kTwoPi) + kTwoPi, kTwoPi);
+
+  // Speed trend over the recent hops (least squares), for ramps.
+  const double t_c = static_cast<double>(e.center_sample) / config_.sample_rate_hz;
+  const int cap = static_cast<int>(recent_hz_.size());
+  if (recent_count_ == cap) {
+    std::rotate(recent_hz_.begin(), recent_hz_.begin() + 1, recent_hz_.end());
+    std::rotate(recent_center_s_.begin(), recent_center_s_.begin() + 1, recent_center_s_.end());
+    --recent_count_;
+  }
+  recent_hz_[static_cast<std::size_t>(recent_count_)] = f;
+  recent_center_s_[static_cast<std::size_t>(recent_count_)] = t_c;
+  ++recent_count_;
+  double slope = 0.0;
+  if (recent_count_ >= 3) {
+    double mt = 0.0, mf = 0.0;
+    for (int i = 0; i < recent_count_; ++i) {
+      mt += recent_center_s_[static_cast<std::size_t>(i)];
+      mf += recent_hz_[static_cast<std::size_t>(i)];
+    }
+    mt /= recent_count_;
+    mf /= recent_count_;
+    double stt = 0.0, stf = 0.0;
+    for (int i = 0; i < recent_count_; ++i) {
+      const double dt = recent_center_s_[static_cast<std::size_t>(i)] - mt;
+      stt += dt * dt;
+      stf += dt * (recent_hz_[static_cast<std::size_t>(i)] - mf);
+    }
+    slope = stt > 0.0 ? stf / stt : 0.0;
+  }
+
+  const double n_c = static_cast<double>(e.center_sample);
+  if (locked_) {
+    const double predicted = phase_.angle_at(n_c);
+    const double error = wrap_pi(angle - predicted);
+    if (std::fabs(error) < 1.0) {
+      phase_.reference_angle_rad = predicted + config_.phase_gain * error;
+      phase_.reference_sample = n_c;
+      phase_.spindle_hz = f;
+      phase_.spindle_hz_per_s = slope;
+      return;
+    }
+    // The phase jumped: the cut changed (stop/start, a new tool...). Lock afresh.
+  }
+  locked_ = true;
+  e.relocked = true;
+  phase_.valid = true;
+  phase_.reference_sample = n_c;
+  phase_.reference_angle_rad = e.angle_rad;
+  phase_.spindle_hz = f;
+  phase_.spindle_hz_per_s = recent_count_ >= 3 ? slope : 0.0;
+  phase_.sample_rate_hz = config_.sample_rate_hz;
+}
+
+}  // namespace millwatch::signal

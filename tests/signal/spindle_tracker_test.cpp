@@ -1,0 +1,227 @@
+#include "core/signal/spindle_tracker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "core/config/json_reader.hpp"
+#include "tests/support/allocation_counter.hpp"
+
+namespace millwatch::signal {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+/// A milling-like force: each flute a half-sine pulse over its share of the revolution with its
+/// own amplitude (runout), plus white noise, 50 Hz hum and a drift. `angle(t)` is the spindle
+/// angle (rad), so the speed profile is arbitrary.
+struct Cut {
+  int flutes = 2;
+  std::vector<double> amplitude = {1.0, 0.8};
+  double noise_N = 0.05;
+  double hum_N = 0.05;
+  double drift_N_per_s = 0.2;
+  std::mt19937_64 rng{7};
+
+  double force(double angle, double t) {
+    const double pitch = 2 * kPi / flutes;
+    double a = std::fmod(angle, 2 * kPi);
+    if (a < 0) {
+      a += 2 * kPi;
+    }
+    const int j = std::min(flutes - 1, static_cast<int>(a / pitch));
+    const double u = (a - j * pitch) / pitch;  // 0..1 within the flute's share
+    const double pulse = amplitude[static_cast<std::size_t>(j)] * std::sin(kPi * u);
+    return pulse + noise_N * std::normal_distribution<double>()(rng) +
+           hum_N * std::sin(2 * kPi * 50 * t) + drift_N_per_s * t;
+  }
+};
+
+SpindleTrackerConfig config(double fs, int flutes, double commanded_rpm) {
+  SpindleTrackerConfig c;
+  c.sample_rate_hz = fs;
+  c.flutes = flutes;
+  c.commanded_rpm = commanded_rpm;
+  return c;
+}
+
+// [000]: 25,252 rpm actual at 25,000 commanded. Within 0.05 % from 0.25 s of data.
+TEST(SpindleTracker, MeasuresTheActualSpeedFromAQuarterSecond) {
+  for (double fs : {20000.0, 50000.0, 333300.0}) {
+    for (int flutes : {2, 3}) {
+      Cut cut;
+      cut.flutes = flutes;
+      cut.amplitude =
+          flutes == 2 ? std::vector<double>{1.0, 0.8} : std::vector<double>{1.0, 0.9, 0.7};
+      const double f_true = 25252.0 / 60.0;
+      SpindleTracker tracker(config(fs, flutes, 25000.0));
+      std::vector<double> x(static_cast<std::size_t>(0.25 * fs));
+      for (std::size_t n = 0; n < x.size(); ++n) {
+        const double t = static_cast<double>(n) / fs;
+        x[n] = cut.force(2 * kPi * f_true * t + 0.3, t);
+      }
+      tracker.process(x);
+      const auto& e = tracker.estimate();
+      ASSERT_TRUE(e.valid) << fs << " " << flutes;
+      EXPECT_NEAR(e.spindle_rpm, 25252.0, 0.0005 * 25252.0) << fs << " Hz, " << flutes << " flutes";
+      EXPECT_TRUE(e.cutting);
+    }
+  }
+}
+
+// With nearly equal flutes the fundamental is weak; the commanded range still settles the
+// octave: the spindle frequency, not the tooth frequency, is reported.
+TEST(SpindleTracker, ReportsTheSpindleNotTheToothFrequency) {
+  Cut cut;
+  cut.amplitude = {1.0, 0.995};
+  const double fs = 50000.0;
+  SpindleTracker tracker(config(fs, 2, 25000.0));
+  std::vector<double> x(static_cast<std::size_t>(0.5 * fs));
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    const double t = static_cast<double>(n) / fs;
+    x[n] = cut.force(2 * kPi * 420.0 * t, t);
+  }
+  tracker.process(x);
+  EXPECT_NEAR(tracker.estimate().spindle_hz, 420.0, 0.0005 * 420.0);
+}
+
+// The phase model's revolutions are spaced 1/f and do not slip against the true spindle angle.
+TEST(SpindleTracker, PhaseStaysLockedOverSeconds) {
+  Cut cut;
+  const double fs = 20000.0;
+  const double f_true = 421.3;
+  const double phase0 = 1.1;
+  SpindleTracker tracker(config(fs, 2, 25000.0));
+  std::vector<double> block(500);
+  double offset = 0.0;
+  int checks = 0;
+  double worst = 0.0;
+  for (int b = 0; b < 200; ++b) {  // 5 s
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const double n = static_cast<double>(b * 500 + static_cast<int>(i));
+      block[i] = cut.force(2 * kPi * f_true * n / fs + phase0, n / fs);
+    }
+    tracker.process(block);
+    const auto& p = tracker.phase();
+    if (!p.valid) {
+      continue;
+    }
+    const double n_now = static_cast<double>(tracker.next_sample() - 1);
+    const double truth = 2 * kPi * f_true * n_now / fs + phase0;
+    const double diff = std::remainder(p.angle_at(n_now) - truth, 2 * kPi);
+    if (checks == 0) {
+      offset = diff;  // the tracker's zero is its own
+    }
+    worst = std::max(worst, std::fabs(std::remainder(diff - offset, 2 * kPi)));
+    ++checks;
+  }
+  EXPECT_GT(checks, 150);
+  EXPECT_LT(worst * 180 / kPi, 3.0);  // degrees
+  const auto& p = tracker.phase();
+  EXPECT_NEAR(p.samples_per_revolution(), fs / f_true, 1e-3 * fs / f_true);
+}
+
+// A ramp of 4 % per second is followed.
+TEST(SpindleTracker, FollowsASlowRamp) {
+  Cut cut;
+  const double fs = 20000.0;
+  SpindleTracker tracker(config(fs, 2, 25000.0));
+  auto rpm = [](double t) { return 25000.0 - 1000.0 * std::clamp((t - 0.5) / 1.0, 0.0, 1.0); };
+  double angle = 0.0;
+  std::vector<double> block(250);
+  double worst_rel = 0.0;
+  for (int b = 0; b < 240; ++b) {  // 3 s
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const double t = (b * 250.0 + static_cast<double>(i)) / fs;
+      block[i] = cut.force(angle, t);
+      angle += 2 * kPi * rpm(t) / 60.0 / fs;
+    }
+    if (tracker.process(block) > 0 && tracker.estimate().valid) {
+      const double tc = static_cast<double>(tracker.estimate().center_sample) / fs;
+      worst_rel =
+          std::max(worst_rel, std::fabs(tracker.estimate().spindle_rpm - rpm(tc)) / rpm(tc));
+    }
+  }
+  // Over a 0.25 s window the speed changes 1 %: the centre estimate stays well inside that.
+  EXPECT_LT(worst_rel, 0.002);
+  EXPECT_NEAR(tracker.estimate().spindle_rpm, 24000.0, 0.0005 * 24000.0);
+}
+
+// Stop/start: pure noise means no cutting and no valid speed; cutting again at a new speed is
+// reacquired within about a window.
+TEST(SpindleTracker, SaysNoCuttingAndReacquiresAfterAStop) {
+  Cut cut;
+  const double fs = 20000.0;
+  SpindleTracker tracker(config(fs, 2, 25000.0));
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::mt19937_64 rng(3);
+  std::vector<double> block(200);
+  int relocks = 0;
+  for (int b = 0; b < 400; ++b) {  // 4 s: cut 1 s, stop 1 s, cut at 24,100 rpm 2 s
+    const double t0 = b * 200.0 / fs;
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const double t = t0 + static_cast<double>(i) / fs;
+      if (t < 1.0) {
+        block[i] = cut.force(2 * kPi * 420.0 * t, t);
+      } else if (t < 2.0) {
+        block[i] = noise(rng);
+      } else {
+        block[i] = cut.force(2 * kPi * 24100.0 / 60.0 * t + 2.0, t);
+      }
+    }
+    tracker.process(block);
+    const auto& e = tracker.estimate();
+    relocks += e.relocked ? 1 : 0;
+    const double tc = static_cast<double>(e.center_sample) / fs;
+    if (tc > 1.3 && tc < 1.7) {
+      EXPECT_FALSE(e.cutting) << tc;
+      EXPECT_FALSE(e.valid) << tc;
+      EXPECT_FALSE(tracker.phase().valid);
+    }
+    if (t0 > 2.3) {
+      EXPECT_TRUE(e.valid) << t0;
+      EXPECT_NEAR(e.spindle_rpm, 24100.0, 0.0005 * 24100.0) << t0;
+    }
+  }
+  EXPECT_GE(relocks, 2);
+}
+
+TEST(SpindleTracker, ProcessAllocatesNothing) {
+  Cut cut;
+  SpindleTracker tracker(config(20000.0, 2, 25000.0));
+  std::vector<double> x(20000);
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    x[n] = cut.force(2 * kPi * 420.0 * static_cast<double>(n) / 20000.0, 0.0);
+  }
+  tracker.process(x);
+  test::AllocationCounter counter;
+  EXPECT_GT(tracker.process(x), 0);
+  EXPECT_EQ(counter.allocations(), 0);
+}
+
+TEST(SpindleTracker, InvalidConfigurationNamesTheField) {
+  auto error_of = [](const SpindleTrackerConfig& c) {
+    try {
+      SpindleTracker t(c);
+    } catch (const config::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  auto c = config(20000.0, 2, 25000.0);
+  c.commanded_rpm = 0.0;
+  EXPECT_NE(error_of(c).find("spindle.commanded_rpm"), std::string::npos);
+  c = config(500.0, 2, 25000.0);
+  EXPECT_NE(error_of(c).find("spindle.sample_rate_hz"), std::string::npos);
+  c = config(20000.0, 2, 25000.0);
+  c.window_s = 0.01;
+  EXPECT_NE(error_of(c).find("spindle.window_s"), std::string::npos);
+  const nlohmann::json j = {{"window_s", 0.1}, {"hop_s", 0.2}};
+  EXPECT_THROW(spindle_tracker_config_from_json(j, "spindle"), config::ConfigError);
+}
+
+}  // namespace
+}  // namespace millwatch::signal
