@@ -26,6 +26,17 @@ class Resonance {
     s2_ = b2_ * x - a2_ * y;
     return y;
   }
+  /// Takes the coefficients of `other` and keeps this one's state (a change of step time or
+  /// tuning without a transient).
+  void retune(const Resonance& other) {
+    b0_ = other.b0_;
+    b1_ = other.b1_;
+    b2_ = other.b2_;
+    a1_ = other.a1_;
+    a2_ = other.a2_;
+    sample_rate_hz_ = other.sample_rate_hz_;
+    decay_time_s_ = other.decay_time_s_;
+  }
   /// Sets the state to the steady response to a constant input.
   void settle(double x);
   void reset() { s1_ = s2_ = 0.0; }

@@ -192,11 +192,12 @@ void MillingModel::derive(bool keep_state) {
     const double fs = 1.0 / step_time_s_;
     for (int a = 0; a < 3; ++a) {
       const auto ua = static_cast<std::size_t>(a);
-      Resonance r(e.dynamometer.natural_hz[ua], e.dynamometer.damping_ratio[ua], fs);
+      const Resonance r(e.dynamometer.natural_hz[ua], e.dynamometer.damping_ratio[ua], fs);
       if (keep_state) {
-        r.settle(a == 0 ? forces_.fx_N.back() : a == 1 ? forces_.fy_N.back() : forces_.fz_N.back());
+        dynamometer_.axis[ua].retune(r);  // the resonance keeps ringing through the update
+      } else {
+        dynamometer_.axis[ua] = r;
       }
-      dynamometer_.axis[ua] = r;
     }
   }
 }

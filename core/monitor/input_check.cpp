@@ -20,8 +20,16 @@ void InputCheck::restart() {
 }
 
 CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) {
-  counters_.samples_dropped += static_cast<std::int64_t>(block.fx_N.size());
+  const auto n = static_cast<std::int64_t>(block.fx_N.size());
+  counters_.samples_dropped += n;
   ++counters_.blocks_rejected;
+  // A block rejected at its expected time leaves its slot empty: the next block follows the
+  // hole without counting those samples again.
+  if (started_ && std::fabs(static_cast<double>(block.utime_us - utime_of(next_sample_)) *
+                            config_.sample_rate_hz / 1e6) <= config_.tolerance_samples) {
+    next_sample_ += n;
+    hole_samples_ += n;
+  }
   CheckedBlock out;
   out.verdict = BlockVerdict::kRejected;
   out.problem = why;
@@ -63,6 +71,12 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     next_sample_ += missing;
     out.gap_samples = missing;
     out.problem = "gap before block";
+  }
+  if (hole_samples_ > 0) {  // a rejected block's slot: a discontinuity, already counted
+    out.gap_samples += hole_samples_;
+    ++counters_.gaps;
+    hole_samples_ = 0;
+    out.problem = "samples of a rejected block missing before this one";
   }
 
   const std::array<std::span<const double>, 3> in = {block.fx_N, block.fy_N, block.fz_N};

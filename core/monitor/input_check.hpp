@@ -2,7 +2,8 @@
 // First stage of the pipeline: checks each block and each sample, counts what is wrong, and
 // hands on a clean block. Nothing is thrown; everything is counted.
 //
-//  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected
+//  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected;
+//    when it came at its expected time, its slot is a gap before the next block (counted once)
 //  - block older than expected (out of order, duplicate): rejected
 //  - block later than expected: the missing samples are counted as dropped and reported as a
 //    gap so that downstream stages can restart
@@ -81,6 +82,7 @@ class InputCheck {
   bool started_ = false;
   std::int64_t start_utime_us_ = 0;
   std::int64_t next_sample_ = 0;
+  std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
   std::array<double, 3> last_good_{};
   std::array<std::vector<double>, 3> out_;
   std::vector<std::uint8_t> flags_;

@@ -20,7 +20,9 @@ double wrap_pi(double a) {
 RevolutionMeter::RevolutionMeter(const RevolutionMeterConfig& config, int channel_offset)
     : config_(config), offset_(channel_offset) {}
 
-void RevolutionMeter::restart() {
+void RevolutionMeter::restart(std::int64_t from_sample) {
+  start_from_ = from_sample;
+  needed_sample_ = INT64_MIN;
   started_ = false;
   valleys_found_ = 0;
 }
@@ -37,11 +39,12 @@ bool RevolutionMeter::find_valley(const SampleRing& ring, const PhaseModel& phas
       static_cast<std::int64_t>(std::ceil(config_.search_fraction_of_pitch * pitch_samples));
   const int h = config_.fit_half_width > 0
                     ? config_.fit_half_width
-                    : std::max(1, static_cast<int>(std::lround(pitch_samples / 16.0)));
+                    : std::max(2, static_cast<int>(std::lround(pitch_samples / 7.0)));
   const auto center = static_cast<std::int64_t>(std::llround(predicted));
-  if (center + half + h > ring.newest()) {
+  if (center + half + 3 * h > ring.newest()) {
+    needed_sample_ = center + half + 3 * h;
     *ok = false;
-    return false;  // not all samples yet
+    return false;  // not all samples yet (room for the fit to re-centre)
   }
   if (center - half - h < ring.oldest()) {
     *ok = false;
@@ -56,8 +59,20 @@ bool RevolutionMeter::find_valley(const SampleRing& ring, const PhaseModel& phas
     }
   }
   const bool interior = best > center - half && best < center + half;
-  const Extremum e =
-      refine_extremum([&](std::int64_t n) { return ring.at(resultant, n); }, best, h, true);
+  // Fit around the predicted valley when the data agree with the prediction: a window chosen
+  // by the noisy minimum itself leans towards the flatter side of an asymmetric valley (a bias
+  // of noise), a window fixed by the prediction does not. Then re-centre on the vertex until
+  // the window sits on it, so that the result does not depend on the prediction.
+  std::int64_t fit_center = std::llabs(best - center) <= h ? center : best;
+  Extremum e =
+      refine_extremum([&](std::int64_t n) { return ring.at(resultant, n); }, fit_center, h, true);
+  if (e.valid && std::llround(e.position) != fit_center) {
+    fit_center = std::llround(e.position);
+    if (fit_center - h >= ring.oldest() && fit_center + h <= ring.newest()) {
+      e = refine_extremum([&](std::int64_t n) { return ring.at(resultant, n); }, fit_center, h,
+                          true);
+    }
+  }
   *position = e.position;
   *ok = interior && e.valid;
   if (*ok) {
@@ -72,12 +87,18 @@ bool RevolutionMeter::find_valley(const SampleRing& ring, const PhaseModel& phas
 RevolutionMeter::Step RevolutionMeter::step(const SampleRing& ring, const PhaseModel& phase) {
   const int flutes = config_.flutes;
   if (!phase.valid || !template_.valid || ring.empty()) {
+    needed_sample_ = INT64_MIN;
     return Step::kWait;
   }
   if (!started_) {
     // Start at the first CE1 valley comfortably inside the ring.
     const double margin = 0.5 * phase.samples_per_revolution() / flutes;
-    const double oldest_angle = phase.angle_at(static_cast<double>(ring.oldest()) + margin);
+    const std::int64_t first = std::max(ring.oldest(), start_from_);
+    if (first > ring.newest()) {
+      needed_sample_ = first;
+      return Step::kWait;
+    }
+    const double oldest_angle = phase.angle_at(static_cast<double>(first) + margin);
     base_revolution_ = std::ceil((oldest_angle - template_.angle_rad[0]) / kTwoPi);
     next_valley_ = 0;
     valleys_found_ = 0;
@@ -121,18 +142,21 @@ void RevolutionMeter::measure(const SampleRing& ring) {
     // Peaks within the flute's period.
     const auto from = static_cast<std::int64_t>(std::ceil(valleys_[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(valleys_[uj + 1]));
+    // Channels fx, fy, fz, then the in-plane resultant √(fx² + fy²).
     for (int c = 0; c < 4; ++c) {
+      auto value = [&](std::int64_t n) {
+        return c < 3 ? ring.at(offset_ + c, n)
+                     : std::hypot(ring.at(offset_, n), ring.at(offset_ + 1, n));
+      };
       std::int64_t best = from;
       for (std::int64_t n = from; n <= to; ++n) {
-        if (std::fabs(ring.at(offset_ + c, n)) > std::fabs(ring.at(offset_ + c, best))) {
+        if (std::fabs(value(n)) > std::fabs(value(best))) {
           best = n;
         }
       }
-      double peak = ring.at(offset_ + c, best);
+      double peak = value(best);
       if (best > from && best < to) {
-        const bool negative = peak < 0.0;
-        const Extremum e = refine_extremum([&](std::int64_t n) { return ring.at(offset_ + c, n); },
-                                           best, 1, negative);
+        const Extremum e = refine_extremum(value, best, 1, peak < 0.0);
         if (e.valid) {
           peak = e.value;
         }

@@ -3,8 +3,9 @@
 // angle α ([001] eq 36, [003] eqs 4-5), and each flute's peak forces and ΔFy ([001] Fig. 5).
 //
 // Valleys are sought where the valley template and the tracked spindle angle put them (± a
-// fraction of a pitch), located to a fraction of a sample by a local parabola fit on the
-// resultant, and each measured valley nudges the template (so slow phase drift is followed).
+// fraction of a pitch), located to a fraction of a sample by a local polynomial fit on the
+// detection signal (the pipeline uses the squared resultant with the channel offsets removed),
+// and each measured valley nudges the template (so slow phase drift is followed).
 // Flute j's period runs from the valley before its cut to the valley after; a revolution is
 // measured once the first valley of the next one has arrived. Flute 0 is CE1 (template), and
 //   α = 360°·T_1/T,  ΔFy = |peak Fy of CE1| − |peak Fy of CE2|.
@@ -12,11 +13,12 @@
 // refined by a three-point parabola.
 
 #include <array>
+#include <climits>
 #include <cstdint>
 
-#include "core/signal/phase_model.hpp"
 #include "core/monitor/sample_ring.hpp"
 #include "core/monitor/valley_template.hpp"
+#include "core/signal/phase_model.hpp"
 
 namespace millwatch::monitor {
 
@@ -49,10 +51,14 @@ struct RevolutionMeterConfig {
 class RevolutionMeter {
  public:
   RevolutionMeter() = default;
-  /// @param channel_offset first of the ring's four channels (fx, fy, fz, resultant) to measure
+  /// @param channel_offset first of the ring's four channels to measure: fx, fy, fz and the
+  ///        valley-detection signal (smallest at the valleys, e.g. the resultant or its square)
   RevolutionMeter(const RevolutionMeterConfig& config, int channel_offset);
 
   void set_template(const ValleyTemplate& t) { template_ = t; }
+  /// The newest sample the next valley needs (known after advance() waited for it); measuring
+  /// exactly when it arrives makes the results independent of how samples come in blocks.
+  [[nodiscard]] std::int64_t needed_sample() const { return needed_sample_; }
   [[nodiscard]] const ValleyTemplate& valley_template() const { return template_; }
 
   /// Measures every revolution whose samples are all in the ring, calling sink(measurement)
@@ -70,8 +76,9 @@ class RevolutionMeter {
     }
   }
 
-  /// Forget the valley sequence (after a gap, a loss of lock, a new template).
-  void restart();
+  /// Forget the valley sequence (after a gap, a loss of lock, a new template); measure only
+  /// revolutions whose samples all come at or after `from_sample`.
+  void restart(std::int64_t from_sample = INT64_MIN);
 
  private:
   enum class Step { kWait, kValley, kRevolution };
@@ -83,6 +90,8 @@ class RevolutionMeter {
   int offset_ = 0;
   ValleyTemplate template_;
   bool started_ = false;
+  std::int64_t start_from_ = INT64_MIN;
+  std::int64_t needed_sample_ = INT64_MIN;
   std::int64_t next_valley_ = 0;  // index k: flute k mod N, tracker revolution k div N + base
   double base_revolution_ = 0.0;  // tracker revolution (unwrapped turns) of valley k = 0
   std::array<double, kMaxFlutes + 1> valleys_{};

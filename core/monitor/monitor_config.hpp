@@ -1,0 +1,55 @@
+#pragma once
+// Configuration of the monitoring pipeline, shared by the live daemon and the replay.
+//
+// JSON (every field optional except where the source cannot tell, e.g. the sample rate of a
+// live DAQ):
+//   { "model": { ModelConfig: the cut as commanded — tool, process, material, effects },
+//     "sample_rate_hz": 50000,
+//     "axis_map": {"x": "-fx", "y": "-fy", "z": "-fz"},
+//     "saturation_N": [x, y, z],
+//     "filter": {"cutoff_hz": 3300, "order": 4},
+//     "spindle": { SpindleTrackerConfig: window_s, hop_s, search_fraction, ... },
+//     "tooth_periods": {"window_revolutions": 30, "search_fraction_of_pitch": 0.3},
+//     "sync_average": {"bins": 360, "window_revolutions": 30, "template_revolutions": 10},
+//     "lockstep": {"enabled": true, "sectors": 12},
+//     "alerts": { AlertConfig } }
+
+#include <array>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/model/model_config.hpp"
+#include "core/monitor/alert_engine.hpp"
+#include "core/signal/axis_map.hpp"
+#include "core/signal/spindle_tracker.hpp"
+
+namespace millwatch::monitor {
+
+struct MonitorConfig {
+  model::ModelConfig model;
+  double sample_rate_hz = 50000.0;
+  signal::AxisMap axis_map;
+  std::array<double, 3> saturation_N = {std::numeric_limits<double>::infinity(),
+                                        std::numeric_limits<double>::infinity(),
+                                        std::numeric_limits<double>::infinity()};
+  double filter_cutoff_hz = 3300.0;  ///< [000] Sect. 5
+  int filter_order = 4;
+  signal::SpindleTrackerConfig spindle;  ///< rate, flutes, commanded speed come from the above
+  int alpha_window_revolutions = 30;     ///< [001]: α from 30 revolutions
+  double search_fraction_of_pitch = 0.3;
+  int sync_bins = 360;
+  int sync_window_revolutions = 30;
+  int template_revolutions = 10;  ///< revolutions averaged before the valleys are located
+  bool lockstep = true;
+  int residual_sectors = 12;
+  AlertConfig alerts;
+};
+
+/// @throws config::ConfigError naming the field, its value and the allowed range.
+MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path = "");
+nlohmann::json to_json(const MonitorConfig& c);
+/// Cross-field checks (sample rate against filter and spindle). @throws config::ConfigError.
+void validate(const MonitorConfig& c, const std::string& path = "");
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,36 @@
+#pragma once
+// Everything the pipeline measures about one revolution: the measured features, the same
+// features of the model in lockstep, and the residual between them.
+
+#include <array>
+#include <cstdint>
+
+#include "core/monitor/revolution_meter.hpp"
+
+namespace millwatch::monitor {
+
+inline constexpr int kMaxSectors = 36;
+
+struct RevolutionRecord {
+  std::int64_t revolution = 0;  ///< revolutions measured since the pipeline started
+  std::int64_t utime_us = 0;    ///< time of the revolution's first valley (filter delay removed)
+  double spindle_rpm = 0.0;     ///< tracked speed
+  RevolutionMeasurement measured;
+  /// Window statistics of the valid measured revolutions (the last alpha_window).
+  double alpha_mean_deg = 0.0;
+  double alpha_std_deg = 0.0;
+  double delta_fy_mean_N = 0.0;
+  int window_revolutions = 0;
+
+  bool model_valid = false;  ///< lockstep aligned and its revolution measured
+  RevolutionMeasurement model;
+  double model_offset_rad = 0.0;
+  /// Measured minus modelled filtered force over the revolution.
+  std::array<double, 3> residual_rms_N{};
+  double measured_rms_N = 0.0;  ///< RMS of the measured resultant, for scale
+  std::array<double, kMaxFlutes> residual_flute_rms_N{};
+  int sectors = 0;
+  std::array<double, kMaxSectors> residual_sector_rms_N{};
+};
+
+}  // namespace millwatch::monitor
