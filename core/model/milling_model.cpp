@@ -229,7 +229,7 @@ int MillingModel::settling_revolutions() const {
   return revs;
 }
 
-void MillingModel::warm_up(int revolutions) {
+void MillingModel::warm_up(int revolutions, double tolerance) {
   if (revolutions > 0) {
     for (int r = 0; r < revolutions; ++r) {
       step_revolution();
@@ -240,7 +240,6 @@ void MillingModel::warm_up(int revolutions) {
   // grows by a factor F_n'/(k + F_n') → 1 per pass): continue until a revolution repeats the
   // previous one. Accumulation patterns spanning several revolutions never do: hence the cap.
   constexpr int kMaxRevolutions = 150;
-  constexpr double kRelativeTolerance = 1e-6;
   const int settle = settling_revolutions();
   for (int r = 0; r < kMaxRevolutions; ++r) {
     previous_fx_N_ = forces_.fx_N;  // same size: no allocation
@@ -253,7 +252,7 @@ void MillingModel::warm_up(int revolutions) {
                          std::fabs(forces_.fy_N[k] - previous_fy_N_[k])});
       scale = std::max({scale, std::fabs(forces_.fx_N[k]), std::fabs(forces_.fy_N[k])});
     }
-    if (r + 1 >= settle && change <= kRelativeTolerance * scale) {
+    if (r + 1 >= settle && change <= tolerance * scale) {
       return;
     }
   }

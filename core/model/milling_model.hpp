@@ -55,7 +55,8 @@ class MillingModel {
   /// Steps revolutions until the force of one revolution repeats the previous one (at least
   /// settling_revolutions(), at most 150: accumulation patterns spanning several revolutions
   /// never repeat revolution to revolution), or exactly `revolutions` when > 0.
-  void warm_up(int revolutions = 0);
+  /// @param tolerance largest change between two revolutions, relative to the peak force
+  void warm_up(int revolutions = 0, double tolerance = 1e-6);
 
   [[nodiscard]] const ForceWaveform& forces() const { return forces_; }
   /// Chip (µm) that flute j engaged at step k of the last revolution, at the bottom disc (after

@@ -11,6 +11,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr int kAveragedRevolutions = 8;
+constexpr int kWarmUpRevolutions = 30;  // enough for deflection and accumulation to settle
 
 double wrap_2pi(double a) {
   a = std::fmod(a, kTwoPi);
@@ -20,11 +21,7 @@ double wrap_2pi(double a) {
 }  // namespace
 
 Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter)
-    : commanded_(model), config_(model), filter_(filter) {
-  for (auto& f : lowpass_) {
-    f = signal::LowPassFilter(filter_);
-  }
-}
+    : commanded_(model), config_(model), filter_(filter) {}
 
 bool Lockstep::set_spindle_hz(double spindle_hz) {
   if (built_ && std::fabs(spindle_hz - spindle_hz_) <= 0.002 * spindle_hz_) {
@@ -38,7 +35,7 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   config_.process.feed_per_tooth_um =
       commanded_.process.feed_per_tooth_um * commanded_.process.spindle_rpm / rpm;
   model::MillingModel m(config_);
-  m.warm_up();
+  m.warm_up(kWarmUpRevolutions);
   // Near h_min the two-regime law with deflection and accumulation makes chips differ from pass
   // to pass: the model's typical revolution is the mean of several, like the measured average.
   waveform_ = m.forces();
@@ -63,32 +60,39 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
 
 void Lockstep::filter_periodic() {
   // Steady state of the causal filter on the periodic model force: each harmonic k of the
-  // spindle frequency is multiplied by H(k·f).
+  // spindle frequency is multiplied by H(k·f). A DFT by phasor recursion (this runs once per
+  // model build, on a few hundred points).
   const std::size_t n = waveform_.fx_N.size();
+  const std::size_t half = n / 2;
   const std::array<const std::vector<double>*, 3> in = {&waveform_.fx_N, &waveform_.fy_N,
                                                         &waveform_.fz_N};
+  std::vector<std::complex<double>> gain(half + 1);
+  for (std::size_t k = 0; k <= half; ++k) {
+    gain[k] = filter_.response(static_cast<double>(k) * spindle_hz_);
+  }
+  std::vector<std::complex<double>> spectrum(half + 1);
   for (std::size_t a = 0; a < 3; ++a) {
     const std::vector<double>& x = *in[a];
-    std::vector<std::complex<double>> spectrum(n / 2 + 1);
-    for (std::size_t k = 0; k <= n / 2; ++k) {
-      std::complex<double> sum = 0.0;
+    for (std::size_t k = 0; k <= half; ++k) {
       const std::complex<double> step = std::polar(1.0, -kTwoPi * static_cast<double>(k) / n);
       std::complex<double> rot = 1.0;
+      std::complex<double> sum = 0.0;
       for (std::size_t i = 0; i < n; ++i) {
         sum += x[i] * rot;
         rot *= step;
       }
-      spectrum[k] = sum * filter_.response(static_cast<double>(k) * spindle_hz_);
+      // Real signal: weight 2 for the harmonics with a mirror image, 1 for DC and Nyquist.
+      const double weight = (k == 0 || 2 * k == n) ? 1.0 : 2.0;
+      spectrum[k] = weight * sum * gain[k] / static_cast<double>(n);
     }
     filtered_[a].assign(n, 0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      double v = std::real(spectrum[0]);
-      for (std::size_t k = 1; k <= n / 2; ++k) {
-        const double weight = (2 * k == n) ? 1.0 : 2.0;
-        v += weight *
-             std::real(spectrum[k] * std::polar(1.0, kTwoPi * static_cast<double>(k * i) / n));
+    for (std::size_t k = 0; k <= half; ++k) {
+      const std::complex<double> step = std::polar(1.0, kTwoPi * static_cast<double>(k) / n);
+      std::complex<double> rot = spectrum[k];
+      for (std::size_t i = 0; i < n; ++i) {
+        filtered_[a][i] += std::real(rot);
+        rot *= step;
       }
-      filtered_[a][i] = v / static_cast<double>(n);
     }
   }
 }
@@ -168,28 +172,16 @@ bool Lockstep::align(const SyncAverage& measured) {
   return true;
 }
 
-std::array<double, 3> Lockstep::raw_at(double model_angle_rad) const {
-  const std::size_t n = waveform_.fx_N.size();
-  const double pos = wrap_2pi(model_angle_rad) / kTwoPi * static_cast<double>(n);
-  const auto k0 = static_cast<std::size_t>(pos) % n;
+std::array<double, 3> Lockstep::next_sample(double tracker_angle_rad) const {
+  const double turns = (tracker_angle_rad + offset_rad_) / kTwoPi;
+  const std::size_t n = filtered_[0].size();
+  const double pos = (turns - std::floor(turns)) * static_cast<double>(n);
+  const auto k0 = std::min(static_cast<std::size_t>(pos), n - 1);
   const std::size_t k1 = k0 + 1 == n ? 0 : k0 + 1;
-  const double f = pos - std::floor(pos);
-  return {waveform_.fx_N[k0] + f * (waveform_.fx_N[k1] - waveform_.fx_N[k0]),
-          waveform_.fy_N[k0] + f * (waveform_.fy_N[k1] - waveform_.fy_N[k0]),
-          waveform_.fz_N[k0] + f * (waveform_.fz_N[k1] - waveform_.fz_N[k0])};
-}
-
-void Lockstep::settle(double tracker_angle_rad) {
-  const auto v = raw_at(tracker_angle_rad + offset_rad_);
-  for (std::size_t a = 0; a < 3; ++a) {
-    lowpass_[a].reset();
-    lowpass_[a].settle(v[a]);
-  }
-}
-
-std::array<double, 3> Lockstep::next_sample(double tracker_angle_rad) {
-  const auto v = raw_at(tracker_angle_rad + offset_rad_);
-  return {lowpass_[0].step(v[0]), lowpass_[1].step(v[1]), lowpass_[2].step(v[2])};
+  const double f = pos - static_cast<double>(k0);
+  return {filtered_[0][k0] + f * (filtered_[0][k1] - filtered_[0][k0]),
+          filtered_[1][k0] + f * (filtered_[1][k1] - filtered_[1][k0]),
+          filtered_[2][k0] + f * (filtered_[2][k1] - filtered_[2][k0])};
 }
 
 }  // namespace millwatch::monitor

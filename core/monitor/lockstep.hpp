@@ -8,9 +8,10 @@
 // filter as the measured force (so with the same lag), is correlated circularly with the
 // measured revolution-synchronous average, all three axes together; the best shift (refined
 // to a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
-// every measured sample gets a model sample at the same tracked angle, run through its own
-// instance of the same causal filter — the measured and modelled forces go through identical
-// processing and are compared like with like.
+// every measured sample gets a model sample at the same tracked angle, taken from the filtered
+// periodic model: the steady state of the same causal filter the measured force went through
+// (each harmonic k of the spindle frequency times H(k·f), so the same lag) — measured and
+// modelled forces are compared like with like.
 
 #include <array>
 #include <vector>
@@ -41,10 +42,8 @@ class Lockstep {
   /// Normalised correlation of the alignment (1 = identical shapes).
   [[nodiscard]] double alignment_correlation() const { return correlation_; }
 
-  /// The filtered model force (N, model frame) for the next measured sample at `tracker_angle_rad`.
-  std::array<double, 3> next_sample(double tracker_angle_rad);
-  /// Restart the model's filters at the value of the model at `tracker_angle_rad`.
-  void settle(double tracker_angle_rad);
+  /// The filtered model force (N, model frame) at the tracked angle of a measured sample.
+  [[nodiscard]] std::array<double, 3> next_sample(double tracker_angle_rad) const;
 
   /// The model's revolution (unfiltered), index k at model angle 2πk/steps.
   [[nodiscard]] const model::ForceWaveform& waveform() const { return waveform_; }
@@ -53,7 +52,6 @@ class Lockstep {
   [[nodiscard]] const model::ModelConfig& model_config() const { return config_; }
 
  private:
-  std::array<double, 3> raw_at(double model_angle_rad) const;
   void filter_periodic();
 
   model::ModelConfig commanded_;
@@ -61,7 +59,6 @@ class Lockstep {
   signal::ButterworthDesign filter_;
   model::ForceWaveform waveform_;
   std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
-  std::array<signal::LowPassFilter, 3> lowpass_;
   double spindle_hz_ = 0.0;
   double offset_rad_ = 0.0;
   double correlation_ = 0.0;

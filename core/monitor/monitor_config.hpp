@@ -10,7 +10,7 @@
 //     "filter": {"cutoff_hz": 3300, "order": 4},
 //     "spindle": { SpindleTrackerConfig: window_s, hop_s, search_fraction, ... },
 //     "tooth_periods": {"window_revolutions": 30, "search_fraction_of_pitch": 0.3},
-//     "sync_average": {"bins": 360, "window_revolutions": 30, "template_revolutions": 10},
+//     "sync_average": {"bins": 256, "window_revolutions": 30, "template_revolutions": 10},
 //     "lockstep": {"enabled": true, "sectors": 12},
 //     "alerts": { AlertConfig } }
 
@@ -38,7 +38,7 @@ struct MonitorConfig {
   signal::SpindleTrackerConfig spindle;  ///< rate, flutes, commanded speed come from the above
   int alpha_window_revolutions = 30;     ///< [001]: α from 30 revolutions
   double search_fraction_of_pitch = 0.3;
-  int sync_bins = 360;
+  int sync_bins = 256;
   int sync_window_revolutions = 30;
   int template_revolutions = 10;  ///< revolutions averaged before the valleys are located
   bool lockstep = true;

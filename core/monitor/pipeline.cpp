@@ -84,7 +84,7 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   tooth_delay_s_ = filter_.group_delay_s(tc.commanded_rpm / 60.0 * mc.flutes);
   tare_gain_ = 1.0 / (kTareTime_s * config_.sample_rate_hz);
   // The envelope forgets over about two revolutions at the commanded speed.
-  envelope_decay_ = std::exp(-1.0 / (2.0 * config_.sample_rate_hz / (tc.commanded_rpm / 60.0)));
+  envelope_decay_ = std::exp(-2.0 / (2.0 * config_.sample_rate_hz / (tc.commanded_rpm / 60.0)));
   // Gaps up to a tracker hop are bridged; longer ones restart the stream.
   max_bridged_gap_ = static_cast<std::int64_t>(config_.spindle.hop_s * config_.sample_rate_hz);
   alpha_window_.assign(static_cast<std::size_t>(config_.alpha_window_revolutions), 0.0);
@@ -117,8 +117,8 @@ void Pipeline::restart_stream(std::int64_t first_sample) {
   measuring_ = false;
   measured_meter_.restart();
   model_meter_.restart();
-  pending_measured_count_ = 0;
-  pending_model_count_ = 0;
+  pending_measured_.clear();
+  pending_model_.clear();
 }
 
 void Pipeline::bridge_gap(std::int64_t first_sample) {
@@ -132,13 +132,12 @@ void Pipeline::bridge_gap(std::int64_t first_sample) {
     }
   }
   stream_fresh_ = true;
-  resettle_model_ = true;
   const std::int64_t from =
       first_sample + static_cast<std::int64_t>(0.002 * config_.sample_rate_hz);
   measured_meter_.restart(from);
   model_meter_.restart(from);
-  pending_measured_count_ = 0;
-  pending_model_count_ = 0;
+  pending_measured_.clear();
+  pending_model_.clear();
 }
 
 void Pipeline::process(const SampleBlock& block) {
@@ -190,11 +189,12 @@ void Pipeline::process(const SampleBlock& block) {
     // the channels read is the charge amplifiers' offset and drift.
     // Only quiet stretches count: the force envelope of the last revolutions well below the
     // usual peak (the tracker's verdict lags by half a window when the cut resumes).
-    envelope_N_ =
-        std::max(std::hypot(fx - tare_N_[0], fy - tare_N_[1]), envelope_N_ * envelope_decay_);
+    const double ex = fx - tare_N_[0];
+    const double ey = fy - tare_N_[1];
+    envelope_sq_ = std::max(ex * ex + ey * ey, envelope_sq_ * envelope_decay_);
     const auto& tracked = tracker_.estimate();
     if (tracked.updates > 0 && !tracked.cutting && typical_peak_N_ > 0.0 &&
-        envelope_N_ < kIdleFraction * typical_peak_N_) {
+        envelope_sq_ < kIdleFraction * kIdleFraction * typical_peak_N_ * typical_peak_N_) {
       tare_N_[0] += tare_gain_ * (fx - tare_N_[0]);
       tare_N_[1] += tare_gain_ * (fy - tare_N_[1]);
       tare_N_[2] += tare_gain_ * (fz - tare_N_[2]);
@@ -226,10 +226,6 @@ void Pipeline::process(const SampleBlock& block) {
       last_turn_ = turn;
       sync_.add(angle - turn * kTwoPi, {fx, fy, fz, detect});
       if (measuring_ && lockstep_.aligned()) {
-        if (resettle_model_) {
-          lockstep_.settle(angle);
-          resettle_model_ = false;
-        }
         const auto m = lockstep_.next_sample(angle);
         v[4] = m[0];
         v[5] = m[1];
@@ -321,63 +317,49 @@ void Pipeline::start_measuring(std::int64_t sample) {
     if (lockstep_.align(sync_)) {
       event(PipelineEventKind::kModelAligned, sample, 0, lockstep_.alignment_correlation(),
             "model aligned to the measured revolution");
-      lockstep_.settle(phase_.angle_at(static_cast<double>(sample)));
     }
   }
   measured_meter_.restart(from);
   model_meter_.restart(from);
-  pending_measured_count_ = 0;
-  pending_model_count_ = 0;
+  pending_measured_.clear();
+  pending_model_.clear();
   measuring_ = true;
 }
 
 void Pipeline::measure_revolutions() {
   // Both meters measure the same revolutions (same template, phase and start): pair them by
   // their sequence numbers.
-  const int cap = static_cast<int>(pending_measured_.size());
   const bool with_model = config_.lockstep && lockstep_.aligned();
-  auto push = [cap](auto& queue, int& count, const RevolutionMeasurement& m) {
-    if (count == cap) {
-      std::rotate(queue.begin(), queue.begin() + 1, queue.end());
-      --count;
-    }
-    queue[static_cast<std::size_t>(count++)] = m;
-  };
-  auto pop = [](auto& queue, int& count) {
-    std::rotate(queue.begin(), queue.begin() + 1, queue.end());
-    --count;
-  };
   measured_meter_.advance(ring_, phase_, [&](const RevolutionMeasurement& m) {
     if (!with_model) {
       emit_record(m, nullptr);
       return;
     }
-    push(pending_measured_, pending_measured_count_, m);
+    pending_measured_.push(m);
   });
   if (!with_model) {
     return;
   }
-  model_meter_.advance(ring_, phase_, [&](const RevolutionMeasurement& m) {
-    push(pending_model_, pending_model_count_, m);
-  });
-  while (pending_measured_count_ > 0 && pending_model_count_ > 0) {
-    const auto& meas = pending_measured_[0];
-    const auto& mod = pending_model_[0];
+  model_meter_.advance(ring_, phase_,
+                       [&](const RevolutionMeasurement& m) { pending_model_.push(m); });
+  while (!pending_measured_.empty() && !pending_model_.empty()) {
+    const RevolutionMeasurement& meas = pending_measured_.front();
+    const RevolutionMeasurement& mod = pending_model_.front();
     if (meas.sequence == mod.sequence) {
       emit_record(meas, &mod);
-      pop(pending_measured_, pending_measured_count_);
-      pop(pending_model_, pending_model_count_);
+      pending_measured_.pop();
+      pending_model_.pop();
     } else if (meas.sequence < mod.sequence) {
       emit_record(meas, nullptr);
-      pop(pending_measured_, pending_measured_count_);
+      pending_measured_.pop();
     } else {
-      pop(pending_model_, pending_model_count_);
+      pending_model_.pop();
     }
   }
   // A model meter that lags too far behind is not waited for.
-  while (pending_measured_count_ > cap / 2) {
-    emit_record(pending_measured_[0], nullptr);
-    pop(pending_measured_, pending_measured_count_);
+  while (pending_measured_.size() > PendingRevolutions::kCapacity / 2) {
+    emit_record(pending_measured_.front(), nullptr);
+    pending_measured_.pop();
   }
 }
 
@@ -461,7 +443,8 @@ void Pipeline::fill_residuals(RevolutionRecord& r) const {
   std::array<int, kMaxFlutes> flute_n{};
   std::array<double, kMaxSectors> sector_sum{};
   std::array<int, kMaxSectors> sector_n{};
-  const double angle0 = phase_.angle_at(m.valley_sample[0]);
+  const double sector_per_sample =
+      sectors / (m.valley_sample[static_cast<std::size_t>(m.flutes)] - m.valley_sample[0]);
   int flute = 0;
   for (std::int64_t n = from; n <= to; ++n) {
     std::array<double, 3> d{};
@@ -478,8 +461,9 @@ void Pipeline::fill_residuals(RevolutionRecord& r) const {
     }
     flute_sum[static_cast<std::size_t>(flute)] += d_xy2;
     ++flute_n[static_cast<std::size_t>(flute)];
-    const double rel = phase_.angle_at(static_cast<double>(n)) - angle0;
-    const int s = std::clamp(static_cast<int>(rel / kTwoPi * sectors), 0, sectors - 1);
+    // Sector by position within the revolution (the speed is steady over one revolution).
+    const double rel = (static_cast<double>(n) - m.valley_sample[0]) * sector_per_sample;
+    const int s = std::clamp(static_cast<int>(rel), 0, sectors - 1);
     sector_sum[static_cast<std::size_t>(s)] += d_xy2;
     ++sector_n[static_cast<std::size_t>(s)];
   }

@@ -151,20 +151,38 @@ class Pipeline {
   double tooth_delay_s_ = 0.0;
   std::array<double, 3> tare_N_{};  // channel zero, re-established while not cutting
   double tare_gain_ = 0.0;
-  double envelope_N_ = 0.0;  // decaying peak of the in-plane force
+  double envelope_sq_ = 0.0;  // decaying peak of the squared in-plane force, N²
   double envelope_decay_ = 0.0;
   double last_detect_ = -1.0;
-  bool resettle_model_ = false;
   std::int64_t max_bridged_gap_ = 0;
   double last_rpm_ = 0.0;
   double last_hop_hz_ = 0.0;
   bool settled_ = false;  // the speed estimate has held still since the lock
 
-  // Pairing of measured and model revolutions (model ones may lag a step).
-  std::array<RevolutionMeasurement, 64> pending_measured_{};
-  int pending_measured_count_ = 0;
-  std::array<RevolutionMeasurement, 64> pending_model_{};
-  int pending_model_count_ = 0;
+  /// A small FIFO of revolutions waiting for their partner (the oldest is dropped when full).
+  struct PendingRevolutions {
+    static constexpr std::size_t kCapacity = 64;
+    std::array<RevolutionMeasurement, kCapacity> items{};
+    std::size_t head = 0;
+    std::size_t count = 0;
+    [[nodiscard]] bool empty() const { return count == 0; }
+    [[nodiscard]] std::size_t size() const { return count; }
+    [[nodiscard]] const RevolutionMeasurement& front() const { return items[head]; }
+    void pop() {
+      head = (head + 1) % kCapacity;
+      --count;
+    }
+    void push(const RevolutionMeasurement& m) {
+      if (count == kCapacity) {
+        pop();
+      }
+      items[(head + count) % kCapacity] = m;
+      ++count;
+    }
+    void clear() { head = count = 0; }
+  };
+  PendingRevolutions pending_measured_;  // pairing of measured and model revolutions
+  PendingRevolutions pending_model_;
 
   // α and ΔFy over the last window of valid revolutions.
   std::vector<double> alpha_window_, dfy_window_;

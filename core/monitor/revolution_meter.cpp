@@ -142,15 +142,30 @@ void RevolutionMeter::measure(const SampleRing& ring) {
     // Peaks within the flute's period.
     const auto from = static_cast<std::int64_t>(std::ceil(valleys_[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(valleys_[uj + 1]));
-    // Channels fx, fy, fz, then the in-plane resultant √(fx² + fy²).
+    // Channels fx, fy, fz, then the in-plane resultant √(fx² + fy²) (searched on its square).
     for (int c = 0; c < 4; ++c) {
       auto value = [&](std::int64_t n) {
-        return c < 3 ? ring.at(offset_ + c, n)
-                     : std::hypot(ring.at(offset_, n), ring.at(offset_ + 1, n));
+        if (c < 3) {
+          return ring.at(offset_ + c, n);
+        }
+        const double x = ring.at(offset_, n);
+        const double y = ring.at(offset_ + 1, n);
+        return std::sqrt(x * x + y * y);
+      };
+      auto size = [&](std::int64_t n) {
+        if (c < 3) {
+          return std::fabs(ring.at(offset_ + c, n));
+        }
+        const double x = ring.at(offset_, n);
+        const double y = ring.at(offset_ + 1, n);
+        return x * x + y * y;
       };
       std::int64_t best = from;
-      for (std::int64_t n = from; n <= to; ++n) {
-        if (std::fabs(value(n)) > std::fabs(value(best))) {
+      double best_size = size(from);
+      for (std::int64_t n = from + 1; n <= to; ++n) {
+        const double z = size(n);
+        if (z > best_size) {
+          best_size = z;
           best = n;
         }
       }

@@ -8,9 +8,9 @@ namespace millwatch::monitor {
 
 SyncAverage::SyncAverage(int bins, int window_revolutions)
     : bins_(bins), window_(window_revolutions) {
-  // window_ closed revolutions, the one being filled, and the window's total.
+  // window_ closed revolutions and the one being filled.
   sums_.assign(
-      static_cast<std::size_t>(window_ + 2) * (kChannels + 1) * static_cast<std::size_t>(bins_),
+      static_cast<std::size_t>(window_ + 1) * (kChannels + 1) * static_cast<std::size_t>(bins_),
       0.0);
 }
 
@@ -22,7 +22,7 @@ void SyncAverage::clear() {
 
 void SyncAverage::add(double angle_rad, const std::array<double, kChannels>& values) {
   const double pos = angle_rad / (2.0 * std::numbers::pi) * bins_;
-  double whole = std::floor(pos);
+  const double whole = std::floor(pos);
   const double w = pos - whole;
   int k0 = static_cast<int>(whole) % bins_;
   if (k0 < 0) {
@@ -38,24 +38,27 @@ void SyncAverage::add(double angle_rad, const std::array<double, kChannels>& val
 }
 
 void SyncAverage::end_revolution() {
-  const int total = window_ + 1;
-  const int next = (slot_ + 1) % (window_ + 1);  // the oldest closed revolution, when full
-  for (int c = 0; c <= kChannels; ++c) {
-    for (int k = 0; k < bins_; ++k) {
-      sums_[index(total, c, k)] += sums_[index(slot_, c, k)];
-      if (filled_ == window_) {
-        sums_[index(total, c, k)] -= sums_[index(next, c, k)];  // the oldest leaves
-      }
-      sums_[index(next, c, k)] = 0.0;
+  // The closed revolution stays in its slot; the oldest one's slot is reused (cleared). Totals
+  // are summed only when an average is asked for (rarely), keeping this per-revolution step short.
+  slot_ = (slot_ + 1) % (window_ + 1);
+  const auto begin = sums_.begin() + static_cast<std::ptrdiff_t>(index(slot_, 0, 0));
+  std::fill(begin, begin + static_cast<std::ptrdiff_t>((kChannels + 1) * bins_), 0.0);
+  filled_ = std::min(filled_ + 1, window_);
+}
+
+double SyncAverage::total(int channel, int bin) const {
+  double sum = 0.0;
+  for (int s = 0; s <= window_; ++s) {
+    if (s != slot_) {
+      sum += sums_[index(s, channel, bin)];
     }
   }
-  filled_ = std::min(filled_ + 1, window_);
-  slot_ = next;
+  return sum;
 }
 
 double SyncAverage::average(int channel, int bin) const {
-  const double weight = sums_[index(window_ + 1, kChannels, bin)];
-  return weight > 0.0 ? sums_[index(window_ + 1, channel, bin)] / weight : 0.0;
+  const double weight = total(kChannels, bin);
+  return weight > 0.0 ? total(channel, bin) / weight : 0.0;
 }
 
 void SyncAverage::average(int channel, std::vector<double>& out) const {
@@ -65,7 +68,7 @@ void SyncAverage::average(int channel, std::vector<double>& out) const {
   }
   // Bins no sample has reached yet take their neighbours' mean.
   for (int k = 0; k < bins_; ++k) {
-    if (sums_[index(window_ + 1, kChannels, k)] <= 0.0) {
+    if (total(kChannels, k) <= 0.0) {
       const int prev = (k + bins_ - 1) % bins_;
       const int next = (k + 1) % bins_;
       out[static_cast<std::size_t>(k)] =

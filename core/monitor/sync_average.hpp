@@ -31,6 +31,7 @@ class SyncAverage {
   void clear();
 
  private:
+  [[nodiscard]] double total(int channel, int bin) const;
   [[nodiscard]] std::size_t index(int slot, int channel, int bin) const {
     return (static_cast<std::size_t>(slot) * (kChannels + 1) + static_cast<std::size_t>(channel)) *
                static_cast<std::size_t>(bins_) +
@@ -41,8 +42,8 @@ class SyncAverage {
   int window_ = 0;
   int slot_ = 0;    // ring slot of the revolution being filled
   int filled_ = 0;  // closed revolutions in the window
-  // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled), then
-  // the window's total: kChannels weighted sums and the weights, per bin.
+  // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled):
+  // kChannels weighted sums and the weights, per bin.
   std::vector<double> sums_;
 };
 

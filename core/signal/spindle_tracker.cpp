@@ -12,6 +12,7 @@ namespace millwatch::signal {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double kLockedSearch = 0.02;  // ± relative search range around the locked speed
 
 double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
@@ -107,7 +108,8 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
   window_ = static_cast<std::size_t>(std::llround(config_.window_s * config_.sample_rate_hz));
   hop_ = std::max<std::size_t>(
       1, static_cast<std::size_t>(std::llround(config_.hop_s * config_.sample_rate_hz)));
-  fft_size_ = std::bit_ceil(2 * window_);  // zero-padded: finer bins for the interpolation
+  // Zero-padded by at least half the window: finer bins for the interpolation.
+  fft_size_ = std::bit_ceil(window_ + window_ / 2);
   const double f_max = config_.commanded_rpm / 60.0 * (1.0 + config_.search_fraction);
   const int auto_harmonics = 4 * config_.flutes;
   harmonics_ = config_.max_harmonic > 0 ? config_.max_harmonic : auto_harmonics;
@@ -186,14 +188,18 @@ void SpindleTracker::update() {
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
   for (std::size_t k = 0; k < magnitude_.size(); ++k) {
-    magnitude_[k] = std::hypot(fft_out_[k][0], fft_out_[k][1]);
+    magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
   }
 
   // Coarse search over the commanded range, a quarter of a (padded) bin at a time.
   const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
   const double f_cmd = config_.commanded_rpm / 60.0;
-  const double f_lo = f_cmd * (1.0 - config_.search_fraction);
-  const double f_hi = f_cmd * (1.0 + config_.search_fraction);
+  double f_lo = f_cmd * (1.0 - config_.search_fraction);
+  double f_hi = f_cmd * (1.0 + config_.search_fraction);
+  if (locked_) {  // while locked, a narrow range around the last speed is enough (and cheaper)
+    f_lo = std::max(f_lo, phase_.spindle_hz * (1.0 - kLockedSearch));
+    f_hi = std::min(f_hi, phase_.spindle_hz * (1.0 + kLockedSearch));
+  }
   double best_f = f_lo;
   double best_score = -1.0;
   for (double f = f_lo; f <= f_hi; f += 0.25 * bin_hz) {

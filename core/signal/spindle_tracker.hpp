@@ -44,7 +44,7 @@ struct SpindleTrackerConfig {
   double commanded_rpm = 25000.0;
   double search_fraction = 0.15;  ///< search f within commanded·(1 ± this)
   double window_s = 0.25;
-  double hop_s = 0.03125;
+  double hop_s = 0.05;
   int max_harmonic = 0;  ///< highest harmonic used; 0 = automatic (4·flutes)
   double min_snr_db =
       12.0;  ///< cutting when the strongest harmonic is this far above the band's median

@@ -1,0 +1,113 @@
+// Throughput and latency of the whole monitoring pipeline, lockstep model on, on a simulated
+// recording of [000]'s cut (3 channels).
+//
+//   build/release/bench/pipeline_benchmark
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <vector>
+
+#include "core/monitor/pipeline.hpp"
+#include "core/sim/cut_simulator.hpp"
+
+namespace {
+
+using namespace millwatch;
+
+struct Recording {
+  double sample_rate_hz = 0.0;
+  std::vector<double> t, fx, fy, fz;
+};
+
+Recording make_recording(double sample_rate_hz, double duration_s) {
+  sim::Scenario s;
+  s.sample_rate_hz = sample_rate_hz;
+  s.duration_s = duration_s;
+  s.spindle.actual_rpm = 25252.0;
+  s.noise.enabled = true;
+  s.quantisation.enabled = true;
+  sim::CutSimulator sim(s);
+  Recording r;
+  r.sample_rate_hz = sample_rate_hz;
+  const auto n = static_cast<std::size_t>(sim.total_samples());
+  r.t.resize(n);
+  r.fx.resize(n);
+  r.fy.resize(n);
+  r.fz.resize(n);
+  sim.next_block(r.t, r.fx, r.fy, r.fz);
+  return r;
+}
+
+/// Measures the time from the last sample of a revolution (the block that completes it) to the
+/// revolution's record.
+struct LatencySink : monitor::PipelineSink {
+  std::chrono::steady_clock::time_point block_start{};
+  double worst_s = 0.0;
+  double sum_s = 0.0;
+  long count = 0;
+  void on_revolution(const monitor::RevolutionRecord& /*r*/) override {
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - block_start).count();
+    worst_s = std::max(worst_s, s);
+    sum_s += s;
+    ++count;
+  }
+};
+
+/// Steady state: the first half second (lock, model build, valley template) is not timed.
+void BM_Pipeline(benchmark::State& state) {
+  const double fs = static_cast<double>(state.range(0));
+  const std::size_t block = static_cast<std::size_t>(state.range(1));
+  const Recording r = make_recording(fs, 2.5);
+  monitor::MonitorConfig c;
+  c.sample_rate_hz = fs;
+  double processed_s = 0.0;
+  double latency_sum = 0.0, latency_worst = 0.0;
+  long latency_n = 0;
+  const auto start = static_cast<std::size_t>(0.5 * fs) / block * block;
+  auto feed = [&](monitor::Pipeline& p, LatencySink& sink, std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i < to; i += block) {
+      const std::size_t n = std::min(block, to - i);
+      sink.block_start = std::chrono::steady_clock::now();
+      p.process({std::llround(r.t[i] * 1e6), 0, fs, std::span(r.fx).subspan(i, n),
+                 std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
+    }
+  };
+  for (auto _ : state) {
+    state.PauseTiming();
+    LatencySink sink;
+    monitor::Pipeline p(c, sink);
+    feed(p, sink, 0, start);
+    sink = LatencySink{};
+    state.ResumeTiming();
+    feed(p, sink, start, r.t.size());
+    processed_s += static_cast<double>(r.t.size() - start) / fs;
+    latency_sum += sink.sum_s;
+    latency_worst = std::max(latency_worst, sink.worst_s);
+    latency_n += sink.count;
+  }
+  state.counters["x_realtime"] = benchmark::Counter(processed_s, benchmark::Counter::kIsRate);
+  state.counters["latency_mean_us"] = latency_n > 0 ? 1e6 * latency_sum / latency_n : 0.0;
+  state.counters["latency_worst_us"] = 1e6 * latency_worst;
+  state.SetItemsProcessed(static_cast<std::int64_t>(r.t.size() - start) * state.iterations());
+}
+// Blocks of 1 ms at each rate (a DAQ bridge's typical message).
+BENCHMARK(BM_Pipeline)->Args({50000, 50})->Args({333300, 333})->Unit(benchmark::kMillisecond);
+
+/// What a new lock costs once: building the lockstep model at the measured speed.
+void BM_LockstepModelBuild(benchmark::State& state) {
+  monitor::MonitorConfig c;
+  const auto filter = signal::ButterworthDesign::lowpass(50000.0, 3300.0, 4);
+  double hz = 25252.0 / 60.0;
+  for (auto _ : state) {
+    monitor::Lockstep l(c.model, filter);
+    l.set_spindle_hz(hz);
+    hz *= 1.0001;
+  }
+}
+BENCHMARK(BM_LockstepModelBuild)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
