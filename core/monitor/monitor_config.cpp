@@ -84,6 +84,34 @@ void validate(const MonitorConfig& c, const std::string& path) {
   }
 }
 
+nlohmann::json monitor_json_from_sidecar(const nlohmann::json& sidecar,
+                                         const nlohmann::json& overrides) {
+  if (!sidecar.is_object()) {
+    config::fail("(sidecar)", "expected an object, got " + config::describe_json(sidecar));
+  }
+  nlohmann::json out = nlohmann::json::object();
+  if (sidecar.contains("model")) {
+    out["model"] = sidecar["model"];
+  } else {
+    for (const char* key : {"tool", "process", "material"}) {
+      if (!sidecar.contains(key)) {
+        config::fail(key, "missing in the sidecar (needed to model the cut)");
+      }
+      out["model"][key] = sidecar[key];
+    }
+  }
+  if (!sidecar.contains("sample_rate_hz")) {
+    config::fail("sample_rate_hz", "missing in the sidecar");
+  }
+  out["sample_rate_hz"] = sidecar["sample_rate_hz"];
+  if (sidecar.contains("force_sign_convention") && sidecar["force_sign_convention"].is_object() &&
+      sidecar["force_sign_convention"].contains("axis_map")) {
+    out["axis_map"] = sidecar["force_sign_convention"]["axis_map"];
+  }
+  out.merge_patch(overrides);
+  return out;
+}
+
 nlohmann::json to_json(const MonitorConfig& c) {
   nlohmann::json sat = nlohmann::json::array();
   for (double s : c.saturation_N) {

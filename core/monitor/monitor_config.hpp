@@ -52,4 +52,12 @@ nlohmann::json to_json(const MonitorConfig& c);
 /// Cross-field checks (sample rate against filter and spindle). @throws config::ConfigError.
 void validate(const MonitorConfig& c, const std::string& path = "");
 
+/// The monitor configuration JSON a recorded cut's sidecar implies: the cut's model (the full
+/// "model" of a simulated cut, else its "tool", "process" and "material"), "sample_rate_hz" and
+/// the axis map of "force_sign_convention". `overrides` (a monitor configuration JSON, e.g. from
+/// --config) is merged over it (RFC 7386 merge patch). Read the result with
+/// monitor_config_from_json. @throws config::ConfigError naming a missing or bad sidecar field.
+nlohmann::json monitor_json_from_sidecar(const nlohmann::json& sidecar,
+                                         const nlohmann::json& overrides = nlohmann::json::object());
+
 }  // namespace millwatch::monitor

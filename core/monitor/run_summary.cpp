@@ -1,0 +1,167 @@
+#include "core/monitor/run_summary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace millwatch::monitor {
+namespace {
+
+/// NaN serialises as null in JSON: say "no data" honestly.
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+double RunSummary::Running::mean() const {
+  return n > 0 ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+double RunSummary::Running::stddev() const {
+  if (n < 2) {
+    return n == 1 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+  }
+  const double m = mean();
+  return std::sqrt(
+      std::max(0.0, (sum_sq - static_cast<double>(n) * m * m) / static_cast<double>(n - 1)));
+}
+
+double RunSummary::Running::rms() const {
+  return n > 0 ? std::sqrt(sum_sq / static_cast<double>(n))
+               : std::numeric_limits<double>::quiet_NaN();
+}
+
+RunSummary::RunSummary(const MonitorConfig& config)
+    : config_(config), flutes_(config.model.tool.flutes) {}
+
+void RunSummary::add(const RevolutionRecord& r) {
+  ++revolutions_;
+  if (!r.measured.valid) {
+    return;
+  }
+  ++valid_;
+  const auto& m = r.measured;
+  alpha_.add(m.alpha_deg);
+  delta_fy_.add(m.delta_fy_N);
+  for (int j = 0; j < flutes_; ++j) {
+    const auto uj = static_cast<std::size_t>(j);
+    period_[uj].add(m.flute_period_s[uj]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      peak_[uj][a].add(m.peak_N[uj][a]);
+    }
+    peak_resultant_[uj].add(m.peak_resultant_N[uj]);
+  }
+  if (r.model_valid) {
+    model_alpha_.add(r.model.alpha_deg);
+    model_delta_fy_.add(r.model.delta_fy_N);
+    for (std::size_t a = 0; a < 3; ++a) {
+      residual_[a].sum_sq += r.residual_rms_N[a] * r.residual_rms_N[a];
+      ++residual_[a].n;
+    }
+    measured_rms_.sum_sq += r.measured_rms_N * r.measured_rms_N;
+    ++measured_rms_.n;
+  }
+}
+
+void RunSummary::add(const SpindleUpdate& u) {
+  if (u.estimate.valid) {
+    rpm_.add(u.estimate.spindle_rpm);
+  }
+}
+
+void RunSummary::add(const Alert& a) {
+  alerts_.push_back({{"kind", std::string(to_string(a.kind))},
+                     {"active", a.active},
+                     {"severity", static_cast<int>(a.severity)},
+                     {"utime", a.utime_us},
+                     {"revolution", a.revolution},
+                     {"value", a.value},
+                     {"threshold", a.threshold},
+                     {"quantity", std::string(a.quantity)},
+                     {"message", std::string(a.message.data())}});
+}
+
+void RunSummary::add(const PipelineEvent& e) {
+  switch (e.kind) {
+    case PipelineEventKind::kLockAcquired:
+    case PipelineEventKind::kModelAligned:
+    case PipelineEventKind::kModelBuilt:
+    case PipelineEventKind::kCuttingResumed:
+      return;  // normal operation, not a warning
+    default:
+      break;
+  }
+  const std::string kind(to_string(e.kind));
+  auto it = std::find_if(warnings_.begin(), warnings_.end(),
+                         [&](const Warning& w) { return w.kind == kind; });
+  if (it == warnings_.end()) {
+    warnings_.push_back({kind, 0, 0, e.utime_us, std::string(e.detail)});
+    it = warnings_.end() - 1;
+  }
+  ++it->occurrences;
+  it->samples += e.count;
+}
+
+void RunSummary::finish(const PipelineStatus& status) {
+  status_ = status;
+}
+
+nlohmann::json RunSummary::to_json() const {
+  using nlohmann::json;
+  json periods = json::array(), fx = json::array(), fy = json::array(), fz = json::array(),
+       resultant = json::array();
+  for (int j = 0; j < flutes_; ++j) {
+    const auto uj = static_cast<std::size_t>(j);
+    periods.push_back(number_or_null(period_[uj].mean()));
+    fx.push_back(number_or_null(peak_[uj][0].mean()));
+    fy.push_back(number_or_null(peak_[uj][1].mean()));
+    fz.push_back(number_or_null(peak_[uj][2].mean()));
+    resultant.push_back(number_or_null(peak_resultant_[uj].mean()));
+  }
+  json warnings = json::array();
+  for (const auto& w : warnings_) {
+    warnings.push_back({{"kind", w.kind},
+                        {"occurrences", w.occurrences},
+                        {"samples", w.samples},
+                        {"first_utime", w.first_utime_us},
+                        {"detail", w.detail}});
+  }
+  const auto& in = status_.input;
+  const std::int64_t samples = in.samples_accepted;
+  return json{{"samples", samples},
+              {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
+              {"revolutions", valid_},
+              {"revolutions_measured", revolutions_},
+              {"spindle_rpm", number_or_null(rpm_.mean())},
+              {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
+              {"alpha_deg",
+               {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
+              {"tooth_period_s", periods},
+              {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
+              {"delta_fy_N", number_or_null(delta_fy_.mean())},
+              {"residual_rms_N",
+               {{"fx", number_or_null(residual_[0].rms())},
+                {"fy", number_or_null(residual_[1].rms())},
+                {"fz", number_or_null(residual_[2].rms())},
+                {"measured", number_or_null(measured_rms_.rms())}}},
+              {"model",
+               {{"alpha_deg", number_or_null(model_alpha_.mean())},
+                {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
+                {"lockstep", config_.lockstep}}},
+              {"alerts", alerts_},
+              {"dropped_samples", in.samples_dropped},
+              {"warnings", warnings},
+              {"counters",
+               {{"samples_in", in.samples_in},
+                {"samples_flagged", in.samples_flagged},
+                {"nonfinite_samples", in.nonfinite_samples},
+                {"saturated_samples", in.saturated_samples},
+                {"gaps", in.gaps},
+                {"out_of_order_blocks", in.out_of_order_blocks},
+                {"blocks_rejected", in.blocks_rejected},
+                {"idle_revolutions", status_.idle_revolutions}}},
+              {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
+}
+
+}  // namespace millwatch::monitor

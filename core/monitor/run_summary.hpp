@@ -1,0 +1,71 @@
+#pragma once
+// Summary of a monitoring run (a replay, or a daemon's life): what the pipeline measured over
+// all its revolutions, and what went wrong. Feed it the pipeline's outputs; to_json() gives the
+// replay's summary:
+//   samples, duration_s, revolutions, spindle_rpm (measured), spindle_rpm_commanded,
+//   alpha_deg {mean, std}, tooth_period_s [per flute], peak_force_N {fx, fy, fz: per flute},
+//   delta_fy_N, residual_rms_N {fx, fy, fz}, alerts [...], dropped_samples, warnings [...]
+// and more detail (model features, counters) beside them.
+
+#include <array>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/monitor/pipeline.hpp"
+
+namespace millwatch::monitor {
+
+class RunSummary {
+ public:
+  explicit RunSummary(const MonitorConfig& config);
+
+  void add(const RevolutionRecord& r);
+  void add(const SpindleUpdate& u);
+  void add(const Alert& a);
+  void add(const PipelineEvent& e);
+  /// The pipeline's final status (counters, samples).
+  void finish(const PipelineStatus& status);
+
+  [[nodiscard]] nlohmann::json to_json() const;
+  [[nodiscard]] std::int64_t valid_revolutions() const { return valid_; }
+
+ private:
+  struct Running {
+    double sum = 0.0;
+    double sum_sq = 0.0;
+    std::int64_t n = 0;
+    void add(double v) {
+      sum += v;
+      sum_sq += v * v;
+      ++n;
+    }
+    [[nodiscard]] double mean() const;
+    [[nodiscard]] double stddev() const;
+    [[nodiscard]] double rms() const;
+  };
+  struct Warning {
+    std::string kind;
+    std::int64_t occurrences = 0;
+    std::int64_t samples = 0;
+    std::int64_t first_utime_us = 0;
+    std::string detail;
+  };
+
+  MonitorConfig config_;
+  int flutes_ = 0;
+  std::int64_t revolutions_ = 0;
+  std::int64_t valid_ = 0;
+  Running rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
+  std::array<Running, kMaxFlutes> period_{};
+  std::array<std::array<Running, 3>, kMaxFlutes> peak_{};
+  std::array<Running, kMaxFlutes> peak_resultant_{};
+  std::array<Running, 3> residual_{};
+  Running measured_rms_;
+  std::vector<nlohmann::json> alerts_;
+  std::vector<Warning> warnings_;
+  PipelineStatus status_;
+};
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,75 @@
+#include "daemon/daemon_config.hpp"
+
+#include "core/config/json_reader.hpp"
+
+namespace millwatch::daemon {
+namespace {
+
+using config::ObjectReader;
+
+SourceConfig read_source(ObjectReader r, std::array<double, 3>& saturation_N) {
+  SourceConfig s;
+  s.kind = r.choice("kind", "lcm", {"lcm", "comedi"}) == "comedi" ? SourceConfig::Kind::kComedi
+                                                                  : SourceConfig::Kind::kLcm;
+  s.channel = r.string("channel", s.channel);
+  s.device = r.string("device", s.device);
+  s.subdevice = r.integer("subdevice", s.subdevice, -1, 64);
+  s.block_samples = r.integer("block_samples", s.block_samples, 16, 8192);
+  const nlohmann::json& channels = r.raw("channels");
+  if (s.kind == SourceConfig::Kind::kComedi) {
+    if (!channels.is_array() || channels.size() != 3) {
+      config::fail(r.path_of("channels"),
+                   "a Comedi source needs three channels (fx, fy, fz), got " +
+                       config::describe_json(channels));
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      s.channels[a] = signal::daq_channel_from_json(
+          channels[a], r.path_of("channels") + "[" + std::to_string(a) + "]");
+      saturation_N[a] = s.channels[a].range_N;  // saturated samples come out at ±range
+    }
+  } else if (!channels.is_null()) {
+    config::fail(r.path_of("channels"), "only a Comedi source has channels");
+  }
+  r.finish();
+  return s;
+}
+
+messaging::ChannelNames read_channels(ObjectReader r) {
+  messaging::ChannelNames c;
+  c.raw = r.string("raw", c.raw);
+  c.spindle = r.string("spindle", c.spindle);
+  c.tooth_periods = r.string("tooth_periods", c.tooth_periods);
+  c.flute_peaks = r.string("flute_peaks", c.flute_peaks);
+  c.residual = r.string("residual", c.residual);
+  c.sync_average = r.string("sync_average", c.sync_average);
+  c.runout = r.string("runout", c.runout);
+  c.alert = r.string("alert", c.alert);
+  c.status = r.string("status", c.status);
+  r.finish();
+  return c;
+}
+
+}  // namespace
+
+DaemonConfig daemon_config_from_json(const nlohmann::json& j) {
+  ObjectReader r(j, "");
+  DaemonConfig c;
+  c.monitor = monitor::monitor_config_from_json(r.raw("monitor"), "monitor");
+  c.source = read_source(r.object("source"), c.monitor.saturation_N);
+  {
+    auto l = r.object("lcm");
+    c.lcm_url = l.string("url", c.lcm_url);
+    c.channels = read_channels(l.object("channels"));
+    l.finish();
+  }
+  c.status_period_s =
+      r.number("status_period_s", c.status_period_s, config::closed(0.01, 3600.0, "s"));
+  c.log_level = r.choice("log_level", c.log_level, {"trace", "debug", "info", "warn", "error"});
+  r.finish();
+  if (c.source.kind == SourceConfig::Kind::kLcm && c.source.channel != c.channels.raw) {
+    c.channels.raw = c.source.channel;
+  }
+  return c;
+}
+
+}  // namespace millwatch::daemon

@@ -1,0 +1,42 @@
+#pragma once
+// The daemon's configuration file (JSON), validated at load:
+//   { "monitor": { MonitorConfig },
+//     "source": { "kind": "lcm", "channel": "MILLWATCH_FORCE_RAW" }
+//            or { "kind": "comedi", "device": "/dev/comedi0", "subdevice": -1,
+//                 "block_samples": 1000, "channels": [DaqChannelScaling x3] (fx, fy, fz) },
+//     "lcm": { "url": "udpm://239.255.76.67:7667?ttl=0", "channels": { ChannelNames } },
+//     "status_period_s": 1.0,
+//     "log_level": "info" }
+
+#include <array>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/monitor/monitor_config.hpp"
+#include "core/signal/daq_scaling.hpp"
+#include "msgs/lcm_output.hpp"
+
+namespace millwatch::daemon {
+
+struct SourceConfig {
+  enum class Kind { kLcm, kComedi } kind = Kind::kLcm;
+  std::string channel = "MILLWATCH_FORCE_RAW";
+  std::string device = "/dev/comedi0";
+  int subdevice = -1;  ///< -1: the first analogue input subdevice
+  int block_samples = 1000;
+  std::array<signal::DaqChannelScaling, 3> channels{};  ///< fx, fy, fz
+};
+
+struct DaemonConfig {
+  monitor::MonitorConfig monitor;
+  SourceConfig source;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  messaging::ChannelNames channels;
+  double status_period_s = 1.0;
+  std::string log_level = "info";
+};
+
+/// @throws config::ConfigError naming the field, its value and the allowed range.
+DaemonConfig daemon_config_from_json(const nlohmann::json& j);
+
+}  // namespace millwatch::daemon

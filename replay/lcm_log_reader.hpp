@@ -1,0 +1,42 @@
+#pragma once
+// Reads the raw force blocks of an LCM log (as lcm-logger writes it) from one channel.
+// Events of other channels are skipped; an event that does not decode as force_block_t is
+// reported and skipped; a log cut short ends at its last whole event, with a warning.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+
+#include "core/monitor/sample_block.hpp"
+#include "millwatch/force_block_t.hpp"
+
+namespace millwatch::shell {
+
+class LcmLogReader {
+ public:
+  /// @throws std::runtime_error "PATH: cannot read as an LCM log".
+  LcmLogReader(const std::filesystem::path& path, std::string channel,
+               std::function<void(std::int64_t event, const std::string& problem)> on_bad_event);
+
+  /// The next raw block (views valid until the next call); an empty block at the end.
+  monitor::SampleBlock next();
+  [[nodiscard]] std::int64_t events() const { return events_; }
+  [[nodiscard]] std::int64_t bad_events() const { return bad_events_; }
+  /// Sample rate of the first block (0 before it).
+  [[nodiscard]] double first_sample_rate_hz() const { return first_rate_hz_; }
+
+ private:
+  std::filesystem::path path_;
+  std::string channel_;
+  std::function<void(std::int64_t, const std::string&)> on_bad_event_;
+  std::unique_ptr<lcm::LogFile> log_;
+  force_block_t message_;
+  std::int64_t events_ = 0;
+  std::int64_t bad_events_ = 0;
+  double first_rate_hz_ = 0.0;
+};
+
+}  // namespace millwatch::shell

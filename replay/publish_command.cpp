@@ -1,0 +1,136 @@
+#include "replay/publish_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "core/config/json_reader.hpp"
+#include "core/sim/cut_simulator.hpp"
+#include "msgs/lcm_convert.hpp"
+#include "replay/csv_cut_reader.hpp"
+#include "replay/json_file.hpp"
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct PublishOptions {
+  std::string input;
+  std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string channel = "MILLWATCH_FORCE_RAW";
+  double speed = 1.0;
+  int block_samples = 1000;
+  double duration_s = 0.0;
+  double start_utime_s = 0.0;
+};
+
+int run_publish(const PublishOptions& o) {
+  lcm::LCM lcm(o.url);
+  if (!lcm.good()) {
+    throw std::runtime_error("cannot open LCM at " + o.url);
+  }
+  const fs::path input = o.input;
+  std::unique_ptr<sim::CutSimulator> simulator;
+  std::unique_ptr<CsvCutReader> csv;
+  double rate_hz = 0.0;
+  if (input.extension() == ".csv") {
+    fs::path sidecar = input;
+    sidecar.replace_extension(".json");
+    rate_hz = read_json_file(sidecar).at("sample_rate_hz").get<double>();
+    csv = std::make_unique<CsvCutReader>(
+        input, rate_hz, [&](std::int64_t line, const std::string& p) {
+          spdlog::warn("{}:{}: {}; skipped", input.string(), line, p);
+        });
+  } else {
+    sim::Scenario s;
+    try {
+      s = sim::scenario_from_json(read_json_file(input));
+    } catch (const config::ConfigError& e) {
+      throw std::runtime_error(input.string() + ": " + e.what());
+    }
+    if (o.duration_s > 0.0) {
+      s.duration_s = o.duration_s;
+    }
+    rate_hz = s.sample_rate_hz;
+    simulator = std::make_unique<sim::CutSimulator>(s);
+  }
+  const auto n = static_cast<std::size_t>(o.block_samples);
+  std::vector<double> t(n), fx(n), fy(n), fz(n);
+  const auto start = std::chrono::steady_clock::now();
+  const auto offset_us = static_cast<std::int64_t>(o.start_utime_s * 1e6);
+  std::int64_t first_utime = -1;
+  std::int64_t seq = 0;
+  std::int64_t samples = 0;
+  while (true) {
+    monitor::SampleBlock b;
+    if (simulator) {
+      const std::size_t k = simulator->next_block(t, fx, fy, fz);
+      if (k == 0) {
+        break;
+      }
+      b = {std::llround(t[0] * 1e6), seq, rate_hz, {fx.data(), k}, {fy.data(), k}, {fz.data(), k}};
+    } else {
+      b = csv->next(n);
+      if (b.fx_N.empty()) {
+        break;
+      }
+    }
+    b.utime_us += offset_us;
+    b.seq = seq++;
+    if (first_utime < 0) {
+      first_utime = b.utime_us;
+    }
+    if (o.speed > 0.0) {
+      std::this_thread::sleep_until(start +
+                                    std::chrono::microseconds(static_cast<std::int64_t>(
+                                        static_cast<double>(b.utime_us - first_utime) / o.speed)));
+    }
+    const force_block_t m = messaging::to_message(b);
+    lcm.publish(o.channel, &m);
+    samples += static_cast<std::int64_t>(b.fx_N.size());
+  }
+  spdlog::info("published {} blocks, {} samples on {}", seq, samples, o.channel);
+  return 0;
+}
+
+}  // namespace
+
+void add_publish_command(CLI::App& app) {
+  auto o = std::make_shared<PublishOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "publish",
+      "Publish raw sample blocks on LCM like a DAQ bridge (from a CSV cut or a scenario)");
+  cmd->add_option("input", o->input, "CUT.csv (sidecar beside it) or a scenario JSON to simulate")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--url", o->url, "LCM URL");
+  cmd->add_option("--channel", o->channel, "Channel of the raw blocks");
+  cmd->add_option("--speed", o->speed, "Pace: k times real time, 0 as fast as possible")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--block", o->block_samples,
+                  "Samples per message (at most 2000 keeps it under 64 KiB)")
+      ->check(CLI::Range(1, 2000));
+  cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--start-utime", o->start_utime_s, "Add this many seconds to every utime");
+  cmd->callback([o] {
+    int rc = 0;
+    try {
+      rc = run_publish(*o);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      rc = 2;
+    }
+    if (rc != 0) {
+      throw CLI::RuntimeError(rc);
+    }
+  });
+}
+
+}  // namespace millwatch::shell

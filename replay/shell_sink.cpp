@@ -1,0 +1,47 @@
+#include "replay/shell_sink.hpp"
+
+#include <spdlog/spdlog.h>
+
+namespace millwatch::shell {
+
+void ShellSink::on_alert(const monitor::Alert& a) {
+  summary_.add(a);
+  if (a.active) {
+    spdlog::warn("{}: ALERT {} at revolution {}: {}", source_, monitor::to_string(a.kind),
+                 a.revolution, a.message.data());
+  } else {
+    spdlog::info("{}: {}", source_, a.message.data());
+  }
+}
+
+void ShellSink::on_event(const monitor::PipelineEvent& e) {
+  summary_.add(e);
+  const auto kind = static_cast<std::size_t>(e.kind);
+  const std::int64_t n = ++logged_[kind % logged_.size()];
+  const double t_s = static_cast<double>(e.utime_us) * 1e-6;
+  switch (e.kind) {
+    case monitor::PipelineEventKind::kLockAcquired:
+      spdlog::info("{}: spindle locked at {:.1f} rpm (t = {:.3f} s)", source_, e.value, t_s);
+      return;
+    case monitor::PipelineEventKind::kModelAligned:
+      spdlog::info("{}: model aligned (correlation {:.3f})", source_, e.value);
+      return;
+    case monitor::PipelineEventKind::kModelBuilt:
+      spdlog::info("{}: model rebuilt for {:.1f} rpm", source_, e.value);
+      return;
+    case monitor::PipelineEventKind::kCuttingResumed:
+      spdlog::info("{}: cutting resumed (t = {:.3f} s)", source_, t_s);
+      return;
+    default:
+      break;
+  }
+  if (n <= 10) {
+    spdlog::warn("{}: {} at t = {:.6f} s (block {}, sample {}): {} sample(s); {}", source_,
+                 monitor::to_string(e.kind), t_s, e.block_seq, e.sample, e.count, e.detail);
+  } else if (n == 11) {
+    spdlog::warn("{}: more \"{}\" follow; counted in the status", source_,
+                 monitor::to_string(e.kind));
+  }
+}
+
+}  // namespace millwatch::shell

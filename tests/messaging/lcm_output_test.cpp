@@ -1,0 +1,134 @@
+// In-process LCM (memq://): what the pipeline emits arrives as decodable messages.
+
+#include "msgs/lcm_output.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "core/sim/cut_simulator.hpp"
+#include "msgs/lcm_convert.hpp"
+
+namespace millwatch::messaging {
+namespace {
+
+struct Received {
+  std::vector<tooth_periods_t> periods;
+  std::vector<flute_peaks_t> peaks;
+  std::vector<model_residual_t> residuals;
+  std::vector<spindle_state_t> spindle;
+  std::vector<pipeline_status_t> status;
+  std::vector<tool_alert_t> alerts;
+  std::vector<sync_average_t> sync;
+  void on_periods(const lcm::ReceiveBuffer*, const std::string&, const tooth_periods_t* m) {
+    periods.push_back(*m);
+  }
+  void on_peaks(const lcm::ReceiveBuffer*, const std::string&, const flute_peaks_t* m) {
+    peaks.push_back(*m);
+  }
+  void on_residual(const lcm::ReceiveBuffer*, const std::string&, const model_residual_t* m) {
+    residuals.push_back(*m);
+  }
+  void on_spindle(const lcm::ReceiveBuffer*, const std::string&, const spindle_state_t* m) {
+    spindle.push_back(*m);
+  }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status_t* m) {
+    status.push_back(*m);
+  }
+  void on_alert(const lcm::ReceiveBuffer*, const std::string&, const tool_alert_t* m) {
+    alerts.push_back(*m);
+  }
+  void on_sync(const lcm::ReceiveBuffer*, const std::string&, const sync_average_t* m) {
+    sync.push_back(*m);
+  }
+};
+
+/// Collects the records the sink saw directly, to compare with the messages.
+struct Direct : monitor::PipelineSink {
+  std::vector<monitor::RevolutionRecord> records;
+  void on_revolution(const monitor::RevolutionRecord& r) override { records.push_back(r); }
+};
+
+TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  Received rx;
+  const ChannelNames ch;
+  lcm.subscribe(ch.tooth_periods, &Received::on_periods, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.flute_peaks, &Received::on_peaks, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.residual, &Received::on_residual, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.spindle, &Received::on_spindle, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.status, &Received::on_status, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.alert, &Received::on_alert, &rx)->setQueueCapacity(100000);
+  lcm.subscribe(ch.sync_average, &Received::on_sync, &rx)->setQueueCapacity(100000);
+
+  sim::Scenario s;
+  s.sample_rate_hz = 50000.0;
+  s.duration_s = 0.6;
+  s.spindle.actual_rpm = 25252.0;
+  sim::CutSimulator sim(s);
+  monitor::MonitorConfig c;
+  c.model = s.model;
+  c.sample_rate_hz = s.sample_rate_hz;
+  Direct direct;
+  {
+    LcmOutput out(lcm, ch, &direct);
+    monitor::Pipeline p(c, out);
+    std::vector<double> t(1000), fx(1000), fy(1000), fz(1000);
+    while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
+      p.process({std::llround(t[0] * 1e6),
+                 0,
+                 s.sample_rate_hz,
+                 {fx.data(), n},
+                 {fy.data(), n},
+                 {fz.data(), n}});
+    }
+    out.publish_status(p.status());
+    ASSERT_TRUE(out.drain());
+    EXPECT_EQ(out.dropped(), 0);
+  }
+  while (lcm.handleTimeout(10) > 0) {
+  }
+  ASSERT_FALSE(direct.records.empty());
+  ASSERT_EQ(rx.periods.size(), direct.records.size());
+  ASSERT_EQ(rx.peaks.size(), direct.records.size());
+  for (std::size_t i = 0; i < direct.records.size(); ++i) {
+    const auto& r = direct.records[i];
+    EXPECT_EQ(rx.periods[i].revolution, r.revolution);
+    EXPECT_EQ(rx.periods[i].utime, r.utime_us);
+    EXPECT_EQ(rx.periods[i].num_flutes, 2);
+    EXPECT_EQ(rx.periods[i].flute_period_s.size(), 2u);
+    EXPECT_DOUBLE_EQ(rx.periods[i].alpha_deg, r.measured.alpha_deg);
+    EXPECT_DOUBLE_EQ(rx.peaks[i].delta_fy_N, r.measured.delta_fy_N);
+    EXPECT_DOUBLE_EQ(rx.peaks[i].peak_fy_N[1], r.measured.peak_N[1][1]);
+  }
+  EXPECT_FALSE(rx.residuals.empty());
+  EXPECT_FALSE(rx.spindle.empty());
+  ASSERT_FALSE(rx.status.empty());
+  EXPECT_EQ(rx.status.back().samples_processed, 30000);
+  EXPECT_EQ(rx.status.back().state, "measuring");
+  EXPECT_FALSE(rx.alerts.empty());  // [000]'s runout is strong: a runout alert
+  EXPECT_EQ(rx.alerts[0].kind, tool_alert_t::KIND_RUNOUT);
+}
+
+TEST(LcmConvert, ForceBlockRoundTripKeepsEverySample) {
+  const std::vector<double> fx = {1.0, 2.0, 3.0}, fy = {-1.0, 0.5, 0.25}, fz = {0.0, 0.1, 0.2};
+  const monitor::SampleBlock b{123456, 7, 50000.0, fx, fy, fz};
+  const force_block_t m = to_message(b);
+  EXPECT_EQ(m.num_samples, 3);
+  std::vector<uint8_t> buffer(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(buffer.data(), 0, static_cast<int>(buffer.size())),
+            static_cast<int>(buffer.size()));
+  force_block_t back;
+  ASSERT_EQ(back.decode(buffer.data(), 0, static_cast<int>(buffer.size())),
+            static_cast<int>(buffer.size()));
+  const monitor::SampleBlock v = to_block(back);
+  EXPECT_EQ(v.utime_us, 123456);
+  EXPECT_EQ(v.seq, 7);
+  EXPECT_EQ(std::vector<double>(v.fy_N.begin(), v.fy_N.end()), fy);
+}
+
+}  // namespace
+}  // namespace millwatch::messaging
