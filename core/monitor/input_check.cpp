@@ -84,7 +84,7 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     std::uint8_t flag = 0;
     for (std::size_t a = 0; a < 3; ++a) {
       double v = in[a][i];
-      if (!std::isfinite(v)) {
+      if (!std::isfinite(v) || std::fabs(v) > config_.plausible_N) {
         flag |= kFlagNonFinite;
         v = last_good_[a];
       } else {

@@ -7,7 +7,8 @@
 //  - block older than expected (out of order, duplicate): rejected
 //  - block later than expected: the missing samples are counted as dropped and reported as a
 //    gap so that downstream stages can restart
-//  - non-finite sample: replaced by the channel's last good value, flagged
+//  - non-finite or implausible (|F| > plausible_N) sample: replaced by the channel's last good
+//    value, flagged
 //  - sample at or beyond the channel's saturation level (charge-amplifier range): kept, flagged
 // Sample time is kept as a sample index from the first block (utime of the first block + index
 // / rate), so that gaps keep later samples at their true time.
@@ -28,6 +29,9 @@ struct InputCheckConfig {
   std::array<double, 3> saturation_N = {std::numeric_limits<double>::infinity(),
                                         std::numeric_limits<double>::infinity(),
                                         std::numeric_limits<double>::infinity()};
+  /// A reading beyond this is no force a dynamometer can have measured (a corrupt value):
+  /// treated like a non-finite one.
+  double plausible_N = 1e6;
   /// Timing mismatch tolerated before a block counts as a gap or out of order, in samples.
   double tolerance_samples = 0.5;
   std::size_t max_block_samples = 65536;

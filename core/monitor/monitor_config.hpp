@@ -57,7 +57,7 @@ void validate(const MonitorConfig& c, const std::string& path = "");
 /// the axis map of "force_sign_convention". `overrides` (a monitor configuration JSON, e.g. from
 /// --config) is merged over it (RFC 7386 merge patch). Read the result with
 /// monitor_config_from_json. @throws config::ConfigError naming a missing or bad sidecar field.
-nlohmann::json monitor_json_from_sidecar(const nlohmann::json& sidecar,
-                                         const nlohmann::json& overrides = nlohmann::json::object());
+nlohmann::json monitor_json_from_sidecar(
+    const nlohmann::json& sidecar, const nlohmann::json& overrides = nlohmann::json::object());
 
 }  // namespace millwatch::monitor

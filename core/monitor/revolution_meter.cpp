@@ -86,7 +86,8 @@ bool RevolutionMeter::find_valley(const SampleRing& ring, const PhaseModel& phas
 
 RevolutionMeter::Step RevolutionMeter::step(const SampleRing& ring, const PhaseModel& phase) {
   const int flutes = config_.flutes;
-  if (!phase.valid || !template_.valid || ring.empty()) {
+  if (!phase.valid || !template_.valid || ring.empty() || !std::isfinite(phase.spindle_hz) ||
+      !(phase.spindle_hz > 0.0)) {
     needed_sample_ = INT64_MIN;
     return Step::kWait;
   }

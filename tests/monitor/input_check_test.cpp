@@ -67,6 +67,29 @@ TEST(InputCheck, NonFiniteSamplesAreReplacedFlaggedAndCounted) {
   EXPECT_EQ(check.counters().samples_accepted, 10);
 }
 
+TEST(InputCheck, ImplausibleValuesAreTreatedLikeNonFiniteOnes) {
+  InputCheck check(config());
+  Block a = ramp(4);
+  a.fy[2] = 1.4e306;  // a corrupt value
+  const auto c = check.check(a.view(0));
+  EXPECT_EQ(c.fy_N[2], -1.0);
+  EXPECT_EQ(c.flags[2], kFlagNonFinite);
+  EXPECT_EQ(check.counters().nonfinite_samples, 1);
+}
+
+TEST(InputCheck, ABlockRejectedAtItsTimeLeavesOneHoleCountedOnce) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  const auto bad = check.check(ramp(100).view(2000, 20000.0));  // wrong rate, right time
+  EXPECT_EQ(bad.verdict, BlockVerdict::kRejected);
+  const auto next = check.check(ramp(100).view(4000));
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.gap_samples, 100);
+  EXPECT_EQ(next.first_sample, 200);
+  EXPECT_EQ(check.counters().samples_dropped, 100);
+  EXPECT_EQ(check.counters().gaps, 1);
+}
+
 TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
   InputCheck check(config());
   Block a = ramp(5);

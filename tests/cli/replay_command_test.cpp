@@ -1,0 +1,227 @@
+// End-to-end tests of `millwatch replay` as a user runs it: a simulated cut with known truth,
+// bad CSV lines, wrong headers, missing sidecars, corrupt and truncated LCM logs.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "core/sim/cut_simulator.hpp"
+#include "msgs/lcm_convert.hpp"
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Simulates `scenario` into dir/name.csv (+ .json) with the CLI; returns the CSV path.
+fs::path simulate(const fs::path& dir, const std::string& name, const nlohmann::json& scenario) {
+  const fs::path s = dir / (name + "_scenario.json");
+  std::ofstream(s) << scenario.dump(2);
+  const fs::path csv = dir / (name + ".csv");
+  const auto r =
+      test::run_command(test::millwatch_cli() + " simulate " + s.string() + " -o " + csv.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return csv;
+}
+
+nlohmann::json base_scenario() {
+  return {{"recording", {{"sample_rate_hz", 50000.0}, {"duration_s", 1.0}, {"seed", 5}}},
+          {"spindle", {{"actual_rpm", 25252.0}}},
+          {"noise", {{"enabled", true}}}};
+}
+
+struct ReplayRun {
+  int exit_code;
+  std::string log;
+  nlohmann::json summary;
+};
+
+ReplayRun replay(const std::string& args, const fs::path& summary) {
+  const auto r =
+      test::run_command(test::millwatch_cli() + " replay " + args + " --summary " +
+                        summary.string() + " 2>" + (summary.string() + ".log") + " >/dev/null");
+  ReplayRun out{r.exit_code, "", nullptr};
+  std::stringstream log;
+  log << std::ifstream(summary.string() + ".log").rdbuf();
+  out.log = log.str();
+  if (fs::exists(summary)) {
+    out.summary = nlohmann::json::parse(std::ifstream(summary));
+  }
+  return out;
+}
+
+TEST(ReplayCommand, SummarisesASimulatedCutWithTheIssuesKeys) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  const auto& j = r.summary;
+  for (const char* key :
+       {"samples", "duration_s", "revolutions", "spindle_rpm", "spindle_rpm_commanded", "alpha_deg",
+        "tooth_period_s", "peak_force_N", "delta_fy_N", "residual_rms_N", "alerts",
+        "dropped_samples", "warnings"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["samples"], 50000);
+  EXPECT_NEAR(j["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
+  EXPECT_EQ(j["spindle_rpm_commanded"], 25000.0);
+  EXPECT_GT(j["revolutions"].get<int>(), 150);
+  EXPECT_EQ(j["tooth_period_s"].size(), 2u);
+  EXPECT_NEAR(j["tooth_period_s"][0].get<double>() + j["tooth_period_s"][1].get<double>(),
+              60.0 / 25252.0, 1e-6);
+  EXPECT_EQ(j["peak_force_N"]["fx"].size(), 2u);
+  EXPECT_EQ(j["dropped_samples"], 0);
+  EXPECT_TRUE(j["warnings"].empty());
+  // The sidecar's model is the true cut: the residual is measurement noise only.
+  EXPECT_LT(j["residual_rms_N"]["fx"].get<double>(), 0.02);
+}
+
+TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  // Spoil lines 1001 (a word), 20001 (3 columns) and 30001 (NaN force) of the file.
+  std::ifstream in(csv);
+  std::stringstream out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (n == 1001) {
+      line = "0.01998,abc,1,2";
+    } else if (n == 20001) {
+      line = "0.39998,1,2";
+    } else if (n == 30001) {
+      line = line.substr(0, line.find(',')) + ",nan,0,0";
+    }
+    out << line << '\n';
+  }
+  in.close();
+  std::ofstream(csv) << out.str();
+  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  EXPECT_NE(r.log.find(":1001: a force is not a number"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find(":20001: fewer than 4 columns"), std::string::npos) << r.log;
+  EXPECT_EQ(r.summary["bad_lines"], 2);
+  EXPECT_EQ(r.summary["dropped_samples"], 2);  // the two skipped rows, as gaps
+  EXPECT_EQ(r.summary["counters"]["nonfinite_samples"], 1);
+  EXPECT_EQ(r.summary["samples"], 50000 - 2);
+  EXPECT_GT(r.summary["revolutions"].get<int>(), 150);  // it kept measuring
+}
+
+TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  std::ofstream(dir / "bad.csv") << "time,fx,fy,fz\n0,1,2,3\n";
+  fs::copy_file(dir / "cut.json", dir / "bad.json");
+  ReplayRun r = replay((dir / "bad.csv").string(), dir / "s1.json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.log.find("bad.csv:1: header is \"time,fx,fy,fz\"; expected \"t_s,fx_N,fy_N,fz_N\""),
+            std::string::npos)
+      << r.log;
+  fs::copy_file(csv, dir / "lonely.csv");
+  r = replay((dir / "lonely.csv").string(), dir / "s2.json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.log.find("lonely.json: sidecar not found"), std::string::npos) << r.log;
+  // A sidecar with a bad field names it.
+  nlohmann::json sidecar = nlohmann::json::parse(std::ifstream(dir / "cut.json"));
+  sidecar["model"]["tool"]["flutes"] = 0;
+  std::ofstream(dir / "zero.json") << sidecar.dump();
+  fs::copy_file(csv, dir / "zero.csv");
+  r = replay((dir / "zero.csv").string(), dir / "s3.json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.log.find("zero.json: model.tool.flutes: value 0 is out of range [1, 8]"),
+            std::string::npos)
+      << r.log;
+  EXPECT_FALSE(fs::exists(dir / "s3.json"));  // no partial summary
+}
+
+/// Writes the simulated cut's raw blocks into an LCM log the way lcm-logger would.
+fs::path write_log(const fs::path& dir, double duration_s) {
+  sim::Scenario s;
+  s.sample_rate_hz = 50000.0;
+  s.duration_s = duration_s;
+  s.spindle.actual_rpm = 25252.0;
+  sim::CutSimulator sim(s);
+  const fs::path path = dir / "raw.lcmlog";
+  lcm::LogFile log(path.string(), "w");
+  std::vector<double> t(1000), fx(1000), fy(1000), fz(1000);
+  std::int64_t seq = 0;
+  while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
+    const force_block_t m = messaging::to_message({std::llround(t[0] * 1e6),
+                                                   seq++,
+                                                   s.sample_rate_hz,
+                                                   {fx.data(), n},
+                                                   {fy.data(), n},
+                                                   {fz.data(), n}});
+    std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent e;
+    e.eventnum = seq;
+    e.timestamp = m.utime;
+    e.channel = "MILLWATCH_FORCE_RAW";
+    e.datalen = static_cast<std::int32_t>(buf.size());
+    e.data = buf.data();
+    log.writeEvent(&e);
+  }
+  return path;
+}
+
+fs::path monitor_config(const fs::path& dir) {
+  const nlohmann::json c = {{"monitor", {{"sample_rate_hz", 50000.0}}}};
+  std::ofstream(dir / "monitor.json") << c.dump();
+  return dir / "monitor.json";
+}
+
+TEST(ReplayCommand, ReplaysAnLcmLogAndSurvivesCorruptionAndTruncation) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path log = write_log(dir, 1.0);
+  const fs::path config = monitor_config(dir);
+  ReplayRun whole = replay(log.string() + " --config " + config.string(), dir / "whole.json");
+  ASSERT_EQ(whole.exit_code, 0) << whole.log;
+  EXPECT_EQ(whole.summary["samples"], 50000);
+  EXPECT_NEAR(whole.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
+
+  // Corrupt the payload of one event in the middle and cut the file short mid-event.
+  std::string bytes;
+  {
+    std::ifstream in(log, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::size_t event = bytes.size() / 50;                      // about one event in size
+  std::string spoiled = bytes.substr(0, bytes.size() - event / 2);  // truncated
+  for (std::size_t i = 20 * event + 100; i < 20 * event + 140; ++i) {
+    spoiled[i] = '\x7f';  // scribble over part of an event
+  }
+  std::ofstream(dir / "bad.lcmlog", std::ios::binary) << spoiled;
+  ReplayRun bad =
+      replay((dir / "bad.lcmlog").string() + " --config " + config.string(), dir / "bad.json");
+  ASSERT_EQ(bad.exit_code, 0) << bad.log;
+  EXPECT_LT(bad.summary["samples"].get<int>(), 50000);
+  EXPECT_GT(bad.summary["samples"].get<int>(), 45000);
+  EXPECT_GT(bad.summary["dropped_samples"].get<int>(), 0);  // the lost blocks, as gaps
+  EXPECT_GT(bad.summary["revolutions"].get<int>(), 100);
+}
+
+TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
+  const fs::path dir = test::fresh_temp_dir();
+  nlohmann::json s = base_scenario();
+  s["recording"]["duration_s"] = 0.4;
+  const fs::path csv = simulate(dir, "short", s);
+  const auto start = std::chrono::steady_clock::now();
+  const ReplayRun r = replay(csv.string() + " --speed 2", dir / "s.json");
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  EXPECT_GT(elapsed, 0.2 * 0.95);  // 0.4 s of data at twice real time
+}
+
+}  // namespace
+}  // namespace millwatch
