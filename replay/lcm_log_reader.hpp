@@ -1,14 +1,17 @@
 #pragma once
 // Reads the raw force blocks of an LCM log (as lcm-logger writes it) from one channel.
 // Events of other channels are skipped; an event that does not decode as force_block_t is
-// reported and skipped; a log cut short ends at its last whole event, with a warning.
+// reported and skipped; a damaged event is reported and reading resumes at the next sync word,
+// so damage costs only the events it touches (lcm 1.3.1's own reader also drops the sound event
+// before a broken sync word, and stops at a broken length); a log cut short ends at its last
+// whole event, with a warning.
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <functional>
-#include <lcm/lcm-cpp.hpp>
-#include <memory>
 #include <string>
+#include <vector>
 
 #include "core/monitor/sample_block.hpp"
 #include "millwatch/force_block_t.hpp"
@@ -29,10 +32,22 @@ class LcmLogReader {
   [[nodiscard]] double first_sample_rate_hz() const { return first_rate_hz_; }
 
  private:
+  /// Reads the event at position_ into event_channel_ and data_; false at the end of the log.
+  bool read_event();
+  /// Reports the damaged event at position_ and moves to the next sync word; false if none.
+  bool skip_damage();
+  /// Byte offset of the next event sync word at or after from_byte, or -1.
+  std::int64_t find_sync_word(std::int64_t from_byte);
+  void report(std::int64_t event, const std::string& problem);
+
   std::filesystem::path path_;
   std::string channel_;
   std::function<void(std::int64_t, const std::string&)> on_bad_event_;
-  std::unique_ptr<lcm::LogFile> log_;
+  std::ifstream file_;
+  std::int64_t size_bytes_ = 0;
+  std::int64_t position_ = 0;  ///< byte offset of the next event
+  std::string event_channel_;
+  std::vector<std::uint8_t> data_;
   force_block_t message_;
   std::int64_t events_ = 0;
   std::int64_t bad_events_ = 0;

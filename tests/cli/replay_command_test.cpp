@@ -46,8 +46,8 @@ struct ReplayRun {
 
 ReplayRun replay(const std::string& args, const fs::path& summary) {
   const auto r =
-      test::run_command(test::millwatch_cli() + " replay " + args + " --summary " +
-                        summary.string() + " 2>" + (summary.string() + ".log") + " >/dev/null");
+      test::run_command("(" + test::millwatch_cli() + " replay " + args + " --summary " +
+                        summary.string() + " 2>" + (summary.string() + ".log") + " >/dev/null)");
   ReplayRun out{r.exit_code, "", nullptr};
   std::stringstream log;
   log << std::ifstream(summary.string() + ".log").rdbuf();
@@ -189,25 +189,44 @@ TEST(ReplayCommand, ReplaysAnLcmLogAndSurvivesCorruptionAndTruncation) {
   EXPECT_EQ(whole.summary["samples"], 50000);
   EXPECT_NEAR(whole.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
 
-  // Corrupt the payload of one event in the middle and cut the file short mid-event.
+  // Damage the log the ways a disk or a killed logger does: samples scribbled over inside event
+  // 10, event 20's sync word and event 30's channel length broken, the last event cut short.
   std::string bytes;
   {
     std::ifstream in(log, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
-  const std::size_t event = bytes.size() / 50;                      // about one event in size
-  std::string spoiled = bytes.substr(0, bytes.size() - event / 2);  // truncated
-  for (std::size_t i = 20 * event + 100; i < 20 * event + 140; ++i) {
-    spoiled[i] = '\x7f';  // scribble over part of an event
+  const std::string sync = "\xED\xA1\xDA\x01";
+  std::vector<std::size_t> starts;
+  for (std::size_t at = bytes.find(sync); at != std::string::npos; at = bytes.find(sync, at + 1)) {
+    starts.push_back(at);
   }
+  ASSERT_EQ(starts.size(), 50u);
+  std::string spoiled = bytes.substr(0, bytes.size() - (bytes.size() - starts.back()) / 2);
+  for (std::size_t i = starts[10] + 200; i < starts[10] + 240; ++i) {
+    spoiled[i] = '\x7f';  // eight samples become NaN
+  }
+  spoiled[starts[20] + 1] = '\0';                           // sync word
+  spoiled.replace(starts[30] + 20, 4, "\x7f\x00\x00\x00");  // channel length
   std::ofstream(dir / "bad.lcmlog", std::ios::binary) << spoiled;
   ReplayRun bad =
       replay((dir / "bad.lcmlog").string() + " --config " + config.string(), dir / "bad.json");
   ASSERT_EQ(bad.exit_code, 0) << bad.log;
-  EXPECT_LT(bad.summary["samples"].get<int>(), 50000);
-  EXPECT_GT(bad.summary["samples"].get<int>(), 45000);
-  EXPECT_GT(bad.summary["dropped_samples"].get<int>(), 0);  // the lost blocks, as gaps
+  EXPECT_EQ(bad.summary["samples"], 47000);                    // events 20, 30 and 50 lost, no more
+  EXPECT_EQ(bad.summary["dropped_samples"], 2000);             // events 20 and 30, as gaps
+  EXPECT_EQ(bad.summary["counters"]["nonfinite_samples"], 5);  // 40 bytes: 5 whole doubles
+  EXPECT_EQ(bad.summary["bad_lines"], 3);  // two broken headers and the truncated end
+  // Only the damaged events are lost: reading resumes at the next event.
+  EXPECT_NE(bad.log.find("bad.lcmlog:21: unreadable event at byte " + std::to_string(starts[20]) +
+                         "; " + std::to_string(starts[21] - starts[20]) + " bytes skipped"),
+            std::string::npos)
+      << bad.log;
+  EXPECT_NE(bad.log.find("bad.lcmlog:30: unreadable event at byte " + std::to_string(starts[30])),
+            std::string::npos)
+      << bad.log;
+  EXPECT_NE(bad.log.find("log ends inside an event"), std::string::npos) << bad.log;
   EXPECT_GT(bad.summary["revolutions"].get<int>(), 100);
+  EXPECT_NEAR(bad.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
 }
 
 TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
