@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,7 +13,18 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-/// Σ c_k·e^{−jωk} and Σ k·c_k·e^{−jωk} for a polynomial in z⁻¹ of degree 2.
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+[[noreturn]] void reject(const std::string& what) {
+  throw std::invalid_argument("Butterworth low-pass: " + what);
+}
+
+/// P(e^{jω}) = c0 + c1·e^{−jω} + c2·e^{−2jω} and Σ k·c_k·e^{−jωk}.
 struct PolyAt {
   std::complex<double> value;
   std::complex<double> weighted;
@@ -24,21 +36,30 @@ PolyAt eval(double c0, double c1, double c2, double omega) {
   return {c0 + c1 * e1 + c2 * e2, c1 * e1 + 2.0 * c2 * e2};
 }
 
+/// Largest pole radius of 1 + a1·z⁻¹ + a2·z⁻², i.e. of z² + a1·z + a2.
+double pole_radius(const Biquad& c) {
+  const double disc = c.a1 * c.a1 - 4.0 * c.a2;
+  if (disc < 0.0) {
+    return std::sqrt(c.a2);  // complex pair: |p|² = a2
+  }
+  const double root = std::sqrt(disc);
+  return std::max(std::fabs(-c.a1 + root), std::fabs(-c.a1 - root)) / 2.0;
+}
+
 }  // namespace
 
 ButterworthDesign ButterworthDesign::lowpass(double sample_rate_hz, double cutoff_hz, int order) {
-  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw std::invalid_argument("low-pass: sample_rate_hz " + std::to_string(sample_rate_hz) +
-                                " must be a finite number > 0");
+  if (!std::isfinite(sample_rate_hz) || !(sample_rate_hz > 0.0)) {
+    reject("sample_rate_hz = " + number(sample_rate_hz) + " must be finite and > 0 Hz");
   }
-  if (!(cutoff_hz > 0.0) || !(cutoff_hz < 0.45 * sample_rate_hz)) {
-    throw std::invalid_argument("low-pass: cutoff_hz " + std::to_string(cutoff_hz) +
-                                " must be in (0, " + std::to_string(0.45 * sample_rate_hz) +
-                                ") Hz at sample rate " + std::to_string(sample_rate_hz) + " Hz");
+  const double max_cutoff_hz = 0.45 * sample_rate_hz;
+  if (!std::isfinite(cutoff_hz) || !(cutoff_hz > 0.0) || !(cutoff_hz < max_cutoff_hz)) {
+    reject("cutoff_hz = " + number(cutoff_hz) + " is out of range (0, " + number(max_cutoff_hz) +
+           ") Hz (0.45·sample_rate_hz at sample_rate_hz = " + number(sample_rate_hz) + " Hz)");
   }
   if (order < 1 || order > kMaxButterworthOrder) {
-    throw std::invalid_argument("low-pass: order " + std::to_string(order) + " must be in [1, " +
-                                std::to_string(kMaxButterworthOrder) + "]");
+    reject("order = " + std::to_string(order) + " is out of range [1, " +
+           std::to_string(kMaxButterworthOrder) + "]");
   }
   ButterworthDesign d;
   d.sample_rate_hz = sample_rate_hz;
@@ -48,13 +69,12 @@ ButterworthDesign ButterworthDesign::lowpass(double sample_rate_hz, double cutof
   const double w = std::tan(kPi * cutoff_hz / sample_rate_hz);
   const double w2 = w * w;
   for (int k = 0; k < order / 2; ++k) {
-    // Conjugate pair p_k, p_k*: q = −2·Re(p_k) = 2·sin(π(2k + 1)/(2n)).
     const double q = 2.0 * std::sin(kPi * (2 * k + 1) / (2.0 * order));
     const double a0 = 1.0 + q * w + w2;
     d.sos[static_cast<std::size_t>(k)] = {w2 / a0, 2.0 * w2 / a0, w2 / a0, 2.0 * (w2 - 1.0) / a0,
                                           (1.0 - q * w + w2) / a0};
   }
-  if (order % 2 == 1) {  // the real pole p = −1: H = w(1 + z⁻¹)/((1 + w) + (w − 1)z⁻¹)
+  if (order % 2 == 1) {
     d.sos[static_cast<std::size_t>(order / 2)] = {w / (1.0 + w), w / (1.0 + w), 0.0,
                                                   (w - 1.0) / (w + 1.0), 0.0};
   }
@@ -71,8 +91,31 @@ std::complex<double> ButterworthDesign::response(double frequency_hz) const {
   return h;
 }
 
+namespace {
+
+void check_frequency(const ButterworthDesign& d, double frequency_hz) {
+  if (!(frequency_hz >= 0.0) || !(frequency_hz < 0.5 * d.sample_rate_hz)) {
+    reject("frequency_hz = " + number(frequency_hz) + " is out of range [0, " +
+           number(0.5 * d.sample_rate_hz) + ") Hz (below the Nyquist frequency)");
+  }
+}
+
+}  // namespace
+
+double ButterworthDesign::phase_rad(double frequency_hz) const {
+  check_frequency(*this, frequency_hz);
+  const double omega = 2.0 * kPi * frequency_hz / sample_rate_hz;
+  double phase = 0.0;
+  for (int s = 0; s < sections; ++s) {
+    const Biquad& c = sos[static_cast<std::size_t>(s)];
+    phase += std::arg(eval(c.b0, c.b1, c.b2, omega).value) -
+             std::arg(eval(1.0, c.a1, c.a2, omega).value);
+  }
+  return phase;
+}
+
 double ButterworthDesign::group_delay_samples(double frequency_hz) const {
-  // For P(e^{jω}) = Σ c_k e^{−jωk}: −d arg P/dω = Re(Σ k c_k e^{−jωk} / P).
+  check_frequency(*this, frequency_hz);
   const double omega = 2.0 * kPi * frequency_hz / sample_rate_hz;
   double delay = 0.0;
   for (int s = 0; s < sections; ++s) {
@@ -85,26 +128,25 @@ double ButterworthDesign::group_delay_samples(double frequency_hz) const {
 }
 
 double ButterworthDesign::phase_delay_s(double frequency_hz) const {
-  // Unwrap the phase from DC along a fine grid so that −φ/ω is the true lag of the tone.
-  const int steps = 256;
-  double phase = 0.0;
-  std::complex<double> previous = response(0.0);
-  for (int i = 1; i <= steps; ++i) {
-    const std::complex<double> h = response(frequency_hz * i / steps);
-    phase += std::arg(h / previous);
-    previous = h;
+  if (frequency_hz == 0.0) {
+    return group_delay_s(0.0);
   }
-  return -phase / (2.0 * kPi * frequency_hz);
+  return -phase_rad(frequency_hz) / (2.0 * kPi * frequency_hz);
 }
 
 void LowPassFilter::process(std::span<const double> in, std::span<double> out) {
-  const std::size_t n = std::min(in.size(), out.size());
-  for (std::size_t i = 0; i < n; ++i) {
+  if (in.size() != out.size()) {
+    reject("process: out has " + std::to_string(out.size()) + " samples, in has " +
+           std::to_string(in.size()));
+  }
+  for (std::size_t i = 0; i < in.size(); ++i) {
     out[i] = step(in[i]);
   }
 }
 
 void LowPassFilter::settle(double x) {
+  // Per section, the steady state of a constant input x: output y = g·x with the section's DC
+  // gain g, and the delay elements that reproduce it.
   for (int s = 0; s < design_.sections; ++s) {
     const Biquad& c = design_.sos[static_cast<std::size_t>(s)];
     auto& z = state_.z[static_cast<std::size_t>(s)];
@@ -116,24 +158,38 @@ void LowPassFilter::settle(double x) {
   }
 }
 
+std::size_t filtfilt_pad_samples(const ButterworthDesign& design, std::size_t record_samples) {
+  if (record_samples == 0) {
+    return 0;
+  }
+  double radius = 0.0;
+  for (int s = 0; s < design.sections; ++s) {
+    radius = std::max(radius, pole_radius(design.sos[static_cast<std::size_t>(s)]));
+  }
+  const auto scipy_default = static_cast<std::size_t>(3 * (2 * design.sections + 1));
+  std::size_t decay = 0;
+  if (radius > 0.0 && radius < 1.0) {
+    decay = static_cast<std::size_t>(std::ceil(std::log(1e-6) / std::log(radius)));
+  }
+  return std::min(record_samples - 1, std::max(scipy_default, decay));
+}
+
 void filtfilt(const ButterworthDesign& design, std::span<const double> in, std::span<double> out) {
-  const std::size_t n = std::min(in.size(), out.size());
+  if (in.size() != out.size()) {
+    reject("filtfilt: out has " + std::to_string(out.size()) + " samples, in has " +
+           std::to_string(in.size()));
+  }
+  const std::size_t n = in.size();
   if (n == 0) {
     return;
   }
-  // Padding: several time constants of the filter, at most the record itself.
-  const auto settle_samples =
-      static_cast<std::size_t>(std::ceil(3.0 * design.sample_rate_hz / design.cutoff_hz));
-  const std::size_t pad =
-      std::min(n - 1, std::max<std::size_t>(3 * (2 * design.sections + 1), settle_samples));
+  const std::size_t pad = filtfilt_pad_samples(design, n);
   std::vector<double> work(n + 2 * pad);
-  // Odd reflection about the end values: 2·x[0] − x[pad..1], then x, then 2·x[n−1] − ...
   for (std::size_t i = 0; i < pad; ++i) {
     work[i] = 2.0 * in[0] - in[pad - i];
     work[pad + n + i] = 2.0 * in[n - 1] - in[n - 2 - i];
   }
-  std::copy(in.begin(), in.begin() + static_cast<std::ptrdiff_t>(n),
-            work.begin() + static_cast<std::ptrdiff_t>(pad));
+  std::copy(in.begin(), in.end(), work.begin() + static_cast<std::ptrdiff_t>(pad));
   LowPassFilter f(design);
   f.settle(work.front());
   f.process(work, work);
