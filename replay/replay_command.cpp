@@ -42,6 +42,7 @@ struct ReplayOptions {
   double speed = 0.0;  // 0: as fast as possible
   bool realtime = false;
   bool publish_raw = false;
+  bool zero_phase = false;
   int block_samples = 1000;
 };
 
@@ -115,7 +116,10 @@ int run_replay(const ReplayOptions& o) {
     first_block = log->next();
     log_rate = log->first_sample_rate_hz();
   }
-  const monitor::MonitorConfig config = build_config(o, input, log_rate);
+  monitor::MonitorConfig config = build_config(o, input, log_rate);
+  if (o.zero_phase) {
+    config.filter_zero_phase = true;
+  }
   std::unique_ptr<CsvCutReader> csv;
   if (!lcm_log) {
     csv = std::make_unique<CsvCutReader>(input, config.sample_rate_hz, warn_line);
@@ -175,6 +179,7 @@ int run_replay(const ReplayOptions& o) {
       next_status_utime += 1000000;
     }
   }
+  pipeline.finish();
   if (g_stop) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
@@ -186,6 +191,7 @@ int run_replay(const ReplayOptions& o) {
   summary.finish(status);
   nlohmann::json j = summary.to_json();
   j["input"] = input.string();
+  j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = lcm_log ? log->bad_events() : csv->bad_lines();
   if (!o.summary.empty()) {
     OutputFile out(o.summary);
@@ -217,6 +223,9 @@ void add_replay_command(CLI::App& app) {
   cmd->add_option("--publish", o->publish_url,
                   "Publish the results on LCM at this URL (e.g. udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_flag("--publish-raw", o->publish_raw, "Also publish the raw sample blocks");
+  cmd->add_flag("--zero-phase", o->zero_phase,
+                "Filter forwards and backwards (no phase, no delay; same -3 dB cut-off) instead "
+                "of causally (= \"filter\": {\"mode\": \"zero_phase\"} in --config)");
   cmd->add_option("--channel", o->raw_channel, "LCM channel of the raw samples in a log");
   cmd->add_option("--block", o->block_samples, "CSV samples per block")
       ->check(CLI::Range(1, 65536));

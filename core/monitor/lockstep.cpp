@@ -20,8 +20,9 @@ double wrap_2pi(double a) {
 
 }  // namespace
 
-Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter)
-    : commanded_(model), config_(model), filter_(filter) {}
+Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
+                   bool zero_phase)
+    : commanded_(model), config_(model), filter_(filter), zero_phase_(zero_phase) {}
 
 bool Lockstep::set_spindle_hz(double spindle_hz) {
   if (built_ && std::fabs(spindle_hz - spindle_hz_) <= 0.002 * spindle_hz_) {
@@ -68,7 +69,8 @@ void Lockstep::filter_periodic() {
                                                         &waveform_.fz_N};
   std::vector<std::complex<double>> gain(half + 1);
   for (std::size_t k = 0; k <= half; ++k) {
-    gain[k] = filter_.response(static_cast<double>(k) * spindle_hz_);
+    const std::complex<double> h = filter_.response(static_cast<double>(k) * spindle_hz_);
+    gain[k] = zero_phase_ ? std::norm(h) : h;
   }
   std::vector<std::complex<double>> spectrum(half + 1);
   for (std::size_t a = 0; a < 3; ++a) {

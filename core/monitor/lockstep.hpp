@@ -10,8 +10,9 @@
 // to a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
 // every measured sample gets a model sample at the same tracked angle, taken from the filtered
 // periodic model: the steady state of the same causal filter the measured force went through
-// (each harmonic k of the spindle frequency times H(k·f), so the same lag) — measured and
-// modelled forces are compared like with like.
+// (each harmonic k of the spindle frequency times H(k·f), so the same lag; |H(k·f)|² when the
+// measurement is filtered forwards and backwards) — measured and modelled forces are compared
+// like with like.
 
 #include <array>
 #include <vector>
@@ -26,7 +27,9 @@ class Lockstep {
  public:
   Lockstep() = default;
   /// @param model the cut as commanded (process.spindle_rpm is the commanded speed)
-  Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter);
+  /// @param zero_phase the measurement is filtered forwards and backwards (|H|², no lag)
+  Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
+           bool zero_phase = false);
 
   /// Builds the model's steady revolution for the measured speed (allocates; runs the model
   /// until it settles). Returns whether it was rebuilt (speed changed by more than 0.2 %).
@@ -57,6 +60,7 @@ class Lockstep {
   model::ModelConfig commanded_;
   model::ModelConfig config_;
   signal::ButterworthDesign filter_;
+  bool zero_phase_ = false;
   model::ForceWaveform waveform_;
   std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
   double spindle_hz_ = 0.0;

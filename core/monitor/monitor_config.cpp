@@ -35,6 +35,8 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     auto f = r.object("filter");
     c.filter_cutoff_hz = f.number("cutoff_hz", c.filter_cutoff_hz, config::positive(1e6, "Hz"));
     c.filter_order = f.integer("order", c.filter_order, 1, 8);
+    c.filter_zero_phase = f.choice("mode", c.filter_zero_phase ? "zero_phase" : "causal",
+                                   {"causal", "zero_phase"}) == "zero_phase";
     f.finish();
   }
   c.spindle = signal::spindle_tracker_config_from_json(r.raw("spindle"), join(path, "spindle"));
@@ -122,7 +124,10 @@ nlohmann::json to_json(const MonitorConfig& c) {
       {"sample_rate_hz", c.sample_rate_hz},
       {"axis_map", signal::to_json(c.axis_map)},
       {"saturation_N", sat},
-      {"filter", {{"cutoff_hz", c.filter_cutoff_hz}, {"order", c.filter_order}}},
+      {"filter",
+       {{"cutoff_hz", c.filter_cutoff_hz},
+        {"order", c.filter_order},
+        {"mode", c.filter_zero_phase ? "zero_phase" : "causal"}}},
       {"spindle", signal::to_json(c.spindle)},
       {"tooth_periods",
        {{"window_revolutions", c.alpha_window_revolutions},

@@ -7,7 +7,7 @@
 //     "sample_rate_hz": 50000,
 //     "axis_map": {"x": "-fx", "y": "-fy", "z": "-fz"},
 //     "saturation_N": [x, y, z],
-//     "filter": {"cutoff_hz": 3300, "order": 4},
+//     "filter": {"cutoff_hz": 3300, "order": 4, "mode": "causal" | "zero_phase"},
 //     "spindle": { SpindleTrackerConfig: window_s, hop_s, search_fraction, ... },
 //     "tooth_periods": {"window_revolutions": 30, "search_fraction_of_pitch": 0.3},
 //     "sync_average": {"bins": 256, "window_revolutions": 30, "template_revolutions": 10},
@@ -35,6 +35,10 @@ struct MonitorConfig {
                                         std::numeric_limits<double>::infinity()};
   double filter_cutoff_hz = 3300.0;  ///< [000] Sect. 5
   int filter_order = 4;
+  /// Zero-phase (forward-backward) filtering: offline work only, the results come out up to
+  /// signal::ZeroPhaseFilter's chunk + margin samples late; no delay to correct, the model is
+  /// filtered with |H|².
+  bool filter_zero_phase = false;
   signal::SpindleTrackerConfig spindle;  ///< rate, flutes, commanded speed come from the above
   int alpha_window_revolutions = 30;     ///< [001]: α from 30 revolutions
   double search_fraction_of_pitch = 0.3;

@@ -53,10 +53,21 @@ std::string_view to_string(PipelineEventKind kind) {
 Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
     : config_(config), sink_(sink), input_(input_config(config)) {
   validate(config_);
-  filter_ = signal::ButterworthDesign::lowpass(config_.sample_rate_hz, config_.filter_cutoff_hz,
-                                               config_.filter_order);
+  // Forward and backward, the response is |H|²: the zero-phase design moves its cut-off up so
+  // that the pair is still 3 dB down at the configured cut-off, like the causal filter
+  // (1 + (f_c/f_c')^(2n) = √2), and both modes pass the tooth harmonics alike.
+  const double cutoff_hz =
+      config_.filter_zero_phase
+          ? config_.filter_cutoff_hz *
+                std::pow(std::sqrt(2.0) - 1.0, -1.0 / (2.0 * config_.filter_order))
+          : config_.filter_cutoff_hz;
+  filter_ =
+      signal::ButterworthDesign::lowpass(config_.sample_rate_hz, cutoff_hz, config_.filter_order);
   for (auto& f : lowpass_) {
     f = signal::LowPassFilter(filter_);
+  }
+  if (config_.filter_zero_phase) {
+    zero_phase_ = signal::ZeroPhaseFilter(filter_, 3);
   }
   // The tracker works on the filtered resultant, decimated to ~2.5× the cut-off.
   decimation_ =
@@ -72,7 +83,7 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   ring_ = SampleRing(kRingChannels,
                      static_cast<std::size_t>(8.0 * config_.sample_rate_hz / slowest_hz) + 8192);
   if (config_.lockstep) {
-    lockstep_ = Lockstep(config_.model, filter_);
+    lockstep_ = Lockstep(config_.model, filter_, config_.filter_zero_phase);
   }
   RevolutionMeterConfig mc;
   mc.flutes = config_.model.tool.flutes;
@@ -81,7 +92,8 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   measured_meter_ = RevolutionMeter(mc, 0);
   model_meter_ = RevolutionMeter(mc, 4);
   alerts_ = AlertEngine(config_.alerts);
-  tooth_delay_s_ = filter_.group_delay_s(tc.commanded_rpm / 60.0 * mc.flutes);
+  tooth_delay_s_ =
+      config_.filter_zero_phase ? 0.0 : filter_.group_delay_s(tc.commanded_rpm / 60.0 * mc.flutes);
   tare_gain_ = 1.0 / (kTareTime_s * config_.sample_rate_hz);
   // The envelope forgets over about two revolutions at the commanded speed.
   envelope_decay_ = std::exp(-2.0 / (2.0 * config_.sample_rate_hz / (tc.commanded_rpm / 60.0)));
@@ -147,6 +159,9 @@ void Pipeline::process(const SampleBlock& block) {
           static_cast<std::int64_t>(block.fx_N.size()), 0.0, c.problem, block.seq);
     return;
   }
+  if (config_.filter_zero_phase && (c.gap_samples > 0 || c.first_sample == 0)) {
+    drain_zero_phase(zero_phase_.flush());  // the stretch before the gap ends here
+  }
   if (c.gap_samples > 0) {
     event(PipelineEventKind::kGap, c.first_sample, c.gap_samples, 0.0, c.problem, block.seq);
     if (c.gap_samples <= max_bridged_gap_ && !stream_fresh_) {
@@ -175,6 +190,14 @@ void Pipeline::process(const SampleBlock& block) {
   for (std::size_t i = 0; i < count; ++i) {
     const std::int64_t n = c.first_sample + static_cast<std::int64_t>(i);
     const auto f = config_.axis_map.to_model({c.fx_N[i], c.fy_N[i], c.fz_N[i]});
+    if (config_.filter_zero_phase) {
+      if (stream_fresh_) {
+        zero_phase_next_sample_ = n;
+        stream_fresh_ = false;
+      }
+      drain_zero_phase(zero_phase_.push(f));
+      continue;
+    }
     if (stream_fresh_) {
       for (std::size_t a = 0; a < 3; ++a) {
         lowpass_[a].reset();
@@ -182,67 +205,7 @@ void Pipeline::process(const SampleBlock& block) {
       }
       stream_fresh_ = false;
     }
-    double fx = lowpass_[0].step(f[0]);
-    double fy = lowpass_[1].step(f[1]);
-    double fz = lowpass_[2].step(f[2]);
-    // Re-zero while the tracker says the tool is not cutting: the force is then zero, and what
-    // the channels read is the charge amplifiers' offset and drift.
-    // Only quiet stretches count: the force envelope of the last revolutions well below the
-    // usual peak (the tracker's verdict lags by half a window when the cut resumes).
-    const double ex = fx - tare_N_[0];
-    const double ey = fy - tare_N_[1];
-    envelope_sq_ = std::max(ex * ex + ey * ey, envelope_sq_ * envelope_decay_);
-    const auto& tracked = tracker_.estimate();
-    if (tracked.updates > 0 && !tracked.cutting && typical_peak_N_ > 0.0 &&
-        envelope_sq_ < kIdleFraction * kIdleFraction * typical_peak_N_ * typical_peak_N_) {
-      tare_N_[0] += tare_gain_ * (fx - tare_N_[0]);
-      tare_N_[1] += tare_gain_ * (fy - tare_N_[1]);
-      tare_N_[2] += tare_gain_ * (fz - tare_N_[2]);
-    }
-    fx -= tare_N_[0];
-    fy -= tare_N_[1];
-    fz -= tare_N_[2];
-    // Valleys are sought on the squared in-plane force: near a valley the force is nearly
-    // linear in time, so its square is a smooth parabola.
-    const double detect = fx * fx + fy * fy;
-    last_detect_ = detect;
-    if ((n - stream_start_) % decimation_ == 0) {
-      const double magnitude = std::sqrt(detect);
-      if (tracker_.process({&magnitude, 1}) > 0) {
-        on_tracker_update();
-      }
-    }
-    std::array<double, kRingChannels> v = {fx, fy, fz, detect, 0.0, 0.0, 0.0, 0.0};
-    if (phase_.valid) {
-      const double angle = phase_.angle_at(static_cast<double>(n));
-      const double turn = std::floor(angle / kTwoPi);
-      if (turn > last_turn_) {
-        sync_.end_revolution();
-        ++sync_revolutions_since_report_;
-        if (!measuring_ && settled_ && sync_.revolutions() >= config_.template_revolutions) {
-          start_measuring(n);
-        }
-      }
-      last_turn_ = turn;
-      sync_.add(angle - turn * kTwoPi, {fx, fy, fz, detect});
-      if (measuring_ && lockstep_.aligned()) {
-        const auto m = lockstep_.next_sample(angle);
-        v[4] = m[0];
-        v[5] = m[1];
-        v[6] = m[2];
-        v[7] = m[0] * m[0] + m[1] * m[1];
-      }
-    }
-    ring_.push(n, v.data());
-    if (measuring_ && n >= measured_meter_.needed_sample() &&
-        (!lockstep_.aligned() || n >= model_meter_.needed_sample())) {
-      measure_revolutions();
-    }
-    if (n >= next_health_check_) {
-      alerts_.on_input(input_.counters(), input_.utime_of(n),
-                       [this](const Alert& a) { sink_.on_alert(a); });
-      next_health_check_ = n + static_cast<std::int64_t>(0.5 * config_.sample_rate_hz);
-    }
+    downstream(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]));
   }
 
   if (measuring_) {
@@ -251,6 +214,81 @@ void Pipeline::process(const SampleBlock& block) {
       sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, revolutions_,
                             input_.utime_of(ring_.newest()));
     }
+  }
+}
+
+void Pipeline::finish() {
+  if (config_.filter_zero_phase) {
+    drain_zero_phase(zero_phase_.flush());
+  }
+}
+
+void Pipeline::drain_zero_phase(std::size_t ready) {
+  for (std::size_t k = 0; k < ready; ++k) {
+    downstream(zero_phase_next_sample_ + static_cast<std::int64_t>(k), zero_phase_.output(0, k),
+               zero_phase_.output(1, k), zero_phase_.output(2, k));
+  }
+  zero_phase_next_sample_ += static_cast<std::int64_t>(ready);
+}
+
+void Pipeline::downstream(std::int64_t n, double fx, double fy, double fz) {
+  // Re-zero while the tracker says the tool is not cutting: the force is then zero, and what
+  // the channels read is the charge amplifiers' offset and drift.
+  // Only quiet stretches count: the force envelope of the last revolutions well below the
+  // usual peak (the tracker's verdict lags by half a window when the cut resumes).
+  const double ex = fx - tare_N_[0];
+  const double ey = fy - tare_N_[1];
+  envelope_sq_ = std::max(ex * ex + ey * ey, envelope_sq_ * envelope_decay_);
+  const auto& tracked = tracker_.estimate();
+  if (tracked.updates > 0 && !tracked.cutting && typical_peak_N_ > 0.0 &&
+      envelope_sq_ < kIdleFraction * kIdleFraction * typical_peak_N_ * typical_peak_N_) {
+    tare_N_[0] += tare_gain_ * (fx - tare_N_[0]);
+    tare_N_[1] += tare_gain_ * (fy - tare_N_[1]);
+    tare_N_[2] += tare_gain_ * (fz - tare_N_[2]);
+  }
+  fx -= tare_N_[0];
+  fy -= tare_N_[1];
+  fz -= tare_N_[2];
+  // Valleys are sought on the squared in-plane force: near a valley the force is nearly
+  // linear in time, so its square is a smooth parabola.
+  const double detect = fx * fx + fy * fy;
+  last_detect_ = detect;
+  if ((n - stream_start_) % decimation_ == 0) {
+    const double magnitude = std::sqrt(detect);
+    if (tracker_.process({&magnitude, 1}) > 0) {
+      on_tracker_update();
+    }
+  }
+  std::array<double, kRingChannels> v = {fx, fy, fz, detect, 0.0, 0.0, 0.0, 0.0};
+  if (phase_.valid) {
+    const double angle = phase_.angle_at(static_cast<double>(n));
+    const double turn = std::floor(angle / kTwoPi);
+    if (turn > last_turn_) {
+      sync_.end_revolution();
+      ++sync_revolutions_since_report_;
+      if (!measuring_ && settled_ && sync_.revolutions() >= config_.template_revolutions) {
+        start_measuring(n);
+      }
+    }
+    last_turn_ = turn;
+    sync_.add(angle - turn * kTwoPi, {fx, fy, fz, detect});
+    if (measuring_ && lockstep_.aligned()) {
+      const auto m = lockstep_.next_sample(angle);
+      v[4] = m[0];
+      v[5] = m[1];
+      v[6] = m[2];
+      v[7] = m[0] * m[0] + m[1] * m[1];
+    }
+  }
+  ring_.push(n, v.data());
+  if (measuring_ && n >= measured_meter_.needed_sample() &&
+      (!lockstep_.aligned() || n >= model_meter_.needed_sample())) {
+    measure_revolutions();
+  }
+  if (n >= next_health_check_) {
+    alerts_.on_input(input_.counters(), input_.utime_of(n),
+                     [this](const Alert& a) { sink_.on_alert(a); });
+    next_health_check_ = n + static_cast<std::int64_t>(0.5 * config_.sample_rate_hz);
   }
 }
 

@@ -32,6 +32,7 @@
 #include "core/monitor/sync_average.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
 #include "core/signal/spindle_tracker.hpp"
+#include "core/signal/zero_phase_filter.hpp"
 
 namespace millwatch::monitor {
 
@@ -99,6 +100,9 @@ class Pipeline {
 
   /// Processes one block from any source.
   void process(const SampleBlock& block);
+  /// End of the record: with zero-phase filtering, processes the samples still held for the
+  /// backward pass (nothing to do for the causal filter).
+  void finish();
 
   [[nodiscard]] PipelineStatus status() const;
   [[nodiscard]] const MonitorConfig& config() const { return config_; }
@@ -110,6 +114,10 @@ class Pipeline {
  private:
   void restart_stream(std::int64_t first_sample);
   void bridge_gap(std::int64_t first_sample);
+  /// Everything after the low-pass filter, for sample n.
+  void downstream(std::int64_t n, double fx, double fy, double fz);
+  /// Zero-phase mode: processes the filter's ready samples (all held ones when flushing).
+  void drain_zero_phase(std::size_t ready);
   void on_tracker_update();
   void start_measuring(std::int64_t sample);
   void track_offsets(const RevolutionMeasurement& m, int channel,
@@ -126,6 +134,8 @@ class Pipeline {
   InputCheck input_;
   signal::ButterworthDesign filter_;
   std::array<signal::LowPassFilter, 3> lowpass_;
+  signal::ZeroPhaseFilter zero_phase_;       // instead of lowpass_ when configured
+  std::int64_t zero_phase_next_sample_ = 0;  // sample number of its next output
   signal::SpindleTracker tracker_;
   int decimation_ = 1;
   signal::PhaseModel phase_;  // full rate

@@ -84,6 +84,23 @@ TEST(ReplayCommand, SummarisesASimulatedCutWithTheIssuesKeys) {
   EXPECT_LT(j["residual_rms_N"]["fx"].get<double>(), 0.02);
 }
 
+TEST(ReplayCommand, ZeroPhaseOptionMeasuresTheSameAlphaAsTheCausalFilter) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const ReplayRun causal = replay(csv.string(), dir / "causal.json");
+  const ReplayRun zero = replay(csv.string() + " --zero-phase", dir / "zero.json");
+  ASSERT_EQ(causal.exit_code, 0) << causal.log;
+  ASSERT_EQ(zero.exit_code, 0) << zero.log;
+  EXPECT_EQ(causal.summary["filter"], "causal");
+  EXPECT_EQ(zero.summary["filter"], "zero_phase");
+  EXPECT_EQ(zero.summary["samples"], 50000);
+  EXPECT_NEAR(zero.summary["revolutions"].get<double>(),
+              causal.summary["revolutions"].get<double>(), 2.0);
+  EXPECT_NEAR(zero.summary["alpha_deg"]["mean"].get<double>(),
+              causal.summary["alpha_deg"]["mean"].get<double>(), 0.3);
+  EXPECT_LT(zero.summary["residual_rms_N"]["fx"].get<double>(), 0.02);
+}
+
 TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulate(dir, "cut", base_scenario());

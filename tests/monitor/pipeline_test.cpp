@@ -148,6 +148,50 @@ TEST(Pipeline, MeetsTheAccuracyTargetsOnASimulatedCut) {
   EXPECT_GT(compared, 100);
 }
 
+// Issue 3 §2: the causal filter (delay corrected) and the offline zero-phase option measure the
+// same α; both compare the model like with like (the model goes through H or |H|²).
+// (A dynamometer resonance close above the cut-off — 4.5 kHz against 3.3 kHz — leaks through
+// both filters differently and moves α by degrees with the filter's details; the README's
+// findings have the figures. Here it sits at 9 kHz.)
+TEST(Pipeline, CausalAndZeroPhaseFilteringGiveTheSameAlpha) {
+  sim::Scenario s = cut_at_50khz(true);
+  s.model.effects.dynamometer.natural_hz = {9000.0, 9200.0, 12000.0};
+  const Recording r = record(s);
+  MonitorConfig zc = monitor_for(s);
+  zc.filter_zero_phase = true;
+  Collector causal, zero;
+  Pipeline pc(monitor_for(s), causal);
+  Pipeline pz(zc, zero);
+  replay(pc, r, 1000);
+  replay(pz, r, 1000);
+  pc.finish();
+  const std::size_t before_finish = zero.revolutions.size();
+  pz.finish();
+  EXPECT_GT(zero.revolutions.size(), before_finish);  // the held samples were measured too
+  ASSERT_GT(zero.revolutions.size(), 150u);
+  int compared = 0;
+  double worst_time_us = 0.0;
+  for (const auto& rz : zero.revolutions) {
+    const RevolutionRecord* rc = at_time(causal.revolutions, rz.utime_us);
+    if (rc == nullptr || rz.window_revolutions < 30 || rc->window_revolutions < 30) {
+      continue;
+    }
+    ++compared;
+    EXPECT_NEAR(rz.alpha_mean_deg, rc->alpha_mean_deg, 0.3) << rz.utime_us;
+    EXPECT_NEAR(rz.delta_fy_mean_N, rc->delta_fy_mean_N, 0.02 * std::fabs(rc->delta_fy_mean_N));
+    // The causal valleys, corrected by the group delay at the tooth-passing frequency, land
+    // within a few microseconds of the zero-phase ones (the residual lateness is the filter's
+    // phase curvature over the valley's harmonics).
+    worst_time_us =
+        std::max(worst_time_us, static_cast<double>(std::llabs(rz.utime_us - rc->utime_us)));
+    // Like with like: the residual stays at the noise level in both modes.
+    EXPECT_LT(rz.residual_rms_N[1], 0.05);
+    EXPECT_LT(rc->residual_rms_N[1], 0.05);
+  }
+  EXPECT_GT(compared, 100);
+  EXPECT_LE(worst_time_us, 20.0);
+}
+
 // The same stream in different block sizes gives the same results.
 TEST(Pipeline, ResultsDoNotDependOnBlockSize) {
   const sim::Scenario s = cut_at_50khz(true);
