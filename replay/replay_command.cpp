@@ -68,6 +68,9 @@ monitor::MonitorConfig build_config(const ReplayOptions& o, const fs::path& inpu
   if (sidecar.empty() && !is_lcm_log(input)) {
     sidecar = input;
     sidecar.replace_extension(".json");
+    if (!fs::exists(sidecar) && !o.config.empty()) {
+      sidecar.clear();  // no sidecar beside the CSV: --config describes the cut alone
+    }
   }
   nlohmann::json base;
   if (!sidecar.empty()) {

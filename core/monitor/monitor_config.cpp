@@ -19,6 +19,8 @@ std::string join(const std::string& path, const char* key) {
 MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path) {
   ObjectReader r(j, path);
   MonitorConfig c;
+  (void)r.string("name", "");  // for the reader of the file
+  (void)r.string("description", "");
   c.model = model::model_config_from_json(r.raw("model"), join(path, "model"));
   c.sample_rate_hz =
       r.number("sample_rate_hz", c.sample_rate_hz, config::closed(1000.0, 2e6, "Hz"));
@@ -53,6 +55,7 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     c.sync_bins = s.integer("bins", c.sync_bins, 32, 4096);
     c.sync_window_revolutions =
         s.integer("window_revolutions", c.sync_window_revolutions, 2, 10000);
+    c.template_revolutions = s.integer("template_revolutions", c.template_revolutions, 1, 10000);
     s.finish();
   }
   {
@@ -119,22 +122,24 @@ nlohmann::json to_json(const MonitorConfig& c) {
   for (double s : c.saturation_N) {
     sat.push_back(std::isfinite(s) ? s : 1e300);
   }
-  return {
-      {"model", model::to_json(c.model)},
-      {"sample_rate_hz", c.sample_rate_hz},
-      {"axis_map", signal::to_json(c.axis_map)},
-      {"saturation_N", sat},
-      {"filter",
-       {{"cutoff_hz", c.filter_cutoff_hz},
-        {"order", c.filter_order},
-        {"mode", c.filter_zero_phase ? "zero_phase" : "causal"}}},
-      {"spindle", signal::to_json(c.spindle)},
-      {"tooth_periods",
-       {{"window_revolutions", c.alpha_window_revolutions},
-        {"search_fraction_of_pitch", c.search_fraction_of_pitch}}},
-      {"sync_average", {{"bins", c.sync_bins}, {"window_revolutions", c.sync_window_revolutions}}},
-      {"lockstep", {{"enabled", c.lockstep}, {"sectors", c.residual_sectors}}},
-      {"alerts", to_json(c.alerts)}};
+  return {{"model", model::to_json(c.model)},
+          {"sample_rate_hz", c.sample_rate_hz},
+          {"axis_map", signal::to_json(c.axis_map)},
+          {"saturation_N", sat},
+          {"filter",
+           {{"cutoff_hz", c.filter_cutoff_hz},
+            {"order", c.filter_order},
+            {"mode", c.filter_zero_phase ? "zero_phase" : "causal"}}},
+          {"spindle", signal::to_json(c.spindle)},
+          {"tooth_periods",
+           {{"window_revolutions", c.alpha_window_revolutions},
+            {"search_fraction_of_pitch", c.search_fraction_of_pitch}}},
+          {"sync_average",
+           {{"bins", c.sync_bins},
+            {"window_revolutions", c.sync_window_revolutions},
+            {"template_revolutions", c.template_revolutions}}},
+          {"lockstep", {{"enabled", c.lockstep}, {"sectors", c.residual_sectors}}},
+          {"alerts", to_json(c.alerts)}};
 }
 
 }  // namespace millwatch::monitor

@@ -3,7 +3,8 @@
 //
 // JSON (every field optional except where the source cannot tell, e.g. the sample rate of a
 // live DAQ):
-//   { "model": { ModelConfig: the cut as commanded — tool, process, material, effects },
+//   { "name": "...", "description": "..." (free text, for the reader),
+//     "model": { ModelConfig: the cut as commanded — tool, process, material, effects },
 //     "sample_rate_hz": 50000,
 //     "axis_map": {"x": "-fx", "y": "-fy", "z": "-fz"},
 //     "saturation_N": [x, y, z],

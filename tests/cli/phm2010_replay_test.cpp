@@ -1,0 +1,118 @@
+// The monitor on real dynamometer recordings: three 0.1 s windows of the PHM 2010 data
+// challenge's cutter c1 (3-flute ball-nose end mill, ~10,400 rpm, 50 kHz) at cuts 1, 158 and
+// 315, replayed with the shipped config/phm2010_c1.json. The truth here is what is known of the
+// set-up (three equally spaced flutes, the nominal speed) and the measured flank wear.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path data_dir() {
+  return test::shared_dir() / "data" / "phm2010";
+}
+
+nlohmann::json replay_window(const std::string& cut, const fs::path& dir) {
+  const fs::path summary = dir / ("cut" + cut + ".json");
+  const auto r =
+      test::run_command(test::millwatch_cli() + " replay " +
+                        (data_dir() / ("c1_cut" + cut + "_window.csv")).string() + " --config " +
+                        (test::source_dir() / "config" / "phm2010_c1.json").string() +
+                        " --summary " + summary.string() + " >/dev/null");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return fs::exists(summary) ? nlohmann::json::parse(std::ifstream(summary)) : nlohmann::json();
+}
+
+/// Mean flank wear of the three flutes after `cut`, from c1_wear.csv.
+double mean_wear_um(int cut) {
+  std::ifstream in(data_dir() / "c1_wear.csv");
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream s(line);
+    std::string field;
+    std::getline(s, field, ',');
+    if (std::stoi(field) != cut) {
+      continue;
+    }
+    double sum = 0.0;
+    for (int f = 0; f < 3; ++f) {
+      std::getline(s, field, ',');
+      sum += std::stod(field);
+    }
+    return sum / 3.0;
+  }
+  return std::nan("");
+}
+
+double mean_of(const nlohmann::json& a) {
+  double sum = 0.0;
+  for (const auto& v : a) {
+    sum += v.get<double>();
+  }
+  return sum / static_cast<double>(a.size());
+}
+
+TEST(Phm2010Replay, TracksSpeedToothPeriodsAndForceGrowthWithWear) {
+  if (!fs::exists(data_dir() / "c1_cut158_window.csv")) {
+    GTEST_SKIP() << "real recordings not found at " << data_dir();
+  }
+  const fs::path dir = test::fresh_temp_dir();
+  const nlohmann::json fresh = replay_window("001", dir);
+  const nlohmann::json mid = replay_window("158", dir);
+  const nlohmann::json worn = replay_window("315", dir);
+  ASSERT_FALSE(mid.is_null());
+  ASSERT_FALSE(worn.is_null());
+
+  for (const nlohmann::json* s : {&fresh, &mid, &worn}) {
+    EXPECT_EQ((*s)["samples"], 5000);
+    EXPECT_EQ((*s)["dropped_samples"], 0);
+  }
+  // Cut 1 is light and barely periodic: the speed is still found near the nominal one, and
+  // whatever is measured is not invented.
+  EXPECT_NEAR(fresh["spindle_rpm"].get<double>(), 10400.0, 300.0);
+
+  for (const nlohmann::json* s : {&mid, &worn}) {
+    const double rpm = (*s)["spindle_rpm"].get<double>();
+    EXPECT_NEAR(rpm, 10400.0, 0.02 * 10400.0);
+    ASSERT_GE((*s)["revolutions"].get<int>(), 3);
+    // Three flutes evenly spaced: three tooth periods that add up to a revolution, α near 120°.
+    const auto& periods = (*s)["tooth_period_s"];
+    ASSERT_EQ(periods.size(), 3u);
+    const double revolution_s = 60.0 / rpm;
+    EXPECT_NEAR(3.0 * mean_of(periods), revolution_s, 0.005 * revolution_s);
+    for (const auto& p : periods) {
+      EXPECT_NEAR(p.get<double>(), revolution_s / 3.0, 0.03 * revolution_s / 3.0);
+    }
+    EXPECT_NEAR((*s)["alpha_deg"]["mean"].get<double>(), 120.0, 3.0);
+  }
+  // The two steady windows see the same spindle.
+  EXPECT_NEAR(mid["spindle_rpm"].get<double>(), worn["spindle_rpm"].get<double>(), 0.002 * 10400.0);
+
+  // Flank wear grows from cut 158 to 315; so do the cutting forces (rubbing on the wear land),
+  // flute by flute and more than in proportion.
+  const double wear_ratio = mean_wear_um(315) / mean_wear_um(158);
+  EXPECT_GT(wear_ratio, 1.2);
+  const double force_ratio =
+      mean_of(worn["peak_force_N"]["resultant"]) / mean_of(mid["peak_force_N"]["resultant"]);
+  EXPECT_GT(force_ratio, wear_ratio);
+  for (std::size_t f = 0; f < 3; ++f) {
+    EXPECT_GT(worn["peak_force_N"]["resultant"][f].get<double>(),
+              2.0 * mid["peak_force_N"]["resultant"][f].get<double>());
+  }
+}
+
+}  // namespace
+}  // namespace millwatch
