@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Builds millwatch (Release) and, in one run, benchmarks the whole pipeline with the lockstep
+# model (bench/pipeline_benchmark), the model and simulator (bench/model_benchmark) and the
+# NumPy/SciPy reference of the filter + FFT + valley steps (bench/reference_pipeline.py, Debian's
+# python3-scipy); prints the README's performance table (Markdown) on stdout, progress on stderr.
+# Raw results stay in build/bench/. Needs the packages of scripts/install-deps.sh.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+build=build/release
+out=build/bench
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" --target pipeline_benchmark model_benchmark millwatch >&2
+mkdir -p "$out"
+for b in pipeline model; do
+  echo "== ${b}_benchmark" >&2
+  "$build/bench/${b}_benchmark" --benchmark_repetitions=3 --benchmark_out="$out/$b.json" \
+    --benchmark_out_format=json >&2
+done
+echo "== NumPy/SciPy reference" >&2
+/usr/bin/python3 bench/reference_pipeline.py --millwatch "$build/replay/millwatch" \
+  --workdir "$out" >"$out/reference.jsonl"
+
+/usr/bin/python3 - "$out" <<'EOF'
+import json, sys
+out = sys.argv[1]
+runs = {}  # benchmark name -> its repetitions
+for b in ("pipeline", "model"):
+    for r in json.load(open(f"{out}/{b}.json"))["benchmarks"]:
+        if r["run_type"] == "iteration":
+            runs.setdefault(r["run_name"], []).append(r)
+ref = {round(r["sample_rate_hz"]): r for r in map(json.loads, open(f"{out}/reference.jsonl"))}
+best = lambda name, key: max(r[key] for r in runs[name])  # best of the repetitions
+print("| sample rate | millwatch full pipeline, lockstep on | latency per revolution, worst / mean"
+      " | NumPy/SciPy filter + FFT + valleys | simulator, full model + measurement chain |")
+print("|---|---|---|---|---|")
+for rate, label, block, target in ((50000, "50 kHz", 50, 200), (333300, "333.3 kHz", 333, 30)):
+    pipe, sim = f"BM_Pipeline/{rate}/{block}", f"BM_SimulatorThroughput/{rate}"
+    worst = max(r["latency_worst_us"] for r in runs[pipe])
+    mean = sum(r["latency_mean_us"] for r in runs[pipe]) / len(runs[pipe])
+    print(f"| {label} | {best(pipe, 'x_realtime'):.0f}× real time (target ≥ {target}×)"
+          f" | {worst / 1e3:.2f} ms / {mean:.1f} µs (target < 1 ms)"
+          f" | {ref[rate]['x_realtime']:.0f}× real time"
+          f" | {best(sim, 'x_realtime'):.1f}× real time ({best(sim, 'items_per_second') / 1e6:.2f}"
+          " M samples/s) |")
+rev = min(r["real_time"] for r in runs["BM_FullModelRevolution"]) / 1e3
+upd = min(r["real_time"] for r in runs["BM_ModelUpdateAfterRunoutChange"]) / 1e3
+cpu = next((l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")))
+r = next(iter(ref.values()))
+print(f"\nFull model, one revolution (2 flutes, 10 discs, 0.5°, every effect on): {rev:.2f} ms"
+      f" (target < 1 ms); model update after a runout change: {upd:.2f} ms.")
+print(f"{cpu}, one core, Release; C++ best of 3 repetitions (latency: worst and mean over them),"
+      f" NumPy/SciPy best of {r['repeats']} (Python {r['python']}, NumPy {r['numpy']},"
+      f" SciPy {r['scipy']}); × real time from CPU time, latency from the wall clock.")
+EOF
