@@ -21,6 +21,13 @@ function(millwatch_test source)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE millwatch::test_support GTest::gtest_main)
   millwatch_warnings(${name})
+  # Multi-process LCM sessions (tests/daemon) run alone: on a busy 2-core machine the UDP
+  # receivers of a paced session can fall behind.
+  set(serial FALSE)
+  if(source MATCHES "/tests/daemon/")
+    set(serial TRUE)
+  endif()
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-                       PROPERTIES ENVIRONMENT "MILLWATCH_SHARED_DIR=${MILLWATCH_SHARED_DIR}")
+                       PROPERTIES ENVIRONMENT "MILLWATCH_SHARED_DIR=${MILLWATCH_SHARED_DIR}"
+                                  RUN_SERIAL ${serial})
 endfunction()

@@ -138,6 +138,7 @@ int run(const std::string& config_path, const std::string& url_override,
       if (reload.load()) {
         std::lock_guard<std::mutex> lock(reload_mutex);
         if (pending) {
+          pipeline->finish();  // samples held for zero-phase filtering are measured first
           carry(carried, pipeline->status().input);
           pipeline = std::make_unique<monitor::Pipeline>(pending->monitor, output);
           spdlog::info("configuration reloaded; the pipeline restarts on the next block");
@@ -166,6 +167,7 @@ int run(const std::string& config_path, const std::string& url_override,
       }
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
+    pipeline->finish();
     const monitor::PipelineStatus final_status = merged_status(*pipeline, carried, source_counters);
     output.publish_status(final_status);
     summary.finish(final_status);
