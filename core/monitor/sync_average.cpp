@@ -7,7 +7,7 @@
 namespace millwatch::monitor {
 
 SyncAverage::SyncAverage(int bins, int window_revolutions)
-    : bins_(bins), window_(window_revolutions) {
+    : bins_(bins), bins_per_rad_(bins / (2.0 * std::numbers::pi)), window_(window_revolutions) {
   // window_ closed revolutions and the one being filled.
   sums_.assign(
       static_cast<std::size_t>(window_ + 1) * (kChannels + 1) * static_cast<std::size_t>(bins_),
@@ -21,20 +21,23 @@ void SyncAverage::clear() {
 }
 
 void SyncAverage::add(double angle_rad, const std::array<double, kChannels>& values) {
-  const double pos = angle_rad / (2.0 * std::numbers::pi) * bins_;
+  const double pos = angle_rad * bins_per_rad_;
   const double whole = std::floor(pos);
   const double w = pos - whole;
-  int k0 = static_cast<int>(whole) % bins_;
-  if (k0 < 0) {
-    k0 += bins_;
+  int k0 = static_cast<int>(whole);
+  if (k0 >= bins_ || k0 < 0) {
+    k0 %= bins_;
+    k0 += k0 < 0 ? bins_ : 0;
   }
   const int k1 = k0 + 1 == bins_ ? 0 : k0 + 1;
-  for (int c = 0; c < kChannels; ++c) {
-    sums_[index(slot_, c, k0)] += (1.0 - w) * values[static_cast<std::size_t>(c)];
-    sums_[index(slot_, c, k1)] += w * values[static_cast<std::size_t>(c)];
+  double* a = &sums_[index(slot_, 0, k0)];
+  double* b = &sums_[index(slot_, 0, k1)];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(kChannels); ++c) {
+    a[c] += (1.0 - w) * values[c];
+    b[c] += w * values[c];
   }
-  sums_[index(slot_, kChannels, k0)] += 1.0 - w;
-  sums_[index(slot_, kChannels, k1)] += w;
+  a[kChannels] += 1.0 - w;
+  b[kChannels] += w;
 }
 
 void SyncAverage::end_revolution() {

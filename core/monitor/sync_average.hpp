@@ -32,13 +32,16 @@ class SyncAverage {
 
  private:
   [[nodiscard]] double total(int channel, int bin) const;
+  // Layout [slot][bin][channel]: a sample's two bins are two short contiguous runs.
   [[nodiscard]] std::size_t index(int slot, int channel, int bin) const {
-    return (static_cast<std::size_t>(slot) * (kChannels + 1) + static_cast<std::size_t>(channel)) *
-               static_cast<std::size_t>(bins_) +
-           static_cast<std::size_t>(bin);
+    return (static_cast<std::size_t>(slot) * static_cast<std::size_t>(bins_) +
+            static_cast<std::size_t>(bin)) *
+               (kChannels + 1) +
+           static_cast<std::size_t>(channel);
   }
 
   int bins_ = 0;
+  double bins_per_rad_ = 0.0;
   int window_ = 0;
   int slot_ = 0;    // ring slot of the revolution being filled
   int filled_ = 0;  // closed revolutions in the window
