@@ -12,6 +12,7 @@
 #include "core/config/json_reader.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "msgs/lcm_convert.hpp"
+#include "replay/command_exit.hpp"
 #include "replay/csv_cut_reader.hpp"
 #include "replay/json_file.hpp"
 
@@ -119,18 +120,7 @@ void add_publish_command(CLI::App& app) {
   cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--start-utime", o->start_utime_s, "Add this many seconds to every utime");
-  cmd->callback([o] {
-    int rc = 0;
-    try {
-      rc = run_publish(*o);
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      rc = 2;
-    }
-    if (rc != 0) {
-      throw CLI::RuntimeError(rc);
-    }
-  });
+  cmd->callback([o] { run_subcommand([&o] { return run_publish(*o); }); });
 }
 
 }  // namespace millwatch::shell

@@ -16,6 +16,7 @@
 #include "core/monitor/run_summary.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "msgs/lcm_output.hpp"
+#include "replay/command_exit.hpp"
 #include "replay/csv_cut_reader.hpp"
 #include "replay/json_file.hpp"
 #include "replay/lcm_log_reader.hpp"
@@ -232,18 +233,7 @@ void add_replay_command(CLI::App& app) {
   cmd->add_option("--channel", o->raw_channel, "LCM channel of the raw samples in a log");
   cmd->add_option("--block", o->block_samples, "CSV samples per block")
       ->check(CLI::Range(1, 65536));
-  cmd->callback([o] {
-    int rc = 0;
-    try {
-      rc = run_replay(*o);
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      rc = 2;
-    }
-    if (rc != 0) {
-      throw CLI::RuntimeError(rc);
-    }
-  });
+  cmd->callback([o] { run_subcommand([&o] { return run_replay(*o); }); });
 }
 
 }  // namespace millwatch::shell
