@@ -5,7 +5,8 @@
 // publisher thread (messaging::LcmOutput) publishes every output. The main thread waits for
 // signals: SIGTERM/SIGINT stop cleanly (the queue is drained, a final status and summary are
 // published and logged), SIGHUP reloads the configuration between two blocks (a bad file is
-// reported and the running configuration kept).
+// reported and the running configuration kept). A reload applies the monitor section,
+// status_period_s and log_level; the source and the LCM set-up take a restart (said so).
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -17,6 +18,8 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "core/config/json_reader.hpp"
 #include "core/monitor/pipeline.hpp"
@@ -46,35 +49,99 @@ daemon::DaemonConfig load(const std::string& path, const std::string& url_overri
   }
 }
 
-/// The pipeline's status with what was lost before it (in the source, in replaced pipelines).
+/// The pipeline of a configuration read from `path`. Building it checks what only the stages
+/// can (e.g. a spindle window of at least 5 revolutions at the commanded speed), so that a bad
+/// file is an error here — at --check, at start, on SIGHUP — and never in the sample thread.
+std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
+                                                 const monitor::MonitorConfig& config,
+                                                 monitor::PipelineSink& sink) {
+  try {
+    return std::make_unique<monitor::Pipeline>(config, sink);
+  } catch (const config::ConfigError& e) {
+    // The stages name fields relative to the monitor configuration.
+    throw std::runtime_error(path + ": monitor." + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(path + ": monitor: " + e.what());
+  }
+}
+
+/// The pipeline's status with what came before it (replaced pipelines) and what was lost
+/// before it (in the source).
 monitor::PipelineStatus merged_status(const monitor::Pipeline& p,
-                                      const monitor::InputCounters& carried,
+                                      const monitor::PipelineStatus& carried,
                                       const daemon::SourceCounters& source) {
   monitor::PipelineStatus s = p.status();
   auto& in = s.input;
-  in.samples_in += carried.samples_in;
-  in.samples_accepted += carried.samples_accepted;
-  in.samples_dropped += carried.samples_dropped + source.samples_dropped.load();
-  in.samples_flagged += carried.samples_flagged;
-  in.nonfinite_samples += carried.nonfinite_samples;
-  in.saturated_samples += carried.saturated_samples;
-  in.gaps += carried.gaps;
-  in.out_of_order_blocks += carried.out_of_order_blocks;
-  in.blocks_rejected +=
-      carried.blocks_rejected + source.undecodable.load() + source.oversized.load();
+  const auto& c = carried.input;
+  in.samples_in += c.samples_in;
+  in.samples_accepted += c.samples_accepted;
+  in.samples_dropped += c.samples_dropped + source.samples_dropped.load();
+  in.samples_flagged += c.samples_flagged;
+  in.nonfinite_samples += c.nonfinite_samples;
+  in.saturated_samples += c.saturated_samples;
+  in.gaps += c.gaps;
+  in.out_of_order_blocks += c.out_of_order_blocks;
+  in.blocks_rejected += c.blocks_rejected + source.undecodable.load() + source.oversized.load();
+  s.revolutions += carried.revolutions;
+  s.valid_revolutions += carried.valid_revolutions;
+  s.idle_revolutions += carried.idle_revolutions;
   return s;
 }
 
-void carry(monitor::InputCounters& total, const monitor::InputCounters& c) {
-  total.samples_in += c.samples_in;
-  total.samples_accepted += c.samples_accepted;
-  total.samples_dropped += c.samples_dropped;
-  total.samples_flagged += c.samples_flagged;
-  total.nonfinite_samples += c.nonfinite_samples;
-  total.saturated_samples += c.saturated_samples;
-  total.gaps += c.gaps;
-  total.out_of_order_blocks += c.out_of_order_blocks;
-  total.blocks_rejected += c.blocks_rejected;
+/// What a reload cannot change in a running daemon (the source and the LCM set-up): the fields
+/// of `next` that differ from the running configuration, for a warning.
+std::string needs_restart(const daemon::DaemonConfig& running, const daemon::DaemonConfig& next) {
+  std::string out;
+  auto note = [&out](bool differs, const char* field) {
+    if (differs) {
+      out += (out.empty() ? "" : ", ") + std::string(field);
+    }
+  };
+  const auto& a = running.source;
+  const auto& b = next.source;
+  note(a.kind != b.kind, "source.kind");
+  note(a.channel != b.channel, "source.channel");
+  note(a.device != b.device, "source.device");
+  note(a.subdevice != b.subdevice, "source.subdevice");
+  note(a.block_samples != b.block_samples, "source.block_samples");
+  bool channels_differ = false;
+  for (std::size_t i = 0; i < a.channels.size(); ++i) {
+    const auto& x = a.channels[i];
+    const auto& y = b.channels[i];
+    channels_differ = channels_differ || x.daq_channel != y.daq_channel ||
+                      x.volts_min != y.volts_min || x.volts_max != y.volts_max ||
+                      x.maxdata != y.maxdata || x.range_N != y.range_N ||
+                      x.full_scale_V != y.full_scale_V;
+  }
+  note(channels_differ, "source.channels");
+  note(running.lcm_url != next.lcm_url, "lcm.url");
+  const auto& c = running.channels;
+  const auto& d = next.channels;
+  // For an LCM source, lcm.channels.raw follows source.channel (noted above).
+  note((c.raw != d.raw && a.channel == b.channel) || c.spindle != d.spindle ||
+           c.tooth_periods != d.tooth_periods || c.flute_peaks != d.flute_peaks ||
+           c.residual != d.residual || c.sync_average != d.sync_average || c.runout != d.runout ||
+           c.alert != d.alert || c.status != d.status,
+       "lcm.channels");
+  return out;
+}
+
+/// Adds a pipeline's counts (before it is replaced) to `total`.
+void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
+  auto& t = total.input;
+  const auto& c = s.input;
+  t.samples_in += c.samples_in;
+  t.samples_accepted += c.samples_accepted;
+  t.samples_dropped += c.samples_dropped;
+  t.samples_flagged += c.samples_flagged;
+  t.nonfinite_samples += c.nonfinite_samples;
+  t.saturated_samples += c.saturated_samples;
+  t.gaps += c.gaps;
+  t.out_of_order_blocks += c.out_of_order_blocks;
+  t.blocks_rejected += c.blocks_rejected;
+  total.revolutions += s.revolutions;
+  total.valid_revolutions += s.valid_revolutions;
+  total.idle_revolutions += s.idle_revolutions;
 }
 
 int run(const std::string& config_path, const std::string& url_override,
@@ -101,6 +168,9 @@ int run(const std::string& config_path, const std::string& url_override,
   monitor::RunSummary summary(config.monitor);
   shell::ShellSink shell_sink(summary, "millwatchd");
   messaging::LcmOutput output(lcm_out, config.channels, &shell_sink);
+  // Built here, so that a configuration the stages refuse stops the daemon with its message.
+  std::unique_ptr<monitor::Pipeline> first_pipeline =
+      make_pipeline(config_path, config.monitor, output);
   daemon::BlockQueue queue;
   daemon::SourceCounters source_counters;
   std::atomic<bool> stop{false};
@@ -121,38 +191,55 @@ int run(const std::string& config_path, const std::string& url_override,
         config.source, config.monitor.sample_rate_hz, queue, source_counters);
   }
 
-  // Reload hand-over: the main thread parks a new configuration, the sample thread takes it
-  // between two blocks.
+  // Reload hand-over: the main thread reads the new file and builds its pipeline, the sample
+  // thread swaps it in between two blocks and hands the old one back (FFTW's planner, used by
+  // a pipeline's construction and destruction, must stay in one thread).
+  struct Reload {
+    daemon::DaemonConfig config;
+    std::unique_ptr<monitor::Pipeline> pipeline;
+  };
   std::mutex reload_mutex;
-  std::unique_ptr<daemon::DaemonConfig> pending;
+  std::unique_ptr<Reload> pending;
+  std::vector<std::unique_ptr<monitor::Pipeline>> retired;
   std::atomic<bool> reload{false};
-  monitor::InputCounters carried;
+  monitor::PipelineStatus carried;  // counts of the pipelines replaced by reloads
 
   std::thread sample_thread([&] {
-    auto pipeline = std::make_unique<monitor::Pipeline>(config.monitor, output);
+    std::unique_ptr<monitor::Pipeline> pipeline = std::move(first_pipeline);
     auto slot = std::make_unique<daemon::BlockSlot>();
+    double status_period_s = config.status_period_s;
     std::int64_t next_status_utime = 0;
     auto last_status_wall = std::chrono::steady_clock::now();
-    const auto period = std::chrono::duration<double>(config.status_period_s);
     while (true) {
       if (reload.load()) {
-        std::lock_guard<std::mutex> lock(reload_mutex);
-        if (pending) {
-          pipeline->finish();  // samples held for zero-phase filtering are measured first
-          carry(carried, pipeline->status().input);
-          pipeline = std::make_unique<monitor::Pipeline>(pending->monitor, output);
-          spdlog::info("configuration reloaded; the pipeline restarts on the next block");
-          pending.reset();
+        std::unique_ptr<Reload> next;
+        {
+          std::lock_guard<std::mutex> lock(reload_mutex);
+          next = std::move(pending);
+          reload.store(false);
         }
-        reload.store(false);
+        if (next) {
+          pipeline->finish();  // samples held for zero-phase filtering are measured first
+          carry(carried, pipeline->status());
+          std::unique_ptr<monitor::Pipeline> old =
+              std::exchange(pipeline, std::move(next->pipeline));
+          {
+            std::lock_guard<std::mutex> lock(reload_mutex);
+            retired.push_back(std::move(old));
+          }
+          status_period_s = next->config.status_period_s;
+          spdlog::set_level(spdlog::level::from_str(next->config.log_level));
+          spdlog::info(
+              "configuration reloaded after {} samples; the pipeline restarts on the next block",
+              carried.input.samples_in);
+        }
       }
       if (queue.try_pop(*slot)) {
         const monitor::SampleBlock block = slot->view();
         pipeline->process(block);
         if (block.utime_us >= next_status_utime) {
           output.publish_status(merged_status(*pipeline, carried, source_counters));
-          next_status_utime =
-              block.utime_us + static_cast<std::int64_t>(config.status_period_s * 1e6);
+          next_status_utime = block.utime_us + static_cast<std::int64_t>(status_period_s * 1e6);
           last_status_wall = std::chrono::steady_clock::now();
         }
         continue;
@@ -161,7 +248,8 @@ int run(const std::string& config_path, const std::string& url_override,
         break;  // the queue is drained
       }
       // Idle: no samples. Still say so every status period.
-      if (std::chrono::steady_clock::now() - last_status_wall > period) {
+      if (std::chrono::steady_clock::now() - last_status_wall >
+          std::chrono::duration<double>(status_period_s)) {
         output.publish_status(merged_status(*pipeline, carried, source_counters));
         last_status_wall = std::chrono::steady_clock::now();
       }
@@ -183,7 +271,18 @@ int run(const std::string& config_path, const std::string& url_override,
     sigwait(&signals, &signal);
     if (signal == SIGHUP) {
       try {
-        auto next = std::make_unique<daemon::DaemonConfig>(load(config_path, url_override));
+        {
+          std::lock_guard<std::mutex> lock(reload_mutex);
+          retired.clear();
+        }
+        auto next = std::make_unique<Reload>();
+        next->config = load(config_path, url_override);
+        next->pipeline = make_pipeline(config_path, next->config.monitor, output);
+        const std::string restart = needs_restart(config, next->config);
+        if (!restart.empty()) {
+          spdlog::warn("SIGHUP: {}: {} changed; that takes a restart, the running values stay",
+                       config_path, restart);
+        }
         std::lock_guard<std::mutex> lock(reload_mutex);
         pending = std::move(next);
         reload.store(true);
@@ -238,7 +337,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (check) {
-      load(config_path, url);
+      const daemon::DaemonConfig c = load(config_path, url);
+      monitor::PipelineSink ignore;
+      make_pipeline(config_path, c.monitor, ignore);
       std::printf("%s: configuration is valid\n", config_path.c_str());
       return 0;
     }

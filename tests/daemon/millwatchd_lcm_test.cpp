@@ -1,10 +1,14 @@
 // millwatchd as it runs beside the machine: multi-process LCM sessions inside a private network
-// namespace (tests/daemon/lcm_session.sh: lcm-logger, lcm-logplayer, `millwatch publish`), the
-// signals (SIGTERM, SIGHUP), garbage on the raw channel, bad configurations, a missing DAQ.
-// Sessions that need `unshare -n` are skipped, saying why, where it is not permitted.
+// namespace (tests/daemon/lcm_session.sh: lcm-logger, lcm-logplayer, `millwatch publish`) whose
+// recordings are decoded here, the signals (SIGTERM, SIGINT, SIGHUP), garbage on the raw
+// channel, bad configurations (in the file, or refused by the pipeline's stages), a missing DAQ,
+// udpm:// without a multicast route. Single-process tests use memq://. Tests that need
+// `unshare -n` are skipped, saying why, where it is not permitted.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,8 +21,12 @@
 #include <vector>
 
 #include "core/sim/cut_simulator.hpp"
+#include "millwatch/flute_peaks_t.hpp"
+#include "millwatch/model_residual_t.hpp"
 #include "millwatch/pipeline_status_t.hpp"
 #include "millwatch/spindle_state_t.hpp"
+#include "millwatch/sync_average_t.hpp"
+#include "millwatch/tool_alert_t.hpp"
 #include "millwatch/tooth_periods_t.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "tests/support/run_command.hpp"
@@ -49,11 +57,12 @@ bool namespaces_work(std::string& why) {
   return r.exit_code == 0;
 }
 
-/// Runs one lcm_session.sh mode in a private network namespace (bounded to 90 s).
+/// Runs one lcm_session.sh mode in a private network namespace (bounded to 90 s; the script
+/// kills its own stragglers).
 test::CommandResult session(const std::string& mode, const fs::path& dir) {
   const fs::path script = test::source_dir() / "tests" / "daemon" / "lcm_session.sh";
   return test::run_command("MILLWATCH_CLI=" + test::millwatch_cli() +
-                           " MILLWATCH_DAEMON=" + kDaemon + " timeout 90 unshare -n " +
+                           " MILLWATCH_DAEMON=" + kDaemon + " timeout -k 5 90 unshare -n " +
                            script.string() + " " + mode + " " + dir.string());
 }
 
@@ -85,6 +94,7 @@ std::map<std::string, std::vector<std::vector<std::uint8_t>>> read_log(const fs:
   return out;
 }
 
+/// Every event of a channel, decoded; an event that does not decode exactly is a failure.
 template <class Message>
 std::vector<Message> decode_all(const std::vector<std::vector<std::uint8_t>>& events) {
   std::vector<Message> out;
@@ -92,9 +102,21 @@ std::vector<Message> decode_all(const std::vector<std::vector<std::uint8_t>>& ev
     Message m;
     if (m.decode(e.data(), 0, static_cast<int>(e.size())) == static_cast<int>(e.size())) {
       out.push_back(m);
+    } else {
+      ADD_FAILURE() << "an event of " << e.size() << " bytes does not decode as "
+                    << Message::getTypeName();
     }
   }
   return out;
+}
+
+/// The events of `channel` in `log` (none if it is absent).
+const std::vector<std::vector<std::uint8_t>>& events(
+    const std::map<std::string, std::vector<std::vector<std::uint8_t>>>& log,
+    const std::string& channel) {
+  static const std::vector<std::vector<std::uint8_t>> kNone;
+  const auto it = log.find(channel);
+  return it == log.end() ? kNone : it->second;
 }
 
 class MillwatchdSession : public ::testing::Test {
@@ -126,28 +148,114 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
 
   const auto log = read_log(dir_ / "live.lcmlog");
   ASSERT_EQ(log.count("MILLWATCH_FORCE_RAW"), 1u);
-  EXPECT_EQ(log.at("MILLWATCH_FORCE_RAW").size(), 50u);  // 1000-sample blocks
-  const auto periods = decode_all<tooth_periods_t>(log.at("MILLWATCH_TOOTH_PERIODS"));
+  EXPECT_EQ(log.at("MILLWATCH_FORCE_RAW").size(), 200u);  // 250-sample blocks
+  // Every channel the daemon publishes on was recorded, and every event decodes.
+  for (const char* channel :
+       {"MILLWATCH_SPINDLE", "MILLWATCH_TOOTH_PERIODS", "MILLWATCH_FLUTE_PEAKS",
+        "MILLWATCH_RESIDUAL", "MILLWATCH_SYNC_AVERAGE", "MILLWATCH_ALERT", "MILLWATCH_STATUS"}) {
+    EXPECT_FALSE(events(log, channel).empty()) << channel << " was not recorded";
+  }
+  const auto periods = decode_all<tooth_periods_t>(events(log, "MILLWATCH_TOOTH_PERIODS"));
   ASSERT_GE(periods.size(), static_cast<std::size_t>(0.95 * revolutions));
   for (std::size_t i = 1; i < periods.size(); ++i) {
     EXPECT_GT(periods[i].revolution, periods[i - 1].revolution);
     EXPECT_GT(periods[i].utime, periods[i - 1].utime);
   }
   EXPECT_EQ(periods.back().num_flutes, 2);
+  EXPECT_EQ(periods.back().flute_period_s.size(), 2u);
   EXPECT_NEAR(periods.back().alpha_mean_deg, live["alpha_deg"]["mean"].get<double>(), 0.5);
   double period_sum_s = 0.0;
   for (const auto& p : periods) {
     period_sum_s += p.period_s;
   }
   EXPECT_NEAR(period_sum_s / static_cast<double>(periods.size()), 60.0 / 25252.0, 1e-6);
-  const auto spindle = decode_all<spindle_state_t>(log.at("MILLWATCH_SPINDLE"));
+  const auto spindle = decode_all<spindle_state_t>(events(log, "MILLWATCH_SPINDLE"));
   ASSERT_FALSE(spindle.empty());
+  EXPECT_TRUE(spindle.back().valid);
+  EXPECT_TRUE(spindle.back().cutting);
   EXPECT_NEAR(spindle.back().spindle_rpm_measured, 25252.0, 0.0005 * 25252.0);
   EXPECT_EQ(spindle.back().spindle_rpm_commanded, 25000.0);
-  const auto status = decode_all<pipeline_status_t>(log.at("MILLWATCH_STATUS"));
+  for (std::size_t i = 1; i < spindle.size(); ++i) {
+    EXPECT_GT(spindle[i].seq, spindle[i - 1].seq);
+    EXPECT_GE(spindle[i].revolution, spindle[i - 1].revolution);
+  }
+
+  // Per revolution: peaks and residuals (the logger may miss a message on a busy machine).
+  const auto peaks = decode_all<flute_peaks_t>(events(log, "MILLWATCH_FLUTE_PEAKS"));
+  ASSERT_GE(peaks.size(), static_cast<std::size_t>(0.95 * revolutions));
+  std::array<double, 2> resultant_sum{};
+  for (std::size_t i = 0; i < peaks.size(); ++i) {
+    if (i > 0) {
+      EXPECT_GT(peaks[i].revolution, peaks[i - 1].revolution);
+    }
+    ASSERT_EQ(peaks[i].num_flutes, 2);
+    for (std::size_t j = 0; j < 2; ++j) {
+      EXPECT_GT(peaks[i].peak_resultant_N[j], 0.0);
+      resultant_sum[j] += peaks[i].peak_resultant_N[j];
+    }
+  }
+  for (std::size_t j = 0; j < 2; ++j) {
+    EXPECT_NEAR(resultant_sum[j] / static_cast<double>(peaks.size()),
+                live["peak_force_N"]["resultant"][j].get<double>(),
+                0.02 * live["peak_force_N"]["resultant"][j].get<double>())
+        << "flute " << j;
+  }
+  const auto residuals = decode_all<model_residual_t>(events(log, "MILLWATCH_RESIDUAL"));
+  ASSERT_GE(residuals.size(), static_cast<std::size_t>(0.9 * revolutions));
+  double fx_sq = 0.0;
+  for (std::size_t i = 0; i < residuals.size(); ++i) {
+    if (i > 0) {
+      EXPECT_GT(residuals[i].revolution, residuals[i - 1].revolution);
+    }
+    EXPECT_EQ(residuals[i].num_flutes, 2);
+    EXPECT_EQ(residuals[i].num_sectors, 12);
+    EXPECT_TRUE(std::isfinite(residuals[i].rms_fx_N));
+    EXPECT_LT(residuals[i].rms_fx_N, residuals[i].measured_rms_N);  // the model explains the cut
+    fx_sq += residuals[i].rms_fx_N * residuals[i].rms_fx_N;
+  }
+  EXPECT_NEAR(std::sqrt(fx_sq / static_cast<double>(residuals.size())),
+              live["residual_rms_N"]["fx"].get<double>(),
+              0.02 * live["residual_rms_N"]["fx"].get<double>());
+
+  // The synchronous average every 30 revolutions, measured and model on 256 bins.
+  const auto sync = decode_all<sync_average_t>(events(log, "MILLWATCH_SYNC_AVERAGE"));
+  ASSERT_GE(sync.size(), 5u);
+  for (std::size_t i = 0; i < sync.size(); ++i) {
+    if (i > 0) {
+      EXPECT_GT(sync[i].revolution, sync[i - 1].revolution);
+    }
+    ASSERT_EQ(sync[i].num_bins, 256);
+    EXPECT_EQ(sync[i].window_revolutions, 30);
+  }
+  double peak_fy = 0.0;
+  double peak_model_fy = 0.0;
+  for (int k = 0; k < 256; ++k) {
+    peak_fy = std::max(peak_fy, std::fabs(sync.back().fy_N[static_cast<std::size_t>(k)]));
+    peak_model_fy =
+        std::max(peak_model_fy, std::fabs(sync.back().model_fy_N[static_cast<std::size_t>(k)]));
+  }
+  EXPECT_GT(peak_fy, 1.0);
+  EXPECT_NEAR(peak_model_fy, peak_fy, 0.3 * peak_fy);
+
+  // The alerts on LCM are the summary's.
+  const auto alerts = decode_all<tool_alert_t>(events(log, "MILLWATCH_ALERT"));
+  ASSERT_EQ(alerts.size(), live["alerts"].size());
+  for (std::size_t i = 0; i < alerts.size(); ++i) {
+    EXPECT_EQ(alerts[i].revolution, live["alerts"][i]["revolution"].get<std::int64_t>());
+    EXPECT_EQ(alerts[i].active, live["alerts"][i]["active"].get<bool>());
+    EXPECT_EQ(alerts[i].quantity, live["alerts"][i]["quantity"].get<std::string>());
+  }
+
+  const auto status = decode_all<pipeline_status_t>(events(log, "MILLWATCH_STATUS"));
   ASSERT_FALSE(status.empty());
+  for (std::size_t i = 1; i < status.size(); ++i) {
+    EXPECT_GT(status[i].seq, status[i - 1].seq);
+    EXPECT_GE(status[i].samples_in, status[i - 1].samples_in);
+  }
   EXPECT_EQ(status.back().samples_in, 50000);  // the final status, published on SIGTERM
   EXPECT_EQ(status.back().samples_dropped, 0);
+  EXPECT_EQ(status.back().blocks_rejected, 0);
+  EXPECT_EQ(status.back().revolutions, revolutions);
 
   // Offline, the recorded raw channel through the same configuration: the same results.
   const auto replay =
@@ -167,55 +275,71 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
                      live["residual_rms_N"][axis].get<double>());
   }
 
-  // lcm-logplayer feeds the recorded raw log into a fresh daemon: the same results again.
+  // lcm-logplayer feeds the recorded raw log into a fresh daemon, stopped by SIGINT this time:
+  // the same results again.
   const auto played = session("logplayer", dir_);
   ASSERT_EQ(played.exit_code, 0) << played.output << read_text(dir_ / "played.log");
+  EXPECT_NE(played.output.find("daemon exit 0"), std::string::npos) << played.output;
+  EXPECT_NE(read_text(dir_ / "played.log").find("SIGINT: stopping"), std::string::npos);
   const nlohmann::json again = read_json(dir_ / "played.json");
+  ASSERT_FALSE(again.is_null()) << read_text(dir_ / "played.log");
   EXPECT_EQ(again["samples"], 50000);
+  EXPECT_EQ(again["dropped_samples"], 0);
   EXPECT_EQ(again["revolutions"], live["revolutions"]);
   EXPECT_DOUBLE_EQ(again["alpha_deg"]["mean"].get<double>(),
                    live["alpha_deg"]["mean"].get<double>());
 }
 
-/// Writes events of `fx` blocks [from, to) of the cut (1000 samples each) into an LCM log.
+/// Writes `m` into `log` as an event of the raw channel.
+void write_event(lcm::LogFile& log, std::int64_t event, const force_block_t& m) {
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  lcm::LogEvent e{event, m.utime, "MILLWATCH_FORCE_RAW", static_cast<std::int32_t>(buf.size()),
+                  buf.data()};
+  log.writeEvent(&e);
+}
+
+/// Writes blocks [from, to) of the cut (250 samples each: the daemon's messages of a block fit
+/// the logger's queue) into an LCM log.
 void write_raw_log(const fs::path& path, const sim::Scenario& s, int from, int to) {
+  constexpr std::size_t kBlock = 250;
   sim::CutSimulator sim(s);
   lcm::LogFile log(path.string(), "w");
-  std::vector<double> t(1000), fx(1000), fy(1000), fz(1000);
+  std::vector<double> t(kBlock), fx(kBlock), fy(kBlock), fz(kBlock);
   for (int seq = 0; seq < to; ++seq) {
     const std::size_t n = sim.next_block(t, fx, fy, fz);
     if (seq < from || n == 0) {
       continue;
     }
-    const force_block_t m = messaging::to_message({std::llround(t[0] * 1e6),
-                                                   seq,
-                                                   s.sample_rate_hz,
-                                                   {fx.data(), n},
-                                                   {fy.data(), n},
-                                                   {fz.data(), n}});
-    std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent e{seq, m.utime, "MILLWATCH_FORCE_RAW", static_cast<std::int32_t>(buf.size()),
-                    buf.data()};
-    log.writeEvent(&e);
+    write_event(log, seq,
+                messaging::to_message({std::llround(t[0] * 1e6),
+                                       seq,
+                                       s.sample_rate_hz,
+                                       {fx.data(), n},
+                                       {fy.data(), n},
+                                       {fz.data(), n}}));
   }
 }
 
-// Issue 3 §4 and §6: SIGHUP reloads without losing samples; a bad file on reload is reported
-// by field and the running configuration kept; garbage on the raw channel is counted and
+// Issue 3 §4 and §6: SIGHUP reloads without losing samples and the new configuration is in
+// effect (commanded speed on MILLWATCH_SPINDLE, status period); a bad file on reload is reported
+// by field and the running configuration kept; garbage on the raw channel — random bytes and
+// blocks that decode but cannot be used — is counted in the status and the summary and
 // survived; SIGTERM stops with the final summary.
 TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   sim::Scenario s;
   s.sample_rate_hz = 50000.0;
   s.duration_s = 1.0;
   s.spindle.actual_rpm = 25252.0;
-  write_raw_log(dir_ / "part1.lcmlog", s, 0, 25);
-  write_raw_log(dir_ / "part2.lcmlog", s, 25, 50);
+  write_raw_log(dir_ / "part1.lcmlog", s, 0, 100);
+  write_raw_log(dir_ / "part2.lcmlog", s, 100, 200);
+  constexpr int kRandomMessages = 5;
+  constexpr int kWrongRateSamples = 1000;
   {
     lcm::LogFile garbage((dir_ / "garbage.lcmlog").string(), "w");
     std::mt19937 rng(3);
-    for (int i = 0; i < 5; ++i) {
-      std::vector<std::uint8_t> bytes(100 + 50 * i);
+    for (int i = 0; i < kRandomMessages; ++i) {
+      std::vector<std::uint8_t> bytes(static_cast<std::size_t>(100 + 50 * i));
       for (auto& b : bytes) {
         b = static_cast<std::uint8_t>(rng());
       }
@@ -223,12 +347,27 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
                       bytes.data()};
       garbage.writeEvent(&e);
     }
+    // Blocks that decode but are no use: empty, and at a sample rate not the configured one.
+    force_block_t empty{};
+    empty.utime = 500000;
+    empty.seq = 1000;
+    empty.sample_rate_hz = 50000.0;
+    write_event(garbage, kRandomMessages, empty);
+    const std::vector<double> zeros(kWrongRateSamples, 0.0);
+    write_event(garbage, kRandomMessages + 1,
+                messaging::to_message({500000, 1001, 20000.0, zeros, zeros, zeros}));
   }
-  nlohmann::json good = nlohmann::json::parse(std::ifstream(dir_ / "monitor.json"));
-  std::ofstream(dir_ / "good.json") << good.dump();
-  good["status_period_s"] = 0.5;
+  // Start: status every 0.05 s of samples, commanded 25,000 rpm. Good reload: every 10 s and
+  // 25,100 rpm. Bad reload: a mistyped field (and 26,000 rpm, which must not be taken).
+  nlohmann::json initial = nlohmann::json::parse(std::ifstream(dir_ / "monitor.json"));
+  initial["status_period_s"] = 0.05;
+  nlohmann::json good = initial;
+  good["status_period_s"] = 10.0;
+  good["monitor"]["model"]["process"]["spindle_rpm"] = 25100.0;
   nlohmann::json bad = good;
   bad["monitor"]["model"]["tool"]["flutes"] = "two";
+  bad["monitor"]["model"]["process"]["spindle_rpm"] = 26000.0;
+  std::ofstream(dir_ / "initial.json") << initial.dump();
   std::ofstream(dir_ / "good.json") << good.dump();
   std::ofstream(dir_ / "bad.json") << bad.dump();
 
@@ -236,14 +375,57 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   const std::string log = read_text(dir_ / "reload.log");
   ASSERT_EQ(r.exit_code, 0) << r.output << log;
   EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
-  EXPECT_NE(log.find("configuration reloaded"), std::string::npos) << log;
+  EXPECT_NE(log.find("configuration reloaded after 25000 samples"), std::string::npos) << log;
   EXPECT_NE(log.find("monitor.model.tool.flutes"), std::string::npos) << log;
   EXPECT_NE(log.find("keeping the running configuration"), std::string::npos) << log;
+  EXPECT_NE(log.find("does not decode"), std::string::npos) << log;
+  EXPECT_NE(log.find("final summary"), std::string::npos) << log;
   const nlohmann::json summary = read_json(dir_ / "reload.json");
   ASSERT_FALSE(summary.is_null()) << log;
+  const std::int64_t unusable = 2;
   EXPECT_EQ(summary["samples"], 50000);  // every sample, across the reloads
-  EXPECT_EQ(summary["counters"]["blocks_rejected"], 5) << summary.dump(2);  // the garbage
+  EXPECT_EQ(summary["counters"]["samples_in"], 50000 + kWrongRateSamples);
+  EXPECT_EQ(summary["dropped_samples"], kWrongRateSamples);  // the unusable blocks' only
+  EXPECT_EQ(summary["counters"]["blocks_rejected"], kRandomMessages + unusable) << summary.dump(2);
   EXPECT_GT(summary["revolutions"].get<int>(), 100);  // it kept measuring after all that
+
+  // What the daemon said on LCM meanwhile.
+  const auto recorded = read_log(dir_ / "reload.lcmlog");
+  const auto status = decode_all<pipeline_status_t>(events(recorded, "MILLWATCH_STATUS"));
+  ASSERT_FALSE(status.empty());
+  int before_reload = 0;
+  int late_in_part2 = 0;
+  for (std::size_t i = 0; i < status.size(); ++i) {
+    if (i > 0) {  // samples_in keeps counting through the reloads
+      EXPECT_GE(status[i].samples_in, status[i - 1].samples_in) << "status " << status[i].seq;
+    }
+    before_reload += status[i].utime > 0 && status[i].utime < 500000 ? 1 : 0;
+    late_in_part2 += status[i].utime > 600000 && status[i].utime < 950000 ? 1 : 0;
+  }
+  EXPECT_GE(before_reload, 5);  // every 0.05 s of samples before the reload,
+  EXPECT_EQ(late_in_part2, 0);  // every 10 s after it
+  EXPECT_EQ(status.back().samples_in, 50000 + kWrongRateSamples);  // the final status
+  EXPECT_EQ(status.back().samples_processed, 50000);
+  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + unusable);
+  EXPECT_EQ(status.back().revolutions, summary["revolutions"].get<std::int64_t>());  // both parts
+
+  // The commanded speed of the good reload is in effect after it; the bad one's never is.
+  const auto spindle = decode_all<spindle_state_t>(events(recorded, "MILLWATCH_SPINDLE"));
+  std::size_t first_new = spindle.size();
+  for (std::size_t i = 0; i < spindle.size(); ++i) {
+    EXPECT_NE(spindle[i].spindle_rpm_commanded, 26000.0);
+    if (spindle[i].spindle_rpm_commanded == 25100.0 && first_new == spindle.size()) {
+      first_new = i;
+    }
+    if (first_new < i) {
+      EXPECT_EQ(spindle[i].spindle_rpm_commanded, 25100.0) << "update " << spindle[i].seq;
+    }
+  }
+  ASSERT_GT(first_new, 0u) << "no spindle update before the reload";
+  ASSERT_LT(first_new, spindle.size()) << "no spindle update after the reload";
+  EXPECT_EQ(spindle.front().spindle_rpm_commanded, 25000.0);
+  EXPECT_TRUE(spindle.back().valid);
+  EXPECT_NEAR(spindle.back().spindle_rpm_measured, 25252.0, 0.001 * 25252.0);
 }
 
 // Issue 3 §4: SIGTERM and SIGINT stop cleanly with a final summary (in-process LCM: no traffic).
@@ -316,6 +498,49 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
   EXPECT_NE(broken.output.find("broken.json"), std::string::npos) << broken.output;
 }
 
+// Issue 3 §6: a file that reads well but that the pipeline's stages refuse (a spindle window
+// shorter than 5 revolutions at the commanded speed) is a clear error at --check, at start and on
+// SIGHUP — never a crash of the sample thread. A reload that changes what only a restart can
+// change says so. (In-process LCM: no traffic.)
+TEST(Millwatchd, ConfigurationTheStagesRefuseIsAnErrorNotACrash) {
+  const fs::path dir = test::fresh_temp_dir();
+  const nlohmann::json good = {{"monitor", {{"sample_rate_hz", 50000.0}}}};
+  nlohmann::json refused = good;
+  refused["monitor"]["spindle"]["window_s"] = 0.1;
+  refused["monitor"]["model"]["process"]["spindle_rpm"] = 2000.0;  // 3.3 revolutions
+  nlohmann::json restart = good;
+  restart["source"]["channel"] = "OTHER_RAW";
+  std::ofstream(dir / "good.json") << good.dump();
+  std::ofstream(dir / "refused.json") << refused.dump();
+  std::ofstream(dir / "restart.json") << restart.dump();
+  const std::string expected = "refused.json: monitor.spindle.window_s";
+
+  const auto check = test::run_command(kDaemon + " --check -c " + (dir / "refused.json").string());
+  EXPECT_EQ(check.exit_code, 2) << check.output;
+  EXPECT_NE(check.output.find(expected), std::string::npos) << check.output;
+  const auto start = test::run_command("timeout -k 5 20 " + kDaemon + " -c " +
+                                       (dir / "refused.json").string() + " --lcm-url memq://");
+  EXPECT_EQ(start.exit_code, 2) << start.output;
+  EXPECT_NE(start.output.find(expected), std::string::npos) << start.output;
+
+  const fs::path running = dir / "running.json";
+  fs::copy_file(dir / "good.json", running);
+  const fs::path summary = dir / "summary.json";
+  const auto r = test::run_command(
+      "cd " + dir.string() + " && timeout -k 5 30 sh -c '" + kDaemon +
+      " -c running.json --lcm-url memq:// --summary summary.json 2>daemon.log & pid=$!; "
+      "sleep 0.5; cp restart.json running.json; kill -HUP $pid; sleep 0.3; "
+      "cp refused.json running.json; kill -HUP $pid; sleep 0.3; "
+      "kill -TERM $pid; wait $pid; echo exit=$?'");
+  const std::string log = read_text(dir / "daemon.log");
+  EXPECT_NE(r.output.find("exit=0"), std::string::npos) << r.output << log;
+  EXPECT_NE(log.find("source.channel changed; that takes a restart"), std::string::npos) << log;
+  EXPECT_NE(log.find("configuration reloaded"), std::string::npos) << log;
+  EXPECT_NE(log.find("monitor.spindle.window_s"), std::string::npos) << log;
+  EXPECT_NE(log.find("keeping the running configuration"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(summary)) << log;
+}
+
 // Issue 3 §3(d): a DAQ that is not there is a clear error, not a crash.
 TEST(Millwatchd, MissingComediDeviceIsAClearError) {
   const fs::path dir = test::fresh_temp_dir();
@@ -327,13 +552,37 @@ TEST(Millwatchd, MissingComediDeviceIsAClearError) {
   c["source"]["channels"][1]["daq_channel"] = 1;
   c["source"]["channels"][2]["daq_channel"] = 2;
   std::ofstream(dir / "daq.json") << c.dump();
-  const auto r = test::run_command("timeout 30 " + kDaemon + " -c " + (dir / "daq.json").string() +
-                                   " --lcm-url memq://");
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(r.output.find("Segmentation"), std::string::npos);
-  const bool named = r.output.find("/dev/comedi9") != std::string::npos;
-  const bool not_built = r.output.find("Comedi") != std::string::npos;
-  EXPECT_TRUE(named || not_built) << r.output;
+  const auto check = test::run_command(kDaemon + " --check -c " + (dir / "daq.json").string());
+  EXPECT_EQ(check.exit_code, 0) << check.output;  // the file is fine; the device is not there
+  const auto r = test::run_command("timeout -k 5 30 " + kDaemon + " -c " +
+                                   (dir / "daq.json").string() + " --lcm-url memq://");
+  EXPECT_EQ(r.exit_code, 2) << r.output;  // an error exit, not a signal or a timeout
+  EXPECT_NE(r.output.find("/dev/comedi9"), std::string::npos) << r.output;
+  if (r.output.find("built without comedilib") != std::string::npos) {
+    GTEST_SKIP() << "millwatchd was built without comedilib (libcomedi-dev): " << r.output;
+  }
+  EXPECT_NE(r.output.find("/dev/comedi9: cannot open Comedi device"), std::string::npos)
+      << r.output;
+}
+
+// Issue 3 §5: udpm:// without a multicast route (a private network namespace without one) is a
+// clear error at once, not a daemon that hears nothing.
+TEST(Millwatchd, UdpmWithoutAMulticastRouteFailsAtOnce) {
+  std::string why;
+  if (!namespaces_work(why)) {
+    GTEST_SKIP() << "no private network namespace here (unshare -n): " << why;
+  }
+  const fs::path dir = test::fresh_temp_dir();
+  std::ofstream(dir / "d.json") << nlohmann::json{
+      {"monitor",
+       {{"sample_rate_hz", 50000.0}}}}.dump();
+  const auto r = test::run_command("timeout -k 5 20 unshare -n sh -c 'ip link set lo up; " +
+                                   kDaemon + " -c " + (dir / "d.json").string() +
+                                   " --lcm-url \"udpm://239.255.76.67:7667?ttl=0\"; echo exit=$?'");
+  EXPECT_NE(r.output.find("exit=2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cannot open LCM at udpm://239.255.76.67:7667?ttl=0"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("multicast route"), std::string::npos) << r.output;
 }
 
 }  // namespace
