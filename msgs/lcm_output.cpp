@@ -125,12 +125,25 @@ void LcmOutput::run() {
   Item item;
   SyncSnapshot snapshot;
   std::uint64_t seen = 0;
+  // A backlog (the revolutions measured at once when measuring starts, ~90 messages) goes out
+  // in paced bursts: LCM receivers queue 30 messages per subscription by default (lcm-logger,
+  // lcm-spy) and drop the rest when their thread is slow to run. In steady state a revolution
+  // is 3 messages and no burst reaches the limit.
+  constexpr int kBurstMessages = 16;
+  int burst = 0;
   while (true) {
     bool any = false;
     while (queue_.try_pop(item)) {
       publish(item);
       handled_.fetch_add(1);
       any = true;
+      if (++burst == kBurstMessages) {
+        burst = 0;
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+    }
+    if (!any) {
+      burst = 0;
     }
     if (sync_queue_.try_pop(snapshot)) {
       sync_average_t s;
