@@ -65,26 +65,33 @@ std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
   }
 }
 
+/// Adds a pipeline's counts (before it is replaced) to `total`.
+void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
+  auto& t = total.input;
+  const auto& c = s.input;
+  t.samples_in += c.samples_in;
+  t.samples_accepted += c.samples_accepted;
+  t.samples_dropped += c.samples_dropped;
+  t.samples_flagged += c.samples_flagged;
+  t.nonfinite_samples += c.nonfinite_samples;
+  t.saturated_samples += c.saturated_samples;
+  t.gaps += c.gaps;
+  t.out_of_order_blocks += c.out_of_order_blocks;
+  t.blocks_rejected += c.blocks_rejected;
+  total.revolutions += s.revolutions;
+  total.valid_revolutions += s.valid_revolutions;
+  total.idle_revolutions += s.idle_revolutions;
+}
+
 /// The pipeline's status with what came before it (replaced pipelines) and what was lost
 /// before it (in the source).
 monitor::PipelineStatus merged_status(const monitor::Pipeline& p,
                                       const monitor::PipelineStatus& carried,
                                       const daemon::SourceCounters& source) {
   monitor::PipelineStatus s = p.status();
-  auto& in = s.input;
-  const auto& c = carried.input;
-  in.samples_in += c.samples_in;
-  in.samples_accepted += c.samples_accepted;
-  in.samples_dropped += c.samples_dropped + source.samples_dropped.load();
-  in.samples_flagged += c.samples_flagged;
-  in.nonfinite_samples += c.nonfinite_samples;
-  in.saturated_samples += c.saturated_samples;
-  in.gaps += c.gaps;
-  in.out_of_order_blocks += c.out_of_order_blocks;
-  in.blocks_rejected += c.blocks_rejected + source.undecodable.load() + source.oversized.load();
-  s.revolutions += carried.revolutions;
-  s.valid_revolutions += carried.valid_revolutions;
-  s.idle_revolutions += carried.idle_revolutions;
+  carry(s, carried);
+  s.input.samples_dropped += source.samples_dropped.load();
+  s.input.blocks_rejected += source.undecodable.load() + source.oversized.load();
   return s;
 }
 
@@ -124,24 +131,6 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
            c.alert != d.alert || c.status != d.status,
        "lcm.channels");
   return out;
-}
-
-/// Adds a pipeline's counts (before it is replaced) to `total`.
-void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
-  auto& t = total.input;
-  const auto& c = s.input;
-  t.samples_in += c.samples_in;
-  t.samples_accepted += c.samples_accepted;
-  t.samples_dropped += c.samples_dropped;
-  t.samples_flagged += c.samples_flagged;
-  t.nonfinite_samples += c.nonfinite_samples;
-  t.saturated_samples += c.saturated_samples;
-  t.gaps += c.gaps;
-  t.out_of_order_blocks += c.out_of_order_blocks;
-  t.blocks_rejected += c.blocks_rejected;
-  total.revolutions += s.revolutions;
-  total.valid_revolutions += s.valid_revolutions;
-  total.idle_revolutions += s.idle_revolutions;
 }
 
 int run(const std::string& config_path, const std::string& url_override,

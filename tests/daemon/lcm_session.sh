@@ -28,19 +28,21 @@ start_daemon() {  # config, summary, log
   sleep 0.5  # subscribed and listening
 }
 
+await_exit() {  # pid, tenths of a second, message: a straggler is killed and the session fails
+  for _ in $(seq "$2"); do
+    kill -0 "$1" 2>/dev/null || return 0
+    sleep 0.1
+  done
+  echo "$3" >&2
+  kill -KILL "$1"
+  exit 3
+}
+
 stop_daemon() {  # [signal]
   local sig=${1:-TERM}
   sleep 0.5  # the last blocks are in
   kill -"$sig" "$daemon"
-  for _ in $(seq 100); do
-    kill -0 "$daemon" 2>/dev/null || break
-    sleep 0.1
-  done
-  if kill -0 "$daemon" 2>/dev/null; then
-    echo "millwatchd did not stop within 10 s of SIG$sig" >&2
-    kill -KILL "$daemon"
-    exit 3
-  fi
+  await_exit "$daemon" 100 "millwatchd did not stop within 10 s of SIG$sig"
   wait "$daemon"
   echo "daemon exit $?"
 }
@@ -62,14 +64,7 @@ start_logger() {  # log file
 stop_logger() {
   sleep 1  # lcm-logger 1.3.1 can lose buffered events on a hard stop
   kill -INT "$logger"
-  for _ in $(seq 50); do
-    kill -0 "$logger" 2>/dev/null || break
-    sleep 0.1
-  done
-  if kill -0 "$logger" 2>/dev/null; then
-    echo "lcm-logger did not stop within 5 s of SIGINT" >&2
-    exit 3
-  fi
+  await_exit "$logger" 50 "lcm-logger did not stop within 5 s of SIGINT"
   wait "$logger"
   echo "logger exit $?"
 }
