@@ -6,13 +6,12 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
-#include "core/sim/cut_simulator.hpp"
-#include "msgs/lcm_convert.hpp"
+#include "core/sim/scenario.hpp"
+#include "tests/support/force_log.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -160,34 +159,14 @@ TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
   EXPECT_FALSE(fs::exists(dir / "s3.json"));  // no partial summary
 }
 
-/// Writes the simulated cut's raw blocks into an LCM log the way lcm-logger would.
+/// The simulated cut's raw blocks in an LCM log, as lcm-logger records them.
 fs::path write_log(const fs::path& dir, double duration_s) {
   sim::Scenario s;
   s.sample_rate_hz = 50000.0;
   s.duration_s = duration_s;
   s.spindle.actual_rpm = 25252.0;
-  sim::CutSimulator sim(s);
   const fs::path path = dir / "raw.lcmlog";
-  lcm::LogFile log(path.string(), "w");
-  std::vector<double> t(1000), fx(1000), fy(1000), fz(1000);
-  std::int64_t seq = 0;
-  while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
-    const force_block_t m = messaging::to_message({std::llround(t[0] * 1e6),
-                                                   seq++,
-                                                   s.sample_rate_hz,
-                                                   {fx.data(), n},
-                                                   {fy.data(), n},
-                                                   {fz.data(), n}});
-    std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    lcm::LogEvent e;
-    e.eventnum = seq;
-    e.timestamp = m.utime;
-    e.channel = "MILLWATCH_FORCE_RAW";
-    e.datalen = static_cast<std::int32_t>(buf.size());
-    e.data = buf.data();
-    log.writeEvent(&e);
-  }
+  test::write_force_log(path, s, 1000);
   return path;
 }
 

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "core/sim/cut_simulator.hpp"
+#include "core/sim/scenario.hpp"
 #include "millwatch/flute_peaks_t.hpp"
 #include "millwatch/model_residual_t.hpp"
 #include "millwatch/pipeline_status_t.hpp"
@@ -29,6 +29,7 @@
 #include "millwatch/tool_alert_t.hpp"
 #include "millwatch/tooth_periods_t.hpp"
 #include "msgs/lcm_convert.hpp"
+#include "tests/support/force_log.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -290,37 +291,6 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
                    live["alpha_deg"]["mean"].get<double>());
 }
 
-/// Writes `m` into `log` as an event of the raw channel.
-void write_event(lcm::LogFile& log, std::int64_t event, const force_block_t& m) {
-  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  lcm::LogEvent e{event, m.utime, "MILLWATCH_FORCE_RAW", static_cast<std::int32_t>(buf.size()),
-                  buf.data()};
-  log.writeEvent(&e);
-}
-
-/// Writes blocks [from, to) of the cut (250 samples each: the daemon's messages of a block fit
-/// the logger's queue) into an LCM log.
-void write_raw_log(const fs::path& path, const sim::Scenario& s, int from, int to) {
-  constexpr std::size_t kBlock = 250;
-  sim::CutSimulator sim(s);
-  lcm::LogFile log(path.string(), "w");
-  std::vector<double> t(kBlock), fx(kBlock), fy(kBlock), fz(kBlock);
-  for (int seq = 0; seq < to; ++seq) {
-    const std::size_t n = sim.next_block(t, fx, fy, fz);
-    if (seq < from || n == 0) {
-      continue;
-    }
-    write_event(log, seq,
-                messaging::to_message({std::llround(t[0] * 1e6),
-                                       seq,
-                                       s.sample_rate_hz,
-                                       {fx.data(), n},
-                                       {fy.data(), n},
-                                       {fz.data(), n}}));
-  }
-}
-
 // Issue 3 §4 and §6: SIGHUP reloads without losing samples and the new configuration is in
 // effect (commanded speed on MILLWATCH_SPINDLE, status period); a bad file on reload is reported
 // by field and the running configuration kept; garbage on the raw channel — random bytes and
@@ -331,8 +301,9 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   s.sample_rate_hz = 50000.0;
   s.duration_s = 1.0;
   s.spindle.actual_rpm = 25252.0;
-  write_raw_log(dir_ / "part1.lcmlog", s, 0, 100);
-  write_raw_log(dir_ / "part2.lcmlog", s, 100, 200);
+  // Blocks of 250 samples: the daemon's messages of a block fit the logger's queue.
+  test::write_force_log(dir_ / "part1.lcmlog", s, 250, 0, 100);
+  test::write_force_log(dir_ / "part2.lcmlog", s, 250, 100, 200);
   constexpr int kRandomMessages = 5;
   constexpr int kWrongRateSamples = 1000;
   {
@@ -352,10 +323,10 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
     empty.utime = 500000;
     empty.seq = 1000;
     empty.sample_rate_hz = 50000.0;
-    write_event(garbage, kRandomMessages, empty);
+    test::write_force_event(garbage, kRandomMessages, empty);
     const std::vector<double> zeros(kWrongRateSamples, 0.0);
-    write_event(garbage, kRandomMessages + 1,
-                messaging::to_message({500000, 1001, 20000.0, zeros, zeros, zeros}));
+    test::write_force_event(garbage, kRandomMessages + 1,
+                            messaging::to_message({500000, 1001, 20000.0, zeros, zeros, zeros}));
   }
   // Start: status every 0.05 s of samples, commanded 25,000 rpm. Good reload: every 10 s and
   // 25,100 rpm. Bad reload: a mistyped field (and 26,000 rpm, which must not be taken).
