@@ -158,20 +158,23 @@ void LowPassFilter::settle(double x) {
   }
 }
 
-std::size_t filtfilt_pad_samples(const ButterworthDesign& design, std::size_t record_samples) {
-  if (record_samples == 0) {
-    return 0;
-  }
+std::size_t decay_samples(const ButterworthDesign& design, double fraction) {
   double radius = 0.0;
   for (int s = 0; s < design.sections; ++s) {
     radius = std::max(radius, pole_radius(design.sos[static_cast<std::size_t>(s)]));
   }
-  const auto scipy_default = static_cast<std::size_t>(3 * (2 * design.sections + 1));
-  std::size_t decay = 0;
-  if (radius > 0.0 && radius < 1.0) {
-    decay = static_cast<std::size_t>(std::ceil(std::log(1e-6) / std::log(radius)));
+  if (!(radius > 0.0 && radius < 1.0)) {
+    return 0;
   }
-  return std::min(record_samples - 1, std::max(scipy_default, decay));
+  return static_cast<std::size_t>(std::ceil(std::log(fraction) / std::log(radius)));
+}
+
+std::size_t filtfilt_pad_samples(const ButterworthDesign& design, std::size_t record_samples) {
+  if (record_samples == 0) {
+    return 0;
+  }
+  const auto scipy_default = static_cast<std::size_t>(3 * (2 * design.sections + 1));
+  return std::min(record_samples - 1, std::max(scipy_default, decay_samples(design, 1e-6)));
 }
 
 void filtfilt(const ButterworthDesign& design, std::span<const double> in, std::span<double> out) {

@@ -154,6 +154,10 @@ class LowPassFilter {
   ButterworthState state_;
 };
 
+/// Samples for the slowest pole (radius r) to decay to `fraction` (in (0, 1)) of its start:
+/// ⌈ln fraction / ln r⌉; 0 for a design without poles.
+[[nodiscard]] std::size_t decay_samples(const ButterworthDesign& design, double fraction);
+
 /// Samples of padding filtfilt() adds at each end of a record of `record_samples` samples: long
 /// enough for the slowest pole (radius r) to decay to 10⁻⁶ (⌈ln 10⁻⁶ / ln r⌉, at least scipy's
 /// 3·(2·sections + 1)), at most record_samples − 1 (the odd reflection needs that many samples).

@@ -1,8 +1,6 @@
 #include "core/signal/zero_phase_filter.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <complex>
 #include <limits>
 #include <stdexcept>
 
@@ -24,17 +22,7 @@ ZeroPhaseFilter::ZeroPhaseFilter(const ButterworthDesign& design, int channels,
 }
 
 std::size_t ZeroPhaseFilter::margin_samples(const ButterworthDesign& design) {
-  double slowest = 0.0;
-  for (int s = 0; s < design.sections; ++s) {
-    const Biquad& c = design.sos[static_cast<std::size_t>(s)];
-    // Poles of 1 + a1·z⁻¹ + a2·z⁻²: roots of z² + a1·z + a2 (a first-order section has a2 = 0).
-    const std::complex<double> root = std::sqrt(std::complex<double>(c.a1 * c.a1 - 4.0 * c.a2));
-    slowest = std::max({slowest, std::abs((-c.a1 + root) / 2.0), std::abs((-c.a1 - root) / 2.0)});
-  }
-  if (slowest <= 0.0) {
-    return 1;
-  }
-  return static_cast<std::size_t>(std::ceil(std::log(1e-12) / std::log(slowest))) + 1;
+  return decay_samples(design, 1e-12) + 1;
 }
 
 std::size_t ZeroPhaseFilter::push(std::span<const double> x) {
