@@ -86,19 +86,21 @@ bool LcmLogReader::read_event() {
     }
   }
   if (position_ < size_bytes_) {
-    report(events_ + 1, "log ends inside an event (last " +
-                            std::to_string(size_bytes_ - position_) + " bytes unreadable)");
-    position_ = size_bytes_;
+    report_truncated_end();
   }
   return false;
+}
+
+void LcmLogReader::report_truncated_end() {
+  report(events_ + 1, "log ends inside an event (last " + std::to_string(size_bytes_ - position_) +
+                          " bytes unreadable)");
+  position_ = size_bytes_;
 }
 
 bool LcmLogReader::skip_damage() {
   const std::int64_t next = find_sync_word(position_ + 1);
   if (next < 0) {
-    report(events_ + 1, "log ends inside an event (last " +
-                            std::to_string(size_bytes_ - position_) + " bytes unreadable)");
-    position_ = size_bytes_;
+    report_truncated_end();
     return false;
   }
   report(events_ + 1, "unreadable event at byte " + std::to_string(position_) + "; " +

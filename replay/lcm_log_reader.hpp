@@ -38,6 +38,8 @@ class LcmLogReader {
   bool skip_damage();
   /// Byte offset of the next event sync word at or after from_byte, or -1.
   std::int64_t find_sync_word(std::int64_t from_byte);
+  /// Reports the unreadable rest of the log from position_ and moves to its end.
+  void report_truncated_end();
   void report(std::int64_t event, const std::string& problem);
 
   std::filesystem::path path_;
