@@ -163,12 +163,21 @@ void RevolutionMeter::measure(const SampleRing& ring) {
       };
       std::int64_t best = from;
       double best_size = size(from);
+      double lowest = value(from), highest = lowest;
       for (std::int64_t n = from + 1; n <= to; ++n) {
         const double z = size(n);
         if (z > best_size) {
           best_size = z;
           best = n;
         }
+        if (c < 3) {
+          const double v = value(n);
+          lowest = std::min(lowest, v);
+          highest = std::max(highest, v);
+        }
+      }
+      if (c < 3) {
+        m.range_N[uj][static_cast<std::size_t>(c)] = highest - lowest;
       }
       double peak = value(best);
       if (best > from && best < to) {

@@ -36,6 +36,9 @@ struct RevolutionMeasurement {
   /// Signed peak of fx, fy, fz per flute (largest magnitude in the flute's period), N.
   std::array<std::array<double, 3>, kMaxFlutes> peak_N{};
   std::array<double, kMaxFlutes> peak_resultant_N{};
+  /// Range (largest minus smallest sample) of fx, fy, fz per flute within its period, N: a
+  /// measure of each flute's force that a slowly drifting channel offset does not change.
+  std::array<std::array<double, 3>, kMaxFlutes> range_N{};
   double delta_fy_N = 0.0;
   bool valid = false;  ///< every valley a true local minimum
 };
