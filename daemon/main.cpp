@@ -160,7 +160,9 @@ int run(const std::string& config_path, const std::string& url_override,
   // Built here, so that a configuration the stages refuse stops the daemon with its message.
   std::unique_ptr<monitor::Pipeline> first_pipeline =
       make_pipeline(config_path, config.monitor, output);
-  daemon::BlockQueue queue;
+  // 64 slots of 98 KB: on the heap, not on the stack.
+  const auto queue_storage = std::make_unique<daemon::BlockQueue>();
+  daemon::BlockQueue& queue = *queue_storage;
   daemon::SourceCounters source_counters;
   std::atomic<bool> stop{false};
 

@@ -75,7 +75,7 @@ void LcmOutput::on_sync_average(const monitor::SyncAverage& measured,
     for (int a = 0; a < 3; ++a) {
       s.values[static_cast<std::size_t>(a)][ub] = measured.average(a, b);
     }
-    const auto m = model != nullptr ? model->next_sample(2.0 * std::numbers::pi * b / s.bins)
+    const auto m = model != nullptr ? model->force_at(2.0 * std::numbers::pi * b / s.bins)
                                     : std::array<double, 3>{};
     for (std::size_t a = 0; a < 3; ++a) {
       s.values[3 + a][ub] = m[a];

@@ -26,9 +26,6 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
     case monitor::PipelineEventKind::kModelAligned:
       spdlog::info("{}: model aligned (correlation {:.3f})", source_, e.value);
       return;
-    case monitor::PipelineEventKind::kModelBuilt:
-      spdlog::info("{}: model rebuilt for {:.1f} rpm", source_, e.value);
-      return;
     case monitor::PipelineEventKind::kCuttingResumed:
       spdlog::info("{}: cutting resumed (t = {:.3f} s)", source_, t_s);
       return;

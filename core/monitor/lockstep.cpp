@@ -174,7 +174,7 @@ bool Lockstep::align(const SyncAverage& measured) {
   return true;
 }
 
-std::array<double, 3> Lockstep::next_sample(double tracker_angle_rad) const {
+std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
   const double turns = (tracker_angle_rad + offset_rad_) / kTwoPi;
   const std::size_t n = filtered_[0].size();
   const double pos = (turns - std::floor(turns)) * static_cast<double>(n);

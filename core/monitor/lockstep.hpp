@@ -45,8 +45,10 @@ class Lockstep {
   /// Normalised correlation of the alignment (1 = identical shapes).
   [[nodiscard]] double alignment_correlation() const { return correlation_; }
 
-  /// The filtered model force (N, model frame) at the tracked angle of a measured sample.
-  [[nodiscard]] std::array<double, 3> next_sample(double tracker_angle_rad) const;
+  /// The filtered model force (N, model frame) at a tracker angle (rad, any turn).
+  [[nodiscard]] std::array<double, 3> force_at(double tracker_angle_rad) const;
+  /// The spindle frequency the model was built for (Hz; 0 before the first build).
+  [[nodiscard]] double spindle_hz() const { return spindle_hz_; }
 
   /// The model's revolution (unfiltered), index k at model angle 2πk/steps.
   [[nodiscard]] const model::ForceWaveform& waveform() const { return waveform_; }

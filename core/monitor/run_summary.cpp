@@ -37,6 +37,7 @@ RunSummary::RunSummary(const MonitorConfig& config)
 
 void RunSummary::add(const RevolutionRecord& r) {
   ++revolutions_;
+  rpm_.add(r.spindle_rpm);
   if (!r.measured.valid) {
     return;
   }
@@ -53,8 +54,10 @@ void RunSummary::add(const RevolutionRecord& r) {
     peak_resultant_[uj].add(m.peak_resultant_N[uj]);
   }
   if (r.model_valid) {
-    model_alpha_.add(r.model.alpha_deg);
-    model_delta_fy_.add(r.model.delta_fy_N);
+    if (r.model.valid) {
+      model_alpha_.add(r.model.alpha_deg);
+      model_delta_fy_.add(r.model.delta_fy_N);
+    }
     for (std::size_t a = 0; a < 3; ++a) {
       residual_[a].sum_sq += r.residual_rms_N[a] * r.residual_rms_N[a];
       ++residual_[a].n;
@@ -66,7 +69,7 @@ void RunSummary::add(const RevolutionRecord& r) {
 
 void RunSummary::add(const SpindleUpdate& u) {
   if (u.estimate.valid) {
-    rpm_.add(u.estimate.spindle_rpm);
+    tracker_rpm_.add(u.estimate.spindle_rpm);
   }
 }
 
@@ -85,8 +88,9 @@ void RunSummary::add(const Alert& a) {
 void RunSummary::add(const PipelineEvent& e) {
   switch (e.kind) {
     case PipelineEventKind::kLockAcquired:
+    case PipelineEventKind::kLockLost:
     case PipelineEventKind::kModelAligned:
-    case PipelineEventKind::kModelBuilt:
+    case PipelineEventKind::kCuttingStopped:
     case PipelineEventKind::kCuttingResumed:
       return;  // normal operation, not a warning
     default:
@@ -107,8 +111,13 @@ void RunSummary::finish(const PipelineStatus& status) {
   status_ = status;
 }
 
+void RunSummary::warn(const std::string& kind, const std::string& detail) const {
+  derived_.push_back({kind, 1, 0, status_.utime_us, detail});
+}
+
 nlohmann::json RunSummary::to_json() const {
   using nlohmann::json;
+  derived_.clear();
   json periods = json::array(), fx = json::array(), fy = json::array(), fz = json::array(),
        resultant = json::array();
   for (int j = 0; j < flutes_; ++j) {
@@ -119,36 +128,80 @@ nlohmann::json RunSummary::to_json() const {
     fz.push_back(number_or_null(peak_[uj][2].mean()));
     resultant.push_back(number_or_null(peak_resultant_[uj].mean()));
   }
-  json warnings = json::array();
-  for (const auto& w : warnings_) {
-    warnings.push_back({{"kind", w.kind},
-                        {"occurrences", w.occurrences},
-                        {"samples", w.samples},
-                        {"first_utime", w.first_utime_us},
-                        {"detail", w.detail}});
-  }
   const auto& in = status_.input;
   const std::int64_t samples = in.samples_accepted;
+
+  // The speed: the revolutions' own, else the tracker's consistent windows, else none.
+  double rpm = rpm_.mean();
+  std::string rpm_source = "revolutions";
+  if (rpm_.n == 0) {
+    rpm = tracker_rpm_.mean();
+    rpm_source = tracker_rpm_.n > 0 ? "spindle tracker" : "none";
+  }
+  const bool explained = !warnings_.empty();  // the pipeline said why nothing was measured
+  if (valid_ == 0 && samples > 0 && !explained) {
+    warn("no revolutions", revolutions_ > 0
+                               ? "no revolution had all its tooth events found; α, periods and "
+                                 "peaks are absent"
+                               : "no revolution was measured; α, periods and peaks are absent");
+  }
+  if (revolutions_ > 0 && status_.cutting_revolutions > 0.0 &&
+      static_cast<double>(revolutions_ + status_.idle_revolutions) <
+          0.9 * status_.cutting_revolutions - 2.0) {
+    warn("revolutions missed",
+         std::to_string(revolutions_) + " revolutions measured of about " +
+             std::to_string(std::llround(status_.cutting_revolutions)) +
+             " turned while the tracker heard cutting (the others: before a lock, in gaps, or "
+             "without their tooth events)");
+  }
+  if (config_.lockstep && revolutions_ > 0 && residual_[0].n == 0) {
+    warn("no model residuals",
+         "the lockstep model was never aligned with the measured revolutions");
+  }
+  if (valid_ > 0 && valid_ < config_.alpha_window_revolutions) {
+    warn("short window", "α and ΔFy are averaged over " + std::to_string(valid_) +
+                             " revolutions, fewer than tooth_periods.window_revolutions (" +
+                             std::to_string(config_.alpha_window_revolutions) + ")");
+  }
+  json warnings = json::array();
+  for (const std::vector<Warning>* list :
+       std::array<const std::vector<Warning>*, 2>{&warnings_, &derived_}) {
+    for (const auto& w : *list) {
+      warnings.push_back({{"kind", w.kind},
+                          {"occurrences", w.occurrences},
+                          {"samples", w.samples},
+                          {"first_utime", w.first_utime_us},
+                          {"detail", w.detail}});
+    }
+  }
+  json residual = {{"fx", number_or_null(residual_[0].rms())},
+                   {"fy", number_or_null(residual_[1].rms())},
+                   {"fz", number_or_null(residual_[2].rms())},
+                   {"measured", number_or_null(measured_rms_.rms())}};
   return json{{"samples", samples},
               {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
               {"revolutions", valid_},
               {"revolutions_measured", revolutions_},
-              {"spindle_rpm", number_or_null(rpm_.mean())},
+              {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
+              {"spindle_rpm", number_or_null(rpm)},
+              {"spindle_rpm_std", number_or_null(rpm_.n > 1 ? rpm_.stddev() : std::nan(""))},
+              {"spindle_rpm_source", rpm_source},
               {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
+              {"tooth_event", std::string(status_.event_kind)},
+              {"flute_labelling",
+               "flute 0 = CE1, the flute whose period holds the largest force (no "
+               "once-per-revolution reference)"},
               {"alpha_deg",
                {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
               {"tooth_period_s", periods},
               {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
               {"delta_fy_N", number_or_null(delta_fy_.mean())},
-              {"residual_rms_N",
-               {{"fx", number_or_null(residual_[0].rms())},
-                {"fy", number_or_null(residual_[1].rms())},
-                {"fz", number_or_null(residual_[2].rms())},
-                {"measured", number_or_null(measured_rms_.rms())}}},
+              {"residual_rms_N", residual},
               {"model",
                {{"alpha_deg", number_or_null(model_alpha_.mean())},
                 {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
-                {"lockstep", config_.lockstep}}},
+                {"lockstep", config_.lockstep},
+                {"builds", status_.model_builds}}},
               {"alerts", alerts_},
               {"dropped_samples", in.samples_dropped},
               {"warnings", warnings},

@@ -2,10 +2,14 @@
 // Summary of a monitoring run (a replay, or a daemon's life): what the pipeline measured over
 // all its revolutions, and what went wrong. Feed it the pipeline's outputs; to_json() gives the
 // replay's summary:
-//   samples, duration_s, revolutions, spindle_rpm (measured), spindle_rpm_commanded,
+//   samples, duration_s, revolutions (valid), revolutions_measured, revolutions_cutting (the
+//   turns while the tracker heard cutting: what every revolution is measured against),
+//   spindle_rpm (mean of the revolutions' own speeds), spindle_rpm_commanded, tooth_event,
 //   alpha_deg {mean, std}, tooth_period_s [per flute], peak_force_N {fx, fy, fz: per flute},
-//   delta_fy_N, residual_rms_N {fx, fy, fz}, alerts [...], dropped_samples, warnings [...]
-// and more detail (model features, counters) beside them.
+//   delta_fy_N, residual_rms_N {fx, fy, fz, measured}, alerts [...], dropped_samples,
+//   warnings [...]
+// and more detail (model features, counters) beside them. Every number is finite or null, and
+// every null has a warning that says why.
 
 #include <array>
 #include <cstdint>
@@ -57,7 +61,7 @@ class RunSummary {
   int flutes_ = 0;
   std::int64_t revolutions_ = 0;
   std::int64_t valid_ = 0;
-  Running rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
+  Running rpm_, tracker_rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
   std::array<Running, kMaxFlutes> period_{};
   std::array<std::array<Running, 3>, kMaxFlutes> peak_{};
   std::array<Running, kMaxFlutes> peak_resultant_{};
@@ -65,6 +69,8 @@ class RunSummary {
   Running measured_rms_;
   std::vector<nlohmann::json> alerts_;
   std::vector<Warning> warnings_;
+  void warn(const std::string& kind, const std::string& detail) const;
+  mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
 };
 

@@ -40,13 +40,25 @@ SpindleTrackerConfig spindle_tracker_config_from_json(const nlohmann::json& j,
   config::ObjectReader r(j, path);
   SpindleTrackerConfig c;
   c.search_fraction = r.number("search_fraction", c.search_fraction, {0.0, 0.45, true, false, ""});
-  c.window_s = r.number("window_s", c.window_s, config::closed(0.02, 10.0, "s"));
-  c.hop_s = r.number("hop_s", c.hop_s, config::closed(0.001, 10.0, "s"));
+  // 0 = automatic; otherwise a window of at least 20 ms.
+  c.window_s = r.number("window_s", c.window_s, config::closed(0.0, 10.0, "s"));
+  if (c.window_s > 0.0 && c.window_s < 0.02) {
+    config::fail(r.path_of("window_s"), "value " + std::to_string(c.window_s) +
+                                            " s is out of range: 0 (automatic) or [0.02, 10] s");
+  }
+  c.hop_s = r.number("hop_s", c.hop_s, config::closed(0.0, 10.0, "s"));
+  if (c.hop_s > 0.0 && c.hop_s < 0.001) {
+    config::fail(r.path_of("hop_s"), "value " + std::to_string(c.hop_s) +
+                                         " s is out of range: 0 (automatic) or [0.001, 10] s");
+  }
   c.max_harmonic = r.integer("max_harmonic", c.max_harmonic, 0, 64);
   c.min_snr_db = r.number("min_snr_db", c.min_snr_db, config::closed(0.0, 80.0, "dB"));
   c.phase_gain = r.number("phase_gain", c.phase_gain, {0.0, 1.0, true, false, ""});
+  c.lock_agreement = r.number("lock_agreement", c.lock_agreement, config::closed(1e-5, 0.2, ""));
+  c.lock_phase_rad =
+      r.number("lock_phase_rad", c.lock_phase_rad, config::closed(0.01, 3.14159, "rad"));
   r.finish();
-  if (c.hop_s > c.window_s) {
+  if (c.window_s > 0.0 && c.hop_s > c.window_s) {
     config::fail(r.path_of("hop_s"), "value " + std::to_string(c.hop_s) +
                                          " s must not exceed window_s (" +
                                          std::to_string(c.window_s) + " s)");
@@ -60,7 +72,17 @@ nlohmann::json to_json(const SpindleTrackerConfig& c) {
           {"hop_s", c.hop_s},
           {"max_harmonic", c.max_harmonic},
           {"min_snr_db", c.min_snr_db},
-          {"phase_gain", c.phase_gain}};
+          {"phase_gain", c.phase_gain},
+          {"lock_agreement", c.lock_agreement},
+          {"lock_phase_rad", c.lock_phase_rad}};
+}
+
+TrackerTiming tracker_timing(const SpindleTrackerConfig& c) {
+  TrackerTiming t;
+  const double rev_s = c.commanded_rpm > 0.0 ? 60.0 / c.commanded_rpm : 0.0;
+  t.window_s = c.window_s > 0.0 ? c.window_s : std::clamp(10.0 * rev_s, 0.02, 0.25);
+  t.hop_s = c.hop_s > 0.0 ? std::min(c.hop_s, t.window_s) : 0.25 * t.window_s;
+  return t;
 }
 
 void validate(const SpindleTrackerConfig& c, const std::string& path) {
@@ -80,7 +102,7 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             " Hz is too low for a spindle at up to " +
                                             std::to_string(f_max) + " Hz");
   }
-  if (c.window_s * c.commanded_rpm / 60.0 < 5.0) {
+  if (tracker_timing(c).window_s * c.commanded_rpm / 60.0 < 5.0) {
     config::fail(at + "window_s",
                  "value " + std::to_string(c.window_s) + " s must hold at least 5 revolutions");
   }
@@ -105,9 +127,10 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
   validate(config, "spindle");
   release();
   config_ = config;
-  window_ = static_cast<std::size_t>(std::llround(config_.window_s * config_.sample_rate_hz));
+  const TrackerTiming timing = tracker_timing(config_);
+  window_ = static_cast<std::size_t>(std::llround(timing.window_s * config_.sample_rate_hz));
   hop_ = std::max<std::size_t>(
-      1, static_cast<std::size_t>(std::llround(config_.hop_s * config_.sample_rate_hz)));
+      1, static_cast<std::size_t>(std::llround(timing.hop_s * config_.sample_rate_hz)));
   // Zero-padded by at least half the window: finer bins for the interpolation.
   fft_size_ = std::bit_ceil(window_ + window_ / 2);
   const double f_max = config_.commanded_rpm / 60.0 * (1.0 + config_.search_fraction);
@@ -121,6 +144,7 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
     hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
   }
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
+  past_.assign(window_ / hop_ + 2, Past{});
   scratch_.reserve(fft_size_ / 2 + 1);
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
@@ -133,9 +157,30 @@ void SpindleTracker::restart(std::int64_t next_sample) {
   stream_start_ = next_sample;
   since_hop_ = 0;
   locked_ = false;
+  past_count_ = 0;
   recent_count_ = 0;
   estimate_ = {};
   phase_ = {};
+}
+
+void SpindleTracker::remember(bool cutting, double hz, double tooth_phase_rad,
+                              std::int64_t center) {
+  past_[static_cast<std::size_t>(past_count_ % static_cast<int>(past_.size()))] = {
+      cutting, hz, tooth_phase_rad, center};
+  ++past_count_;
+}
+
+const SpindleTracker::Past* SpindleTracker::window_ago(std::int64_t center) const {
+  // The newest remembered window that ends before this one begins (give or take the rounding
+  // of hops to samples).
+  const auto cap = static_cast<int>(past_.size());
+  for (int i = past_count_ - 1; i >= std::max(0, past_count_ - cap); --i) {
+    const Past& p = past_[static_cast<std::size_t>(i % cap)];
+    if (center - p.center >= static_cast<std::int64_t>(window_ - window_ / 100)) {
+      return &p;
+    }
+  }
+  return nullptr;
 }
 
 int SpindleTracker::process(std::span<const double> samples) {
@@ -210,21 +255,14 @@ void SpindleTracker::update() {
     }
   }
 
-  // Noise floor: median magnitude over the band the harmonics span.
-  scratch_.clear();
-  const auto k_lo = static_cast<std::size_t>(0.5 * best_f / bin_hz);
-  const auto k_hi = std::min(magnitude_.size() - 1,
-                             static_cast<std::size_t>((harmonics_ + 0.5) * best_f / bin_hz));
-  for (std::size_t k = k_lo; k <= k_hi; ++k) {
-    scratch_.push_back(magnitude_[k]);
-  }
-  std::nth_element(scratch_.begin(),
-                   scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2),
-                   scratch_.end());
-  const double floor = std::max(scratch_[scratch_.size() / 2], 1e-300);
-
-  // Refine with every harmonic standing clear of the floor.
-  double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, strongest = 0.0;
+  // Refine with every harmonic standing clear of its own neighbourhood: a spectral line, not
+  // a hump of coloured noise. A harmonic's floor is the median magnitude within two spindle
+  // frequencies of it, outside every harmonic's main lobe (Hann: ±2 bins of the unpadded
+  // window) — enough independent bins for a steady median even with a short window.
+  const double lobe = 2.0 * static_cast<double>(fft_size_) / static_cast<double>(window_) + 1.0;
+  const double harmonic_bins = best_f / bin_hz;
+  const auto reach = static_cast<std::size_t>(2.0 * harmonic_bins);
+  double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, sum_peak = 0.0, sum_floor = 0.0;
   int used = 0;
   for (int h = 1; h <= harmonics_; ++h) {
     const auto center = static_cast<std::size_t>(std::lround(h * best_f / bin_hz));
@@ -237,8 +275,25 @@ void SpindleTracker::update() {
         k = c;
       }
     }
+    scratch_.clear();
+    const std::size_t from = center > reach + 1 ? center - reach : 1;
+    const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
+    for (std::size_t c = from; c <= to; ++c) {
+      const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
+      if (std::fabs(x - std::round(x)) * harmonic_bins > lobe) {
+        scratch_.push_back(magnitude_[c]);
+      }
+    }
+    if (scratch_.size() < 8) {
+      continue;
+    }
+    std::nth_element(scratch_.begin(),
+                     scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2),
+                     scratch_.end());
+    const double floor = std::max(scratch_[scratch_.size() / 2], 1e-300);
     const double m = magnitude_[k];
-    strongest = std::max(strongest, m);
+    sum_peak += m;
+    sum_floor += floor;
     if (m < 4.0 * floor) {
       continue;
     }
@@ -258,12 +313,17 @@ void SpindleTracker::update() {
   SpindleEstimate& e = estimate_;
   ++e.updates;
   e.relocked = false;
+  e.consistent = false;
+  e.agreement = 0.0;
+  e.phase_error_rad = 0.0;
   e.center_sample = first + w / 2;
-  e.snr_db = 20.0 * std::log10(std::max(strongest, 1e-300) / floor);
+  // The harmonics together over their floors: noise peaks at a few harmonics do not add up.
+  e.snr_db = 20.0 * std::log10(std::max(sum_peak, 1e-300) / std::max(sum_floor, 1e-300));
   e.cutting = e.snr_db >= config_.min_snr_db && used > 0;
   if (!e.cutting) {
     e.valid = false;
     locked_ = false;
+    remember(false, 0.0, 0.0, e.center_sample);
     recent_count_ = 0;
     phase_.valid = false;
     return;
@@ -273,7 +333,6 @@ void SpindleTracker::update() {
   e.spindle_hz = f;
   e.spindle_rpm = 60.0 * f;
   e.uncertainty_rpm = 60.0 * spread / std::sqrt(static_cast<double>(used));
-  e.valid = true;
 
   // Phase at the window centre from the fundamental and the tooth harmonic (exact DTFTs of the
   // windowed block; the Hann window is symmetric, so it adds no phase at the centre).
@@ -298,8 +357,22 @@ void SpindleTracker::update() {
   }
   e.angle_rad = std::fmod(std::fmod(angle, kTwoPi) + kTwoPi, kTwoPi);
 
+  // Agreement with the window one window length earlier (no samples shared): the speeds, and
+  // the tooth phase that window predicts here at the mean of the two speeds.
+  const double n_c = static_cast<double>(e.center_sample);
+  if (const Past* earlier = window_ago(e.center_sample); earlier != nullptr && earlier->cutting) {
+    const double dt =
+        static_cast<double>(e.center_sample - earlier->center) / config_.sample_rate_hz;
+    const double predicted = earlier->tooth_phase_rad + kTwoPi * z * 0.5 * (f + earlier->hz) * dt;
+    e.agreement = std::fabs(f - earlier->hz) / f;
+    e.phase_error_rad = wrap_pi(phiz - predicted);
+    e.consistent = e.agreement <= config_.lock_agreement &&
+                   std::fabs(e.phase_error_rad) <= config_.lock_phase_rad;
+  }
+  remember(true, f, phiz, e.center_sample);
+
   // Speed trend over the recent hops (least squares), for ramps.
-  const double t_c = static_cast<double>(e.center_sample) / config_.sample_rate_hz;
+  const double t_c = n_c / config_.sample_rate_hz;
   const int cap = static_cast<int>(recent_hz_.size());
   if (recent_count_ == cap) {
     std::rotate(recent_hz_.begin(), recent_hz_.begin() + 1, recent_hz_.end());
@@ -327,10 +400,12 @@ void SpindleTracker::update() {
     slope = stt > 0.0 ? stf / stt : 0.0;
   }
 
-  const double n_c = static_cast<double>(e.center_sample);
   if (locked_) {
-    const double error = wrap_pi(angle - phase_.angle_at(n_c));
-    if (std::fabs(error) < 1.0) {
+    // The tooth phase against the locked model, modulo one pitch: the flute picked at the lock
+    // stays picked even when a weak fundamental would pick another.
+    const double pitch = kTwoPi / z;
+    const double error = pitch * wrap_pi((angle - phase_.angle_at(n_c)) * z) / kTwoPi;
+    if (std::fabs(error * z) < 1.0) {
       // Re-anchor at the newest sample, continuous there: the window's news is half a window
       // old, so a new speed extrapolated from its centre would make the angle now jump. Part
       // of the phase error is corrected; the speed now is the window's plus its trend.
@@ -340,11 +415,20 @@ void SpindleTracker::update() {
       phase_.reference_angle_rad = angle_now;
       phase_.spindle_hz = f + slope * (n_now - n_c) / config_.sample_rate_hz;
       phase_.spindle_hz_per_s = slope;
+      e.valid = true;
       return;
     }
-    // The phase jumped: the cut changed (stop/start, a new tool...). Lock afresh.
+    // The phase jumped: the cut changed (stop/start, a new tool...). Lock afresh when
+    // consistent again.
+    locked_ = false;
+    phase_.valid = false;
+  }
+  if (!e.consistent) {
+    e.valid = false;
+    return;
   }
   locked_ = true;
+  e.valid = true;
   e.relocked = true;
   phase_.valid = true;
   phase_.reference_sample = n_c;

@@ -9,18 +9,34 @@
 // runout. The commanded speed is a hint that settles the octave, not the answer. Each harmonic's
 // peak is then interpolated (parabola on the log-magnitude of the zero-padded spectrum) and f is
 // the average of (peak frequency)/h weighted by (h·magnitude)², since higher harmonics pin f
-// more finely. "Cutting" means the strongest harmonic stands min_snr_db above the median of the
-// band — with no periodic force there is no valid speed.
+// more finely. "Cutting" means the harmonics stand min_snr_db above their neighbourhoods (the
+// sum of their peaks over the sum of their floors; a floor is the median magnitude within two
+// spindle frequencies of the harmonic, outside every harmonic's main lobe): spectral lines, not
+// a hump of coloured noise — with no periodic force there is no valid speed.
 //
 // Phase: the complex amplitudes of the fundamental and the tooth harmonic at the window centre
 // (a DTFT at exactly h·f) give the spindle angle there; the tooth harmonic pins it to 2π/N_z
 // and the fundamental picks the flute. The tracker's angle zero is therefore the phase zero of
-// the force's fundamental: arbitrary, but steady while locked. A phase model
-// (signal::PhaseModel, in input samples) is locked at the first cutting window; at each later
-// window it is re-anchored at the newest sample, continuous there, corrected by part of the
-// window's phase error, with the speed's rate of change fitted over the last hops so that
-// ramps are followed. A large phase error or the loss of cutting
-// drops the lock; the next cutting window locks afresh (a stop/start or feed hold).
+// the force's fundamental: arbitrary, but steady while locked.
+//
+// Quality and locking: every window's estimate carries its SNR (the strongest harmonic over the
+// band's median) and its agreement with the window one window length earlier — which shares
+// no samples with it (relative speed difference, and the tooth-harmonic phase against the one
+// the earlier window predicts at this window's centre at the mean of the two speeds, exact on a
+// linear ramp). The tracker locks only on a consistent estimate: two such cutting windows whose
+// speeds agree within lock_agreement and whose tooth phases agree within lock_phase_rad. A
+// stopping or starting spindle, or weak irregular cutting, gives windows that disagree: no
+// lock, no speed.
+// While locked, the phase model (signal::PhaseModel, in input samples) is re-anchored at the
+// newest sample every window, continuous there, corrected by part of the window's tooth-phase
+// error (modulo one pitch, so a weak fundamental cannot flip the flute), with the speed's rate
+// of change fitted over the last windows so that ramps are followed. A large phase error or the
+// loss of cutting drops the lock; the next consistent pair of windows locks afresh.
+//
+// The window is short by default (10 revolutions at the commanded speed, 0.02–0.25 s) so that
+// a stop/start re-acquires within a tenth of a second and a ramp barely moves the speed within
+// one window; the monitor measures each revolution's own speed from its tooth events, so the
+// tracker needs to be consistent, not precise.
 //
 // setup() creates FFTW plans (not thread-safe: set up trackers from one thread at a time);
 // process() never allocates.
@@ -43,13 +59,21 @@ struct SpindleTrackerConfig {
   int flutes = 2;
   double commanded_rpm = 25000.0;
   double search_fraction = 0.15;  ///< search f within commanded·(1 ± this)
-  double window_s = 0.25;
-  double hop_s = 0.05;
-  int max_harmonic = 0;  ///< highest harmonic used; 0 = automatic (4·flutes)
-  double min_snr_db =
-      12.0;  ///< cutting when the strongest harmonic is this far above the band's median
-  double phase_gain = 0.5;  ///< fraction of each window's phase error corrected
+  double window_s = 0.0;         ///< analysis window; 0 = automatic (10 revolutions, 0.02–0.25 s)
+  double hop_s = 0.0;            ///< time between windows; 0 = automatic (a quarter window)
+  int max_harmonic = 0;          ///< highest harmonic used; 0 = automatic (4·flutes)
+  double min_snr_db = 12.0;      ///< cutting when the harmonics stand this far above their floors
+  double phase_gain = 0.5;       ///< fraction of each window's phase error corrected
+  double lock_agreement = 0.01;  ///< windows a window apart agree in speed within this (relative)
+  double lock_phase_rad = 0.8;   ///< ...and in tooth-harmonic phase within this
 };
+
+/// The window and hop a configuration resolves to (automatic values filled in), in seconds.
+struct TrackerTiming {
+  double window_s = 0.0;
+  double hop_s = 0.0;
+};
+TrackerTiming tracker_timing(const SpindleTrackerConfig& c);
 
 /// @throws config::ConfigError naming the field.
 SpindleTrackerConfig spindle_tracker_config_from_json(const nlohmann::json& j,
@@ -59,13 +83,19 @@ nlohmann::json to_json(const SpindleTrackerConfig& c);
 void validate(const SpindleTrackerConfig& c, const std::string& path);
 
 struct SpindleEstimate {
-  bool valid = false;  ///< a current speed estimate (cutting, locked)
-  bool cutting = false;
+  bool valid = false;     ///< locked: a current, consistent speed estimate
+  bool cutting = false;   ///< periodic force: the strongest harmonic min_snr_db above the floor
   bool relocked = false;  ///< this update started a new lock (new angle reference)
-  double spindle_hz = 0.0;
+  /// This window agrees with the one a window earlier (speed within lock_agreement, tooth phase
+  /// within lock_phase_rad); false until a cutting stretch is two windows long.
+  bool consistent = false;
+  double spindle_hz = 0.0;  ///< this window's speed (meaningful when cutting)
   double spindle_rpm = 0.0;
-  double uncertainty_rpm = 0.0;
+  double uncertainty_rpm = 0.0;  ///< spread of the harmonics' speeds / √(harmonics used)
   double snr_db = 0.0;
+  double agreement = 0.0;          ///< |f − f_earlier|/f against the window a window earlier
+  double phase_error_rad = 0.0;    ///< tooth-harmonic phase against that window's
+                                   ///< prediction, in radians of the tooth harmonic
   double angle_rad = 0.0;          ///< spindle angle at center_sample, [0, 2π)
   std::int64_t center_sample = 0;  ///< the window's centre, in input samples
   std::int64_t updates = 0;
@@ -93,10 +123,16 @@ class SpindleTracker {
   [[nodiscard]] const SpindleTrackerConfig& config() const { return config_; }
   /// Index of the next input sample.
   [[nodiscard]] std::int64_t next_sample() const { return next_sample_; }
+  /// The resolved window and hop (samples).
+  [[nodiscard]] std::size_t window_samples() const { return window_; }
+  [[nodiscard]] std::size_t hop_samples() const { return hop_; }
 
  private:
   void update();
   double harmonic_score(double f_hz) const;
+  struct Past;
+  void remember(bool cutting, double hz, double tooth_phase_rad, std::int64_t center);
+  [[nodiscard]] const Past* window_ago(std::int64_t center) const;
   double magnitude_at(double f_hz) const;
   void release();
 
@@ -119,6 +155,16 @@ class SpindleTracker {
   SpindleEstimate estimate_;
   PhaseModel phase_;
   bool locked_ = false;
+  // The last windows' estimates (a ring), so that each window can be compared with the one a
+  // whole window earlier: windows that share samples agree whatever the signal.
+  struct Past {
+    bool cutting = false;
+    double hz = 0.0;
+    double tooth_phase_rad = 0.0;
+    std::int64_t center = 0;
+  };
+  std::vector<Past> past_;  // sized at setup to hold a window's worth of hops
+  int past_count_ = 0;
   std::array<double, 6> recent_hz_{};  // speeds of the last hops, for the ramp rate
   std::array<double, 6> recent_center_s_{};
   int recent_count_ = 0;

@@ -80,14 +80,23 @@ TEST(Phm2010Replay, TracksSpeedToothPeriodsAndForceGrowthWithWear) {
     EXPECT_EQ((*s)["samples"], 5000);
     EXPECT_EQ((*s)["dropped_samples"], 0);
   }
-  // Cut 1 is light and barely periodic: the speed is still found near the nominal one, and
-  // whatever is measured is not invented.
-  EXPECT_NEAR(fresh["spindle_rpm"].get<double>(), 10400.0, 300.0);
+  // Cut 1 is light and barely periodic (its spindle harmonics stand 6–12 dB above the noise):
+  // no speed is stated, and the summary says why (issue 6 §4; before, it "locked" at three
+  // different speeds and reported 10,259 rpm as fact).
+  EXPECT_TRUE(fresh["spindle_rpm"].is_null()) << fresh["spindle_rpm"];
+  EXPECT_EQ(fresh["revolutions"], 0);
+  bool said_why = false;
+  for (const auto& w : fresh["warnings"]) {
+    said_why = said_why || w["kind"] == "no steady tooth-passing signal";
+  }
+  EXPECT_TRUE(said_why) << fresh["warnings"];
 
   for (const nlohmann::json* s : {&mid, &worn}) {
     const double rpm = (*s)["spindle_rpm"].get<double>();
     EXPECT_NEAR(rpm, 10400.0, 0.02 * 10400.0);
-    ASSERT_GE((*s)["revolutions"].get<int>(), 3);
+    // 17 revolutions in 0.1 s: at least 15 measured with the shipped configuration (issue 6 §2).
+    EXPECT_GE((*s)["revolutions"].get<int>(), 15);
+    EXPECT_LE((*s)["revolutions"].get<int>(), 17);
     // Three flutes evenly spaced: three tooth periods that add up to a revolution, α near 120°.
     const auto& periods = (*s)["tooth_period_s"];
     ASSERT_EQ(periods.size(), 3u);

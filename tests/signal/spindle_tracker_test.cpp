@@ -48,26 +48,36 @@ SpindleTrackerConfig config(double fs, int flutes, double commanded_rpm) {
   return c;
 }
 
-// [000]: 25,252 rpm actual at 25,000 commanded. Within 0.05 % from 0.25 s of data.
-TEST(SpindleTracker, MeasuresTheActualSpeedFromAQuarterSecond) {
+// [000]: 25,252 rpm actual at 25,000 commanded. With the automatic window (10 revolutions) the
+// tracker locks within a few windows and is within 0.1 %; with a 0.25 s window, within 0.05 %
+// once two windows agree.
+TEST(SpindleTracker, MeasuresTheActualSpeed) {
   for (double fs : {20000.0, 50000.0, 333300.0}) {
     for (int flutes : {2, 3}) {
-      Cut cut;
-      cut.flutes = flutes;
-      cut.amplitude =
-          flutes == 2 ? std::vector<double>{1.0, 0.8} : std::vector<double>{1.0, 0.9, 0.7};
-      const double f_true = 25252.0 / 60.0;
-      SpindleTracker tracker(config(fs, flutes, 25000.0));
-      std::vector<double> x(static_cast<std::size_t>(0.25 * fs));
-      for (std::size_t n = 0; n < x.size(); ++n) {
-        const double t = static_cast<double>(n) / fs;
-        x[n] = cut.force(2 * kPi * f_true * t + 0.3, t);
+      for (const double window_s : {0.0, 0.25}) {
+        Cut cut;
+        cut.flutes = flutes;
+        cut.amplitude =
+            flutes == 2 ? std::vector<double>{1.0, 0.8} : std::vector<double>{1.0, 0.9, 0.7};
+        const double f_true = 25252.0 / 60.0;
+        SpindleTrackerConfig c = config(fs, flutes, 25000.0);
+        c.window_s = window_s;
+        SpindleTracker tracker(c);
+        std::vector<double> x(static_cast<std::size_t>((window_s > 0.0 ? 0.52 : 0.25) * fs));
+        for (std::size_t n = 0; n < x.size(); ++n) {
+          const double t = static_cast<double>(n) / fs;
+          x[n] = cut.force(2 * kPi * f_true * t + 0.3, t);
+        }
+        tracker.process(x);
+        const auto& e = tracker.estimate();
+        ASSERT_TRUE(e.valid) << fs << " " << flutes << " " << window_s;
+        EXPECT_TRUE(e.cutting);
+        EXPECT_TRUE(e.consistent);
+        EXPECT_GT(e.snr_db, 20.0);
+        EXPECT_LT(e.agreement, 0.002);
+        EXPECT_NEAR(e.spindle_rpm, 25252.0, (window_s > 0.0 ? 0.0005 : 0.001) * 25252.0)
+            << fs << " Hz, " << flutes << " flutes, window " << window_s;
       }
-      tracker.process(x);
-      const auto& e = tracker.estimate();
-      ASSERT_TRUE(e.valid) << fs << " " << flutes;
-      EXPECT_NEAR(e.spindle_rpm, 25252.0, 0.0005 * 25252.0) << fs << " Hz, " << flutes << " flutes";
-      EXPECT_TRUE(e.cutting);
     }
   }
 }
@@ -145,23 +155,24 @@ TEST(SpindleTracker, FollowsASlowRamp) {
           std::max(worst_rel, std::fabs(tracker.estimate().spindle_rpm - rpm(tc)) / rpm(tc));
     }
   }
-  // Over a 0.25 s window the speed changes 1 %: the centre estimate stays well inside that.
+  // Over a window of 10 revolutions the speed changes 0.1 %: the centre estimate stays inside
+  // that.
   EXPECT_LT(worst_rel, 0.002);
-  EXPECT_NEAR(tracker.estimate().spindle_rpm, 24000.0, 0.0005 * 24000.0);
+  EXPECT_NEAR(tracker.estimate().spindle_rpm, 24000.0, 0.001 * 24000.0);
 }
 
 // Stop/start: pure noise means no cutting and no valid speed; cutting again at a new speed is
-// reacquired within about a window.
+// reacquired within two windows (0.03 s).
 TEST(SpindleTracker, SaysNoCuttingAndReacquiresAfterAStop) {
   Cut cut;
   const double fs = 20000.0;
   SpindleTracker tracker(config(fs, 2, 25000.0));
   std::normal_distribution<double> noise(0.0, 0.05);
   std::mt19937_64 rng(3);
-  std::vector<double> block(200);
+  std::vector<double> block(100);  // shorter than a hop: every update is seen
   int relocks = 0;
-  for (int b = 0; b < 400; ++b) {  // 4 s: cut 1 s, stop 1 s, cut at 24,100 rpm 2 s
-    const double t0 = b * 200.0 / fs;
+  for (int b = 0; b < 800; ++b) {  // 4 s: cut 1 s, stop 1 s, cut at 24,100 rpm 2 s
+    const double t0 = b * 100.0 / fs;
     for (std::size_t i = 0; i < block.size(); ++i) {
       const double t = t0 + static_cast<double>(i) / fs;
       if (t < 1.0) {
@@ -181,12 +192,93 @@ TEST(SpindleTracker, SaysNoCuttingAndReacquiresAfterAStop) {
       EXPECT_FALSE(e.valid) << tc;
       EXPECT_FALSE(tracker.phase().valid);
     }
-    if (t0 > 2.3) {
+    if (t0 > 2.05) {
       EXPECT_TRUE(e.valid) << t0;
-      EXPECT_NEAR(e.spindle_rpm, 24100.0, 0.0005 * 24100.0) << t0;
+      EXPECT_NEAR(e.spindle_rpm, 24100.0, 0.0015 * 24100.0) << t0;
     }
   }
   EXPECT_GE(relocks, 2);
+}
+
+// Issue 6 §4: the tracker locks only on a consistent estimate. Pulses of random size at random
+// times (weak, irregular contact: on average as many as teeth pass, but with no period) make
+// windows whose strongest "harmonic" may stand above the noise by chance, but no two windows
+// agree: no lock, no speed.
+TEST(SpindleTracker, DoesNotLockOnIrregularCutting) {
+  const double fs = 20000.0;
+  SpindleTracker tracker(config(fs, 3, 10400.0));
+  std::mt19937_64 rng(11);
+  const double tooth_s = 60.0 / 10420.0 / 3.0;
+  std::exponential_distribution<double> interval(1.0 / tooth_s);
+  std::uniform_real_distribution<double> size(0.2, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::vector<double> x(static_cast<std::size_t>(4.0 * fs), 0.0);
+  for (double& v : x) {
+    v = noise(rng);
+  }
+  for (double t = interval(rng); t < 4.0; t += interval(rng)) {
+    const double a = size(rng);
+    for (int k = -20; k <= 20; ++k) {
+      const auto n = static_cast<std::int64_t>(std::llround(t * fs)) + k;
+      if (n >= 0 && n < static_cast<std::int64_t>(x.size())) {
+        x[static_cast<std::size_t>(n)] += a * std::exp(-0.5 * (k / 6.0) * (k / 6.0));
+      }
+    }
+  }
+  int valid = 0, updates = 0;
+  for (std::size_t i = 0; i < x.size(); i += 100) {
+    if (tracker.process(std::span(x).subspan(i, 100)) > 0) {
+      ++updates;
+      valid += tracker.estimate().valid ? 1 : 0;
+    }
+  }
+  EXPECT_GT(updates, 250);
+  EXPECT_EQ(valid, 0);
+}
+
+// Issue 6 §10: a spindle slowing to rest and speeding up again (a feed hold) gives no lock,
+// and cutting at speed again locks within a tenth of a second.
+TEST(SpindleTracker, DoesNotLockOnAStoppingSpindleAndReacquiresQuickly) {
+  Cut cut;
+  const double fs = 20000.0;
+  SpindleTracker tracker(config(fs, 2, 25000.0));
+  // 25,000 rpm, slowing to rest in 0.05 s at 0.5 s, at rest 0.2 s, back at speed at 0.8 s.
+  auto rpm = [](double t) {
+    if (t < 0.5 || t >= 0.8) {
+      return 25000.0;
+    }
+    if (t < 0.55) {
+      return 25000.0 * (0.55 - t) / 0.05;
+    }
+    return t < 0.75 ? 0.0 : 25000.0 * (t - 0.75) / 0.05;
+  };
+  double angle = 0.0;
+  std::vector<double> block(100);
+  double relock_s = -1.0;
+  for (int b = 0; b < 200; ++b) {  // 1 s
+    for (std::size_t i = 0; i < block.size(); ++i) {
+      const double t = (b * 100.0 + static_cast<double>(i)) / fs;
+      // Cutting while the spindle is at speed; a rubbing tool while it slows (feed held).
+      block[i] =
+          t < 0.5 || t >= 0.8 ? cut.force(angle, t) : 0.3 * cut.force(angle, t) * rpm(t) / 25000.0;
+      angle += 2 * kPi * rpm(t) / 60.0 / fs;
+    }
+    if (tracker.process(block) == 0) {
+      continue;
+    }
+    const auto& e = tracker.estimate();
+    const double tc = static_cast<double>(e.center_sample) / fs;
+    const double window_end = static_cast<double>(tracker.next_sample()) / fs;
+    if (window_end > 0.51 && window_end < 0.8) {
+      EXPECT_FALSE(e.valid) << "a speed while stopping or stopped, window to " << window_end;
+    }
+    if (e.relocked && tc > 0.7 && relock_s < 0.0) {
+      relock_s = window_end;
+    }
+  }
+  ASSERT_GT(relock_s, 0.0);
+  EXPECT_LT(relock_s - 0.8, 0.1);
+  EXPECT_NEAR(tracker.estimate().spindle_rpm, 25000.0, 0.001 * 25000.0);
 }
 
 TEST(SpindleTracker, ProcessAllocatesNothing) {
@@ -217,7 +309,7 @@ TEST(SpindleTracker, InvalidConfigurationNamesTheField) {
   c = config(500.0, 2, 25000.0);
   EXPECT_NE(error_of(c).find("spindle.sample_rate_hz"), std::string::npos);
   c = config(20000.0, 2, 25000.0);
-  c.window_s = 0.01;
+  c.window_s = 0.01;  // fewer than 5 revolutions
   EXPECT_NE(error_of(c).find("spindle.window_s"), std::string::npos);
   const nlohmann::json j = {{"window_s", 0.1}, {"hop_s", 0.2}};
   EXPECT_THROW(spindle_tracker_config_from_json(j, "spindle"), config::ConfigError);

@@ -1,0 +1,24 @@
+#include "core/monitor/conditioner.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+constexpr double kTareTime_s = 0.05;  // time constant of the re-zeroing while quiet
+
+}  // namespace
+
+Conditioner::Conditioner(const MonitorConfig& config, const signal::ButterworthDesign& filter)
+    : axis_map_(config.axis_map), zero_phase_on_(config.filter_zero_phase) {
+  for (auto& f : lowpass_) {
+    f = signal::LowPassFilter(filter);
+  }
+  if (zero_phase_on_) {
+    zero_phase_ = signal::ZeroPhaseFilter(filter, 3);
+  }
+  tare_gain_ = 1.0 / (kTareTime_s * config.sample_rate_hz);
+  // The envelope forgets over about two revolutions at the commanded speed.
+  const double revolution_hz = config.model.process.spindle_rpm / 60.0;
+  envelope_decay_ = std::exp(-2.0 / (2.0 * config.sample_rate_hz / revolution_hz));
+}
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,119 @@
+#pragma once
+// The pipeline's first signal stage: a checked sample in the instrument's channels becomes the
+// filtered force on the tool, re-zeroed.
+//
+//   axis map (model frame) → low-pass ×3 (causal, or zero-phase offline) → tare
+//
+// The tare re-zeroes the channels while the tool is quiet (not cutting, and the force envelope
+// of the last revolutions well below the usual peak): the force is then zero, and what the
+// channels read is the charge amplifiers' offset and drift. The pipeline says when it is
+// quiet (set_quiet). Output goes to a callable out(sample, fx, fy, fz), in sample order; in
+// zero-phase mode it comes chunk + margin samples late (signal::ZeroPhaseFilter).
+// Set up once (allocates); push/flush allocate nothing.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <span>
+
+#include "core/monitor/monitor_config.hpp"
+#include "core/signal/axis_map.hpp"
+#include "core/signal/butterworth_lowpass.hpp"
+#include "core/signal/zero_phase_filter.hpp"
+
+namespace millwatch::monitor {
+
+class Conditioner {
+ public:
+  Conditioner() = default;
+  /// @param filter the design the measurement goes through (the pipeline's, see Pipeline)
+  Conditioner(const MonitorConfig& config, const signal::ButterworthDesign& filter);
+
+  /// Ends the current stretch (a gap, the stream's start): held zero-phase samples come out;
+  /// the next sample starts a new stretch on which the filters settle.
+  template <typename Out>
+  void restart(Out&& out) {
+    flush(out);
+    fresh_ = true;
+  }
+
+  /// One checked sample (instrument channels, N) at absolute sample index n.
+  template <typename Out>
+  void push(std::int64_t n, const std::array<double, 3>& reading, Out&& out) {
+    const auto f = axis_map_.to_model(reading);
+    if (zero_phase_on_) {
+      if (fresh_) {
+        zero_phase_next_ = n;
+        fresh_ = false;
+      }
+      drain(zero_phase_.push(f), out);
+      return;
+    }
+    if (fresh_) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        lowpass_[a].reset();
+        lowpass_[a].settle(f[a]);
+      }
+      fresh_ = false;
+    }
+    emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
+  }
+
+  /// Zero-phase mode: every held sample comes out (the end of a stretch or of the record).
+  template <typename Out>
+  void flush(Out&& out) {
+    if (zero_phase_on_) {
+      drain(zero_phase_.flush(), out);
+    }
+  }
+
+  /// Whether the tool is quiet now (not cutting, as far as the pipeline knows), and the usual
+  /// peak of the in-plane force while cutting (0: not known yet, no tare).
+  void set_quiet(bool quiet, double typical_peak_N) {
+    quiet_ = quiet;
+    typical_peak_N_ = typical_peak_N;
+  }
+  [[nodiscard]] const std::array<double, 3>& tare_N() const { return tare_N_; }
+
+ private:
+  template <typename Out>
+  void drain(std::size_t ready, Out& out) {
+    for (std::size_t k = 0; k < ready; ++k) {
+      emit(zero_phase_next_ + static_cast<std::int64_t>(k), zero_phase_.output(0, k),
+           zero_phase_.output(1, k), zero_phase_.output(2, k), out);
+    }
+    zero_phase_next_ += static_cast<std::int64_t>(ready);
+  }
+
+  template <typename Out>
+  void emit(std::int64_t n, double fx, double fy, double fz, Out& out) {
+    const double ex = fx - tare_N_[0];
+    const double ey = fy - tare_N_[1];
+    envelope_sq_ = std::max(ex * ex + ey * ey, envelope_sq_ * envelope_decay_);
+    const double idle = kIdleFraction * typical_peak_N_;
+    if (quiet_ && typical_peak_N_ > 0.0 && envelope_sq_ < idle * idle) {
+      tare_N_[0] += tare_gain_ * (fx - tare_N_[0]);
+      tare_N_[1] += tare_gain_ * (fy - tare_N_[1]);
+      tare_N_[2] += tare_gain_ * (fz - tare_N_[2]);
+    }
+    out(n, fx - tare_N_[0], fy - tare_N_[1], fz - tare_N_[2]);
+  }
+
+  static constexpr double kIdleFraction = 0.2;  // of the usual peak: a quiet envelope
+
+  signal::AxisMap axis_map_;
+  std::array<signal::LowPassFilter, 3> lowpass_;
+  signal::ZeroPhaseFilter zero_phase_;
+  bool zero_phase_on_ = false;
+  std::int64_t zero_phase_next_ = 0;  // sample number of its next output
+  bool fresh_ = true;
+  std::array<double, 3> tare_N_{};
+  double tare_gain_ = 0.0;
+  double envelope_sq_ = 0.0;  // decaying peak of the squared in-plane force, N²
+  double envelope_decay_ = 0.0;
+  bool quiet_ = false;
+  double typical_peak_N_ = 0.0;
+};
+
+}  // namespace millwatch::monitor

@@ -1,0 +1,215 @@
+#include "core/monitor/revolution_analyzer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace millwatch::monitor {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+/// Template angle of event k (0..flutes) of a revolution.
+double event_angle(const ToothEventTemplate& t, const RevolutionEvents& e, int k) {
+  const double turn = static_cast<double>(e.turn);
+  return k < t.flutes ? t.event_rad[static_cast<std::size_t>(k)] + kTwoPi * turn
+                      : t.event_rad[0] + kTwoPi * (turn + 1.0);
+}
+
+}  // namespace
+
+AngleMap angle_map(const RevolutionEvents& e, const ToothEventTemplate& t) {
+  int used = 0;
+  for (int k = 0; k <= e.flutes; ++k) {
+    used += e.found[static_cast<std::size_t>(k)] ? 1 : 0;
+  }
+  const bool all = used < 2;
+  // Centred sums for a well-conditioned fit.
+  const double n0 = e.event_sample[0];
+  double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
+  for (int k = 0; k <= e.flutes; ++k) {
+    if (!all && !e.found[static_cast<std::size_t>(k)]) {
+      continue;
+    }
+    const double x = e.event_sample[static_cast<std::size_t>(k)] - n0;
+    const double y = event_angle(t, e, k);
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    count += 1.0;
+  }
+  const double denominator = count * sxx - sx * sx;
+  AngleMap m;
+  if (denominator <= 0.0) {
+    // Degenerate: one revolution between the first and last event.
+    const double span = e.event_sample[static_cast<std::size_t>(e.flutes)] - n0;
+    m.slope_rad_per_sample = span > 0.0 ? kTwoPi / span : 0.0;
+    m.intercept_rad = event_angle(t, e, 0) - m.slope_rad_per_sample * n0;
+    return m;
+  }
+  m.slope_rad_per_sample = (count * sxy - sx * sy) / denominator;
+  m.intercept_rad = (sy - m.slope_rad_per_sample * sx) / count - m.slope_rad_per_sample * n0;
+  return m;
+}
+
+RevolutionAnalyzer::RevolutionAnalyzer(const MonitorConfig& config,
+                                       std::size_t max_revolution_samples)
+    : flutes_(config.model.tool.flutes),
+      sample_rate_hz_(config.sample_rate_hz),
+      search_fraction_(config.search_fraction_of_pitch),
+      sectors_(std::clamp(config.residual_sectors, 1, kMaxSectors)) {
+  for (auto& s : scratch_) {
+    s.assign(max_revolution_samples, 0.0);
+  }
+}
+
+void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
+                                 const SampleRing& ring, const Lockstep* model,
+                                 RevolutionRecord& out) {
+  RevolutionMeasurement& m = out.measured;
+  m.flutes = events.flutes;
+  m.sequence = events.sequence;
+  m.event_sample = events.event_sample;
+  m.boundary_sample = events.boundary_sample;
+  m.valid = events.valid;
+  measure_revolution([&](int c, std::int64_t s) { return ring.at(c, s); }, sample_rate_hz_, m);
+  out.spindle_rpm = events.period_samples > 0.0 ? 60.0 * sample_rate_hz_ / events.period_samples
+                                                : 60.0 / m.period_s;
+
+  out.model_valid = false;
+  out.sectors = 0;
+  const AngleMap map = angle_map(events, tmpl);
+  if (model != nullptr && model->aligned() && model_revolution(events, tmpl, map, *model, out)) {
+    out.model_offset_rad = model->offset_rad();
+    residuals(m, ring, map, out);
+  }
+}
+
+void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
+                                        const ToothEventTemplate& tmpl, const SampleRing& ring,
+                                        SyncAverage& sync) const {
+  const AngleMap map = angle_map(events, tmpl);
+  const auto from = static_cast<std::int64_t>(std::ceil(events.event_sample[0]));
+  const auto to = static_cast<std::int64_t>(
+                      std::ceil(events.event_sample[static_cast<std::size_t>(events.flutes)])) -
+                  1;
+  const double turn_rad = kTwoPi * static_cast<double>(events.turn);
+  for (std::int64_t s = std::max(from, ring.oldest()); s <= std::min(to, ring.newest()); ++s) {
+    double a = map.at(static_cast<double>(s)) - turn_rad;
+    a -= kTwoPi * std::floor(a / kTwoPi);
+    const double fx = ring.at(0, s);
+    const double fy = ring.at(1, s);
+    sync.add(a, {fx, fy, ring.at(2, s), std::sqrt(ring.at(3, s))});
+  }
+  sync.end_revolution();
+}
+
+bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
+                                          const ToothEventTemplate& tmpl, const AngleMap& map,
+                                          const Lockstep& model, RevolutionRecord& out) {
+  const int flutes = events.flutes;
+  const auto n = static_cast<std::size_t>(flutes);
+  const double span = events.event_sample[n] - events.event_sample[0];
+  const double pitch = span / flutes;
+  const auto half = static_cast<std::int64_t>(std::ceil(search_fraction_ * pitch));
+  const int fit = std::max(2, static_cast<int>(std::lround(pitch / 7.0)));
+  const std::int64_t pad = half + 3 * fit + 2;
+  first_ = static_cast<std::int64_t>(
+               std::floor(std::min(events.boundary_sample[0], events.event_sample[0]))) -
+           pad;
+  const std::int64_t last = static_cast<std::int64_t>(std::ceil(events.event_sample[n])) + pad;
+  if (last - first_ + 1 > static_cast<std::int64_t>(scratch_[0].size()) || !(span > 0.0)) {
+    return false;
+  }
+  for (std::int64_t s = first_; s <= last; ++s) {
+    const auto f = model.force_at(map.at(static_cast<double>(s)));
+    const auto i = static_cast<std::size_t>(s - first_);
+    scratch_[0][i] = f[0];
+    scratch_[1][i] = f[1];
+    scratch_[2][i] = f[2];
+    scratch_[3][i] = f[0] * f[0] + f[1] * f[1];
+  }
+  const auto channel = [&](int c, std::int64_t s) {
+    return scratch_[static_cast<std::size_t>(c)][static_cast<std::size_t>(s - first_)];
+  };
+  const auto detect = [&](std::int64_t s) { return channel(3, s); };
+  RevolutionMeasurement& mm = out.model;
+  mm.flutes = flutes;
+  mm.sequence = events.sequence;
+  mm.valid = true;
+  for (int k = 0; k <= flutes; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
+    const double lead = events.event_sample[uk] - events.boundary_sample[uk];
+    EventSearch e;
+    if (tmpl.kind == ToothEventKind::kCentroid) {
+      const double next_lead =
+          k < flutes ? events.event_sample[uk + 1] - events.boundary_sample[uk + 1] : lead;
+      const double to = k < flutes ? events.event_sample[uk + 1] - next_lead
+                                   : events.event_sample[uk] + pitch - lead;
+      e = find_centroid(detect, first_, last, events.boundary_sample[uk], to);
+    } else {
+      e = find_valley(detect, first_, last, events.event_sample[uk], half, fit);
+    }
+    const bool found = e.status == EventSearch::Status::kFound;
+    mm.event_sample[uk] = found ? e.position : events.event_sample[uk];
+    mm.boundary_sample[uk] = mm.event_sample[uk] - lead;
+    mm.valid = mm.valid && found;
+  }
+  measure_revolution(channel, sample_rate_hz_, mm);
+  return true;
+}
+
+void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleRing& ring,
+                                   const AngleMap& map, RevolutionRecord& out) const {
+  const auto n_flutes = static_cast<std::size_t>(m.flutes);
+  const auto from = static_cast<std::int64_t>(std::ceil(m.boundary_sample[0]));
+  const auto to = static_cast<std::int64_t>(std::floor(m.boundary_sample[n_flutes]));
+  if (from < ring.oldest() || to > ring.newest() || to <= from) {
+    return;
+  }
+  std::array<double, 3> sum{};
+  double measured_sum = 0.0;
+  std::array<double, kMaxFlutes> flute_sum{};
+  std::array<int, kMaxFlutes> flute_n{};
+  std::array<double, kMaxSectors> sector_sum{};
+  std::array<int, kMaxSectors> sector_n{};
+  std::size_t flute = 0;
+  const double sectors_per_rad = sectors_ / kTwoPi;
+  for (std::int64_t s = from; s <= to; ++s) {
+    const auto i = static_cast<std::size_t>(s - first_);
+    std::array<double, 3> d{};
+    for (std::size_t a = 0; a < 3; ++a) {
+      d[a] = ring.at(static_cast<int>(a), s) - scratch_[a][i];
+      sum[a] += d[a] * d[a];
+    }
+    measured_sum += ring.at(3, s);  // Fx² + Fy²
+    const double d_xy2 = d[0] * d[0] + d[1] * d[1];
+    while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
+      ++flute;
+    }
+    flute_sum[flute] += d_xy2;
+    ++flute_n[flute];
+    double a = map.at(static_cast<double>(s));
+    a -= kTwoPi * std::floor(a / kTwoPi);
+    const auto sector = static_cast<std::size_t>(
+        std::clamp(static_cast<int>(a * sectors_per_rad), 0, sectors_ - 1));
+    sector_sum[sector] += d_xy2;
+    ++sector_n[sector];
+  }
+  const auto count = static_cast<double>(to - from + 1);
+  for (std::size_t a = 0; a < 3; ++a) {
+    out.residual_rms_N[a] = std::sqrt(sum[a] / count);
+  }
+  out.measured_rms_N = std::sqrt(measured_sum / count);
+  for (std::size_t j = 0; j < n_flutes; ++j) {
+    out.residual_flute_rms_N[j] = flute_n[j] > 0 ? std::sqrt(flute_sum[j] / flute_n[j]) : 0.0;
+  }
+  out.sectors = sectors_;
+  for (std::size_t s = 0; s < static_cast<std::size_t>(sectors_); ++s) {
+    out.residual_sector_rms_N[s] = sector_n[s] > 0 ? std::sqrt(sector_sum[s] / sector_n[s]) : 0.0;
+  }
+  out.model_valid = true;
+}
+
+}  // namespace millwatch::monitor

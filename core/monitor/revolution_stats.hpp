@@ -1,0 +1,36 @@
+#pragma once
+// What the pipeline keeps across revolutions: the usual peak force (to tell a revolution that
+// did not cut), and α and ΔFy over the last window of valid revolutions ([001]: 30).
+// Fixed storage, sized at construction; nothing is allocated per revolution.
+
+#include <vector>
+
+#include "core/monitor/revolution_record.hpp"
+
+namespace millwatch::monitor {
+
+class RevolutionStats {
+ public:
+  RevolutionStats() = default;
+  explicit RevolutionStats(int window_revolutions);
+
+  /// A revolution whose largest flute peak is below this fraction of the usual peak did not cut.
+  static constexpr double kIdleFraction = 0.2;
+
+  /// Whether the revolution cut (true for the first ones, while the usual peak is unknown);
+  /// cutting revolutions update the usual peak.
+  bool cutting(const RevolutionMeasurement& m);
+  /// Adds a valid revolution to the window and fills the record's window statistics.
+  void add(RevolutionRecord& r);
+  /// Running level of the revolutions' largest flute peak, N (0: none yet).
+  [[nodiscard]] double typical_peak_N() const { return typical_peak_N_; }
+  void clear_window();
+
+ private:
+  double typical_peak_N_ = 0.0;
+  std::vector<double> alpha_, delta_fy_;
+  int count_ = 0;
+  int next_ = 0;
+};
+
+}  // namespace millwatch::monitor

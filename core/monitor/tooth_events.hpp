@@ -1,0 +1,253 @@
+#pragma once
+// Tooth events: the instants that cut the force into revolutions and flute periods.
+//
+// Continuous cuts (a slot, wide side milling): the event is the valley between one flute's cut
+// and the next ([001] eq 36, [003] Table 4), sought on the squared in-plane force, where a
+// valley is a smooth parabola, and located to a fraction of a sample by a local cubic fit.
+// Interrupted cuts (the force returns to zero between teeth, e.g. side milling at small radial
+// immersion): a valley there is a flat stretch of noise, not an event. The event is then the
+// centroid of the tooth's pulse of squared force above the quiet level, and each flute's force
+// window starts in the middle of the quiet stretch before its pulse. Which kind a cut has is
+// decided once per lock from the revolution-synchronous average (ToothEventTemplate).
+//
+// ToothEventTracker follows the events revolution after revolution: each event is sought
+// around where the previous one and the current revolution period put it (an α-β filter on
+// the revolution period follows ramps), never more than a fraction of a pitch away. At a lock
+// it walks back through the sample ring from the lock's window to the start of the cut, so that
+// the revolutions before the lock are measured too, and then measures forward.
+//
+// Flute 0 is CE1 (the flute whose period holds the largest force: [001]/[003]'s main edge).
+// Without a once-per-revolution reference this labelling is a convention.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <span>
+
+#include "core/monitor/revolution_features.hpp"
+#include "core/monitor/sample_ring.hpp"
+#include "core/signal/phase_model.hpp"
+
+namespace millwatch::monitor {
+
+enum class ToothEventKind : std::uint8_t { kValley, kCentroid };
+const char* to_string(ToothEventKind kind);
+
+struct ToothEventTemplate {
+  int flutes = 0;
+  ToothEventKind kind = ToothEventKind::kValley;
+  /// Tracker angle of each flute's event, CE1 first, in the order of rotation, unwrapped:
+  /// event_rad[0] ∈ [0, 2π) ≤ event_rad[1] ≤ ... < event_rad[0] + 2π.
+  std::array<double, kMaxFlutes> event_rad{};
+  /// Angle at which each flute's force window starts (≤ event_rad[j]; equal for valleys).
+  std::array<double, kMaxFlutes> boundary_rad{};
+  bool valid = false;
+};
+
+/// Finds the events on the revolution-synchronous average of the in-plane resultant √(Fx²+Fy²)
+/// (uniform angle grid from the tracker's zero). A cut is "interrupted" when every gap between
+/// pulses stays within 5 % of the force's span above its lowest level for at least 10 % of a
+/// pitch.
+ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_average, int flutes);
+
+/// Outcome of one event search.
+struct EventSearch {
+  enum class Status { kFound, kNotFound, kGone, kWait };
+  Status status = Status::kNotFound;
+  double position = 0.0;    ///< fractional sample (the prediction when not found)
+  std::int64_t needed = 0;  ///< kWait: the newest sample the search needs
+};
+
+/// A valley of `detect` (callable on absolute sample n ∈ [oldest, newest]) within ± half
+/// samples of `predicted`, refined by a cubic over ± fit_half samples. Found only when the
+/// smallest sample is interior to the search window and the fit is curved upwards.
+template <typename Signal>
+EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t newest,
+                        double predicted, std::int64_t half, int fit_half) {
+  EventSearch out;
+  const auto center = static_cast<std::int64_t>(std::llround(predicted));
+  out.position = predicted;
+  if (center + half + 3 * fit_half > newest) {
+    out.status = EventSearch::Status::kWait;
+    out.needed = center + half + 3 * fit_half;  // room for the fit to re-centre
+    return out;
+  }
+  if (center - half - 3 * fit_half < oldest) {
+    out.status = EventSearch::Status::kGone;
+    return out;
+  }
+  std::int64_t best = center - half;
+  for (std::int64_t n = center - half; n <= center + half; ++n) {
+    if (detect(n) < detect(best)) {
+      best = n;
+    }
+  }
+  const bool interior = best > center - half && best < center + half;
+  // Fit around the prediction when the data agree with it: a window chosen by the noisy
+  // minimum itself leans towards the flatter side of an asymmetric valley (a bias of noise).
+  // Then re-centre on the vertex until the window sits on it, so that the result does not
+  // depend on the prediction.
+  std::int64_t fit_center = std::llabs(best - center) <= fit_half ? center : best;
+  Extremum e = refine_extremum(detect, fit_center, fit_half, true);
+  for (int i = 0; i < 3 && e.valid && std::llround(e.position) != fit_center; ++i) {
+    fit_center = std::llround(e.position);
+    e = refine_extremum(detect, fit_center, fit_half, true);
+  }
+  if (interior && e.valid) {
+    // The fit's window jumps by a sample as the vertex crosses a half sample, and with it the
+    // fit's small bias on an asymmetric valley: blend with the fit on the neighbouring window
+    // so that the located valley moves continuously with the signal.
+    const double offset = e.position - static_cast<double>(fit_center);
+    const std::int64_t other = fit_center + (offset >= 0.0 ? 1 : -1);
+    const Extremum f = refine_extremum(detect, other, fit_half, true);
+    const double w = std::min(0.5, std::fabs(offset));
+    out.status = EventSearch::Status::kFound;
+    out.position = f.valid ? (1.0 - w) * e.position + w * f.position : e.position;
+  } else {
+    out.status = EventSearch::Status::kNotFound;
+  }
+  return out;
+}
+
+/// The centroid of a pulse of `detect` above its quiet level within [from, to]: Σ n·w / Σ w with
+/// w = detect − (smallest sample in the window). Found when the window's ends are quiet (below
+/// 15 % of the pulse's height), so that the whole pulse is inside.
+template <typename Signal>
+EventSearch find_centroid(const Signal& detect, std::int64_t oldest, std::int64_t newest,
+                          double from, double to) {
+  EventSearch out;
+  out.position = 0.5 * (from + to);
+  const auto lo = static_cast<std::int64_t>(std::ceil(from));
+  const auto hi = static_cast<std::int64_t>(std::floor(to));
+  if (hi > newest) {
+    out.status = EventSearch::Status::kWait;
+    out.needed = hi;
+    return out;
+  }
+  if (lo < oldest || hi - lo < 4) {
+    out.status = lo < oldest ? EventSearch::Status::kGone : EventSearch::Status::kNotFound;
+    return out;
+  }
+  double floor = detect(lo), top = floor;
+  for (std::int64_t n = lo; n <= hi; ++n) {
+    const double v = detect(n);
+    floor = std::min(floor, v);
+    top = std::max(top, v);
+  }
+  const double height = top - floor;
+  double sum_w = 0.0, sum_wn = 0.0;
+  for (std::int64_t n = lo; n <= hi; ++n) {
+    const double w = detect(n) - floor;
+    sum_w += w;
+    sum_wn += w * static_cast<double>(n - lo);
+  }
+  const bool quiet_ends = detect(lo) - floor < 0.15 * height && detect(hi) - floor < 0.15 * height;
+  if (height > 0.0 && sum_w > 0.0 && quiet_ends) {
+    out.status = EventSearch::Status::kFound;
+    out.position = static_cast<double>(lo) + sum_wn / sum_w;
+  } else {
+    out.status = EventSearch::Status::kNotFound;
+  }
+  return out;
+}
+
+struct ToothEventConfig {
+  int flutes = 2;
+  double sample_rate_hz = 50000.0;
+  double search_fraction_of_pitch = 0.3;  ///< valley search half-window
+  int fit_half_width = 0;                 ///< valley fit half-width in samples; 0 = automatic
+  double spacing_gain = 0.05;             ///< how fast measured events move the flutes' spacing
+  int lost_after = 3;  ///< revolutions without one event found: the cut has stopped
+};
+
+/// One revolution's events, CE1 to the next CE1.
+struct RevolutionEvents {
+  std::int64_t sequence = 0;  ///< revolutions since start()
+  std::int64_t turn = 0;      ///< the tracker's turn: event j sits at event_rad[j] + 2π·turn
+  int flutes = 0;
+  std::array<double, kMaxFlutes + 1> event_sample{};
+  std::array<double, kMaxFlutes + 1> boundary_sample{};
+  std::array<bool, kMaxFlutes + 1> found{};
+  /// The revolution's period (samples), filtered over the last revolutions: its speed is
+  /// f_s/period_samples (the raw period e_N − e_0 jitters with the events).
+  double period_samples = 0.0;
+  bool valid = false;    ///< every event found
+  bool no_data = false;  ///< the revolution fell into a gap in the samples: nothing measured
+};
+
+class ToothEventTracker {
+ public:
+  ToothEventTracker() = default;
+  explicit ToothEventTracker(const ToothEventConfig& config) : config_(config) {}
+
+  /// Starts following the events of `tmpl` (tracker angles of the lock `phase`): finds the CE1
+  /// event nearest `anchor_sample`, walks back through the ring to the earliest run of found
+  /// events at or after `earliest_sample`, and measures forward from there. Nothing is
+  /// allocated. Returns false when not even the anchor's event is found.
+  bool start(const ToothEventTemplate& tmpl, const signal::PhaseModel& phase, double anchor_sample,
+             std::int64_t earliest_sample, const SampleRing& ring, int detect_channel);
+  void stop() { active_ = false; }
+
+  /// Measures every revolution whose samples are in the ring, calling sink(RevolutionEvents)
+  /// for each, in order. Stops (active() false) once lost_after revolutions in a row had no
+  /// event found.
+  template <typename Sink>
+  void advance(const SampleRing& ring, Sink&& sink) {
+    while (active_) {
+      const Step s = step(ring);
+      if (s == Step::kWait) {
+        return;
+      }
+      if (s == Step::kRevolution) {
+        sink(static_cast<const RevolutionEvents&>(revolution_));
+      }
+    }
+  }
+
+  [[nodiscard]] bool active() const { return active_; }
+  /// The newest sample the next event needs (valid while active).
+  [[nodiscard]] std::int64_t needed_sample() const { return needed_; }
+  [[nodiscard]] const ToothEventTemplate& event_template() const { return template_; }
+  /// Current revolution period estimate (samples).
+  [[nodiscard]] double samples_per_revolution() const { return period_; }
+  /// Sample of the last CE1 event that closed a revolution (INT64_MIN before any).
+  [[nodiscard]] std::int64_t last_closed_sample() const { return last_closed_; }
+
+ private:
+  enum class Step { kWait, kEvent, kRevolution };
+  Step step(const SampleRing& ring);
+  /// Searches the event of `flute` predicted at `predicted` (samples).
+  EventSearch search(const SampleRing& ring, int flute, double predicted) const;
+  [[nodiscard]] double lead(int flute) const;  // boundary → event, samples
+  /// Whether the force within ± reach of `position` reaches the cut's (min_pulse_).
+  [[nodiscard]] bool pulse_around(const SampleRing& ring, double position, double reach) const;
+  void close_revolution();
+
+  ToothEventConfig config_;
+  ToothEventTemplate template_;
+  int detect_ = 3;
+  double min_pulse_ = 0.0;  // detect level an event's neighbourhood must reach
+  bool active_ = false;
+  std::int64_t needed_ = 0;
+  std::int64_t earliest_ = 0;
+  std::int64_t last_closed_ = INT64_MIN;
+  // Fraction of a revolution from flute j's event to the next flute's, and from each flute's
+  // boundary to its event.
+  std::array<double, kMaxFlutes> spacing_{};
+  std::array<double, kMaxFlutes> lead_fraction_{};
+  // g-h-k filter of the CE1 events: this revolution's CE1 event (sample), the revolution period
+  // (samples) and its change per revolution.
+  double anchor_ = 0.0;
+  double period_ = 0.0;
+  double period_rate_ = 0.0;
+  int next_flute_ = 0;            // flute of the next event
+  int events_in_revolution_ = 0;  // events of the current revolution so far (incl. its CE1)
+  int barren_revolutions_ = 0;    // revolutions in a row without any event found
+  int gone_in_revolution_ = 0;    // events of the current revolution without samples (a gap)
+  std::int64_t turn_ = 0;
+  std::int64_t sequence_ = 0;
+  RevolutionEvents revolution_;
+};
+
+}  // namespace millwatch::monitor
