@@ -185,6 +185,7 @@ TEST(AlertEngine, StepInImbalanceIsDetectedWithinTwoBlocks) {
   run.noisy(1990, 2, {1.06, 0.94}, 0.01);
   ASSERT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
   const Alert& a = *run.first(AlertKind::kRunoutChange);
+  std::printf("%s\n", a.message.data());
   EXPECT_GE(a.revolution, 3010);
   EXPECT_LT(a.revolution, 3010 + 50);
   EXPECT_EQ(a.severity, AlertSeverity::kWarning);
@@ -244,6 +245,7 @@ TEST(AlertEngine, TwentyPercentRiseOfFluteForceRaisesWearDrift) {
   run.noisy(2000, 2, {1.03 * 1.2, 0.97 * 1.2}, 0.01);
   ASSERT_EQ(run.count(AlertKind::kWearDrift, true), 1);
   const Alert& a = *run.first(AlertKind::kWearDrift);
+  std::printf("%s\n", a.message.data());
   const auto [before, after] = before_after(a, "mean flute force %lf N → %lf N");
   EXPECT_NEAR(before, 1.0, 0.005) << a.message.data();
   EXPECT_GT(after, 1.15) << a.message.data();
@@ -273,6 +275,7 @@ TEST(AlertEngine, CollapsingFluteRaisesBreakageWithinItsPersistence) {
   run.noisy(100, 3, {1.0, 0.045, 0.8}, 0.02);
   ASSERT_EQ(run.count(AlertKind::kBreakage, true), 1);
   const Alert& a = *run.first(AlertKind::kBreakage);
+  std::printf("%s\n", a.message.data());
   EXPECT_EQ(a.revolution, 2000 + AlertConfig{}.persist_revolutions - 1);
   EXPECT_EQ(a.severity, AlertSeverity::kAlarm);
   EXPECT_NEAR(a.value, 0.05, 0.01);
