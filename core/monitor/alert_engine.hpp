@@ -47,9 +47,9 @@
 // Severity: breakage is an alarm, the others warnings, clears are info. rebaseline() forgets
 // the baseline (a new tool) and clears the change alerts at the next revolution.
 //
-// Alert fields: runout value = I, threshold = the limit; runout change value = I now (mean over
-// the change), threshold = the baseline's I; wear drift value = r now, threshold = the limit;
-// breakage value = q_j of the weakest flute, threshold = τ_j.
+// Alert fields: runout value = I, threshold = the limit; runout change value = I after the
+// change (the confirming blocks' mean), threshold = the baseline's I; wear drift value = r after
+// (likewise), threshold = the limit; breakage value = q_j of the weakest flute, threshold = τ_j.
 // Everything is allocated at construction; examining a revolution allocates nothing.
 
 #include <array>
