@@ -1,0 +1,448 @@
+#include "core/monitor/alert_engine.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/config/json_reader.hpp"
+#include "core/monitor/input_check.hpp"
+#include "core/monitor/revolution_record.hpp"
+#include "tests/support/allocation_counter.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+constexpr std::int64_t kRevolution_us = 2376;  // 25,252 rpm
+
+using Forces = std::array<double, kMaxFlutes>;
+
+/// A valid revolution whose flutes' force ranges have lengths `force_N` (in the x–y plane).
+RevolutionRecord revolution(std::int64_t n, int flutes, const Forces& force_N) {
+  RevolutionRecord r;
+  r.revolution = n;
+  r.utime_us = n * kRevolution_us;
+  r.measured.valid = true;
+  r.measured.flutes = flutes;
+  for (int j = 0; j < flutes; ++j) {
+    const auto i = static_cast<std::size_t>(j);
+    r.measured.range_N[i] = {0.8 * force_N[i], 0.6 * force_N[i], 0.0};
+    r.measured.peak_resultant_N[i] = force_N[i];
+  }
+  return r;
+}
+
+/// Feeds revolutions to an engine and keeps what it raises and clears.
+struct Feed {
+  explicit Feed(const AlertConfig& c = {}, std::uint64_t seed = 1) : engine(c), rng(seed) {}
+
+  AlertEngine engine;
+  std::vector<Alert> alerts;
+  std::int64_t next = 0;
+  std::mt19937_64 rng;
+  std::normal_distribution<double> normal{0.0, 1.0};
+  Forces noise{};  // AR(1) state per flute, relative
+
+  void feed(int flutes, const Forces& force_N) {
+    engine.on_revolution(revolution(next++, flutes, force_N),
+                         [&](const Alert& a) { alerts.push_back(a); });
+  }
+  /// `count` revolutions of flute forces level·(1 + e), e an AR(1) per flute with lag-1
+  /// correlation rho and stationary σ `sigma` (relative).
+  void noisy(int count, int flutes, const Forces& level_N, double sigma, double rho = 0.0) {
+    const double innovation = sigma * std::sqrt(1.0 - rho * rho);
+    for (int n = 0; n < count; ++n) {
+      Forces f{};
+      for (std::size_t j = 0; j < static_cast<std::size_t>(flutes); ++j) {
+        noise[j] = rho * noise[j] + innovation * normal(rng);
+        f[j] = level_N[j] * (1.0 + noise[j]);
+      }
+      feed(flutes, f);
+    }
+  }
+  [[nodiscard]] int count(AlertKind kind, bool active) const {
+    return static_cast<int>(std::count_if(alerts.begin(), alerts.end(), [&](const Alert& a) {
+      return a.kind == kind && a.active == active;
+    }));
+  }
+  [[nodiscard]] const Alert* first(AlertKind kind, bool active = true) const {
+    for (const auto& a : alerts) {
+      if (a.kind == kind && a.active == active) {
+        return &a;
+      }
+    }
+    return nullptr;
+  }
+  [[nodiscard]] int change_alarms() const {
+    return count(AlertKind::kRunoutChange, true) + count(AlertKind::kWearDrift, true) +
+           count(AlertKind::kBreakage, true);
+  }
+};
+
+int baseline_revolutions(const AlertConfig& c) {
+  return c.block_revolutions * c.baseline_blocks;
+}
+
+/// The two numbers around the arrow of a message ("… a % → b % …" or "a N → b N").
+std::pair<double, double> before_after(const Alert& a, const char* format) {
+  double before = NAN, after = NAN;
+  const std::string text(a.message.data());
+  const auto colon = text.find(": ");
+  EXPECT_EQ(std::sscanf(text.c_str() + colon + 2, format, &before, &after), 2) << text;
+  return {before, after};
+}
+
+TEST(AlertConfig, JsonRoundTripAndFieldNamedErrors) {
+  AlertConfig c;
+  c.block_revolutions = 30;
+  c.runout_change_min = 0.05;
+  c.false_alarm_revolutions = 1e8;
+  const AlertConfig back = alert_config_from_json(to_json(c), "alerts");
+  EXPECT_EQ(to_json(back), to_json(c));
+  EXPECT_EQ(to_json(alert_config_from_json(nlohmann::json::object(), "alerts")),
+            to_json(AlertConfig{}));
+
+  auto error_of = [](const nlohmann::json& j) {
+    try {
+      alert_config_from_json(j, "alerts");
+    } catch (const config::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of({{"cusum_k", -1.0}}).find("alerts.cusum_k: value -1"), std::string::npos);
+  EXPECT_NE(error_of({{"false_alarm_revolutions", 10.0}}).find("alerts.false_alarm_revolutions"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"block_revolutions", 0}}).find("alerts.block_revolutions"),
+            std::string::npos);
+  // The CUSUM's threshold is no longer a setting: it follows from the false-alarm rate.
+  EXPECT_NE(error_of({{"cusum_threshold_sigma", 8.0}}).find("unknown key"), std::string::npos);
+}
+
+// The design on noise alone: 2 flutes at 6 % imbalance with 2 % noise per flute and revolution,
+// independent and AR(1) with ρ = 0.8 between revolutions; 3 flutes likewise. Defaults: one
+// false alarm per 10⁷ revolutions and detector, so none in 4·10⁵.
+TEST(AlertEngine, NoFalseAlarmOnLongNoiseOnlySequences) {
+  for (const double rho : {0.0, 0.8}) {
+    Feed two({}, 11);
+    two.noisy(400000, 2, {1.03, 0.97}, 0.02, rho);
+    EXPECT_EQ(two.change_alarms(), 0) << "rho " << rho;
+    EXPECT_EQ(two.count(AlertKind::kRunout, true), 0);
+    Feed three({}, 12);
+    three.noisy(200000, 3, {1.0, 0.9, 0.8}, 0.02, rho);
+    EXPECT_EQ(three.change_alarms(), 0) << "rho " << rho;
+  }
+}
+
+// The empirical false-alarm rate against the documented ARL₀, with the design's safety margins
+// taken away (no minimum relevant change, no baseline margin, a long baseline) and the wear
+// limit at zero, so that both CUSUMs run at their design point: ARL₀ = 20,000 revolutions.
+// With the margins on (the defaults) the rate is far lower.
+TEST(AlertEngine, EmpiricalFalseAlarmRateMatchesTheDesign) {
+  AlertConfig c;
+  c.false_alarm_revolutions = 2e4;
+  c.runout_change_min = 0.0;
+  c.baseline_margin = 0.0;
+  c.baseline_blocks = 400;
+  c.wear_increase = 1e-9;
+  for (const double rho : {0.0, 0.6}) {
+    int change = 0, wear = 0;
+    std::int64_t monitored = 0;
+    for (int engine = 0; engine < 8; ++engine) {
+      Feed run(c, 100 + static_cast<std::uint64_t>(engine));
+      run.noisy(baseline_revolutions(c) + 150000, 2, {1.03, 0.97}, 0.02, rho);
+      change += run.count(AlertKind::kRunoutChange, true);
+      wear += run.count(AlertKind::kWearDrift, true);
+      monitored += 150000;
+    }
+    const double expected = static_cast<double>(monitored) / c.false_alarm_revolutions;  // 60
+    std::printf(
+        "rho %.1f: %d runout-change and %d wear false alarms in %lld revolutions "
+        "(design %.0f each)\n",
+        rho, change, wear, static_cast<long long>(monitored), expected);
+    // Loosely: the σ estimate is conservative (the larger of two estimates, the AR(1) long-run
+    // factor), so fewer alarms than designed; never many more.
+    EXPECT_LE(change, 2.0 * expected) << rho;
+    EXPECT_LE(wear, 2.0 * expected) << rho;
+    EXPECT_GE(change + wear, 0.05 * expected) << rho;
+  }
+}
+
+// A step of the flute imbalance from 6 % to 12 % (each share by 3 % of the mean flute force,
+// 1.5 times the least relevant change) trips the CUSUM in the block it falls in, and the alert
+// is confirmed on the next, the first wholly after the step: within 2 blocks = 50 revolutions.
+// The text states before and after.
+TEST(AlertEngine, StepInImbalanceIsDetectedWithinTwoBlocks) {
+  Feed run({}, 21);
+  run.noisy(3010, 2, {1.03, 0.97}, 0.01);
+  run.noisy(1990, 2, {1.06, 0.94}, 0.01);
+  ASSERT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+  const Alert& a = *run.first(AlertKind::kRunoutChange);
+  std::printf("%s\n", a.message.data());
+  EXPECT_GE(a.revolution, 3010);
+  EXPECT_LT(a.revolution, 3010 + 50);
+  EXPECT_EQ(a.severity, AlertSeverity::kWarning);
+  const auto [before, after] = before_after(a, "flute imbalance %lf %% → %lf %%");
+  EXPECT_NEAR(before, 6.0, 0.2) << a.message.data();
+  EXPECT_NEAR(after, 12.0, 0.5) << a.message.data();
+  EXPECT_NEAR(a.value, 0.12, 0.005);
+  EXPECT_NEAR(a.threshold, 0.06, 0.002);
+  EXPECT_NE(std::string(a.message.data()).find("baseline 6."), std::string::npos);
+  EXPECT_NE(std::string(a.message.data()).find("revolutions)"), std::string::npos);
+  EXPECT_EQ(run.change_alarms(), 1);  // no wear, no breakage
+  // A 0.5 % change of the shares (1 % of imbalance) is below the least relevant change.
+  Feed small({}, 22);
+  small.noisy(3000, 2, {1.03, 0.97}, 0.01);
+  small.noisy(50000, 2, {1.035, 0.965}, 0.01);
+  EXPECT_EQ(small.change_alarms(), 0);
+}
+
+// Without a least relevant change the detector is the CUSUM alone: for a shift of 1.5 σ (of a
+// block median) from the engine's own baseline, the mean delay agrees with Siegmund's ARL₁ for
+// the engine's k and h. (Measured from the true level instead, the delay also carries the
+// baseline's error: a baseline 2 standard errors high makes a 1.5 σ shift look like 1.05 σ,
+// below the allowance with its margin — the price of the false-alarm guarantee.)
+TEST(AlertEngine, StatisticalDetectionDelayAgreesWithSiegmund) {
+  AlertConfig c;
+  c.runout_change_min = 0.0;
+  const int trials = 40;
+  double delay_blocks = 0.0;
+  double predicted = 0.0;
+  for (int trial = 0; trial < trials; ++trial) {
+    Feed run(c, 300 + static_cast<std::uint64_t>(trial));
+    run.noisy(baseline_revolutions(c), 2, {1.03, 0.97}, 0.02);
+    const AlertEngine::Baseline& b = run.engine.baseline();
+    ASSERT_TRUE(b.ready);
+    const double share = b.share[0] + 1.5 * b.share_sigma[0];  // flute 0's share after
+    predicted = cusum_average_run_length(b.change_allowance[0], b.change_threshold[0], 1.5);
+    const std::int64_t start = run.next;
+    while (run.count(AlertKind::kRunoutChange, true) == 0 && run.next < start + 200000) {
+      run.noisy(c.block_revolutions, 2, {1.0 + share, 1.0 - share}, 0.02);
+    }
+    ASSERT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+    delay_blocks += static_cast<double>(run.next - start) / c.block_revolutions / trials;
+  }
+  std::printf("1.5 sigma shift: mean delay %.1f blocks, Siegmund %.1f\n", delay_blocks, predicted);
+  EXPECT_NEAR(delay_blocks, predicted, 0.25 * predicted);
+}
+
+// A 20 % rise of every flute's force raises wear drift once the rise passes the 15 % limit;
+// 10 % raises nothing; back at the baseline it clears (once).
+TEST(AlertEngine, TwentyPercentRiseOfFluteForceRaisesWearDrift) {
+  Feed run({}, 31);
+  run.noisy(1000, 2, {1.03, 0.97}, 0.01);
+  for (int n = 0; n < 4000; ++n) {  // a ramp to +20 % over 4,000 revolutions
+    const double g = 1.0 + 0.2 * n / 4000.0;
+    run.noisy(1, 2, {1.03 * g, 0.97 * g}, 0.01);
+  }
+  run.noisy(2000, 2, {1.03 * 1.2, 0.97 * 1.2}, 0.01);
+  ASSERT_EQ(run.count(AlertKind::kWearDrift, true), 1);
+  const Alert& a = *run.first(AlertKind::kWearDrift);
+  std::printf("%s\n", a.message.data());
+  const auto [before, after] = before_after(a, "mean flute force %lf N → %lf N");
+  EXPECT_NEAR(before, 1.0, 0.005) << a.message.data();
+  EXPECT_GT(after, 1.15) << a.message.data();
+  EXPECT_LT(after, 1.17) << a.message.data();
+  EXPECT_GT(a.value, 0.15);
+  EXPECT_EQ(a.threshold, 0.15);
+  EXPECT_NE(std::string(a.message.data()).find("limit +15.0 %"), std::string::npos);
+  // The ramp crosses 15 % at revolution 4,000; raised within 10 blocks after.
+  EXPECT_GT(a.revolution, 4000);
+  EXPECT_LT(a.revolution, 4250);
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 0);  // all flutes alike: shares unchanged
+  run.noisy(3000, 2, {1.03, 0.97}, 0.01);
+  EXPECT_EQ(run.count(AlertKind::kWearDrift, false), 1);
+  EXPECT_EQ(run.count(AlertKind::kWearDrift, true), 1);
+
+  Feed ten({}, 32);
+  ten.noisy(1000, 2, {1.03, 0.97}, 0.01);
+  ten.noisy(50000, 2, {1.03 * 1.1, 0.97 * 1.1}, 0.01);
+  EXPECT_EQ(ten.change_alarms(), 0);
+}
+
+// Flute 1 of 3 collapses to 5 % of its force: breakage (an alarm) exactly when the collapse has
+// lasted persist_revolutions; healed, it clears once.
+TEST(AlertEngine, CollapsingFluteRaisesBreakageWithinItsPersistence) {
+  Feed run({}, 41);
+  run.noisy(2000, 3, {1.0, 0.9, 0.8}, 0.02);
+  run.noisy(100, 3, {1.0, 0.045, 0.8}, 0.02);
+  ASSERT_EQ(run.count(AlertKind::kBreakage, true), 1);
+  const Alert& a = *run.first(AlertKind::kBreakage);
+  std::printf("%s\n", a.message.data());
+  EXPECT_EQ(a.revolution, 2000 + AlertConfig{}.persist_revolutions - 1);
+  EXPECT_EQ(a.severity, AlertSeverity::kAlarm);
+  EXPECT_NEAR(a.value, 0.05, 0.01);
+  EXPECT_EQ(a.threshold, 0.3);
+  int flute = -1;
+  double now = NAN, before = NAN;
+  EXPECT_EQ(std::sscanf(a.message.data(),
+                        "breakage: flute %d cuts %lf %% of the strongest flute's force (baseline "
+                        "%lf %%)",
+                        &flute, &now, &before),
+            3)
+      << a.message.data();
+  EXPECT_EQ(flute, 1);
+  EXPECT_NEAR(now, 4.5, 0.5);
+  EXPECT_NEAR(before, 90.0, 0.5);
+  run.noisy(100, 3, {1.0, 0.9, 0.8}, 0.02);
+  EXPECT_EQ(run.count(AlertKind::kBreakage, false), 1);
+  EXPECT_EQ(run.count(AlertKind::kBreakage, true), 1);
+  // A flute that loses half its force is chipped, not broken.
+  Feed chipped({}, 42);
+  chipped.noisy(2000, 3, {1.0, 0.9, 0.8}, 0.02);
+  chipped.noisy(2000, 3, {1.0, 0.45, 0.8}, 0.02);
+  EXPECT_EQ(chipped.count(AlertKind::kBreakage, true), 0);
+  EXPECT_EQ(chipped.count(AlertKind::kRunoutChange, true), 1);
+}
+
+/// A revolution measured from samples as the revolution meter does: each flute's force pulse
+/// F_j·sin(πu) along a direction, plus channel offsets and white noise; peaks are the samples
+/// of largest magnitude, ranges max − min.
+RevolutionRecord sampled_revolution(std::int64_t n, const std::array<double, 2>& force_N,
+                                    const std::array<double, 3>& offset_N, std::mt19937_64& rng) {
+  std::normal_distribution<double> noise(0.0, 0.005);
+  RevolutionRecord r = revolution(n, 2, {});
+  constexpr int kSamples = 60;
+  for (std::size_t j = 0; j < 2; ++j) {
+    std::array<double, 3> lo{}, hi{}, peak{};
+    double peak_resultant = 0.0;
+    for (int s = 0; s <= kSamples; ++s) {
+      const double pulse = force_N[j] * std::sin(std::numbers::pi * s / kSamples);
+      const std::array<double, 3> f = {-0.9 * pulse + offset_N[0] + noise(rng),
+                                       0.5 * pulse + offset_N[1] + noise(rng),
+                                       -0.2 * pulse + offset_N[2] + noise(rng)};
+      for (std::size_t a = 0; a < 3; ++a) {
+        lo[a] = s == 0 ? f[a] : std::min(lo[a], f[a]);
+        hi[a] = s == 0 ? f[a] : std::max(hi[a], f[a]);
+        peak[a] = std::fabs(f[a]) > std::fabs(peak[a]) ? f[a] : peak[a];
+      }
+      peak_resultant = std::max(peak_resultant, std::hypot(f[0], f[1], f[2]));
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      r.measured.range_N[j][a] = hi[a] - lo[a];
+    }
+    r.measured.peak_N[j] = peak;
+    r.measured.peak_resultant_N[j] = peak_resultant;
+  }
+  return r;
+}
+
+// Charge-amplifier drift: offsets growing linearly on every channel to (0.4, −0.3, 0.2) N over
+// 20,000 revolutions of a 1 N cut. The peak forces (and their imbalance) move by far more than
+// the change and wear limits; the range-based flute forces do not, and nothing is raised.
+TEST(AlertEngine, ChannelOffsetDriftAloneRaisesNothing) {
+  AlertEngine engine;
+  std::vector<Alert> alerts;
+  std::mt19937_64 rng(51);
+  const int total = 20000;
+  double peak_mean_first = 0.0, peak_mean_last = 0.0, imbalance_first = 0.0, imbalance_last = 0.0;
+  for (int n = 0; n < total; ++n) {
+    const double g = static_cast<double>(n) / total;
+    const RevolutionRecord r = sampled_revolution(n, {1.0, 0.9}, {0.4 * g, -0.3 * g, 0.2 * g}, rng);
+    engine.on_revolution(r, [&](const Alert& a) { alerts.push_back(a); });
+    const auto& p = r.measured.peak_resultant_N;
+    const double mean = 0.5 * (p[0] + p[1]);
+    const double imbalance = std::fabs(p[0] - p[1]) / mean;
+    if (n < 1000) {
+      peak_mean_first += mean / 1000;
+      imbalance_first += imbalance / 1000;
+    } else if (n >= total - 1000) {
+      peak_mean_last += mean / 1000;
+      imbalance_last += imbalance / 1000;
+    }
+  }
+  // The drift is large in what the old detectors watched…
+  EXPECT_GT(std::fabs(peak_mean_last / peak_mean_first - 1.0), 0.2);
+  EXPECT_GT(std::fabs(imbalance_last - imbalance_first), 0.05);
+  // …and raises nothing here.
+  for (const auto& a : alerts) {
+    ADD_FAILURE() << a.message.data();
+  }
+}
+
+// Hysteresis: the runout alert with the imbalance hovering about its limit is raised once and
+// cleared once; so is a runout change that comes and goes.
+TEST(AlertEngine, AlertsAreRaisedOnceAndClearedOnce) {
+  Feed run({}, 61);
+  // Flute forces 1 ± x/2: imbalance x; noise of 1 % per flute gives the imbalance σ ≈ 1.4 %.
+  auto at_imbalance = [](double x) { return Forces{1.0 + 0.5 * x, 1.0 - 0.5 * x}; };
+  run.noisy(1000, 2, at_imbalance(0.20), 0.01);
+  run.noisy(2000, 2, at_imbalance(0.27), 0.01);  // just above 25 %: dips below now and then
+  run.noisy(2000, 2, at_imbalance(0.19), 0.01);  // just below 0.8·25 %
+  EXPECT_EQ(run.count(AlertKind::kRunout, true), 1);
+  EXPECT_EQ(run.count(AlertKind::kRunout, false), 1);
+  const Alert& cleared = *run.first(AlertKind::kRunout, false);
+  EXPECT_EQ(cleared.severity, AlertSeverity::kInfo);
+  EXPECT_NE(std::string(cleared.message.data()).find("runout cleared: flute imbalance 1"),
+            std::string::npos);
+  // The same sequence moved the imbalance 20 % → 27 % → 19 %: one runout change raised, and
+  // cleared when it came back within the allowance.
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, false), 1);
+  EXPECT_EQ(run.count(AlertKind::kWearDrift, true), 0);
+  EXPECT_EQ(run.count(AlertKind::kBreakage, true), 0);
+}
+
+TEST(AlertEngine, RebaselineClearsChangeAlertsAndAcceptsTheNewLevel) {
+  Feed run({}, 71);
+  run.noisy(1000, 2, {1.03, 0.97}, 0.01);
+  run.noisy(1000, 2, {1.08, 0.92}, 0.01);
+  ASSERT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+  run.engine.rebaseline();
+  run.noisy(1, 2, {1.08, 0.92}, 0.01);
+  ASSERT_EQ(run.count(AlertKind::kRunoutChange, false), 1);
+  EXPECT_NE(std::string(run.first(AlertKind::kRunoutChange, false)->message.data()).find("new"),
+            std::string::npos);
+  run.noisy(20000, 2, {1.08, 0.92}, 0.01);
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+  EXPECT_NEAR(run.engine.baseline().share[0], 0.08, 0.003);
+}
+
+TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
+  AlertEngine engine;
+  std::vector<Alert> alerts;
+  auto sink = [&](const Alert& a) { alerts.push_back(a); };
+  InputCounters c;
+  c.samples_in = 25000;
+  engine.on_input(c, 0, sink);
+  c.samples_in = 50000;
+  c.samples_flagged = 100;
+  c.gaps = 1;
+  engine.on_input(c, 500000, sink);
+  c.samples_in = 75000;
+  engine.on_input(c, 1000000, sink);
+  ASSERT_EQ(alerts.size(), 2u);
+  EXPECT_TRUE(alerts[0].active);
+  EXPECT_NE(std::string(alerts[0].message.data()).find("0.400 % of recent samples"),
+            std::string::npos)
+      << alerts[0].message.data();
+  EXPECT_FALSE(alerts[1].active);
+}
+
+// Steady state: nothing is allocated per revolution, including the revolution that completes the
+// baseline and those that raise and clear alerts.
+TEST(AlertEngine, ExaminingARevolutionAllocatesNothing) {
+  AlertEngine engine;
+  std::mt19937_64 rng(81);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  int alerts = 0;
+  auto sink = [&](const Alert&) { ++alerts; };
+  const test::AllocationCounter counter;
+  for (int n = 0; n < 6000; ++n) {
+    const double step = n < 3000 ? 0.03 : 0.2;  // then runout and runout change
+    const Forces f{(1.0 + step) * (1.0 + noise(rng)), (1.0 - step) * (1.0 + noise(rng))};
+    engine.on_revolution(revolution(n, 2, f), sink);
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+  EXPECT_GE(alerts, 2);
+}
+
+}  // namespace
+}  // namespace millwatch::monitor
