@@ -60,7 +60,7 @@
 #include <vector>
 
 #include "core/monitor/change_detector.hpp"
-#include "core/monitor/valley_template.hpp"
+#include "core/monitor/revolution_features.hpp"
 
 namespace millwatch::monitor {
 
