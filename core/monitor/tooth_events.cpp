@@ -8,10 +8,10 @@ namespace millwatch::monitor {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double kQuietFraction = 0.05;  // of the force's span above its lowest level
-constexpr double kQuietPitch = 0.25;     // a gap this long (fraction of a pitch) is a pause
-constexpr int kStartFit = 32;            // CE1 events kept on the way back to start the filter
-constexpr double kMinPulse = 0.2;        // of the lock's force: around an event, the cut's force
+constexpr double kQuietFraction = 0.1;  // of the force's span above its lowest level (ringing)
+constexpr double kQuietPitch = 0.2;     // a gap this long (fraction of a pitch) is a pause
+constexpr int kStartFit = 32;           // CE1 events kept on the way back to start the filter
+constexpr double kMinPulse = 0.2;       // of the lock's force: around an event, the cut's force
 // The CE1 events' times are tracked by a fading-memory g-h-k filter (position: the event,
 // velocity: the revolution period, acceleration: the period's change per revolution; gains
 // from one memory factor θ: g = 1 − θ³, h = 1.5·(1 − θ²)(1 − θ), k = 0.5·(1 − θ)³). It

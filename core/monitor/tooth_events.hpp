@@ -47,8 +47,8 @@ struct ToothEventTemplate {
 
 /// Finds the events on the revolution-synchronous average of the in-plane resultant √(Fx²+Fy²)
 /// (uniform angle grid from the tracker's zero). A cut is "interrupted" when every gap between
-/// pulses stays within 5 % of the force's span above its lowest level for at least 25 % of a
-/// pitch.
+/// pulses stays within 10 % of the force's span above its lowest level (the filter's ringing) for
+/// at least 20 % of a pitch.
 ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_average, int flutes);
 
 /// Outcome of one event search.

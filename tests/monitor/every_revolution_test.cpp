@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <vector>
 
 #include "core/signal/butterworth_lowpass.hpp"
 #include "tests/support/recording.hpp"
@@ -215,6 +216,213 @@ TEST(EveryRevolution, AFeedHoldIsNotMeasuredAndTheRestartIsReacquiredQuickly) {
   EXPECT_GE(before, test::complete_cutting_revolutions(r) * 0 + 200);
   const int present_after = static_cast<int>((r.duration_s - restart_s) * 25252.0 / 60.0);
   EXPECT_GE(after, present_after - 3);
+}
+
+/// Each flute's mean peak in-plane force, the truth: the simulated cut without measurement
+/// errors, through the pipeline's low-pass filter, its largest resultant within one pitch
+/// around the instant the flute is half-way through its engagement (spindle angle from the
+/// simulator's steady speed, plus half the helix lag and the filter's delay). Flute j of the
+/// model, in the order of rotation.
+std::vector<double> true_flute_peaks(sim::Scenario s) {
+  s.noise.enabled = s.quantisation.enabled = s.hum.enabled = s.drift.enabled = false;
+  const Recording r = test::record(s);
+  const MonitorConfig config = test::monitor_for(s);
+  Collector unused;
+  const Pipeline p(config, unused);
+  std::array<signal::LowPassFilter, 2> lowpass = {signal::LowPassFilter(p.filter()),
+                                                  signal::LowPassFilter(p.filter())};
+  const auto& c = s.model;
+  const int flutes = c.tool.flutes;
+  const double f_hz = sim::actual_rpm(s) / 60.0;
+  const double radius_mm = 0.5 * c.tool.diameter_mm;
+  const double engaged_rad =
+      std::acos((radius_mm - c.process.radial_depth_mm) / radius_mm);  // [000] eq 28
+  double mid_rad = 0.5 * std::numbers::pi;                             // slot
+  if (c.process.operation == model::Operation::kUpMilling) {
+    mid_rad = 0.5 * engaged_rad;
+  } else if (c.process.operation == model::Operation::kDownMilling) {
+    mid_rad = std::numbers::pi - 0.5 * engaged_rad;
+  }
+  const double lag_rad =
+      c.process.axial_depth_mm * std::tan(c.tool.helix_deg * std::numbers::pi / 180.0) / radius_mm;
+  const double delay_s = p.filter().group_delay_s(f_hz * flutes);
+  std::vector<double> resultant(r.t.size());
+  for (std::size_t n = 0; n < r.t.size(); ++n) {
+    const double x = -r.fx[n];  // the default axis map: the dynamometer reads −F
+    const double y = -r.fy[n];
+    if (n == 0) {
+      lowpass[0].settle(x);
+      lowpass[1].settle(y);
+    }
+    resultant[n] = std::hypot(lowpass[0].step(x), lowpass[1].step(y));
+  }
+  std::vector<double> sum(static_cast<std::size_t>(flutes), 0.0);
+  int revolutions = 0;
+  const double fs = s.sample_rate_hz;
+  for (int rev = 3;; ++rev) {
+    bool complete = true;
+    std::vector<double> peak(static_cast<std::size_t>(flutes), 0.0);
+    for (int j = 0; j < flutes && complete; ++j) {
+      const double angle = mid_rad + 0.5 * lag_rad + 2.0 * std::numbers::pi * j / flutes;
+      const double centre_s = (rev + angle / (2.0 * std::numbers::pi)) / f_hz + delay_s;
+      const double half_s = 0.5 / (f_hz * flutes);
+      const auto from = static_cast<std::size_t>((centre_s - half_s) * fs);
+      const auto to = static_cast<std::size_t>((centre_s + half_s) * fs);
+      complete = to + 1 < resultant.size();
+      for (std::size_t n = from; complete && n <= to; ++n) {
+        peak[static_cast<std::size_t>(j)] =
+            std::max(peak[static_cast<std::size_t>(j)], resultant[n]);
+      }
+    }
+    if (!complete) {
+      break;
+    }
+    for (int j = 0; j < flutes; ++j) {
+      sum[static_cast<std::size_t>(j)] += peak[static_cast<std::size_t>(j)];
+    }
+    ++revolutions;
+  }
+  for (double& v : sum) {
+    v /= revolutions;
+  }
+  return sum;
+}
+
+/// Largest relative difference between the monitor's mean flute peaks (CE1 first) and the
+/// truth's (model flute order), over the best cyclic matching of the two labellings.
+double worst_flute_peak_error(const std::vector<RevolutionRecord>& revolutions,
+                              const std::vector<double>& truth) {
+  const auto flutes = truth.size();
+  std::vector<double> measured(flutes, 0.0);
+  int n = 0;
+  for (const auto& r : revolutions) {
+    if (!r.measured.valid) {
+      continue;
+    }
+    for (std::size_t j = 0; j < flutes; ++j) {
+      measured[j] += r.measured.peak_resultant_N[j];
+    }
+    ++n;
+  }
+  double best = 1e9;
+  for (std::size_t shift = 0; shift < flutes; ++shift) {
+    double worst = 0.0;
+    for (std::size_t j = 0; j < flutes; ++j) {
+      const double m = measured[j] / n;
+      const double t = truth[(j + shift) % flutes];
+      worst = std::max(worst, std::fabs(m - t) / t);
+    }
+    best = std::min(best, worst);
+  }
+  return best;
+}
+
+struct Shape {
+  const char* name;
+  int flutes;
+  double diameter_mm;
+  model::Operation operation;
+  double radial_depth_mm;
+  double rpm;
+  double sample_rate_hz;
+  double runout_um;
+};
+
+sim::Scenario shape_scenario(const Shape& k) {
+  sim::Scenario s;
+  s.sample_rate_hz = k.sample_rate_hz;
+  s.duration_s = 0.4;
+  s.seed = 5;
+  auto& m = s.model;
+  m.tool.flutes = k.flutes;
+  m.tool.diameter_mm = k.diameter_mm;
+  m.process.operation = k.operation;
+  m.process.radial_depth_mm = k.radial_depth_mm;
+  m.process.spindle_rpm = k.rpm;
+  m.process.feed_per_tooth_um = 3.0;
+  m.process.axial_depth_mm = 0.05;
+  m.effects.runout.offset_um = k.runout_um;
+  m.effects.helix_lag.discs = 5;
+  s.noise.enabled = true;
+  s.noise.sigma_N = {0.015, 0.015, 0.015};
+  s.quantisation.enabled = true;
+  s.quantisation.range_N = {10.0, 10.0, 10.0};
+  return s;
+}
+
+// Issue 6 §8: 1 to 8 flutes, slot, up- and down-milling down to 10 % radial immersion, 20 to
+// 333.3 kHz: every revolution is measured, tooth periods add up to the revolution, and the
+// tooth event suits the cut (valleys where the force is continuous, pulse centroids where it
+// returns to zero between teeth).
+TEST(EveryRevolution, EveryCutShapeIsMeasured) {
+  using model::Operation;
+  const Shape shapes[] = {
+      {"1-flute slot", 1, 0.5, Operation::kSlot, 0.5, 20000.0, 50000.0, 0.0},
+      {"2-flute slot", 2, 0.4, Operation::kSlot, 0.4, 25000.0, 50000.0, 1.82},
+      {"2-flute down 10 %", 2, 0.4, Operation::kDownMilling, 0.04, 25000.0, 333300.0, 0.5},
+      {"2-flute up 50 %", 2, 0.4, Operation::kUpMilling, 0.2, 25000.0, 20000.0, 1.0},
+      {"3-flute slot", 3, 0.6, Operation::kSlot, 0.6, 20000.0, 50000.0, 0.5},
+      {"3-flute down 30 %", 3, 0.5, Operation::kDownMilling, 0.15, 30000.0, 50000.0, 0.3},
+      {"3-flute up 60 %", 3, 1.0, Operation::kUpMilling, 0.6, 15000.0, 20000.0, 0.5},
+      {"4-flute slot at 20 kHz", 4, 1.0, Operation::kSlot, 1.0, 15000.0, 20000.0, 0.5},
+      {"4-flute up 10 %", 4, 1.0, Operation::kUpMilling, 0.1, 15000.0, 20000.0, 0.3},
+      {"6-flute slot", 6, 1.0, Operation::kSlot, 1.0, 12000.0, 50000.0, 0.3},
+      {"8-flute slot", 8, 2.0, Operation::kSlot, 2.0, 10000.0, 50000.0, 0.3},
+  };
+  for (const Shape& k : shapes) {
+    const sim::Scenario s = shape_scenario(k);
+    const Recording r = test::record(s);
+    Collector out;
+    Pipeline p(test::monitor_for(s), out);
+    test::replay(p, r, 1000);
+    const int present = test::complete_cutting_revolutions(r);
+    const auto measured = static_cast<int>(out.revolutions.size());
+    int valid = 0;
+    for (const auto& rev : out.revolutions) {
+      valid += rev.measured.valid ? 1 : 0;
+      double sum = 0.0;
+      for (int j = 0; j < k.flutes; ++j) {
+        sum += rev.measured.flute_period_s[static_cast<std::size_t>(j)];
+      }
+      EXPECT_NEAR(sum, rev.measured.period_s, 1e-12) << k.name;
+      EXPECT_NEAR(rev.spindle_rpm, k.rpm, 0.003 * k.rpm) << k.name;
+    }
+    std::printf("%-24s %s: %d of %d revolutions, %d valid\n", k.name,
+                to_string(p.event_template().kind), measured, present, valid);
+    EXPECT_GE(measured, static_cast<int>(std::ceil(0.9 * present))) << k.name;
+    EXPECT_GE(valid, static_cast<int>(std::ceil(0.9 * present))) << k.name;
+    const bool interrupted =
+        k.operation != Operation::kSlot && k.radial_depth_mm < 0.31 * k.diameter_mm;
+    if (interrupted || k.flutes == 1) {
+      EXPECT_EQ(p.event_template().kind, ToothEventKind::kCentroid) << k.name;
+    }
+    if (k.operation == Operation::kSlot && k.flutes >= 2) {
+      EXPECT_EQ(p.event_template().kind, ToothEventKind::kValley) << k.name;
+    }
+  }
+}
+
+// Issue 6 §8: per-flute peaks against the simulated truth, 3 and 4 flutes in side milling at
+// 20 and 50 kHz (the force returns to zero between teeth in the first two).
+TEST(EveryRevolution, PerFlutePeaksMatchTheTruthInSideMilling) {
+  using model::Operation;
+  const Shape shapes[] = {
+      {"3-flute down 30 % at 50 kHz", 3, 0.5, Operation::kDownMilling, 0.15, 30000.0, 50000.0, 0.3},
+      {"4-flute up 10 % at 20 kHz", 4, 1.0, Operation::kUpMilling, 0.1, 15000.0, 20000.0, 0.3},
+      {"3-flute up 60 % at 20 kHz", 3, 1.0, Operation::kUpMilling, 0.6, 15000.0, 20000.0, 0.5},
+      {"4-flute down 50 % at 50 kHz", 4, 1.0, Operation::kDownMilling, 0.5, 15000.0, 50000.0, 0.5},
+  };
+  for (const Shape& k : shapes) {
+    const sim::Scenario s = shape_scenario(k);
+    const Recording r = test::record(s);
+    Collector out;
+    Pipeline p(test::monitor_for(s), out);
+    test::replay(p, r, 1000);
+    const std::vector<double> truth = true_flute_peaks(s);
+    const double worst = worst_flute_peak_error(out.revolutions, truth);
+    std::printf("%-28s per-flute peaks within %.1f %% of the truth\n", k.name, 100.0 * worst);
+    EXPECT_LT(worst, 0.03) << k.name;
+  }
 }
 
 }  // namespace
