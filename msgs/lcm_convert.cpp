@@ -7,8 +7,6 @@
 namespace millwatch::messaging {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 template <typename Array>
 std::vector<double> first(const Array& a, int n) {
   return std::vector<double>(a.begin(), a.begin() + n);
@@ -34,11 +32,16 @@ monitor::SampleBlock to_block(const force_block_t& m) {
   return {m.utime, m.seq, m.sample_rate_hz, m.fx_N, m.fy_N, m.fz_N};
 }
 
-tooth_periods_t tooth_periods(const monitor::RevolutionRecord& r) {
+tooth_periods2_t tooth_periods(const monitor::RevolutionRecord& r) {
   const auto& m = r.measured;
-  tooth_periods_t t;
+  tooth_periods2_t t;
   t.utime = r.utime_us;
   t.revolution = r.revolution;
+  t.event_kind = r.event_kind == monitor::ToothEventKind::kCentroid
+                     ? tooth_periods2_t::EVENT_PULSE_CENTROID
+                     : tooth_periods2_t::EVENT_VALLEY;
+  t.valid = m.valid;
+  t.spindle_rpm = r.spindle_rpm;
   t.period_s = m.period_s;
   t.flute_period_s = first(m.flute_period_s, m.flutes);
   t.num_flutes = static_cast<std::int32_t>(t.flute_period_s.size());
@@ -46,27 +49,32 @@ tooth_periods_t tooth_periods(const monitor::RevolutionRecord& r) {
   t.alpha_mean_deg = r.alpha_mean_deg;
   t.alpha_std_deg = r.alpha_std_deg;
   t.window_revolutions = r.window_revolutions;
-  t.model_alpha_deg = r.model_valid ? r.model.alpha_deg : kNaN;
+  t.model_valid = r.model_valid && r.model.valid;
+  t.model_alpha_deg = t.model_valid ? r.model.alpha_deg : 0.0;
   return t;
 }
 
-flute_peaks_t flute_peaks(const monitor::RevolutionRecord& r) {
+flute_peaks2_t flute_peaks(const monitor::RevolutionRecord& r) {
   const auto& m = r.measured;
-  flute_peaks_t p;
+  flute_peaks2_t p;
   p.utime = r.utime_us;
   p.revolution = r.revolution;
+  p.valid = m.valid;
+  p.model_valid = r.model_valid && r.model.valid;
   for (int j = 0; j < m.flutes; ++j) {
     const auto uj = static_cast<std::size_t>(j);
     p.peak_fx_N.push_back(m.peak_N[uj][0]);
     p.peak_fy_N.push_back(m.peak_N[uj][1]);
     p.peak_fz_N.push_back(m.peak_N[uj][2]);
     p.peak_resultant_N.push_back(m.peak_resultant_N[uj]);
-    p.model_peak_resultant_N.push_back(r.model_valid ? r.model.peak_resultant_N[uj] : kNaN);
+    p.range_fx_N.push_back(m.range_N[uj][0]);
+    p.range_fy_N.push_back(m.range_N[uj][1]);
+    p.model_peak_resultant_N.push_back(p.model_valid ? r.model.peak_resultant_N[uj] : 0.0);
   }
   p.num_flutes = static_cast<std::int32_t>(p.peak_fx_N.size());
   p.delta_fy_N = m.delta_fy_N;
   p.delta_fy_mean_N = r.delta_fy_mean_N;
-  p.model_delta_fy_N = r.model_valid ? r.model.delta_fy_N : kNaN;
+  p.model_delta_fy_N = p.model_valid ? r.model.delta_fy_N : 0.0;
   return p;
 }
 
@@ -86,18 +94,22 @@ model_residual_t model_residual(const monitor::RevolutionRecord& r) {
   return m;
 }
 
-spindle_state_t spindle_state(const monitor::SpindleUpdate& u) {
-  spindle_state_t s;
+spindle_state2_t spindle_state(const monitor::SpindleUpdate& u) {
+  const auto& e = u.estimate;
+  spindle_state2_t s;
   s.utime = u.utime_us;
   s.seq = u.seq;
-  s.revolution = u.revolution;
-  s.spindle_rpm_measured = u.estimate.valid ? u.estimate.spindle_rpm : kNaN;
+  s.revolution = e.valid ? u.revolution : 0;
+  s.valid = e.valid;
+  s.cutting = e.cutting;
+  s.consistent = e.consistent;
+  s.spindle_rpm_measured = e.valid ? e.spindle_rpm : 0.0;
   s.spindle_rpm_commanded = u.commanded_rpm;
-  s.spindle_rpm_uncertainty = u.estimate.uncertainty_rpm;
-  s.angle_rad = u.estimate.angle_rad;
-  s.harmonic_snr_db = u.estimate.snr_db;
-  s.valid = u.estimate.valid;
-  s.cutting = u.estimate.cutting;
+  s.spindle_rpm_uncertainty = e.valid ? e.uncertainty_rpm : 0.0;
+  s.harmonic_snr_db = e.snr_db;
+  s.speed_agreement = e.agreement;
+  s.phase_error_rad = e.phase_error_rad;
+  s.angle_rad = e.angle_rad;
   return s;
 }
 
@@ -116,9 +128,9 @@ tool_alert_t tool_alert(const monitor::Alert& a, std::int64_t seq) {
   return t;
 }
 
-pipeline_status_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
-                                  std::int64_t published, std::int64_t dropped) {
-  pipeline_status_t p;
+pipeline_status2_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
+                                   std::int64_t published, std::int64_t dropped) {
+  pipeline_status2_t p;
   p.utime = s.utime_us;
   p.seq = seq;
   p.samples_in = s.input.samples_in;
@@ -130,35 +142,18 @@ pipeline_status_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t
   p.gaps = s.input.gaps;
   p.out_of_order_blocks = s.input.out_of_order_blocks;
   p.blocks_rejected = s.input.blocks_rejected;
-  p.revolutions = s.valid_revolutions;
+  p.revolutions = s.revolutions;
+  p.valid_revolutions = s.valid_revolutions;
+  p.idle_revolutions = s.idle_revolutions;
+  p.cutting_revolutions = s.cutting_revolutions;
+  p.model_builds = s.model_builds;
   p.messages_published = published;
   p.messages_dropped = dropped;
   p.spindle_rpm = s.spindle_rpm;
   p.cutting = s.cutting;
   p.state = std::string(s.state);
+  p.tooth_event = std::string(s.event_kind);
   return p;
-}
-
-sync_average_t sync_average(const monitor::SyncAverage& measured, const monitor::Lockstep* model,
-                            std::int64_t revolution, std::int64_t utime_us) {
-  sync_average_t s;
-  s.utime = utime_us;
-  s.revolution = revolution;
-  s.window_revolutions = measured.revolutions();
-  measured.average(0, s.fx_N);
-  measured.average(1, s.fy_N);
-  measured.average(2, s.fz_N);
-  s.num_bins = static_cast<std::int32_t>(s.fx_N.size());
-  if (model != nullptr) {
-    model->filtered_on_tracker_grid(0, s.num_bins, s.model_fx_N);
-    model->filtered_on_tracker_grid(1, s.num_bins, s.model_fy_N);
-    model->filtered_on_tracker_grid(2, s.num_bins, s.model_fz_N);
-  } else {
-    s.model_fx_N.assign(static_cast<std::size_t>(s.num_bins), 0.0);
-    s.model_fy_N.assign(static_cast<std::size_t>(s.num_bins), 0.0);
-    s.model_fz_N.assign(static_cast<std::size_t>(s.num_bins), 0.0);
-  }
-  return s;
 }
 
 }  // namespace millwatch::messaging

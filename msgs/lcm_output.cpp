@@ -69,6 +69,7 @@ void LcmOutput::on_sync_average(const monitor::SyncAverage& measured,
   s.utime_us = utime_us;
   s.revolution = revolution;
   s.window_revolutions = measured.revolutions();
+  s.model_valid = model != nullptr;
   s.bins = std::min(measured.bins(), SyncSnapshot::kMaxBins);
   for (int b = 0; b < s.bins; ++b) {
     const auto ub = static_cast<std::size_t>(b);
@@ -95,8 +96,8 @@ void LcmOutput::on_sync_average(const monitor::SyncAverage& measured,
 
 void LcmOutput::publish(const Item& item) {
   if (const auto* r = std::get_if<monitor::RevolutionRecord>(&item)) {
-    const tooth_periods_t t = tooth_periods(*r);
-    const flute_peaks_t p = flute_peaks(*r);
+    const tooth_periods2_t t = tooth_periods(*r);
+    const flute_peaks2_t p = flute_peaks(*r);
     lcm_.publish(channels_.tooth_periods, &t);
     lcm_.publish(channels_.flute_peaks, &p);
     published_ += 2;
@@ -106,7 +107,7 @@ void LcmOutput::publish(const Item& item) {
       ++published_;
     }
   } else if (const auto* u = std::get_if<monitor::SpindleUpdate>(&item)) {
-    const spindle_state_t s = spindle_state(*u);
+    const spindle_state2_t s = spindle_state(*u);
     lcm_.publish(channels_.spindle, &s);
     ++published_;
   } else if (const auto* a = std::get_if<monitor::Alert>(&item)) {
@@ -114,7 +115,7 @@ void LcmOutput::publish(const Item& item) {
     lcm_.publish(channels_.alert, &t);
     ++published_;
   } else if (const auto* st = std::get_if<monitor::PipelineStatus>(&item)) {
-    const pipeline_status_t p =
+    const pipeline_status2_t p =
         pipeline_status(*st, ++status_seq_, published_.load(), dropped_.load());
     lcm_.publish(channels_.status, &p);
     ++published_;
@@ -146,7 +147,7 @@ void LcmOutput::run() {
       burst = 0;
     }
     if (sync_queue_.try_pop(snapshot)) {
-      sync_average_t s;
+      sync_average2_t s;
       s.utime = snapshot.utime_us;
       s.revolution = snapshot.revolution;
       s.window_revolutions = snapshot.window_revolutions;
@@ -158,6 +159,7 @@ void LcmOutput::run() {
       s.model_fy_N.assign(snapshot.values[4].begin(), snapshot.values[4].begin() + n);
       s.model_fz_N.assign(snapshot.values[5].begin(), snapshot.values[5].begin() + n);
       s.num_bins = static_cast<std::int32_t>(s.fx_N.size());
+      s.model_valid = snapshot.model_valid;
       lcm_.publish(channels_.sync_average, &s);
       ++published_;
       handled_.fetch_add(1);

@@ -3,7 +3,7 @@
 //
 // The pipeline calls this sink from the sample thread: each call copies a fixed-size value into
 // a bounded lock-free queue and wakes the publisher — no allocation, no lock, no LCM call there.
-// A full queue drops the value and counts it (pipeline_status_t.messages_dropped). The publisher
+// A full queue drops the value and counts it (pipeline_status2_t.messages_dropped). The publisher
 // thread turns the values into LCM messages and publishes them. The lcm::LCM instance is passed
 // in, not owned: tests hand a memq:// one, the daemon a udpm:// one.
 
@@ -39,6 +39,7 @@ struct SyncSnapshot {
   std::int64_t revolution = 0;
   int window_revolutions = 0;
   int bins = 0;
+  bool model_valid = false;
   std::array<std::array<double, kMaxBins>, 6> values{};  // fx, fy, fz, model fx, fy, fz
 };
 
@@ -57,7 +58,7 @@ class LcmOutput : public monitor::PipelineSink {
                        std::int64_t revolution, std::int64_t utime_us) override;
   void on_alert(const monitor::Alert& a) override;
   void on_event(const monitor::PipelineEvent& e) override;
-  /// Queues a pipeline_status_t message.
+  /// Queues a pipeline_status2_t message.
   void publish_status(const monitor::PipelineStatus& s);
 
   /// Waits (up to `timeout_s`) until everything queued so far has been published.

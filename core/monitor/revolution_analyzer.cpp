@@ -67,6 +67,7 @@ RevolutionAnalyzer::RevolutionAnalyzer(const MonitorConfig& config,
 void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                                  const SampleRing& ring, const Lockstep* model,
                                  RevolutionRecord& out) {
+  out.event_kind = tmpl.kind;
   RevolutionMeasurement& m = out.measured;
   m.flutes = events.flutes;
   m.sequence = events.sequence;

@@ -21,6 +21,10 @@ namespace millwatch::monitor {
 
 inline constexpr int kMaxFlutes = 8;
 
+/// The instant that separates flutes (tooth_events.hpp): a valley of the force, or the centroid
+/// of a tooth's pulse where the force returns to zero between teeth.
+enum class ToothEventKind : std::uint8_t { kValley, kCentroid };
+
 struct RevolutionMeasurement {
   std::int64_t sequence = 0;  ///< revolutions measured since the events were (re)started
   int flutes = 0;

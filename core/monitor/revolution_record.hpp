@@ -17,6 +17,7 @@ struct RevolutionRecord {
   /// This revolution's own speed from its tooth events: 60/T with T filtered over the last
   /// revolutions (measured.period_s is the raw T).
   double spindle_rpm = 0.0;
+  ToothEventKind event_kind = ToothEventKind::kValley;
   RevolutionMeasurement measured;
   /// Window statistics of the valid measured revolutions (the last alpha_window).
   double alpha_mean_deg = 0.0;

@@ -31,7 +31,6 @@
 
 namespace millwatch::monitor {
 
-enum class ToothEventKind : std::uint8_t { kValley, kCentroid };
 const char* to_string(ToothEventKind kind);
 
 struct ToothEventTemplate {

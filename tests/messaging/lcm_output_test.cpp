@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <thread>
 #include <vector>
 
@@ -15,32 +16,32 @@ namespace millwatch::messaging {
 namespace {
 
 struct Received {
-  std::vector<tooth_periods_t> periods;
-  std::vector<flute_peaks_t> peaks;
+  std::vector<tooth_periods2_t> periods;
+  std::vector<flute_peaks2_t> peaks;
   std::vector<model_residual_t> residuals;
-  std::vector<spindle_state_t> spindle;
-  std::vector<pipeline_status_t> status;
+  std::vector<spindle_state2_t> spindle;
+  std::vector<pipeline_status2_t> status;
   std::vector<tool_alert_t> alerts;
-  std::vector<sync_average_t> sync;
-  void on_periods(const lcm::ReceiveBuffer*, const std::string&, const tooth_periods_t* m) {
+  std::vector<sync_average2_t> sync;
+  void on_periods(const lcm::ReceiveBuffer*, const std::string&, const tooth_periods2_t* m) {
     periods.push_back(*m);
   }
-  void on_peaks(const lcm::ReceiveBuffer*, const std::string&, const flute_peaks_t* m) {
+  void on_peaks(const lcm::ReceiveBuffer*, const std::string&, const flute_peaks2_t* m) {
     peaks.push_back(*m);
   }
   void on_residual(const lcm::ReceiveBuffer*, const std::string&, const model_residual_t* m) {
     residuals.push_back(*m);
   }
-  void on_spindle(const lcm::ReceiveBuffer*, const std::string&, const spindle_state_t* m) {
+  void on_spindle(const lcm::ReceiveBuffer*, const std::string&, const spindle_state2_t* m) {
     spindle.push_back(*m);
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status_t* m) {
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status2_t* m) {
     status.push_back(*m);
   }
   void on_alert(const lcm::ReceiveBuffer*, const std::string&, const tool_alert_t* m) {
     alerts.push_back(*m);
   }
-  void on_sync(const lcm::ReceiveBuffer*, const std::string&, const sync_average_t* m) {
+  void on_sync(const lcm::ReceiveBuffer*, const std::string&, const sync_average2_t* m) {
     sync.push_back(*m);
   }
 };
@@ -103,6 +104,28 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
     EXPECT_DOUBLE_EQ(rx.periods[i].alpha_deg, r.measured.alpha_deg);
     EXPECT_DOUBLE_EQ(rx.peaks[i].delta_fy_N, r.measured.delta_fy_N);
     EXPECT_DOUBLE_EQ(rx.peaks[i].peak_fy_N[1], r.measured.peak_N[1][1]);
+    EXPECT_DOUBLE_EQ(rx.periods[i].spindle_rpm, r.spindle_rpm);
+    EXPECT_EQ(rx.periods[i].valid, r.measured.valid);
+    EXPECT_EQ(rx.periods[i].event_kind, tooth_periods2_t::EVENT_VALLEY);
+    EXPECT_EQ(rx.peaks[i].range_fx_N.size(), 2u);
+    // No message carries a NaN: absent model values are 0 with the flag down.
+    EXPECT_TRUE(std::isfinite(rx.periods[i].model_alpha_deg));
+    if (!rx.periods[i].model_valid) {
+      EXPECT_EQ(rx.periods[i].model_alpha_deg, 0.0);
+    }
+    for (const double v : rx.peaks[i].model_peak_resultant_N) {
+      EXPECT_TRUE(std::isfinite(v));
+    }
+  }
+  for (const auto& u : rx.spindle) {
+    EXPECT_TRUE(std::isfinite(u.spindle_rpm_measured));
+    EXPECT_TRUE(std::isfinite(u.spindle_rpm_uncertainty));
+    if (!u.valid) {
+      EXPECT_EQ(u.spindle_rpm_measured, 0.0);
+    } else {
+      EXPECT_TRUE(u.consistent || u.speed_agreement <= 0.01);
+      EXPECT_NEAR(u.spindle_rpm_measured, 25252.0, 0.002 * 25252.0);
+    }
   }
   EXPECT_FALSE(rx.residuals.empty());
   EXPECT_FALSE(rx.spindle.empty());
