@@ -1,4 +1,4 @@
-#include "replay/csv_cut_reader.hpp"
+#include "shell/csv_cut_reader.hpp"
 
 #include <cerrno>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include "replay/json_file.hpp"
+#include "shell/json_file.hpp"
 
 #include <cerrno>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "replay/lcm_log_reader.hpp"
+#include "shell/lcm_log_reader.hpp"
 
 #include <algorithm>
 #include <array>
