@@ -85,6 +85,7 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
   note(a.device != b.device, "source.device");
   note(a.subdevice != b.subdevice, "source.subdevice");
   note(a.block_samples != b.block_samples, "source.block_samples");
+  note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
   bool channels_differ = false;
   for (std::size_t i = 0; i < a.channels.size(); ++i) {
     const auto& x = a.channels[i];
@@ -151,8 +152,8 @@ int run(const std::string& config_path, const std::string& url_override,
   std::unique_ptr<daemon::ComediSource> comedi_source;
   std::thread receiver;
   if (config.source.kind == daemon::SourceConfig::Kind::kLcm) {
-    lcm_source =
-        std::make_unique<daemon::LcmSource>(lcm_in, config.source.channel, queue, source_counters);
+    lcm_source = std::make_unique<daemon::LcmSource>(
+        lcm_in, config.source.channel, config.source.max_block_samples, queue, source_counters);
     receiver = std::thread([&] {
       while (!stop.load()) {
         lcm_in.handleTimeout(50);

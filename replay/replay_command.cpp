@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "core/config/json_reader.hpp"
 #include "core/monitor/monitor_config.hpp"
@@ -111,7 +112,7 @@ int run_replay(const ReplayOptions& o) {
   };
 
   std::unique_ptr<LcmLogReader> log;
-  std::optional<monitor::SampleBlock> first_block;
+  std::optional<monitor::SampleBlock> first_block;  // read to learn the log's sample rate
   double log_rate = 0.0;
   if (lcm_log) {
     log = std::make_unique<LcmLogReader>(input, o.raw_channel, warn_line);
@@ -146,17 +147,22 @@ int run_replay(const ReplayOptions& o) {
   g_stop = false;
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
-  while (!g_stop) {
-    monitor::SampleBlock block;
+  auto next_block = [&]() -> std::optional<monitor::SampleBlock> {
     if (first_block) {
-      block = *first_block;
-      first_block.reset();
-    } else {
-      block = lcm_log ? log->next() : csv->next(static_cast<std::size_t>(o.block_samples));
+      return std::exchange(first_block, std::nullopt);
     }
-    if (block.fx_N.empty() && block.fy_N.empty()) {
+    if (lcm_log) {
+      return log->next();
+    }
+    const monitor::SampleBlock b = csv->next(static_cast<std::size_t>(o.block_samples));
+    return b.fx_N.empty() ? std::nullopt : std::optional(b);
+  };
+  while (!g_stop) {
+    const std::optional<monitor::SampleBlock> next = next_block();
+    if (!next) {
       break;
     }
+    const monitor::SampleBlock& block = *next;
     if (!have_first) {
       first_utime = block.utime_us;
       have_first = true;

@@ -285,6 +285,62 @@ TEST(ReplayCommand, ReplaysAnLcmLogAndSurvivesCorruptionAndTruncation) {
   EXPECT_NEAR(bad.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
 }
 
+// Well-framed events whose force_block_t is malformed (a sample count that wraps lcm-gen's size
+// check, a negative count, a count that does not match the length) are reported by event and
+// reason and skipped before they are decoded; the rest of the log is measured. (The wrapped
+// count made lcm-gen's decode read past the event's buffer: ASan heap-buffer-overflow.)
+TEST(ReplayCommand, MalformedRawBlocksInALogAreReportedAndSkipped) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path log = write_log(dir, 1.0);
+  std::string bytes;
+  {
+    std::ifstream in(log, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string sync = "\xED\xA1\xDA\x01";
+  std::vector<std::size_t> starts;
+  for (std::size_t at = bytes.find(sync); at != std::string::npos; at = bytes.find(sync, at + 1)) {
+    starts.push_back(at);
+  }
+  ASSERT_EQ(starts.size(), 50u);
+  // An event: 28-byte header, the channel's 19 bytes, then the message; its num_samples is at
+  // byte 32 of the message (msgs/force_block_check.hpp).
+  auto set_count = [&](std::size_t event, std::uint32_t n) {
+    const std::size_t at = starts[event] + 28 + 19 + 32;
+    for (int i = 0; i < 4; ++i) {
+      bytes[at + static_cast<std::size_t>(i)] = static_cast<char>(n >> (24 - 8 * i));
+    }
+  };
+  set_count(10, (1u << 28) + 1);  // 8 · n wraps lcm-gen's int size check
+  set_count(20, 0xFFFFFFFFu);     // −1
+  set_count(30, 999);             // 24 bytes short of what the event holds
+  std::ofstream(dir / "bad.lcmlog", std::ios::binary) << bytes;
+  const ReplayRun r =
+      replay((dir / "bad.lcmlog").string() + " --config " + monitor_config(dir).string(),
+             dir / "bad.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  const std::string prefix =
+      "bad.lcmlog:{}: event on MILLWATCH_FORCE_RAW of 24036 bytes does not decode as "
+      "millwatch.force_block_t: ";
+  auto expect_line = [&](int event, const std::string& reason) {
+    std::string line = prefix;
+    line.replace(line.find("{}"), 2, std::to_string(event));
+    EXPECT_NE(r.log.find(line + reason + "; skipped"), std::string::npos) << line << reason << "\n"
+                                                                          << r.log;
+  };
+  expect_line(11,
+              "36 + 24 x 268435457 = 6442451004 bytes expected for num_samples 268435457, "
+              "got 24036");
+  expect_line(21, "num_samples -1 is negative");
+  expect_line(31, "36 + 24 x 999 = 24012 bytes expected for num_samples 999, got 24036");
+  EXPECT_EQ(r.log.find("runtime error"), std::string::npos) << r.log;
+  EXPECT_EQ(r.summary["bad_lines"], 3);
+  EXPECT_EQ(r.summary["samples"], 47000);
+  EXPECT_EQ(r.summary["dropped_samples"], 3000);  // as gaps
+  EXPECT_EQ(r.summary["counters"]["gaps"], 3);
+  EXPECT_GT(r.summary["revolutions"].get<int>(), 100);
+}
+
 TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
   const fs::path dir = test::fresh_temp_dir();
   nlohmann::json s = base_scenario();
