@@ -125,12 +125,15 @@ nlohmann::json read_json_file(const std::filesystem::path& path) {
   }
   std::stringstream text;
   text << in.rdbuf();
-  const std::string s = text.str();
+  return parse_json_text(text.str(), path.string());
+}
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& name) {
   json result;
   PathTrackingSax sax(result);
-  if (!json::sax_parse(s, &sax)) {
+  if (!json::sax_parse(text, &sax)) {
     const std::string what = sax.not_finite() ? ": " : ": JSON syntax error at ";
-    throw std::runtime_error(path.string() + what + line_and_column(s, sax.position()) + ": " +
+    throw std::runtime_error(name + what + line_and_column(text, sax.position()) + ": " +
                              sax.message());
   }
   return result;
