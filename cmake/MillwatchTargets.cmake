@@ -6,7 +6,17 @@ function(millwatch_warnings target)
                                            -Wnon-virtual-dtor -Wold-style-cast)
 endfunction()
 
-if(MILLWATCH_SANITIZE)
+if(MILLWATCH_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "MILLWATCH_FUZZ needs clang (-DCMAKE_CXX_COMPILER=clang++): "
+                        "libFuzzer is part of clang")
+  endif()
+  # Every target gets libFuzzer's coverage instrumentation and the sanitizers; only the fuzz
+  # targets link libFuzzer's main (tests/fuzz). vptr off for the same reason as below.
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize=vptr
+                      -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+elseif(MILLWATCH_SANITIZE)
   # -fno-sanitize=vptr: with UBSan's vptr check on, lcm 1.3.1's C++ subscription callbacks
   # (lcm-cpp-impl.hpp's cb_func) are handed a user_data that is not their subscription object and
   # fail on the first message; without the check they work (tests/messaging/lcm_output_test.cpp).

@@ -1,6 +1,7 @@
 #include "daemon/daemon_config.hpp"
 
 #include "core/config/json_reader.hpp"
+#include "daemon/block_queue.hpp"
 
 namespace millwatch::daemon {
 namespace {
@@ -14,7 +15,9 @@ SourceConfig read_source(ObjectReader r, std::array<double, 3>& saturation_N) {
   s.channel = r.string("channel", s.channel);
   s.device = r.string("device", s.device);
   s.subdevice = r.integer("subdevice", s.subdevice, -1, 64);
-  s.block_samples = r.integer("block_samples", s.block_samples, 16, 8192);
+  constexpr int kSlot = static_cast<int>(BlockSlot::kMaxSamples);
+  s.block_samples = r.integer("block_samples", s.block_samples, 16, kSlot);
+  s.max_block_samples = r.integer("max_block_samples", s.max_block_samples, 1, kSlot);
   const nlohmann::json& channels = r.raw("channels");
   if (s.kind == SourceConfig::Kind::kComedi) {
     if (!channels.is_array() || channels.size() != 3) {

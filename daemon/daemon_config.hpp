@@ -1,7 +1,7 @@
 #pragma once
 // The daemon's configuration file (JSON), validated at load:
 //   { "monitor": { MonitorConfig },
-//     "source": { "kind": "lcm", "channel": "MILLWATCH_FORCE_RAW" }
+//     "source": { "kind": "lcm", "channel": "MILLWATCH_FORCE_RAW", "max_block_samples": 4096 }
 //            or { "kind": "comedi", "device": "/dev/comedi0", "subdevice": -1,
 //                 "block_samples": 1000, "channels": [DaqChannelScaling x3] (fx, fy, fz) },
 //     "lcm": { "url": "udpm://239.255.76.67:7667?ttl=0", "channels": { ChannelNames } },
@@ -22,8 +22,11 @@ struct SourceConfig {
   enum class Kind { kLcm, kComedi } kind = Kind::kLcm;
   std::string channel = "MILLWATCH_FORCE_RAW";
   std::string device = "/dev/comedi0";
-  int subdevice = -1;  ///< -1: the first analogue input subdevice
-  int block_samples = 1000;
+  int subdevice = -1;        ///< -1: the first analogue input subdevice
+  int block_samples = 1000;  ///< Comedi: samples per block, [16, BlockSlot::kMaxSamples]
+  /// LCM: a raw block of more samples is dropped (and counted) before it is decoded;
+  /// [1, BlockSlot::kMaxSamples].
+  int max_block_samples = 4096;
   std::array<signal::DaqChannelScaling, 3> channels{};  ///< fx, fy, fz
 };
 

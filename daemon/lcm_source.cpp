@@ -4,13 +4,17 @@
 
 #include <algorithm>
 
-#include "millwatch/force_block_t.hpp"
+#include "msgs/force_block_check.hpp"
 
 namespace millwatch::daemon {
 
-LcmSource::LcmSource(lcm::LCM& lcm, const std::string& channel, BlockQueue& queue,
-                     SourceCounters& counters)
-    : lcm_(lcm), queue_(queue), counters_(counters) {
+LcmSource::LcmSource(lcm::LCM& lcm, const std::string& channel, std::int64_t max_block_samples,
+                     BlockQueue& queue, SourceCounters& counters)
+    : lcm_(lcm),
+      max_block_samples_(
+          std::min(max_block_samples, static_cast<std::int64_t>(BlockSlot::kMaxSamples))),
+      queue_(queue),
+      counters_(counters) {
   subscription_ = lcm_.subscribe(channel, &LcmSource::on_message, this);
   subscription_->setQueueCapacity(1000);
 }
@@ -20,33 +24,41 @@ LcmSource::~LcmSource() {
 }
 
 void LcmSource::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-  ++counters_.messages;
-  force_block_t m;
-  const int used = m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
-  if (used < 0 || static_cast<std::uint32_t>(used) != rbuf->data_size) {
-    const auto n = ++counters_.undecodable;
+  const std::int64_t number = ++counters_.messages;
+  const messaging::ForceBlockCheck c =
+      messaging::decode_force_block(rbuf->data, rbuf->data_size, max_block_samples_, message_);
+  if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
+    // A whole block, only longer than we take: its samples are lost.
+    const auto n = ++counters_.oversized;
+    counters_.samples_dropped += c.num_samples;
     if (n <= 10) {
-      spdlog::warn("{}: message {} of {} bytes does not decode as millwatch.force_block_t; dropped",
-                   channel, counters_.messages.load(), rbuf->data_size);
+      spdlog::warn(
+          "{}: message {}: block of {} samples, more than source.max_block_samples ({}); "
+          "dropped",
+          channel, number, c.num_samples, max_block_samples_);
     }
     return;
   }
-  const std::size_t n = m.fx_N.size();
-  if (n > BlockSlot::kMaxSamples) {
-    ++counters_.oversized;
-    counters_.samples_dropped += static_cast<std::int64_t>(n);
-    spdlog::warn("{}: block {} has {} samples, more than {}; dropped", channel, m.seq, n,
-                 BlockSlot::kMaxSamples);
+  if (!c.ok()) {
+    const auto n = ++counters_.undecodable;
+    if (n <= 10) {
+      spdlog::warn(
+          "{}: message {} of {} bytes does not decode as millwatch.force_block_t ({}); dropped",
+          channel, number, rbuf->data_size, c.describe());
+    } else if (n == 11) {
+      spdlog::warn("{}: more messages that do not decode follow; counted in the status", channel);
+    }
     return;
   }
-  slot_.utime_us = m.utime;
-  slot_.seq = m.seq;
-  slot_.sample_rate_hz = m.sample_rate_hz;
-  // Channels of unequal length stay so: the pipeline rejects such a block and says why.
+  // The check makes all three arrays num_samples ≤ max_block_samples_ ≤ the slot's size long.
+  const std::size_t n = message_.fx_N.size();
+  slot_.utime_us = message_.utime;
+  slot_.seq = message_.seq;
+  slot_.sample_rate_hz = message_.sample_rate_hz;
   slot_.count = n;
-  std::copy(m.fx_N.begin(), m.fx_N.end(), slot_.fx.begin());
-  std::copy_n(m.fy_N.begin(), std::min(n, m.fy_N.size()), slot_.fy.begin());
-  std::copy_n(m.fz_N.begin(), std::min(n, m.fz_N.size()), slot_.fz.begin());
+  std::copy_n(message_.fx_N.begin(), n, slot_.fx.begin());
+  std::copy_n(message_.fy_N.begin(), n, slot_.fy.begin());
+  std::copy_n(message_.fz_N.begin(), n, slot_.fz.begin());
   if (!queue_.try_push(slot_)) {
     ++counters_.queue_full;
     counters_.samples_dropped += static_cast<std::int64_t>(n);

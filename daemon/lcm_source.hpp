@@ -1,7 +1,10 @@
 #pragma once
 // Live source (c): raw sample blocks published on an LCM channel by a DAQ bridge. The LCM
-// thread decodes each message and copies it into the block queue; what does not decode, does
-// not fit a slot or finds the queue full is dropped and counted (never the daemon).
+// thread checks each message before decoding it (msgs/force_block_check.hpp: one malformed
+// datagram must neither crash the daemon nor make it allocate what its count asks for), decodes
+// it and copies it into the block queue; what is not a whole force_block_t, has more samples
+// than source.max_block_samples or finds the queue full is dropped and counted (never the
+// daemon).
 
 #include <atomic>
 #include <cstdint>
@@ -9,21 +12,24 @@
 #include <string>
 
 #include "daemon/block_queue.hpp"
+#include "millwatch/force_block_t.hpp"
 
 namespace millwatch::daemon {
 
 struct SourceCounters {
   std::atomic<std::int64_t> messages{0};
-  std::atomic<std::int64_t> undecodable{0};
-  std::atomic<std::int64_t> oversized{0};
+  std::atomic<std::int64_t> undecodable{0};  ///< not a whole force_block_t
+  std::atomic<std::int64_t> oversized{0};    ///< a whole one of more than max_block_samples
   std::atomic<std::int64_t> queue_full{0};
   std::atomic<std::int64_t> samples_dropped{0};
 };
 
 class LcmSource {
  public:
-  /// Subscribes on `lcm` (whose handle() the caller runs in its LCM thread).
-  LcmSource(lcm::LCM& lcm, const std::string& channel, BlockQueue& queue, SourceCounters& counters);
+  /// Subscribes on `lcm` (whose handle() the caller runs in its LCM thread); blocks of more
+  /// than `max_block_samples` (at most BlockSlot::kMaxSamples) are dropped.
+  LcmSource(lcm::LCM& lcm, const std::string& channel, std::int64_t max_block_samples,
+            BlockQueue& queue, SourceCounters& counters);
   ~LcmSource();
   LcmSource(const LcmSource&) = delete;
   LcmSource& operator=(const LcmSource&) = delete;
@@ -33,9 +39,11 @@ class LcmSource {
 
   lcm::LCM& lcm_;
   lcm::Subscription* subscription_ = nullptr;
+  std::int64_t max_block_samples_;
   BlockQueue& queue_;
   SourceCounters& counters_;
-  BlockSlot slot_;  // filled here (LCM thread), then copied into the queue
+  force_block_t message_;  // decoded here (LCM thread); its arrays keep their capacity
+  BlockSlot slot_;         // filled here, then copied into the queue
 };
 
 }  // namespace millwatch::daemon

@@ -23,15 +23,13 @@
 
 #include "core/config/json_reader.hpp"
 #include "core/monitor/pipeline.hpp"
-#include "core/monitor/run_summary.hpp"
 #include "daemon/block_queue.hpp"
 #include "daemon/comedi_source.hpp"
 #include "daemon/daemon_config.hpp"
 #include "daemon/lcm_source.hpp"
-#include "msgs/lcm_output.hpp"
-#include "replay/json_file.hpp"
-#include "replay/output_file.hpp"
-#include "replay/shell_sink.hpp"
+#include "shell/json_file.hpp"
+#include "shell/monitor_run.hpp"
+#include "shell/output_file.hpp"
 
 namespace {
 
@@ -49,14 +47,14 @@ daemon::DaemonConfig load(const std::string& path, const std::string& url_overri
   }
 }
 
-/// The pipeline of a configuration read from `path`. Building it checks what only the stages
-/// can (e.g. a spindle window of at least 5 revolutions at the commanded speed), so that a bad
-/// file is an error here — at --check, at start, on SIGHUP — and never in the sample thread.
-std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
-                                                 const monitor::MonitorConfig& config,
-                                                 monitor::PipelineSink& sink) {
+/// `build()` of a pipeline (or of a run, which builds one) for a configuration read from
+/// `path`. Building it checks what only the stages can (e.g. a spindle window of at least 5
+/// revolutions at the commanded speed), so that a bad file is an error here — at --check, at
+/// start, on SIGHUP — and never in the sample thread.
+template <class Build>
+auto build_for(const std::string& path, Build&& build) {
   try {
-    return std::make_unique<monitor::Pipeline>(config, sink);
+    return build();
   } catch (const config::ConfigError& e) {
     // The stages name fields relative to the monitor configuration.
     throw std::runtime_error(path + ": monitor." + e.what());
@@ -65,34 +63,10 @@ std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
   }
 }
 
-/// Adds a pipeline's counts (before it is replaced) to `total`.
-void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
-  auto& t = total.input;
-  const auto& c = s.input;
-  t.samples_in += c.samples_in;
-  t.samples_accepted += c.samples_accepted;
-  t.samples_dropped += c.samples_dropped;
-  t.samples_flagged += c.samples_flagged;
-  t.nonfinite_samples += c.nonfinite_samples;
-  t.saturated_samples += c.saturated_samples;
-  t.gaps += c.gaps;
-  t.out_of_order_blocks += c.out_of_order_blocks;
-  t.blocks_rejected += c.blocks_rejected;
-  total.revolutions += s.revolutions;
-  total.valid_revolutions += s.valid_revolutions;
-  total.idle_revolutions += s.idle_revolutions;
-}
-
-/// The pipeline's status with what came before it (replaced pipelines) and what was lost
-/// before it (in the source).
-monitor::PipelineStatus merged_status(const monitor::Pipeline& p,
-                                      const monitor::PipelineStatus& carried,
-                                      const daemon::SourceCounters& source) {
-  monitor::PipelineStatus s = p.status();
-  carry(s, carried);
-  s.input.samples_dropped += source.samples_dropped.load();
-  s.input.blocks_rejected += source.undecodable.load() + source.oversized.load();
-  return s;
+std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
+                                                 const monitor::MonitorConfig& config,
+                                                 monitor::PipelineSink& sink) {
+  return build_for(path, [&] { return std::make_unique<monitor::Pipeline>(config, sink); });
 }
 
 /// What a reload cannot change in a running daemon (the source and the LCM set-up): the fields
@@ -111,6 +85,7 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
   note(a.device != b.device, "source.device");
   note(a.subdevice != b.subdevice, "source.subdevice");
   note(a.block_samples != b.block_samples, "source.block_samples");
+  note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
   bool channels_differ = false;
   for (std::size_t i = 0; i < a.channels.size(); ++i) {
     const auto& x = a.channels[i];
@@ -154,24 +129,33 @@ int run(const std::string& config_path, const std::string& url_override,
         " (udpm:// needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`)");
   }
 
-  monitor::RunSummary summary(config.monitor);
-  shell::ShellSink shell_sink(summary, "millwatchd");
-  messaging::LcmOutput output(lcm_out, config.channels, &shell_sink);
+  daemon::SourceCounters source_counters;
+  shell::MonitorRun::Options run_options;
+  run_options.source_name = "millwatchd";
+  run_options.lcm = &lcm_out;
+  run_options.channels = config.channels;
+  run_options.status_period_s = config.status_period_s;
+  // What the source lost before the pipeline saw it, in every status and the summary.
+  run_options.source_losses = [&source_counters](monitor::PipelineStatus& s) {
+    s.input.samples_dropped += source_counters.samples_dropped.load();
+    s.input.blocks_rejected +=
+        source_counters.undecodable.load() + source_counters.oversized.load();
+  };
   // Built here, so that a configuration the stages refuse stops the daemon with its message.
-  std::unique_ptr<monitor::Pipeline> first_pipeline =
-      make_pipeline(config_path, config.monitor, output);
+  std::unique_ptr<shell::MonitorRun> run = build_for(config_path, [&] {
+    return std::make_unique<shell::MonitorRun>(config.monitor, run_options);
+  });
   // 64 slots of 98 KB: on the heap, not on the stack.
   const auto queue_storage = std::make_unique<daemon::BlockQueue>();
   daemon::BlockQueue& queue = *queue_storage;
-  daemon::SourceCounters source_counters;
   std::atomic<bool> stop{false};
 
   std::unique_ptr<daemon::LcmSource> lcm_source;
   std::unique_ptr<daemon::ComediSource> comedi_source;
   std::thread receiver;
   if (config.source.kind == daemon::SourceConfig::Kind::kLcm) {
-    lcm_source =
-        std::make_unique<daemon::LcmSource>(lcm_in, config.source.channel, queue, source_counters);
+    lcm_source = std::make_unique<daemon::LcmSource>(
+        lcm_in, config.source.channel, config.source.max_block_samples, queue, source_counters);
     receiver = std::thread([&] {
       while (!stop.load()) {
         lcm_in.handleTimeout(50);
@@ -193,14 +177,9 @@ int run(const std::string& config_path, const std::string& url_override,
   std::unique_ptr<Reload> pending;
   std::vector<std::unique_ptr<monitor::Pipeline>> retired;
   std::atomic<bool> reload{false};
-  monitor::PipelineStatus carried;  // counts of the pipelines replaced by reloads
 
   std::thread sample_thread([&] {
-    std::unique_ptr<monitor::Pipeline> pipeline = std::move(first_pipeline);
     auto slot = std::make_unique<daemon::BlockSlot>();
-    double status_period_s = config.status_period_s;
-    std::int64_t next_status_utime = 0;
-    auto last_status_wall = std::chrono::steady_clock::now();
     while (true) {
       if (reload.load()) {
         std::unique_ptr<Reload> next;
@@ -210,46 +189,29 @@ int run(const std::string& config_path, const std::string& url_override,
           reload.store(false);
         }
         if (next) {
-          pipeline->finish();  // samples held for zero-phase filtering are measured first
-          carry(carried, pipeline->status());
-          std::unique_ptr<monitor::Pipeline> old =
-              std::exchange(pipeline, std::move(next->pipeline));
+          std::unique_ptr<monitor::Pipeline> old = run->replace_pipeline(std::move(next->pipeline));
           {
             std::lock_guard<std::mutex> lock(reload_mutex);
             retired.push_back(std::move(old));
           }
-          status_period_s = next->config.status_period_s;
+          run->set_status_period(next->config.status_period_s);
           spdlog::set_level(spdlog::level::from_str(next->config.log_level));
           spdlog::info(
               "configuration reloaded after {} samples; the pipeline restarts on the next block",
-              carried.input.samples_in);
+              run->carried_samples_in());
         }
       }
       if (queue.try_pop(*slot)) {
-        const monitor::SampleBlock block = slot->view();
-        pipeline->process(block);
-        if (block.utime_us >= next_status_utime) {
-          output.publish_status(merged_status(*pipeline, carried, source_counters));
-          next_status_utime = block.utime_us + static_cast<std::int64_t>(status_period_s * 1e6);
-          last_status_wall = std::chrono::steady_clock::now();
-        }
+        run->process(slot->view());
         continue;
       }
       if (stop.load()) {
         break;  // the queue is drained
       }
-      // Idle: no samples. Still say so every status period.
-      if (std::chrono::steady_clock::now() - last_status_wall >
-          std::chrono::duration<double>(status_period_s)) {
-        output.publish_status(merged_status(*pipeline, carried, source_counters));
-        last_status_wall = std::chrono::steady_clock::now();
-      }
+      run->idle();  // no samples: still a status every status period
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
-    pipeline->finish();
-    const monitor::PipelineStatus final_status = merged_status(*pipeline, carried, source_counters);
-    output.publish_status(final_status);
-    summary.finish(final_status);
+    run->finish();
   });
 
   spdlog::info("millwatchd running: source {}, LCM {}",
@@ -268,7 +230,7 @@ int run(const std::string& config_path, const std::string& url_override,
         }
         auto next = std::make_unique<Reload>();
         next->config = load(config_path, url_override);
-        next->pipeline = make_pipeline(config_path, next->config.monitor, output);
+        next->pipeline = make_pipeline(config_path, next->config.monitor, run->sink());
         const std::string restart = needs_restart(config, next->config);
         if (!restart.empty()) {
           spdlog::warn("SIGHUP: {}: {} changed; that takes a restart, the running values stay",
@@ -293,19 +255,17 @@ int run(const std::string& config_path, const std::string& url_override,
   }
   comedi_source.reset();
   sample_thread.join();
-  output.drain();
+  run->drain();
   lcm_source.reset();
 
-  const nlohmann::json j = summary.to_json();
+  const nlohmann::json j = run->summary();
   spdlog::info("final summary: {}", j.dump());
   spdlog::info(
       "published {} messages, dropped {}; source: {} messages, {} undecodable, {} queue full",
-      output.published(), output.dropped(), source_counters.messages.load(),
+      run->output()->published(), run->output()->dropped(), source_counters.messages.load(),
       source_counters.undecodable.load(), source_counters.queue_full.load());
   if (!summary_path.empty()) {
-    shell::OutputFile out(summary_path);
-    out.write(j.dump(2) + "\n");
-    out.commit();
+    shell::write_text_file(summary_path, j.dump(2) + "\n");
   }
   return 0;
 }

@@ -13,8 +13,8 @@
 #include "core/sim/cut_simulator.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "replay/command_exit.hpp"
-#include "replay/csv_cut_reader.hpp"
-#include "replay/json_file.hpp"
+#include "shell/csv_cut_reader.hpp"
+#include "shell/json_file.hpp"
 
 namespace millwatch::shell {
 namespace {

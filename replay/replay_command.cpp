@@ -10,18 +10,17 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "core/config/json_reader.hpp"
-#include "core/monitor/pipeline.hpp"
-#include "core/monitor/run_summary.hpp"
+#include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
-#include "msgs/lcm_output.hpp"
 #include "replay/command_exit.hpp"
-#include "replay/csv_cut_reader.hpp"
-#include "replay/json_file.hpp"
-#include "replay/lcm_log_reader.hpp"
-#include "replay/output_file.hpp"
-#include "replay/shell_sink.hpp"
+#include "shell/csv_cut_reader.hpp"
+#include "shell/json_file.hpp"
+#include "shell/lcm_log_reader.hpp"
+#include "shell/monitor_run.hpp"
+#include "shell/output_file.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -113,7 +112,7 @@ int run_replay(const ReplayOptions& o) {
   };
 
   std::unique_ptr<LcmLogReader> log;
-  std::optional<monitor::SampleBlock> first_block;
+  std::optional<monitor::SampleBlock> first_block;  // read to learn the log's sample rate
   double log_rate = 0.0;
   if (lcm_log) {
     log = std::make_unique<LcmLogReader>(input, o.raw_channel, warn_line);
@@ -129,43 +128,43 @@ int run_replay(const ReplayOptions& o) {
     csv = std::make_unique<CsvCutReader>(input, config.sample_rate_hz, warn_line);
   }
 
-  monitor::RunSummary summary(config);
-  ShellSink sink(summary, input.string());
   std::unique_ptr<lcm::LCM> lcm;
-  std::unique_ptr<messaging::LcmOutput> output;
-  monitor::PipelineSink* target = &sink;
   if (!o.publish_url.empty()) {
     lcm = std::make_unique<lcm::LCM>(o.publish_url);
     if (!lcm->good()) {
       throw std::runtime_error("cannot open LCM at " + o.publish_url);
     }
-    output = std::make_unique<messaging::LcmOutput>(*lcm, messaging::ChannelNames{}, &sink);
-    target = output.get();
   }
-  monitor::Pipeline pipeline(config, *target);
+  MonitorRun::Options run_options;
+  run_options.source_name = input.string();
+  run_options.lcm = lcm.get();  // none: the summary and the log only
+  MonitorRun run(config, run_options);
 
   const double speed = o.realtime ? 1.0 : o.speed;
   const auto start = std::chrono::steady_clock::now();
   std::int64_t first_utime = 0;
   bool have_first = false;
-  std::int64_t next_status_utime = 0;
   g_stop = false;
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
-  while (!g_stop) {
-    monitor::SampleBlock block;
+  auto next_block = [&]() -> std::optional<monitor::SampleBlock> {
     if (first_block) {
-      block = *first_block;
-      first_block.reset();
-    } else {
-      block = lcm_log ? log->next() : csv->next(static_cast<std::size_t>(o.block_samples));
+      return std::exchange(first_block, std::nullopt);
     }
-    if (block.fx_N.empty() && block.fy_N.empty()) {
+    if (lcm_log) {
+      return log->next();
+    }
+    const monitor::SampleBlock b = csv->next(static_cast<std::size_t>(o.block_samples));
+    return b.fx_N.empty() ? std::nullopt : std::optional(b);
+  };
+  while (!g_stop) {
+    const std::optional<monitor::SampleBlock> next = next_block();
+    if (!next) {
       break;
     }
+    const monitor::SampleBlock& block = *next;
     if (!have_first) {
       first_utime = block.utime_us;
-      next_status_utime = first_utime;
       have_first = true;
     }
     if (speed > 0.0) {  // pace by the blocks' own time
@@ -177,30 +176,19 @@ int run_replay(const ReplayOptions& o) {
       const force_block_t raw = messaging::to_message(block);
       lcm->publish(o.raw_channel, &raw);
     }
-    pipeline.process(block);
-    if (output && block.utime_us >= next_status_utime) {
-      output->publish_status(pipeline.status());
-      next_status_utime += 1000000;
-    }
+    run.process(block);
   }
-  pipeline.finish();
+  run.finish();
   if (g_stop) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
-  const monitor::PipelineStatus status = pipeline.status();
-  if (output) {
-    output->publish_status(status);
-    output->drain();
-  }
-  summary.finish(status);
-  nlohmann::json j = summary.to_json();
+  run.drain();
+  nlohmann::json j = run.summary();
   j["input"] = input.string();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = lcm_log ? log->bad_events() : csv->bad_lines();
   if (!o.summary.empty()) {
-    OutputFile out(o.summary);
-    out.write(j.dump(2) + "\n");
-    out.commit();
+    write_text_file(o.summary, j.dump(2) + "\n");
   }
   std::printf("%s\n", j.dump(2).c_str());
   return 0;

@@ -17,8 +17,8 @@
 #include "core/model/flute_positions.hpp"
 #include "core/sim/channel_stats.hpp"
 #include "core/sim/cut_simulator.hpp"
-#include "replay/json_file.hpp"
-#include "replay/output_file.hpp"
+#include "shell/json_file.hpp"
+#include "shell/output_file.hpp"
 
 namespace millwatch::shell {
 namespace {

@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config git clang-format
+  build-essential cmake ninja-build pkg-config git clang-format clang libclang-rt-14-dev
   libeigen3-dev libfftw3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
   liblcm-dev liblcm-bin liblcm-java default-jdk-headless
   libgtest-dev libgmock-dev libbenchmark-dev libcomedi-dev

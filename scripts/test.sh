@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds and runs the whole test suite: once optimised (Release), once under AddressSanitizer
-# and UndefinedBehaviorSanitizer. Needs the packages of scripts/install-deps.sh.
+# and UndefinedBehaviorSanitizer; then fuzzes every reader for a while (scripts/fuzz.sh,
+# MILLWATCH_FUZZ_SECONDS per target, default 20). Needs the packages of scripts/install-deps.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -16,5 +17,8 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMILLWATCH_
 cmake --build build/asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan -j "$jobs" --output-on-failure --timeout 1200
+
+echo "== libFuzzer targets (clang, ASan + UBSan)"
+./scripts/fuzz.sh "${MILLWATCH_FUZZ_SECONDS:-20}"
 
 echo "== all tests passed"

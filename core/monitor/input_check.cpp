@@ -11,8 +11,23 @@ InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
   flags_.resize(config_.max_block_samples);
 }
 
+namespace {
+
+bool plausible_utime(std::int64_t utime_us) {
+  return utime_us >= -kMaxAbsUtime_us && utime_us <= kMaxAbsUtime_us;
+}
+
+}  // namespace
+
 std::int64_t InputCheck::utime_of(std::int64_t sample) const {
-  return start_utime_us_ + std::llround(static_cast<double>(sample) * 1e6 / config_.sample_rate_hz);
+  return start_utime_us_ +
+         std::llround(static_cast<double>(sample - start_sample_) * 1e6 / config_.sample_rate_hz);
+}
+
+bool InputCheck::at_expected_time(std::int64_t utime_us) const {
+  // Both utimes are within ±kMaxAbsUtime_us (2⁵³): their difference cannot overflow.
+  return std::fabs(static_cast<double>(utime_us - utime_of(next_sample_)) * config_.sample_rate_hz /
+                   1e6) <= config_.tolerance_samples;
 }
 
 void InputCheck::restart() {
@@ -25,8 +40,7 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   ++counters_.blocks_rejected;
   // A block rejected at its expected time leaves its slot empty: the next block follows the
   // hole without counting those samples again.
-  if (started_ && std::fabs(static_cast<double>(block.utime_us - utime_of(next_sample_)) *
-                            config_.sample_rate_hz / 1e6) <= config_.tolerance_samples) {
+  if (started_ && plausible_utime(block.utime_us) && at_expected_time(block.utime_us)) {
     next_sample_ += n;
     hole_samples_ += n;
   }
@@ -48,15 +62,20 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   if (n > config_.max_block_samples) {
     return reject(block, "block longer than max_block_samples");
   }
-  if (std::fabs(block.sample_rate_hz - config_.sample_rate_hz) > 1e-6 * config_.sample_rate_hz) {
+  if (!plausible_utime(block.utime_us)) {
+    return reject(block, "utime beyond +-2^53 us (a corrupt time)");
+  }
+  // Written so that a NaN rate fails too.
+  if (!(std::fabs(block.sample_rate_hz - config_.sample_rate_hz) <=
+        1e-6 * config_.sample_rate_hz)) {
     return reject(block, "sample rate differs from the configured one");
   }
 
   CheckedBlock out;
   if (!started_) {
     started_ = true;
-    start_utime_us_ = block.utime_us - std::llround(static_cast<double>(next_sample_) * 1e6 /
-                                                    config_.sample_rate_hz);
+    start_utime_us_ = block.utime_us;
+    start_sample_ = next_sample_;
   }
   const double offset_samples =
       static_cast<double>(block.utime_us - utime_of(next_sample_)) * config_.sample_rate_hz / 1e6;

@@ -4,6 +4,8 @@
 //
 //  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected;
 //    when it came at its expected time, its slot is a gap before the next block (counted once)
+//  - block whose utime is beyond ±kMaxAbsUtime_us (a corrupt time: a block from the network can
+//    carry anything): rejected, with no effect on the stream's timing
 //  - block older than expected (out of order, duplicate): rejected
 //  - block later than expected: the missing samples are counted as dropped and reported as a
 //    gap so that downstream stages can restart
@@ -11,7 +13,8 @@
 //    value, flagged
 //  - sample at or beyond the channel's saturation level (charge-amplifier range): kept, flagged
 // Sample time is kept as a sample index from the first block (utime of the first block + index
-// / rate), so that gaps keep later samples at their true time.
+// / rate), so that gaps keep later samples at their true time. With every accepted utime within
+// ±kMaxAbsUtime_us, no time or index computed here can overflow.
 
 #include <array>
 #include <cstdint>
@@ -22,6 +25,10 @@
 #include "core/monitor/sample_block.hpp"
 
 namespace millwatch::monitor {
+
+/// Largest |utime| a block may carry, µs: 2⁵³ µs ≈ 285 years either side of the epoch, where a
+/// utime still converts to and from double exactly. Beyond it a time is corrupt.
+inline constexpr std::int64_t kMaxAbsUtime_us = std::int64_t{1} << 53;
 
 struct InputCheckConfig {
   double sample_rate_hz = 50000.0;
@@ -46,7 +53,7 @@ struct InputCounters {
   std::int64_t saturated_samples = 0;
   std::int64_t gaps = 0;
   std::int64_t out_of_order_blocks = 0;
-  std::int64_t blocks_rejected = 0;  ///< malformed or out of order
+  std::int64_t blocks_rejected = 0;  ///< malformed, out of order or with a corrupt utime
 };
 
 enum class BlockVerdict { kAccepted, kRejected };
@@ -81,10 +88,14 @@ class InputCheck {
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
 
+  /// Whether a block at `utime_us` is at the next sample expected (within the tolerance).
+  [[nodiscard]] bool at_expected_time(std::int64_t utime_us) const;
+
   InputCheckConfig config_;
   InputCounters counters_;
   bool started_ = false;
-  std::int64_t start_utime_us_ = 0;
+  std::int64_t start_utime_us_ = 0;  // utime of sample start_sample_
+  std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
   std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
   std::array<double, 3> last_good_{};

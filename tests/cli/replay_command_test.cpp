@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/sim/scenario.hpp"
 #include "tests/support/force_log.hpp"
@@ -132,6 +133,65 @@ TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
   EXPECT_GT(r.summary["revolutions"].get<int>(), 150);  // it kept measuring
 }
 
+// A damaged time column: each bad time is reported by line and what is wrong with it, and its
+// row skipped like any bad row (a one-sample gap); the rest of the cut is measured. (A time of
+// 1e300 used to reach the pipeline as utime −2⁶³ and overflow in InputCheck under UBSan.)
+TEST(ReplayCommand, DamagedTimestampsAreReportedByLineAndSkipped) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  std::ifstream in(csv);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(line);
+  }
+  in.close();
+  ASSERT_EQ(lines.size(), 50001u);
+  auto time_of = [&](int n) { return lines[n - 1].substr(0, lines[n - 1].find(',')); };
+  auto set_time = [&](int n, const std::string& t) {
+    lines[n - 1] = t + lines[n - 1].substr(lines[n - 1].find(','));
+  };
+  set_time(2, "5.5");                          // the first row, ahead of the next
+  set_time(1001, "1e300");                     // out of range
+  set_time(2001, "inf");                       // not finite
+  set_time(3001, "nan");                       // not finite
+  set_time(4001, "1e400");                     // beyond a double: not finite
+  set_time(5001, time_of(4999));               // going back
+  set_time(6001, time_of(6000));               // repeated
+  set_time(7001, "0.7");                       // ahead of its neighbours (0.13996 and 0.14)
+  set_time(8001, "-9.3e12");                   // out of range
+  lines[9000] = time_of(9001) + ",1e400,0,0";  // a force beyond a double: a non-finite sample
+  std::ofstream out(csv);
+  for (const auto& line : lines) {
+    out << line << '\n';
+  }
+  out.close();
+
+  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  for (const char* expected :
+       {"cut.csv:2: t_s 5.5 jumps ahead of the rows around it (2e-05 on line 3); skipped",
+        "cut.csv:1001: t_s 1e+300 is out of range (more than 9007199254.740992 s from 0); skipped",
+        "cut.csv:2001: t_s is not finite (inf); skipped",
+        "cut.csv:3001: t_s is not finite (nan); skipped",
+        "cut.csv:4001: t_s is not finite (1e400); skipped",
+        "cut.csv:5001: t_s 0.09994 is not after the previous row's (0.09996 on line 5000); skipped",
+        "cut.csv:6001: t_s 0.11996 is not after the previous row's (0.11996 on line 6000); skipped",
+        "cut.csv:7001: t_s 0.7 jumps ahead of the rows around it "
+        "(0.13996 on line 7000, 0.14 on line 7002); skipped",
+        "cut.csv:8001: t_s -9.3e+12 is out of range"}) {
+    EXPECT_NE(r.log.find(expected), std::string::npos) << expected << "\n" << r.log;
+  }
+  EXPECT_EQ(r.log.find("runtime error"), std::string::npos) << r.log;
+  EXPECT_EQ(r.summary["bad_lines"], 9);
+  EXPECT_EQ(r.summary["samples"], 50000 - 9);
+  EXPECT_EQ(r.summary["dropped_samples"], 8);  // one-row gaps; the first row is before the start
+  EXPECT_EQ(r.summary["counters"]["gaps"], 8);
+  EXPECT_EQ(r.summary["counters"]["blocks_rejected"], 0);
+  EXPECT_EQ(r.summary["counters"]["out_of_order_blocks"], 0);
+  EXPECT_EQ(r.summary["counters"]["nonfinite_samples"], 1);
+  EXPECT_GT(r.summary["revolutions"].get<int>(), 150);  // it kept measuring
+}
+
 TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulate(dir, "cut", base_scenario());
@@ -223,6 +283,62 @@ TEST(ReplayCommand, ReplaysAnLcmLogAndSurvivesCorruptionAndTruncation) {
   EXPECT_NE(bad.log.find("log ends inside an event"), std::string::npos) << bad.log;
   EXPECT_GT(bad.summary["revolutions"].get<int>(), 100);
   EXPECT_NEAR(bad.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
+}
+
+// Well-framed events whose force_block_t is malformed (a sample count that wraps lcm-gen's size
+// check, a negative count, a count that does not match the length) are reported by event and
+// reason and skipped before they are decoded; the rest of the log is measured. (The wrapped
+// count made lcm-gen's decode read past the event's buffer: ASan heap-buffer-overflow.)
+TEST(ReplayCommand, MalformedRawBlocksInALogAreReportedAndSkipped) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path log = write_log(dir, 1.0);
+  std::string bytes;
+  {
+    std::ifstream in(log, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string sync = "\xED\xA1\xDA\x01";
+  std::vector<std::size_t> starts;
+  for (std::size_t at = bytes.find(sync); at != std::string::npos; at = bytes.find(sync, at + 1)) {
+    starts.push_back(at);
+  }
+  ASSERT_EQ(starts.size(), 50u);
+  // An event: 28-byte header, the channel's 19 bytes, then the message; its num_samples is at
+  // byte 32 of the message (msgs/force_block_check.hpp).
+  auto set_count = [&](std::size_t event, std::uint32_t n) {
+    const std::size_t at = starts[event] + 28 + 19 + 32;
+    for (int i = 0; i < 4; ++i) {
+      bytes[at + static_cast<std::size_t>(i)] = static_cast<char>(n >> (24 - 8 * i));
+    }
+  };
+  set_count(10, (1u << 28) + 1);  // 8 · n wraps lcm-gen's int size check
+  set_count(20, 0xFFFFFFFFu);     // −1
+  set_count(30, 999);             // 24 bytes short of what the event holds
+  std::ofstream(dir / "bad.lcmlog", std::ios::binary) << bytes;
+  const ReplayRun r =
+      replay((dir / "bad.lcmlog").string() + " --config " + monitor_config(dir).string(),
+             dir / "bad.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  const std::string prefix =
+      "bad.lcmlog:{}: event on MILLWATCH_FORCE_RAW of 24036 bytes does not decode as "
+      "millwatch.force_block_t: ";
+  auto expect_line = [&](int event, const std::string& reason) {
+    std::string line = prefix;
+    line.replace(line.find("{}"), 2, std::to_string(event));
+    EXPECT_NE(r.log.find(line + reason + "; skipped"), std::string::npos) << line << reason << "\n"
+                                                                          << r.log;
+  };
+  expect_line(11,
+              "36 + 24 x 268435457 = 6442451004 bytes expected for num_samples 268435457, "
+              "got 24036");
+  expect_line(21, "num_samples -1 is negative");
+  expect_line(31, "36 + 24 x 999 = 24012 bytes expected for num_samples 999, got 24036");
+  EXPECT_EQ(r.log.find("runtime error"), std::string::npos) << r.log;
+  EXPECT_EQ(r.summary["bad_lines"], 3);
+  EXPECT_EQ(r.summary["samples"], 47000);
+  EXPECT_EQ(r.summary["dropped_samples"], 3000);  // as gaps
+  EXPECT_EQ(r.summary["counters"]["gaps"], 3);
+  EXPECT_GT(r.summary["revolutions"].get<int>(), 100);
 }
 
 TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {

@@ -298,9 +298,11 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
 
 // Issue 3 §4 and §6: SIGHUP reloads without losing samples and the new configuration is in
 // effect (commanded speed on MILLWATCH_SPINDLE, status period); a bad file on reload is reported
-// by field and the running configuration kept; garbage on the raw channel — random bytes and
-// blocks that decode but cannot be used — is counted in the status and the summary and
-// survived; SIGTERM stops with the final summary.
+// by field and the running configuration kept; garbage on the raw channel — random bytes,
+// force_block_t messages whose sample count is malformed (one that wraps lcm-gen's size check
+// and made its decode read past the datagram, a negative one that made it throw) and blocks
+// that decode but cannot be used — is counted in the status and the summary and survived;
+// SIGTERM stops with the final summary.
 TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   sim::Scenario s;
   s.sample_rate_hz = 50000.0;
@@ -310,6 +312,7 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   test::write_force_log(dir_ / "part1.lcmlog", s, 250, 0, 100);
   test::write_force_log(dir_ / "part2.lcmlog", s, 250, 100, 200);
   constexpr int kRandomMessages = 5;
+  constexpr int kMalformedMessages = 2;
   constexpr int kWrongRateSamples = 1000;
   {
     lcm::LogFile garbage((dir_ / "garbage.lcmlog").string(), "w");
@@ -321,6 +324,20 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
       }
       lcm::LogEvent e{i, 500000 + i, "MILLWATCH_FORCE_RAW", static_cast<std::int32_t>(bytes.size()),
                       bytes.data()};
+      garbage.writeEvent(&e);
+    }
+    // Whole-looking blocks of 40 samples whose num_samples (big-endian at byte 32) is 2²⁸ + 1,
+    // then −1.
+    for (const std::uint32_t count : {(1u << 28) + 1, 0xFFFFFFFFu}) {
+      const std::vector<double> forty(40, 1.0);
+      const force_block_t m = messaging::to_message({500000, 999, 50000.0, forty, forty, forty});
+      std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+      m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      for (int i = 0; i < 4; ++i) {
+        bytes[static_cast<std::size_t>(32 + i)] = static_cast<std::uint8_t>(count >> (24 - 8 * i));
+      }
+      lcm::LogEvent e{kRandomMessages, 500000, "MILLWATCH_FORCE_RAW",
+                      static_cast<std::int32_t>(bytes.size()), bytes.data()};
       garbage.writeEvent(&e);
     }
     // Blocks that decode but are no use: empty, and at a sample rate not the configured one.
@@ -355,6 +372,11 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   EXPECT_NE(log.find("monitor.model.tool.flutes"), std::string::npos) << log;
   EXPECT_NE(log.find("keeping the running configuration"), std::string::npos) << log;
   EXPECT_NE(log.find("does not decode"), std::string::npos) << log;
+  EXPECT_NE(log.find("(36 + 24 x 268435457 = 6442451004 bytes expected for num_samples "
+                     "268435457, got 996); dropped"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("(num_samples -1 is negative); dropped"), std::string::npos) << log;
   EXPECT_NE(log.find("final summary"), std::string::npos) << log;
   const nlohmann::json summary = read_json(dir_ / "reload.json");
   ASSERT_FALSE(summary.is_null()) << log;
@@ -362,7 +384,8 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   EXPECT_EQ(summary["samples"], 50000);  // every sample, across the reloads
   EXPECT_EQ(summary["counters"]["samples_in"], 50000 + kWrongRateSamples);
   EXPECT_EQ(summary["dropped_samples"], kWrongRateSamples);  // the unusable blocks' only
-  EXPECT_EQ(summary["counters"]["blocks_rejected"], kRandomMessages + unusable) << summary.dump(2);
+  EXPECT_EQ(summary["counters"]["blocks_rejected"], kRandomMessages + kMalformedMessages + unusable)
+      << summary.dump(2);
   EXPECT_GT(summary["revolutions"].get<int>(), 100);  // it kept measuring after all that
 
   // What the daemon said on LCM meanwhile.
@@ -382,7 +405,7 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   EXPECT_EQ(late_in_part2, 0);  // every 10 s after it
   EXPECT_EQ(status.back().samples_in, 50000 + kWrongRateSamples);  // the final status
   EXPECT_EQ(status.back().samples_processed, 50000);
-  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + unusable);
+  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + kMalformedMessages + unusable);
   EXPECT_EQ(status.back().revolutions, summary["revolutions"].get<std::int64_t>());  // both parts
 
   // The commanded speed of the good reload is in effect after it; the bad one's never is.
@@ -449,6 +472,11 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
       {"unknown", "/monitor/filter/cutof_hz", 3300.0, "monitor.filter.cutof_hz: unknown key"},
       {"choice", "/source/kind", "serial", "source.kind"},
       {"url", "/lcm/url", 7, "lcm.url"},
+      {"max_block", "/source/max_block_samples", 5000,
+       "source.max_block_samples: value 5000 is out of range [1, 4096]"},
+      // A Comedi block must fit the queue's slots (4096 samples; 8192 used to be accepted).
+      {"block", "/source/block_samples", 8192,
+       "source.block_samples: value 8192 is out of range [16, 4096]"},
   };
   for (const Case& c : cases) {
     nlohmann::json j = base;

@@ -138,6 +138,77 @@ TEST(InputCheck, MalformedBlocksAreRejectedWithAReason) {
   EXPECT_EQ(check.counters().blocks_rejected, 3);
 }
 
+// A block from the network can carry any utime: one beyond ±2⁵³ µs is rejected with its
+// reason and counted, before any time arithmetic (UBSan saw a signed overflow here with −2⁶³),
+// and leaves the stream's timing as it was.
+TEST(InputCheck, CorruptUtimesAreRejectedWithoutOverflowAndLeaveTheTimingAlone) {
+  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
+  InputCheck check(config());
+  const Block a = ramp(100);
+  // Before the stream has started, then after it.
+  EXPECT_EQ(check.check(a.view(kMin)).problem, "utime beyond +-2^53 us (a corrupt time)");
+  EXPECT_EQ(check.check(a.view(0)).verdict, BlockVerdict::kAccepted);
+  for (const std::int64_t utime :
+       {kMin, kMax, kMin + 1, -kMaxAbsUtime_us - 1, kMaxAbsUtime_us + 1}) {
+    const auto c = check.check(a.view(utime));
+    EXPECT_EQ(c.verdict, BlockVerdict::kRejected) << utime;
+    EXPECT_EQ(c.problem, "utime beyond +-2^53 us (a corrupt time)") << utime;
+  }
+  // Rejected for another reason as well (wrong rate): still no arithmetic on the time.
+  EXPECT_EQ(check.check(a.view(kMin, 20000.0)).verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(check.counters().blocks_rejected, 7);
+  EXPECT_EQ(check.counters().samples_dropped, 700);
+  EXPECT_EQ(check.counters().gaps, 0);
+  EXPECT_EQ(check.counters().out_of_order_blocks, 0);
+  // The stream goes on where it was: no hole, no gap.
+  const auto next = check.check(a.view(2000));
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.first_sample, 100);
+  EXPECT_EQ(next.gap_samples, 0);
+  EXPECT_EQ(check.utime_of(200), 4000);
+}
+
+// Near the ends of the accepted range, one after the other: a gap of almost 2⁵⁴ µs, no
+// overflow. (At that distance from the stream's start a double resolves 4 µs.)
+TEST(InputCheck, UtimesAtTheEndsOfTheRangeMakeAGapWithoutOverflow) {
+  InputCheck check(config());
+  const Block a = ramp(100);
+  const std::int64_t end_us = kMaxAbsUtime_us - kMaxAbsUtime_us % 20;  // on the 20 µs grid
+  EXPECT_EQ(check.check(a.view(-end_us)).verdict, BlockVerdict::kAccepted);
+  const auto far = check.check(a.view(end_us));
+  EXPECT_EQ(far.verdict, BlockVerdict::kAccepted);
+  const std::int64_t expected_gap = (2 * end_us - 2000) / 20;  // 20 µs per sample
+  EXPECT_NEAR(static_cast<double>(far.gap_samples), static_cast<double>(expected_gap), 1.0);
+  EXPECT_NEAR(static_cast<double>(check.utime_of(far.first_sample)), static_cast<double>(end_us),
+              4.0);
+  EXPECT_EQ(check.counters().samples_dropped, far.gap_samples);
+  // Going back from there is out of order, however far.
+  const auto back = check.check(a.view(-kMaxAbsUtime_us));
+  EXPECT_EQ(back.verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(check.counters().out_of_order_blocks, 1);
+}
+
+TEST(InputCheck, ANanSampleRateIsRejected) {
+  InputCheck check(config());
+  const auto c = check.check(ramp(10).view(0, std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_EQ(c.verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(c.problem, "sample rate differs from the configured one");
+}
+
+// After restart() the next block starts a new stream at its own time; sample numbers go on.
+TEST(InputCheck, RestartStartsANewStreamAtTheNextBlocksTime) {
+  InputCheck check(config());
+  check.check(ramp(100).view(1'000'000));
+  check.restart();
+  const auto c = check.check(ramp(100).view(-5'000'000));
+  EXPECT_EQ(c.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(c.first_sample, 100);
+  EXPECT_EQ(c.gap_samples, 0);
+  EXPECT_EQ(check.utime_of(100), -5'000'000);
+  EXPECT_EQ(check.utime_of(150), -4'999'000);
+}
+
 TEST(InputCheck, SteadyStateAllocatesNothing) {
   InputCheck check(config());
   const Block a = ramp(1000);

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 namespace millwatch::test {
@@ -20,7 +22,11 @@ std::filesystem::path shared_dir() {
 
 std::filesystem::path fresh_temp_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = "millwatch_test";
+  // One folder per build tree and test: builds of other checkouts on this machine run the same
+  // tests at the same time.
+  char build[17];
+  std::snprintf(build, sizeof build, "%016zx", std::hash<std::string>{}(MILLWATCH_CLI));
+  std::string name = std::string("millwatch_test_") + build;
   if (info != nullptr) {
     name += std::string("_") + info->test_suite_name() + "_" + info->name();
   }

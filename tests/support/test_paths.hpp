@@ -12,7 +12,7 @@ std::filesystem::path source_dir();
 /// environment variable MILLWATCH_SHARED_DIR overrides the default.
 std::filesystem::path shared_dir();
 
-/// A fresh, empty temporary directory unique to the calling test.
+/// A fresh, empty temporary directory unique to the calling test and this build tree.
 std::filesystem::path fresh_temp_dir();
 
 }  // namespace millwatch::test

@@ -31,4 +31,7 @@ class OutputFile {
   bool committed_ = false;
 };
 
+/// Writes `text` to `path` through an OutputFile. @throws std::runtime_error naming the path.
+void write_text_file(const std::filesystem::path& path, const std::string& text);
+
 }  // namespace millwatch::shell

@@ -1,4 +1,4 @@
-#include "replay/json_file.hpp"
+#include "shell/json_file.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -116,6 +116,35 @@ std::string line_and_column(const std::string& text, std::size_t byte) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column);
 }
 
+/// Byte offset of the first '[' or '{' (outside strings) nested deeper than `max_depth`, or
+/// npos.
+std::size_t too_deep(const std::string& text, std::size_t max_depth) {
+  std::size_t depth = 0;
+  bool in_string = false;
+  bool escaped = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) {
+        return i;
+      }
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::string::npos;
+}
+
 }  // namespace
 
 nlohmann::json read_json_file(const std::filesystem::path& path) {
@@ -125,12 +154,19 @@ nlohmann::json read_json_file(const std::filesystem::path& path) {
   }
   std::stringstream text;
   text << in.rdbuf();
-  const std::string s = text.str();
+  return parse_json_text(text.str(), path.string());
+}
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& name) {
+  if (const std::size_t at = too_deep(text, kMaxJsonDepth); at != std::string::npos) {
+    throw std::runtime_error(name + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                             " levels at " + line_and_column(text, at + 1));
+  }
   json result;
   PathTrackingSax sax(result);
-  if (!json::sax_parse(s, &sax)) {
+  if (!json::sax_parse(text, &sax)) {
     const std::string what = sax.not_finite() ? ": " : ": JSON syntax error at ";
-    throw std::runtime_error(path.string() + what + line_and_column(s, sax.position()) + ": " +
+    throw std::runtime_error(name + what + line_and_column(text, sax.position()) + ": " +
                              sax.message());
   }
   return result;

@@ -1,4 +1,4 @@
-#include "replay/output_file.hpp"
+#include "shell/output_file.hpp"
 
 #include <cerrno>
 #include <cstring>
@@ -48,6 +48,12 @@ void OutputFile::commit() {
                              ec.message());
   }
   committed_ = true;
+}
+
+void write_text_file(const std::filesystem::path& path, const std::string& text) {
+  OutputFile out(path);
+  out.write(text);
+  out.commit();
 }
 
 }  // namespace millwatch::shell

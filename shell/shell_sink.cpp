@@ -1,4 +1,4 @@
-#include "replay/shell_sink.hpp"
+#include "shell/shell_sink.hpp"
 
 #include <spdlog/spdlog.h>
 

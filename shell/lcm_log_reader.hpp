@@ -1,6 +1,7 @@
 #pragma once
 // Reads the raw force blocks of an LCM log (as lcm-logger writes it) from one channel.
-// Events of other channels are skipped; an event that does not decode as force_block_t is
+// Events of other channels are skipped; an event that is not a whole force_block_t of at most
+// max_block_samples samples (msgs/force_block_check.hpp: checked before it is decoded) is
 // reported and skipped; a damaged event is reported and reading resumes at the next sync word,
 // so damage costs only the events it touches (lcm 1.3.1's own reader also drops the sound event
 // before a broken sync word, and stops at a broken length); a log cut short ends at its last
@@ -10,6 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <istream>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,12 +24,22 @@ namespace millwatch::shell {
 
 class LcmLogReader {
  public:
-  /// @throws std::runtime_error "PATH: cannot read as an LCM log".
-  LcmLogReader(const std::filesystem::path& path, std::string channel,
-               std::function<void(std::int64_t event, const std::string& problem)> on_bad_event);
+  /// Called for each bad event with its number (1-based, counting every channel's events) and
+  /// what is wrong with it.
+  using OnBadEvent = std::function<void(std::int64_t event, const std::string& problem)>;
+  /// The most samples a block may have unless told otherwise (the pipeline's own limit).
+  static constexpr std::int64_t kDefaultMaxBlockSamples = 65536;
 
-  /// The next raw block (views valid until the next call); an empty block at the end.
-  monitor::SampleBlock next();
+  /// Reads the log at `path`. @throws std::runtime_error "PATH: cannot read as an LCM log".
+  LcmLogReader(const std::filesystem::path& path, std::string channel, OnBadEvent on_bad_event,
+               std::int64_t max_block_samples = kDefaultMaxBlockSamples);
+  /// Reads `in` (seekable; it must outlive the reader), named `name` in errors.
+  LcmLogReader(std::istream& in, const std::string& name, std::string channel,
+               OnBadEvent on_bad_event, std::int64_t max_block_samples = kDefaultMaxBlockSamples);
+
+  /// The next raw block (views valid until the next call), possibly empty if the log holds an
+  /// empty one; nothing at the end of the log.
+  std::optional<monitor::SampleBlock> next();
   [[nodiscard]] std::int64_t events() const { return events_; }
   [[nodiscard]] std::int64_t bad_events() const { return bad_events_; }
   /// Sample rate of the first block (0 before it).
@@ -42,10 +56,13 @@ class LcmLogReader {
   void report_truncated_end();
   void report(std::int64_t event, const std::string& problem);
 
-  std::filesystem::path path_;
+  void open(const std::string& name);
+
   std::string channel_;
-  std::function<void(std::int64_t, const std::string&)> on_bad_event_;
-  std::ifstream file_;
+  OnBadEvent on_bad_event_;
+  std::int64_t max_block_samples_;
+  std::unique_ptr<std::ifstream> owned_;  // when reading a path
+  std::istream* file_ = nullptr;
   std::int64_t size_bytes_ = 0;
   std::int64_t position_ = 0;  ///< byte offset of the next event
   std::string event_channel_;

@@ -1,9 +1,10 @@
-#include "replay/lcm_log_reader.hpp"
+#include "shell/lcm_log_reader.hpp"
 
 #include <algorithm>
 #include <array>
 #include <stdexcept>
 
+#include "msgs/force_block_check.hpp"
 #include "msgs/lcm_convert.hpp"
 
 namespace millwatch::shell {
@@ -26,29 +27,48 @@ std::uint64_t big_endian(const char* bytes, int n) {
 }  // namespace
 
 LcmLogReader::LcmLogReader(const std::filesystem::path& path, std::string channel,
-                           std::function<void(std::int64_t, const std::string&)> on_bad_event)
-    : path_(path), channel_(std::move(channel)), on_bad_event_(std::move(on_bad_event)) {
+                           OnBadEvent on_bad_event, std::int64_t max_block_samples)
+    : channel_(std::move(channel)),
+      on_bad_event_(std::move(on_bad_event)),
+      max_block_samples_(max_block_samples) {
   if (!std::filesystem::is_regular_file(path)) {
     throw std::runtime_error(path.string() + ": cannot read: no such file");
   }
-  file_.open(path, std::ios::binary);
-  size_bytes_ = static_cast<std::int64_t>(std::filesystem::file_size(path));
+  owned_ = std::make_unique<std::ifstream>(path, std::ios::binary);
+  file_ = owned_.get();
+  open(path.string());
+}
+
+LcmLogReader::LcmLogReader(std::istream& in, const std::string& name, std::string channel,
+                           OnBadEvent on_bad_event, std::int64_t max_block_samples)
+    : channel_(std::move(channel)),
+      on_bad_event_(std::move(on_bad_event)),
+      max_block_samples_(max_block_samples),
+      file_(&in) {
+  open(name);
+}
+
+void LcmLogReader::open(const std::string& name) {
+  file_->seekg(0, std::ios::end);
+  size_bytes_ = static_cast<std::int64_t>(file_->tellg());
+  file_->seekg(0);
   std::array<char, 4> first{};
-  if (!file_ || !file_.read(first.data(), 4) || first != kSync) {
-    throw std::runtime_error(path.string() + ": cannot read as an LCM log (no event at byte 0)");
+  if (!*file_ || size_bytes_ < 0 || !file_->read(first.data(), 4) || first != kSync) {
+    throw std::runtime_error(name + ": cannot read as an LCM log (no event at byte 0)");
   }
 }
 
-monitor::SampleBlock LcmLogReader::next() {
+std::optional<monitor::SampleBlock> LcmLogReader::next() {
   while (read_event()) {
     ++events_;
     if (event_channel_ != channel_) {
       continue;
     }
-    const int used = message_.decode(data_.data(), 0, static_cast<int>(data_.size()));
-    if (used < 0 || static_cast<std::size_t>(used) != data_.size()) {
+    const messaging::ForceBlockCheck c =
+        messaging::decode_force_block(data_.data(), data_.size(), max_block_samples_, message_);
+    if (!c.ok()) {
       report(events_, "event on " + channel_ + " of " + std::to_string(data_.size()) +
-                          " bytes does not decode as millwatch.force_block_t");
+                          " bytes does not decode as millwatch.force_block_t: " + c.describe());
       continue;
     }
     if (first_rate_hz_ == 0.0) {
@@ -56,15 +76,15 @@ monitor::SampleBlock LcmLogReader::next() {
     }
     return messaging::to_block(message_);
   }
-  return {};
+  return std::nullopt;
 }
 
 bool LcmLogReader::read_event() {
   while (position_ + kHeaderBytes <= size_bytes_) {
     std::array<char, kHeaderBytes> header{};
-    file_.clear();
-    file_.seekg(position_);
-    file_.read(header.data(), kHeaderBytes);
+    file_->clear();
+    file_->seekg(position_);
+    file_->read(header.data(), kHeaderBytes);
     const auto channel_bytes = static_cast<std::int32_t>(big_endian(header.data() + 20, 4));
     const auto data_bytes = static_cast<std::int32_t>(big_endian(header.data() + 24, 4));
     const std::int64_t end = position_ + kHeaderBytes + channel_bytes + data_bytes;
@@ -74,9 +94,9 @@ bool LcmLogReader::read_event() {
     if (sound) {
       event_channel_.resize(static_cast<std::size_t>(channel_bytes));
       data_.resize(static_cast<std::size_t>(data_bytes));
-      file_.read(event_channel_.data(), channel_bytes);
-      file_.read(reinterpret_cast<char*>(data_.data()), data_bytes);
-      if (file_) {
+      file_->read(event_channel_.data(), channel_bytes);
+      file_->read(reinterpret_cast<char*>(data_.data()), data_bytes);
+      if (*file_) {
         position_ = end;
         return true;
       }
@@ -113,10 +133,10 @@ std::int64_t LcmLogReader::find_sync_word(std::int64_t from_byte) {
   std::array<char, 65536> chunk{};
   std::int64_t chunk_start = from_byte;
   while (chunk_start < size_bytes_) {
-    file_.clear();
-    file_.seekg(chunk_start);
-    file_.read(chunk.data(), chunk.size());
-    const auto n = static_cast<std::size_t>(file_.gcount());
+    file_->clear();
+    file_->seekg(chunk_start);
+    file_->read(chunk.data(), chunk.size());
+    const auto n = static_cast<std::size_t>(file_->gcount());
     if (n < kSync.size()) {
       return -1;
     }

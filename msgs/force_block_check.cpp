@@ -1,0 +1,94 @@
+#include "msgs/force_block_check.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace millwatch::messaging {
+namespace {
+
+std::uint64_t big_endian(const unsigned char* bytes, int n) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < n; ++i) {
+    v = (v << 8) | bytes[i];
+  }
+  return v;
+}
+
+std::string hex(std::uint64_t v) {
+  char text[24];
+  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(v));
+  return text;
+}
+
+}  // namespace
+
+ForceBlockCheck check_force_block(const void* data, std::size_t size_bytes,
+                                  std::int64_t max_samples) {
+  ForceBlockCheck c;
+  c.size_bytes = size_bytes;
+  c.max_samples = std::clamp<std::int64_t>(max_samples, 0, kForceBlockMaxEncodableSamples);
+  if (size_bytes < kForceBlockHeaderBytes) {
+    c.problem = ForceBlockProblem::kShorterThanHeader;
+    return c;
+  }
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  c.fingerprint = big_endian(bytes, 8);
+  c.num_samples = static_cast<std::int32_t>(static_cast<std::uint32_t>(big_endian(bytes + 32, 4)));
+  if (c.fingerprint != static_cast<std::uint64_t>(force_block_t::getHash())) {
+    c.problem = ForceBlockProblem::kWrongFingerprint;
+  } else if (c.num_samples < 0) {
+    c.problem = ForceBlockProblem::kNegativeCount;
+  } else if (size_bytes != kForceBlockHeaderBytes +
+                               kForceBlockSampleBytes * static_cast<std::size_t>(c.num_samples)) {
+    // In size_t: 24 · (2³¹ − 1) does not wrap.
+    c.problem = ForceBlockProblem::kWrongLength;
+  } else if (c.num_samples > c.max_samples) {
+    c.problem = ForceBlockProblem::kTooManySamples;
+  }
+  return c;
+}
+
+ForceBlockCheck decode_force_block(const void* data, std::size_t size_bytes,
+                                   std::int64_t max_samples, force_block_t& out) {
+  ForceBlockCheck c = check_force_block(data, size_bytes, max_samples);
+  if (c.ok()) {
+    // decode() leaves the arrays as they were for num_samples 0: a reused message must not
+    // keep its last samples. (clear() keeps the capacity: no allocation for a reused message.)
+    out.fx_N.clear();
+    out.fy_N.clear();
+    out.fz_N.clear();
+    // size_bytes ≤ 36 + 24 · kForceBlockMaxEncodableSamples fits an int.
+    const int used = out.decode(data, 0, static_cast<int>(size_bytes));
+    if (used != static_cast<int>(size_bytes)) {  // cannot happen after the check
+      c.problem = ForceBlockProblem::kWrongLength;
+    }
+  }
+  return c;
+}
+
+std::string ForceBlockCheck::describe() const {
+  const std::string n = std::to_string(num_samples);
+  switch (problem) {
+    case ForceBlockProblem::kNone:
+      return "a whole force_block_t of " + n + " samples";
+    case ForceBlockProblem::kShorterThanHeader:
+      return std::to_string(size_bytes) + " bytes, fewer than force_block_t's " +
+             std::to_string(kForceBlockHeaderBytes) + "-byte header";
+    case ForceBlockProblem::kWrongFingerprint:
+      return "fingerprint " + hex(fingerprint) + " is not force_block_t's " +
+             hex(static_cast<std::uint64_t>(force_block_t::getHash()));
+    case ForceBlockProblem::kNegativeCount:
+      return "num_samples " + n + " is negative";
+    case ForceBlockProblem::kWrongLength:
+      return std::to_string(kForceBlockHeaderBytes) + " + " +
+             std::to_string(kForceBlockSampleBytes) + " x " + n + " = " +
+             std::to_string(static_cast<std::int64_t>(kForceBlockHeaderBytes) +
+                            static_cast<std::int64_t>(kForceBlockSampleBytes) * num_samples) +
+             " bytes expected for num_samples " + n + ", got " + std::to_string(size_bytes);
+    case ForceBlockProblem::kTooManySamples:
+      return "num_samples " + n + " is more than the maximum of " + std::to_string(max_samples);
+  }
+  return "unknown problem";
+}
+
+}  // namespace millwatch::messaging

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (tests/fuzz: one per reader — CSV, LCM log, raw LCM message as
+# millwatchd receives it, sidecar/monitor configuration, scenario, daemon configuration) with
+# clang under AddressSanitizer + UndefinedBehaviorSanitizer in build/fuzz, and runs each for
+# SECONDS (default 60) from its seed corpus (tests/fuzz/corpus/<target>). Fails on the first
+# crash, sanitizer report, leak, time-out or broken invariant; the input that did it is left in
+# build/fuzz/runs/<target>/ (crash-*, leak-*, timeout-*) — make it a regression test in the
+# GoogleTest suite. New inputs the fuzzers find go to build/fuzz/runs/<target>/corpus, never
+# into the seeds. Needs the packages of scripts/install-deps.sh (clang, libclang-rt-14-dev).
+#   scripts/fuzz.sh [SECONDS] [TARGET...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+shift || true
+targets=("$@")
+if ((${#targets[@]} == 0)); then
+  targets=(csv_cut_reader lcm_log_reader force_block monitor_config scenario daemon_config)
+fi
+build=build/fuzz
+
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DMILLWATCH_FUZZ=ON -DMILLWATCH_BUILD_TESTS=OFF \
+  -DMILLWATCH_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build "$build" -j "$(nproc)" --target fuzzers
+
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+for target in "${targets[@]}"; do
+  case $target in
+    csv_cut_reader) dict=tests/fuzz/dict/csv.dict ;;
+    monitor_config | scenario | daemon_config) dict=tests/fuzz/dict/json.dict ;;
+    *) dict= ;;
+  esac
+  runs="$build/runs/$target"
+  mkdir -p "$runs/corpus"
+  echo "== fuzz_$target: ${seconds} s"
+  # -rss_limit_mb: a reader must never allocate what a damaged input asks for.
+  "$build/tests/fuzz/fuzz_$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=1024 \
+    -max_len=16384 -print_final_stats=1 -artifact_prefix="$runs/" ${dict:+-dict="$dict"} \
+    "$runs/corpus" "tests/fuzz/corpus/$target" 2>"$runs/log.txt" || {
+    tail -n 60 "$runs/log.txt" >&2
+    echo "fuzz_$target failed: the input is in $runs/ (crash-*, leak-*, timeout-*, oom-*)" >&2
+    exit 1
+  }
+  grep -E '^stat::(number_of_executed_units|new_units_added|peak_rss_mb)' "$runs/log.txt" |
+    tr '\n' ' '
+  echo
+done
+echo "== fuzzing passed: ${#targets[@]} targets, ${seconds} s each, no crash"

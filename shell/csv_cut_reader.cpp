@@ -1,0 +1,218 @@
+#include "shell/csv_cut_reader.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include "core/monitor/input_check.hpp"
+
+namespace millwatch::shell {
+namespace {
+
+constexpr const char* kHeader = "t_s,fx_N,fy_N,fz_N";
+
+/// A number out of a double's range ("1e400", "-1e999", "1e-400") as the value it stands for:
+/// ±infinity, or zero when the exponent is negative.
+double out_of_range_value(const char* first, const char* last) {
+  const bool negative = first < last && *first == '-';
+  bool tiny = false;
+  for (const char* p = first; p + 1 < last; ++p) {
+    if (*p == 'e' || *p == 'E') {
+      tiny = p[1] == '-';
+    }
+  }
+  const double magnitude = tiny ? 0.0 : std::numeric_limits<double>::infinity();
+  return negative ? -magnitude : magnitude;
+}
+
+/// Parses "a,b,c,d" into four doubles ("nan" and "inf" are numbers, found later as non-finite).
+const char* parse_row(const std::string& s, double* v) {
+  const char* p = s.data();
+  const char* end = s.data() + s.size();
+  for (int i = 0; i < 4; ++i) {
+    while (p < end && *p == ' ') {
+      ++p;
+    }
+    const auto r = std::from_chars(p, end, v[i]);
+    if (r.ec == std::errc::result_out_of_range) {
+      v[i] = out_of_range_value(p, r.ptr);  // from_chars leaves v[i] as it was
+    } else if (r.ec != std::errc()) {
+      return i == 0 ? "t_s is not a number" : "a force is not a number";
+    }
+    p = r.ptr;
+    while (p < end && *p == ' ') {
+      ++p;
+    }
+    if (i < 3) {
+      if (p == end || *p != ',') {
+        return "fewer than 4 columns";
+      }
+      ++p;
+    }
+  }
+  return p == end ? nullptr : "more than 4 columns";
+}
+
+/// Shortest text that reads back as `v`.
+std::string number(double v) {
+  std::array<char, 32> text{};
+  const auto r = std::to_chars(text.data(), text.data() + text.size(), v);
+  return {text.data(), r.ptr};
+}
+
+std::string at_line(double t_s, std::int64_t line) {
+  return number(t_s) + " on line " + std::to_string(line);
+}
+
+}  // namespace
+
+CsvCutReader::CsvCutReader(const std::filesystem::path& path, double sample_rate_hz,
+                           OnBadLine on_bad_line)
+    : sample_rate_hz_(sample_rate_hz), on_bad_line_(std::move(on_bad_line)) {
+  file_ = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*file_) {
+    throw std::runtime_error(path.string() + ": cannot read: " + std::strerror(errno));
+  }
+  in_ = file_.get();
+  read_header(path.string());
+}
+
+CsvCutReader::CsvCutReader(std::istream& in, const std::string& name, double sample_rate_hz,
+                           OnBadLine on_bad_line)
+    : in_(&in), sample_rate_hz_(sample_rate_hz), on_bad_line_(std::move(on_bad_line)) {
+  read_header(name);
+}
+
+void CsvCutReader::read_header(const std::string& name) {
+  if (!read_line() || text_ != kHeader) {
+    throw std::runtime_error(name + ":1: header is \"" + text_.substr(0, 80) + "\"; expected \"" +
+                             kHeader + "\"");
+  }
+}
+
+bool CsvCutReader::read_line() {
+  text_.clear();
+  if (!std::getline(*in_, text_)) {
+    return false;  // nothing left (a last line without its end-of-line is still read)
+  }
+  if (!text_.empty() && text_.back() == '\r') {
+    text_.pop_back();
+  }
+  return true;
+}
+
+void CsvCutReader::bad(std::int64_t line, const std::string& problem) {
+  ++bad_lines_;
+  if (on_bad_line_) {
+    on_bad_line_(line, problem);
+  }
+}
+
+bool CsvCutReader::parse_next(Row& row) {
+  double v[4] = {};
+  while (read_line()) {
+    ++line_;
+    if (text_.empty()) {
+      continue;
+    }
+    if (const char* problem = parse_row(text_, v); problem != nullptr) {
+      bad(line_, std::string(problem) + " in \"" + text_.substr(0, 60) + "\"");
+      continue;
+    }
+    if (!std::isfinite(v[0])) {
+      bad(line_, "t_s is not finite (" +
+                     text_.substr(0, std::min<std::size_t>(text_.find(','), 30)) + ")");
+      continue;
+    }
+    // In range: the block's utime (µs) stays within what the pipeline accepts.
+    if (!(std::fabs(v[0] * 1e6) <= static_cast<double>(monitor::kMaxAbsUtime_us))) {
+      bad(line_, "t_s " + number(v[0]) + " is out of range (more than " +
+                     number(static_cast<double>(monitor::kMaxAbsUtime_us) * 1e-6) + " s from 0)");
+      continue;
+    }
+    row.t_s = v[0];
+    row.f_N[0] = v[1];
+    row.f_N[1] = v[2];
+    row.f_N[2] = v[3];
+    row.line = line_;
+    return true;
+  }
+  return false;
+}
+
+bool CsvCutReader::next_row(Row& row) {
+  const double dt_s = 1.0 / sample_rate_hz_;
+  while (true) {
+    if (have_ahead_) {
+      row = ahead_;
+      have_ahead_ = false;
+    } else if (!parse_next(row)) {
+      return false;
+    }
+    if (have_last_ && !(row.t_s > last_.t_s)) {
+      bad(row.line, "t_s " + number(row.t_s) + " is not after the previous row's (" +
+                        at_line(last_.t_s, last_.line) + ")");
+      continue;
+    }
+    // A jump ahead (or the first row): a damaged time if the next row comes back before it;
+    // a gap in the recording leaves the next row after it.
+    if (!have_last_ || row.t_s - last_.t_s > 1.5 * dt_s) {
+      Row next;
+      if (parse_next(next)) {
+        ahead_ = next;
+        have_ahead_ = true;
+        if (next.t_s < row.t_s && (!have_last_ || next.t_s > last_.t_s)) {
+          bad(row.line, "t_s " + number(row.t_s) + " jumps ahead of the rows around it (" +
+                            (have_last_ ? at_line(last_.t_s, last_.line) + ", " : "") +
+                            at_line(next.t_s, next.line) + ")");
+          continue;
+        }
+      }
+    }
+    last_ = row;
+    have_last_ = true;
+    return true;
+  }
+}
+
+monitor::SampleBlock CsvCutReader::next(std::size_t max_samples) {
+  fx_.clear();
+  fy_.clear();
+  fz_.clear();
+  double t0 = 0.0;
+  Row row;
+  const double dt = 1.0 / sample_rate_hz_;
+  while (fx_.size() < max_samples) {
+    if (pending_) {
+      row = pending_row_;
+      pending_ = false;
+    } else if (!next_row(row)) {
+      break;
+    }
+    if (fx_.empty()) {
+      t0 = row.t_s;
+    } else if (std::fabs(row.t_s - (t0 + static_cast<double>(fx_.size()) * dt)) > 0.5 * dt) {
+      pending_row_ = row;  // time jumps: this row opens the next block
+      pending_ = true;
+      break;
+    }
+    fx_.push_back(row.f_N[0]);
+    fy_.push_back(row.f_N[1]);
+    fz_.push_back(row.f_N[2]);
+  }
+  monitor::SampleBlock b;
+  b.utime_us = std::llround(t0 * 1e6);  // |t0| ≤ kMaxAbsUtime_us µs: exact, no overflow
+  b.seq = seq_++;
+  b.sample_rate_hz = sample_rate_hz_;
+  b.fx_N = fx_;
+  b.fy_N = fy_;
+  b.fz_N = fz_;
+  return b;
+}
+
+}  // namespace millwatch::shell

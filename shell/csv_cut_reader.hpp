@@ -1,0 +1,80 @@
+#pragma once
+// Reads a recorded cut's CSV (header `t_s,fx_N,fy_N,fz_N`, a row per sample) into sample
+// blocks. A bad row is reported with its line number and skipped; a block ends where the
+// sample times stop following each other at the sample rate, so that a skipped row or a jump
+// in time reaches the pipeline as a gap (counted there), never as silently shifted samples.
+//
+// Bad rows: not four numbers; a time that is not finite, or beyond ±kMaxAbsUtime_us (about
+// ±9.0e9 s); a time not after the previous good row's (repeated or going back); a time that
+// jumps ahead of both its neighbours (the next row is between the previous good row and it: a
+// damaged time, not a gap in the recording, which would leave the next row after it).
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <istream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/monitor/sample_block.hpp"
+
+namespace millwatch::shell {
+
+class CsvCutReader {
+ public:
+  /// Called for each bad row with its line number (1-based, the header is line 1) and what is
+  /// wrong with it.
+  using OnBadLine = std::function<void(std::int64_t line, const std::string& problem)>;
+
+  /// Reads the file at `path`.
+  /// @throws std::runtime_error "PATH: cannot read" or "PATH:1: header is ...; expected ...".
+  CsvCutReader(const std::filesystem::path& path, double sample_rate_hz, OnBadLine on_bad_line);
+  /// Reads `in` (which must outlive the reader), named `name` in errors.
+  /// @throws std::runtime_error "NAME:1: header is ...; expected ...".
+  CsvCutReader(std::istream& in, const std::string& name, double sample_rate_hz,
+               OnBadLine on_bad_line);
+  CsvCutReader(const CsvCutReader&) = delete;
+  CsvCutReader& operator=(const CsvCutReader&) = delete;
+
+  /// The next block of at most `max_samples` (views valid until the next call); an empty block
+  /// at the end of the file.
+  monitor::SampleBlock next(std::size_t max_samples);
+  [[nodiscard]] std::int64_t bad_lines() const { return bad_lines_; }
+  [[nodiscard]] std::int64_t lines() const { return line_; }
+
+ private:
+  struct Row {
+    double t_s = 0.0;
+    double f_N[3] = {};
+    std::int64_t line = 0;
+  };
+
+  void read_header(const std::string& name);
+  /// Reads one line without its end-of-line into text_; false at the end of the input.
+  bool read_line();
+  /// The next row of four numbers with a finite time in range; false at the end.
+  bool parse_next(Row& row);
+  /// The next row whose time is in order; false at the end.
+  bool next_row(Row& row);
+  void bad(std::int64_t line, const std::string& problem);
+
+  std::unique_ptr<std::ifstream> file_;  // when reading a path
+  std::istream* in_ = nullptr;
+  double sample_rate_hz_;
+  OnBadLine on_bad_line_;
+  std::int64_t line_ = 1;
+  std::int64_t bad_lines_ = 0;
+  std::int64_t seq_ = 0;
+  bool have_last_ = false;  // a row was accepted; last_ is it
+  Row last_;
+  bool have_ahead_ = false;  // a row read ahead to judge a jump in time
+  Row ahead_;
+  bool pending_ = false;  // an accepted row that starts the next block
+  Row pending_row_;
+  std::vector<double> fx_, fy_, fz_;
+  std::string text_;
+};
+
+}  // namespace millwatch::shell

@@ -1,0 +1,104 @@
+#include "shell/monitor_run.hpp"
+
+#include <utility>
+
+namespace millwatch::shell {
+namespace {
+
+/// Adds a pipeline's counts (before it is replaced) to `total`.
+void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
+  auto& t = total.input;
+  const auto& c = s.input;
+  t.samples_in += c.samples_in;
+  t.samples_accepted += c.samples_accepted;
+  t.samples_dropped += c.samples_dropped;
+  t.samples_flagged += c.samples_flagged;
+  t.nonfinite_samples += c.nonfinite_samples;
+  t.saturated_samples += c.saturated_samples;
+  t.gaps += c.gaps;
+  t.out_of_order_blocks += c.out_of_order_blocks;
+  t.blocks_rejected += c.blocks_rejected;
+  total.revolutions += s.revolutions;
+  total.valid_revolutions += s.valid_revolutions;
+  total.idle_revolutions += s.idle_revolutions;
+}
+
+}  // namespace
+
+MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
+    : options_(std::move(options)),
+      summary_(config),
+      shell_sink_(summary_, options_.source_name),
+      last_status_wall_(std::chrono::steady_clock::now()) {
+  if (options_.lcm != nullptr) {
+    output_ =
+        std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);
+  }
+  pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
+}
+
+MonitorRun::~MonitorRun() = default;
+
+monitor::PipelineSink& MonitorRun::sink() {
+  if (output_) {
+    return *output_;
+  }
+  return shell_sink_;
+}
+
+void MonitorRun::process(const monitor::SampleBlock& block) {
+  pipeline_->process(block);
+  if (status_due_ || block.utime_us >= next_status_utime_us_) {
+    publish_status();
+    status_due_ = false;
+    next_status_utime_us_ =
+        block.utime_us + static_cast<std::int64_t>(options_.status_period_s * 1e6);
+  }
+}
+
+void MonitorRun::idle() {
+  if (std::chrono::steady_clock::now() - last_status_wall_ >
+      std::chrono::duration<double>(options_.status_period_s)) {
+    publish_status();
+  }
+}
+
+std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
+    std::unique_ptr<monitor::Pipeline> next) {
+  pipeline_->finish();  // samples held for zero-phase filtering are measured first
+  carry(carried_, pipeline_->status());
+  return std::exchange(pipeline_, std::move(next));
+}
+
+monitor::PipelineStatus MonitorRun::status() const {
+  monitor::PipelineStatus s = pipeline_->status();
+  carry(s, carried_);
+  if (options_.source_losses) {
+    options_.source_losses(s);
+  }
+  return s;
+}
+
+void MonitorRun::publish_status() {
+  if (output_) {
+    output_->publish_status(status());
+  }
+  last_status_wall_ = std::chrono::steady_clock::now();
+}
+
+void MonitorRun::finish() {
+  pipeline_->finish();
+  const monitor::PipelineStatus final_status = status();
+  if (output_) {
+    output_->publish_status(final_status);
+  }
+  summary_.finish(final_status);
+}
+
+void MonitorRun::drain() {
+  if (output_) {
+    output_->drain();
+  }
+}
+
+}  // namespace millwatch::shell

@@ -1,0 +1,64 @@
+// libFuzzer: one raw-sample datagram as millwatchd receives it. The bytes go over in-process LCM
+// (memq://) to the daemon's LcmSource, which checks and decodes them into the block queue; a
+// queued block then goes through InputCheck. Also the check itself: a message it passes decodes
+// to exactly its declared count.
+
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+
+#include "daemon/lcm_source.hpp"
+#include "fuzz_support.hpp"
+#include "msgs/force_block_check.hpp"
+
+using namespace millwatch;
+
+namespace {
+
+constexpr std::int64_t kMax = 512;
+
+struct Daemon {
+  lcm::LCM lcm{"memq://"};
+  std::unique_ptr<daemon::BlockQueue> queue = std::make_unique<daemon::BlockQueue>();
+  daemon::SourceCounters counters;
+  daemon::LcmSource source{lcm, "RAW", kMax, *queue, counters};
+  std::unique_ptr<daemon::BlockSlot> slot = std::make_unique<daemon::BlockSlot>();
+  monitor::InputCheck check{[] {
+    monitor::InputCheckConfig c;
+    c.sample_rate_hz = 50000.0;
+    c.max_block_samples = daemon::BlockSlot::kMaxSamples;
+    return c;
+  }()};
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const messaging::ForceBlockCheck c = messaging::check_force_block(data, size, kMax);
+  force_block_t m;
+  const messaging::ForceBlockCheck decoded = messaging::decode_force_block(data, size, kMax, m);
+  MW_FUZZ_CHECK(c.problem == decoded.problem);
+  MW_FUZZ_CHECK(!c.describe().empty());
+  if (c.ok()) {
+    MW_FUZZ_CHECK(m.num_samples == c.num_samples);
+    MW_FUZZ_CHECK(static_cast<std::int64_t>(m.fx_N.size()) == c.num_samples);
+    MW_FUZZ_CHECK(m.fy_N.size() == m.fx_N.size() && m.fz_N.size() == m.fx_N.size());
+  }
+
+  static Daemon daemon;
+  const std::int64_t before = daemon.counters.messages.load();
+  daemon.lcm.publish("RAW", data, static_cast<unsigned>(size));
+  MW_FUZZ_CHECK(daemon.lcm.handleTimeout(1000) == 1);
+  MW_FUZZ_CHECK(daemon.counters.messages.load() == before + 1);
+  while (daemon.queue->try_pop(*daemon.slot)) {
+    MW_FUZZ_CHECK(c.ok());
+    MW_FUZZ_CHECK(static_cast<std::int64_t>(daemon.slot->count) == c.num_samples);
+    fuzz::check_block(daemon.check, daemon.slot->view());
+  }
+  return 0;
+}
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::quiet();
+  return 0;
+}
