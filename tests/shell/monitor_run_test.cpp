@@ -8,7 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <vector>
 
-#include "millwatch/pipeline_status_t.hpp"
+#include "millwatch/pipeline_status2_t.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -31,8 +31,8 @@ struct Blocks {
 };
 
 struct StatusLog {
-  std::vector<pipeline_status_t> messages;
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status_t* m) {
+  std::vector<pipeline_status2_t> messages;
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status2_t* m) {
     messages.push_back(*m);
   }
 };
