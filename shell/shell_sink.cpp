@@ -29,6 +29,20 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
     case monitor::PipelineEventKind::kCuttingResumed:
       spdlog::info("{}: cutting resumed (t = {:.3f} s)", source_, t_s);
       return;
+    case monitor::PipelineEventKind::kCuttingStopped:
+      spdlog::info("{}: cutting stopped (t = {:.3f} s)", source_, t_s);
+      return;
+    case monitor::PipelineEventKind::kLockLost:
+      spdlog::info("{}: spindle lock lost (t = {:.3f} s): {}", source_, t_s, e.detail);
+      return;
+    case monitor::PipelineEventKind::kRecordTooShort:
+      spdlog::warn("{}: record too short: {:.4f} s of samples, {:.4f} s needed; {}", source_,
+                   static_cast<double>(e.count) / summary_.config().sample_rate_hz, e.value,
+                   e.detail);
+      return;
+    case monitor::PipelineEventKind::kNoSteadySignal:
+      spdlog::warn("{}: no steady tooth-passing signal, no speed stated: {}", source_, e.detail);
+      return;
     default:
       break;
   }

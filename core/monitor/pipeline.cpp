@@ -219,7 +219,7 @@ void Pipeline::finish() {
   }
   // Say why nothing was measured.
   const signal::TrackerTiming t = signal::tracker_timing(tracker_config(config_));
-  const double needed_s = t.window_s + t.hop_s;  // two successive windows that agree
+  const double needed_s = 2.0 * t.window_s;  // two windows a window apart that agree
   const std::int64_t samples = input_.counters().samples_accepted;
   const std::int64_t at = std::max<std::int64_t>(0, last_sample_);
   if (samples == 0) {
@@ -227,8 +227,8 @@ void Pipeline::finish() {
   }
   if (static_cast<double>(samples) < needed_s * config_.sample_rate_hz) {
     event(PipelineEventKind::kRecordTooShort, at, samples, needed_s,
-          "the spindle tracker needs two successive windows (spindle.window_s + hop_s) of "
-          "cutting to lock");
+          "the spindle tracker locks on two windows (spindle.window_s) of steady cutting that "
+          "agree");
   } else if (inconsistent_windows_ > 0) {
     event(PipelineEventKind::kNoSteadySignal, at, inconsistent_windows_, 0.0,
           "weak or irregular cutting: tooth-passing lines came and went, but no two windows a "

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace millwatch::monitor {
@@ -97,10 +98,17 @@ void RunSummary::add(const PipelineEvent& e) {
       break;
   }
   const std::string kind(to_string(e.kind));
+  std::string detail(e.detail);
+  if (e.kind == PipelineEventKind::kRecordTooShort) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%.4f s of samples, %.4f s needed: ",
+                  static_cast<double>(e.count) / config_.sample_rate_hz, e.value);
+    detail = text + detail;
+  }
   auto it = std::find_if(warnings_.begin(), warnings_.end(),
                          [&](const Warning& w) { return w.kind == kind; });
   if (it == warnings_.end()) {
-    warnings_.push_back({kind, 0, 0, e.utime_us, std::string(e.detail)});
+    warnings_.push_back({kind, 0, 0, e.utime_us, detail});
     it = warnings_.end() - 1;
   }
   ++it->occurrences;

@@ -34,6 +34,7 @@ class RunSummary {
 
   [[nodiscard]] nlohmann::json to_json() const;
   [[nodiscard]] std::int64_t valid_revolutions() const { return valid_; }
+  [[nodiscard]] const MonitorConfig& config() const { return config_; }
 
  private:
   struct Running {

@@ -162,8 +162,8 @@ TEST(EveryRevolution, ARecordTooShortSaysWhatItNeeds) {
   const PipelineEvent* e = out.first(PipelineEventKind::kRecordTooShort);
   ASSERT_NE(e, nullptr);
   EXPECT_EQ(e->count, 750);
-  // 10 revolutions at 25,000 rpm, plus a hop: 0.024 + 0.006 s.
-  EXPECT_NEAR(e->value, 0.030, 1e-9);
+  // Two windows of 10 revolutions at 25,000 rpm: 2 × 0.024 s.
+  EXPECT_NEAR(e->value, 0.048, 1e-9);
 }
 
 // Issue 6 §10: during a feed hold (the spindle decelerates to rest, dwells, restarts) nothing
