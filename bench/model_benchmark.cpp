@@ -1,30 +1,158 @@
-// Cost of the physics: one revolution of the full model, an update after a parameter change
-// (what identification pays per trial), and the recorded-cut simulator's throughput.
+// Cost of the physics: the steady-state evaluator (plain model, lockstep model, full model,
+// force basis, a lockstep-style rebuild at a new speed), the time-marching model (one revolution,
+// an update after a parameter change) and the recorded-cut simulator's throughput.
 //
-//   build/bench/model_benchmark --benchmark_min_time=1
+//   build/release/bench/model_benchmark --benchmark_min_time=1
 
 #include <benchmark/benchmark.h>
 
+#include <array>
+#include <complex>
+#include <span>
 #include <vector>
 
 #include "core/model/milling_model.hpp"
+#include "core/model/periodic_response.hpp"
+#include "core/model/steady_state.hpp"
+#include "core/signal/butterworth_lowpass.hpp"
 #include "core/sim/cut_simulator.hpp"
 
 namespace {
 
 using millwatch::model::ModelConfig;
 
+constexpr int kSteps = 720;
+
 /// 2 flutes, 10 discs, 0.5° steps, every effect on.
 ModelConfig full_model() {
   ModelConfig c;  // [000]'s cp-Ti case: runout, trochoid, multi-pass, min chip, accumulation,
                   // deflection and 10 helix discs are on by default
-  c.resolution.steps_per_rev = 720;
+  c.resolution.steps_per_rev = kSteps;
   c.effects.helix_lag.discs = 10;
   c.effects.flank_wear.enabled = true;
   c.effects.flank_wear.wear_um = {5.0, 3.0};
   c.effects.dynamometer.enabled = true;
   return c;
 }
+
+/// The plain model: circular path, one regime, rigid, sharp; helix lag on with 5 discs.
+ModelConfig plain_model() {
+  ModelConfig c = millwatch::model::without_effects(ModelConfig{});
+  c.effects.helix_lag.enabled = true;
+  c.effects.helix_lag.discs = 5;
+  return c;
+}
+
+/// The lockstep's model: the plain model with runout.
+ModelConfig lockstep_model() {
+  ModelConfig c = plain_model();
+  c.effects.runout.enabled = true;
+  return c;
+}
+
+void steady_state(
+    benchmark::State& state, const ModelConfig& c,
+    millwatch::model::SteadyStateOutput output = millwatch::model::SteadyStateOutput::kMean) {
+  millwatch::model::SteadyStateWorkspace ws(c, kSteps);
+  double rpm = 25000.0;
+  for (auto _ : state) {
+    rpm = rpm == 25000.0 ? 25001.0 : 25000.0;  // a new speed each time (nothing cached)
+    const auto& s = millwatch::model::evaluate_steady_state(c, rpm, kSteps, ws, output);
+    benchmark::DoNotOptimize(s.mean.fx_N.data());
+  }
+  const auto& s = ws.result();
+  state.counters["cycle_revs"] = s.cycle_revolutions;
+  state.counters["passes"] = static_cast<double>(s.stats.passes);
+}
+
+void BM_SteadyStatePlain(benchmark::State& state) {
+  steady_state(state, plain_model());
+}
+BENCHMARK(BM_SteadyStatePlain)->Unit(benchmark::kMicrosecond);
+
+void BM_SteadyStatePlainWithRunout(benchmark::State& state) {
+  steady_state(state, lockstep_model());
+}
+BENCHMARK(BM_SteadyStatePlainWithRunout)->Unit(benchmark::kMicrosecond);
+
+void BM_SteadyStateFull(benchmark::State& state) {
+  steady_state(state, full_model());
+}
+BENCHMARK(BM_SteadyStateFull)->Unit(benchmark::kMicrosecond);
+
+/// The same with the accumulation cycle materialised (what the simulator asks for).
+void BM_SteadyStateFullWithCycle(benchmark::State& state) {
+  steady_state(state, full_model(), millwatch::model::SteadyStateOutput::kMeanAndCycle);
+}
+BENCHMARK(BM_SteadyStateFullWithCycle)->Unit(benchmark::kMicrosecond);
+
+/// A fitter's trial: new runout, same speed (the chip tables are rebuilt, as for any new
+/// geometry).
+void BM_SteadyStateFullAfterRunoutChange(benchmark::State& state) {
+  ModelConfig c = full_model();
+  millwatch::model::SteadyStateWorkspace ws(c, kSteps);
+  int i = 0;
+  for (auto _ : state) {
+    c.effects.runout.offset_um = 1.5 + 0.001 * (i++ % 100);
+    benchmark::DoNotOptimize(millwatch::model::evaluate_steady_state(
+                                 c, 25000.0, kSteps, ws, millwatch::model::SteadyStateOutput::kMean)
+                                 .mean.fx_N.data());
+  }
+}
+BENCHMARK(BM_SteadyStateFullAfterRunoutChange)->Unit(benchmark::kMicrosecond);
+
+/// The six linear-edge basis waveforms of the lockstep model (rigid, so the basis is valid).
+void BM_ForceBasisLinearEdge(benchmark::State& state) {
+  ModelConfig c = lockstep_model();
+  c.material.law = millwatch::model::ForceLawKind::kLinearEdge;
+  millwatch::model::SteadyStateWorkspace ws(c, kSteps);
+  for (auto _ : state) {
+    const auto& b = millwatch::model::evaluate_force_basis(c, 25000.0, kSteps, ws);
+    benchmark::DoNotOptimize(b.unit[0].fx_N.data());
+  }
+}
+BENCHMARK(BM_ForceBasisLinearEdge)->Unit(benchmark::kMicrosecond);
+
+/// What Lockstep::set_spindle_hz pays for a new measured speed: the configuration at that speed
+/// (feed rate fixed), the steady state, and the monitor's causal Butterworth low-pass applied to
+/// each axis as its periodic steady state (harmonic k times H(k·f)).
+void lockstep_rebuild(benchmark::State& state, const ModelConfig& commanded) {
+  ModelConfig at_speed = commanded;
+  millwatch::model::SteadyStateWorkspace ws(commanded, kSteps);
+  millwatch::model::PeriodicResponse response(kSteps);
+  const auto design = millwatch::signal::ButterworthDesign::lowpass(333300.0, 3300.0, 4);
+  std::array<std::vector<double>, 3> filtered;
+  for (auto& f : filtered) {
+    f.resize(kSteps);
+  }
+  std::vector<std::complex<double>> gains(static_cast<std::size_t>(response.harmonics()));
+  double rpm = 25252.0;
+  for (auto _ : state) {
+    rpm = rpm == 25252.0 ? 25300.0 : 25252.0;
+    millwatch::model::at_actual_speed(commanded, rpm, at_speed);
+    const auto& s = millwatch::model::evaluate_steady_state(
+        at_speed, rpm, kSteps, ws, millwatch::model::SteadyStateOutput::kMean);
+    millwatch::model::harmonic_gains([&](double f) { return design.response(f); }, rpm / 60.0,
+                                     millwatch::model::ResponseUse::kComplex, gains);
+    const std::array<const std::vector<double>*, 3> axes = {&s.mean.fx_N, &s.mean.fy_N,
+                                                            &s.mean.fz_N};
+    for (std::size_t a = 0; a < 3; ++a) {
+      std::copy(axes[a]->begin(), axes[a]->end(), filtered[a].begin());
+      response.apply(filtered[a], gains);
+    }
+    benchmark::DoNotOptimize(filtered[0].data());
+  }
+}
+
+void BM_LockstepRebuildPlainWithRunout(benchmark::State& state) {
+  lockstep_rebuild(state, lockstep_model());
+}
+BENCHMARK(BM_LockstepRebuildPlainWithRunout)->Unit(benchmark::kMicrosecond);
+
+void BM_LockstepRebuildFull(benchmark::State& state) {
+  lockstep_rebuild(state, full_model());
+}
+BENCHMARK(BM_LockstepRebuildFull)->Unit(benchmark::kMicrosecond);
 
 void BM_FullModelRevolution(benchmark::State& state) {
   millwatch::model::MillingModel model(full_model());

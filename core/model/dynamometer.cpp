@@ -48,4 +48,13 @@ std::complex<double> Resonance::response(double frequency_hz) const {
   return (b0_ + b1_ * z1 + b2_ * z1 * z1) / (1.0 + a1_ * z1 + a2_ * z1 * z1);
 }
 
+std::complex<double> resonance_response(double natural_hz, double damping_ratio,
+                                        double frequency_hz) {
+  const double u = frequency_hz / natural_hz;
+  const double re = 1.0 - u * u;
+  const double im = 2.0 * damping_ratio * u;
+  const double d = re * re + im * im;
+  return {re / d, -im / d};
+}
+
 }  // namespace millwatch::model

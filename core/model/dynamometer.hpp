@@ -52,6 +52,14 @@ class Resonance {
   double decay_time_s_ = 0.0;
 };
 
+/// The continuous-time response of one axis at frequency f (Hz), the same H(s) at s = i·2πf:
+///   H(f) = 1 / (1 − (f/f_n)² + 2iζ·f/f_n)
+/// (unit gain at DC, 1/(2ζ) at f_n with −90° phase). The steady-state evaluator applies it to
+/// every harmonic of the revolution (steady_state.hpp), so it does not depend on an angle grid.
+/// @param natural_hz f_n > 0, @param damping_ratio ζ > 0, @param frequency_hz f ≥ 0
+std::complex<double> resonance_response(double natural_hz, double damping_ratio,
+                                        double frequency_hz);
+
 /// Three axes (x, y, z).
 struct Dynamometer {
   std::array<Resonance, 3> axis;

@@ -1,0 +1,119 @@
+#include "core/model/periodic_response.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace millwatch::model {
+namespace {
+
+/// FFTW's planner is not thread-safe; execution is.
+std::mutex& planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+}  // namespace
+
+PeriodicResponse::PeriodicResponse(int samples_per_period) {
+  if (samples_per_period < 2) {
+    throw std::invalid_argument("PeriodicResponse: samples_per_period must be >= 2, got " +
+                                std::to_string(samples_per_period));
+  }
+  samples_ = samples_per_period;
+  const auto n = static_cast<std::size_t>(samples_);
+  const std::size_t h = n / 2 + 1;
+  const std::lock_guard lock(planner_mutex());
+  time_ = fftw_alloc_real(n);
+  auto* spectrum = fftw_alloc_complex(h);
+  spectrum_ = reinterpret_cast<std::complex<double>*>(spectrum);
+  gains_ = reinterpret_cast<std::complex<double>*>(fftw_alloc_complex(h));
+  forward_ = fftw_plan_dft_r2c_1d(samples_, time_, spectrum, FFTW_ESTIMATE);
+  backward_ = fftw_plan_dft_c2r_1d(samples_, spectrum, time_, FFTW_ESTIMATE);
+  if (time_ == nullptr || spectrum_ == nullptr || gains_ == nullptr || forward_ == nullptr ||
+      backward_ == nullptr) {
+    throw std::runtime_error("PeriodicResponse: FFTW could not set up " + std::to_string(n) +
+                             " points");
+  }
+}
+
+PeriodicResponse::~PeriodicResponse() {
+  release();
+}
+
+PeriodicResponse::PeriodicResponse(PeriodicResponse&& other) noexcept
+    : samples_(std::exchange(other.samples_, 0)),
+      time_(std::exchange(other.time_, nullptr)),
+      spectrum_(std::exchange(other.spectrum_, nullptr)),
+      gains_(std::exchange(other.gains_, nullptr)),
+      forward_(std::exchange(other.forward_, nullptr)),
+      backward_(std::exchange(other.backward_, nullptr)) {}
+
+PeriodicResponse& PeriodicResponse::operator=(PeriodicResponse&& other) noexcept {
+  if (this != &other) {
+    release();
+    samples_ = std::exchange(other.samples_, 0);
+    time_ = std::exchange(other.time_, nullptr);
+    spectrum_ = std::exchange(other.spectrum_, nullptr);
+    gains_ = std::exchange(other.gains_, nullptr);
+    forward_ = std::exchange(other.forward_, nullptr);
+    backward_ = std::exchange(other.backward_, nullptr);
+  }
+  return *this;
+}
+
+void PeriodicResponse::release() {
+  if (time_ == nullptr && forward_ == nullptr && backward_ == nullptr) {
+    return;
+  }
+  const std::lock_guard lock(planner_mutex());
+  if (forward_ != nullptr) {
+    fftw_destroy_plan(forward_);
+  }
+  if (backward_ != nullptr) {
+    fftw_destroy_plan(backward_);
+  }
+  fftw_free(time_);
+  fftw_free(spectrum_);
+  fftw_free(gains_);
+  forward_ = backward_ = nullptr;
+  time_ = nullptr;
+  spectrum_ = gains_ = nullptr;
+  samples_ = 0;
+}
+
+std::span<std::complex<double>> PeriodicResponse::gain_buffer() {
+  return {gains_, static_cast<std::size_t>(harmonics())};
+}
+
+void PeriodicResponse::apply(std::span<double> waveform,
+                             std::span<const std::complex<double>> gains) {
+  const auto n = static_cast<std::size_t>(samples_);
+  const auto h = static_cast<std::size_t>(harmonics());
+  if (samples_ == 0 || waveform.size() != n || gains.size() != h) {
+    throw std::invalid_argument("PeriodicResponse::apply: expected " + std::to_string(n) +
+                                " samples and " + std::to_string(h) + " gains, got " +
+                                std::to_string(waveform.size()) + " and " +
+                                std::to_string(gains.size()));
+  }
+  std::copy(waveform.begin(), waveform.end(), time_);
+  fftw_execute(forward_);
+  const double scale = 1.0 / static_cast<double>(n);
+  // DC (and the Nyquist harmonic of an even length) are real cosines: only Re(gain) acts.
+  const std::size_t last_complex = n % 2 == 0 ? h - 1 : h;
+  spectrum_[0] = std::real(spectrum_[0]) * std::real(gains[0]) * scale;
+  for (std::size_t k = 1; k < last_complex; ++k) {
+    spectrum_[k] *= gains[k] * scale;
+  }
+  if (last_complex < h) {
+    spectrum_[h - 1] = std::real(spectrum_[h - 1]) * std::real(gains[h - 1]) * scale;
+  }
+  fftw_execute(backward_);
+  std::copy(time_, time_ + n, waveform.begin());
+}
+
+}  // namespace millwatch::model
