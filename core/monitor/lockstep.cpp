@@ -10,8 +10,6 @@ namespace millwatch::monitor {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr int kAveragedRevolutions = 8;
-constexpr int kWarmUpRevolutions = 30;  // enough for deflection and accumulation to settle
 
 double wrap_2pi(double a) {
   a = std::fmod(a, kTwoPi);
@@ -22,7 +20,20 @@ double wrap_2pi(double a) {
 
 Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
                    bool zero_phase)
-    : commanded_(model), config_(model), filter_(filter), zero_phase_(zero_phase) {}
+    : commanded_(model),
+      config_(model),
+      filter_(filter),
+      zero_phase_(zero_phase),
+      workspace_(model, model.resolution.steps_per_rev),
+      response_(model.resolution.steps_per_rev) {
+  const auto steps = static_cast<std::size_t>(model.resolution.steps_per_rev);
+  for (auto* axis : {&waveform_.fx_N, &waveform_.fy_N, &waveform_.fz_N}) {
+    axis->assign(steps, 0.0);
+  }
+  for (auto& f : filtered_) {
+    f.assign(steps, 0.0);
+  }
+}
 
 bool Lockstep::set_spindle_hz(double spindle_hz) {
   if (built_ && std::fabs(spindle_hz - spindle_hz_) <= 0.002 * spindle_hz_) {
@@ -30,72 +41,30 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   }
   spindle_hz_ = spindle_hz;
   const double rpm = 60.0 * spindle_hz;
-  config_ = commanded_;
-  config_.process.spindle_rpm = rpm;
   // The feed rate is what the control commands: a faster spindle cuts thinner chips.
-  config_.process.feed_per_tooth_um =
-      commanded_.process.feed_per_tooth_um * commanded_.process.spindle_rpm / rpm;
-  model::MillingModel m(config_);
-  m.warm_up(kWarmUpRevolutions);
-  // Near h_min the two-regime law with deflection and accumulation makes chips differ from pass
-  // to pass: the model's typical revolution is the mean of several, like the measured average.
-  waveform_ = m.forces();
-  for (int r = 1; r < kAveragedRevolutions; ++r) {
-    m.step_revolution();
-    const auto& f = m.forces();
-    for (std::size_t k = 0; k < f.fx_N.size(); ++k) {
-      waveform_.fx_N[k] += f.fx_N[k];
-      waveform_.fy_N[k] += f.fy_N[k];
-      waveform_.fz_N[k] += f.fz_N[k];
-    }
-  }
-  for (auto* axis : {&waveform_.fx_N, &waveform_.fy_N, &waveform_.fz_N}) {
-    for (double& v : *axis) {
-      v /= kAveragedRevolutions;
-    }
-  }
+  model::at_actual_speed(commanded_, rpm, config_);
+  const int steps = commanded_.resolution.steps_per_rev;
+  const model::SteadyState& s = model::evaluate_steady_state(config_, rpm, steps, workspace_,
+                                                             model::SteadyStateOutput::kMean);
+  std::copy(s.mean.fx_N.begin(), s.mean.fx_N.end(), waveform_.fx_N.begin());
+  std::copy(s.mean.fy_N.begin(), s.mean.fy_N.end(), waveform_.fy_N.begin());
+  std::copy(s.mean.fz_N.begin(), s.mean.fz_N.end(), waveform_.fz_N.begin());
   filter_periodic();
   built_ = true;
   return true;
 }
 
 void Lockstep::filter_periodic() {
-  // Steady state of the causal filter on the periodic model force: each harmonic k of the
-  // spindle frequency is multiplied by H(k·f). A DFT by phasor recursion (this runs once per
-  // model build, on a few hundred points).
-  const std::size_t n = waveform_.fx_N.size();
-  const std::size_t half = n / 2;
+  // The causal filter's steady state on the periodic model force (or |H|² for forwards and
+  // backwards): each harmonic k of the spindle frequency times H(k·f).
+  const auto response = [this](double hz) { return filter_.response(hz); };
+  const model::ResponseUse use =
+      zero_phase_ ? model::ResponseUse::kPower : model::ResponseUse::kComplex;
   const std::array<const std::vector<double>*, 3> in = {&waveform_.fx_N, &waveform_.fy_N,
                                                         &waveform_.fz_N};
-  std::vector<std::complex<double>> gain(half + 1);
-  for (std::size_t k = 0; k <= half; ++k) {
-    const std::complex<double> h = filter_.response(static_cast<double>(k) * spindle_hz_);
-    gain[k] = zero_phase_ ? std::norm(h) : h;
-  }
-  std::vector<std::complex<double>> spectrum(half + 1);
   for (std::size_t a = 0; a < 3; ++a) {
-    const std::vector<double>& x = *in[a];
-    for (std::size_t k = 0; k <= half; ++k) {
-      const std::complex<double> step = std::polar(1.0, -kTwoPi * static_cast<double>(k) / n);
-      std::complex<double> rot = 1.0;
-      std::complex<double> sum = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        sum += x[i] * rot;
-        rot *= step;
-      }
-      // Real signal: weight 2 for the harmonics with a mirror image, 1 for DC and Nyquist.
-      const double weight = (k == 0 || 2 * k == n) ? 1.0 : 2.0;
-      spectrum[k] = weight * sum * gain[k] / static_cast<double>(n);
-    }
-    filtered_[a].assign(n, 0.0);
-    for (std::size_t k = 0; k <= half; ++k) {
-      const std::complex<double> step = std::polar(1.0, kTwoPi * static_cast<double>(k) / n);
-      std::complex<double> rot = spectrum[k];
-      for (std::size_t i = 0; i < n; ++i) {
-        filtered_[a][i] += std::real(rot);
-        rot *= step;
-      }
-    }
+    std::copy(in[a]->begin(), in[a]->end(), filtered_[a].begin());
+    response_.apply(filtered_[a], spindle_hz_, response, use);
   }
 }
 
@@ -118,17 +87,17 @@ bool Lockstep::align(const SyncAverage& measured) {
     return false;
   }
   const int bins = measured.bins();
+  const auto ub = static_cast<std::size_t>(bins);
   // Model filtered waveform at zero offset on the tracker grid, and the measured average.
   const double saved = offset_rad_;
   offset_rad_ = 0.0;
-  std::array<std::vector<double>, 3> model_bins;
-  std::array<std::vector<double>, 3> meas_bins;
   for (int a = 0; a < 3; ++a) {
-    filtered_on_tracker_grid(a, bins, model_bins[static_cast<std::size_t>(a)]);
-    measured.average(a, meas_bins[static_cast<std::size_t>(a)]);
+    auto& model = model_bins_[static_cast<std::size_t>(a)];
+    auto& meas = measured_bins_[static_cast<std::size_t>(a)];
+    filtered_on_tracker_grid(a, bins, model);
+    measured.average(a, meas);
     // Means removed: drift and offsets are not shape.
-    for (auto* v :
-         {&model_bins[static_cast<std::size_t>(a)], &meas_bins[static_cast<std::size_t>(a)]}) {
+    for (auto* v : {&model, &meas}) {
       double mean = 0.0;
       for (double x : *v) {
         mean += x;
@@ -141,35 +110,35 @@ bool Lockstep::align(const SyncAverage& measured) {
   }
   offset_rad_ = saved;
   // Circular correlation c(s) = Σ_axes Σ_b meas[b]·model[b + s]: the model shifted by s bins.
-  std::vector<double> corr(static_cast<std::size_t>(bins), 0.0);
+  std::vector<double>& corr = correlation_scratch_;
+  corr.assign(ub, 0.0);
   double norm_m = 0.0, norm_d = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    const auto& m = meas_bins[static_cast<std::size_t>(a)];
-    const auto& d = model_bins[static_cast<std::size_t>(a)];
-    for (int b = 0; b < bins; ++b) {
-      norm_m += m[static_cast<std::size_t>(b)] * m[static_cast<std::size_t>(b)];
-      norm_d += d[static_cast<std::size_t>(b)] * d[static_cast<std::size_t>(b)];
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& m = measured_bins_[a];
+    const auto& d = model_bins_[a];
+    for (std::size_t b = 0; b < ub; ++b) {
+      norm_m += m[b] * m[b];
+      norm_d += d[b] * d[b];
     }
-    for (int s = 0; s < bins; ++s) {
+    for (std::size_t sh = 0; sh < ub; ++sh) {
       double c = 0.0;
-      for (int b = 0; b < bins; ++b) {
-        c += m[static_cast<std::size_t>(b)] * d[static_cast<std::size_t>((b + s) % bins)];
+      for (std::size_t b = 0; b < ub; ++b) {
+        c += m[b] * d[(b + sh) % ub];
       }
-      corr[static_cast<std::size_t>(s)] += c;
+      corr[sh] += c;
     }
   }
-  int best = 0;
-  for (int s = 1; s < bins; ++s) {
-    if (corr[static_cast<std::size_t>(s)] > corr[static_cast<std::size_t>(best)]) {
-      best = s;
+  std::size_t best = 0;
+  for (std::size_t sh = 1; sh < ub; ++sh) {
+    if (corr[sh] > corr[best]) {
+      best = sh;
     }
   }
   const Extremum e = refine_extremum(
-      [&](std::int64_t s) { return corr[static_cast<std::size_t>(((s % bins) + bins) % bins)]; },
-      best, 1, false);
+      [&](std::int64_t sh) { return corr[static_cast<std::size_t>(((sh % bins) + bins) % bins)]; },
+      static_cast<std::int64_t>(best), 1, false);
   offset_rad_ = wrap_2pi(kTwoPi * e.position / bins);
-  correlation_ =
-      corr[static_cast<std::size_t>(best)] / std::sqrt(std::max(norm_m * norm_d, 1e-300));
+  correlation_ = corr[best] / std::sqrt(std::max(norm_m * norm_d, 1e-300));
   aligned_ = true;
   return true;
 }

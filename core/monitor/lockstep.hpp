@@ -1,23 +1,25 @@
 #pragma once
 // The model in lockstep with the measurement.
 //
-// The milling model's steady revolution at the measured speed (chip load from the commanded feed
-// rate: f_t·n_cmd/n_meas), averaged over a few revolutions, is the model's force over the
-// spindle angle. It is aligned to the
-// measurement once per lock: the model, low-pass filtered in the frequency domain by the same
-// filter as the measured force (so with the same lag), is correlated circularly with the
-// measured revolution-synchronous average, all three axes together; the best shift (refined
-// to a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
-// every measured sample gets a model sample at the same tracked angle, taken from the filtered
-// periodic model: the steady state of the same causal filter the measured force went through
-// (each harmonic k of the spindle frequency times H(k·f), so the same lag; |H(k·f)|² when the
-// measurement is filtered forwards and backwards) — measured and modelled forces are compared
-// like with like.
+// The model's periodic steady state at the measured speed (model::evaluate_steady_state, chip
+// load from the commanded feed rate: f_t·n_cmd/n_meas) is the model's force over the spindle
+// angle: its mean revolution (skipped passes average out, as in the measured synchronous
+// average). It goes through the same low-pass filter as the measured force, as the filter's
+// periodic steady state (model::PeriodicResponse: harmonic k of the spindle frequency times
+// H(k·f), so the same lag; |H(k·f)|² when the measurement is filtered forwards and backwards) —
+// measured and modelled forces are compared like with like. It is aligned to the measurement
+// once per lock (and again on a full window of revolutions): correlated circularly with the
+// measured revolution-synchronous average, all three axes together; the best shift (refined to
+// a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
+// each measured sample's angle gives its model sample. Following a new speed re-evaluates the
+// steady state and the filter (allocation-free after the first build, well under a
+// millisecond for the plain model: bench/model_benchmark).
 
 #include <array>
 #include <vector>
 
-#include "core/model/milling_model.hpp"
+#include "core/model/periodic_response.hpp"
+#include "core/model/steady_state.hpp"
 #include "core/monitor/sync_average.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
 
@@ -31,8 +33,8 @@ class Lockstep {
   Lockstep(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
            bool zero_phase = false);
 
-  /// Builds the model's steady revolution for the measured speed (allocates; runs the model
-  /// until it settles). Returns whether it was rebuilt (speed changed by more than 0.2 %).
+  /// Evaluates the model's steady revolution at the measured speed and filters it (allocates
+  /// at the first build only). Returns whether it was rebuilt (speed changed by more than 0.2 %).
   bool set_spindle_hz(double spindle_hz);
   [[nodiscard]] bool has_model() const { return built_; }
 
@@ -63,8 +65,13 @@ class Lockstep {
   model::ModelConfig config_;
   signal::ButterworthDesign filter_;
   bool zero_phase_ = false;
+  model::SteadyStateWorkspace workspace_;
+  model::PeriodicResponse response_;
   model::ForceWaveform waveform_;
   std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
+  // Scratch of align(): the model and the measured average on the tracker grid, correlations.
+  std::array<std::vector<double>, 3> model_bins_, measured_bins_;
+  std::vector<double> correlation_scratch_;
   double spindle_hz_ = 0.0;
   double offset_rad_ = 0.0;
   double correlation_ = 0.0;
