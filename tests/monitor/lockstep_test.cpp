@@ -1,0 +1,110 @@
+// The lockstep model against independent computations: the time-marching model run through
+// the causal filter sample by sample, and a known angle offset.
+
+#include "core/monitor/lockstep.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "core/model/milling_model.hpp"
+#include "core/signal/butterworth_lowpass.hpp"
+#include "tests/support/allocation_counter.hpp"
+
+namespace millwatch::monitor {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+model::ModelConfig cut() {
+  model::ModelConfig c;  // [000]'s cp-Ti slot with runout; rigid, so each revolution repeats
+  c.effects.deflection.enabled = false;
+  c.effects.accumulation.enabled = false;
+  c.effects.helix_lag.discs = 5;
+  return c;
+}
+
+// The filtered model force at an angle is what the causal Butterworth filter gives when the
+// model's force is fed through it sample by sample for many revolutions (its steady state),
+// at the measured speed with the feed rate fixed by the commanded one.
+TEST(Lockstep, EqualsTheTimeMarchedModelThroughTheCausalFilter) {
+  const model::ModelConfig commanded = cut();
+  const double fs = 50000.0;
+  const double f_hz = 25252.0 / 60.0;
+  const auto filter = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
+  Lockstep lockstep(commanded, filter);
+  ASSERT_TRUE(lockstep.set_spindle_hz(f_hz));
+  EXPECT_FALSE(lockstep.set_spindle_hz(f_hz * 1.001));  // within 0.2 %: kept
+  // Independent: MillingModel (time marching) at the actual speed and the thinner chip.
+  model::ModelConfig actual = commanded;
+  actual.process.spindle_rpm = 60.0 * f_hz;
+  actual.process.feed_per_tooth_um = commanded.process.feed_per_tooth_um * 25000.0 / 25252.0;
+  model::MillingModel marched(actual);
+  marched.warm_up();
+  const auto& w = marched.forces();
+  const auto steps = static_cast<double>(w.fx_N.size());
+  auto model_at = [&](const std::vector<double>& axis, double revolutions) {
+    const double pos = (revolutions - std::floor(revolutions)) * steps;
+    const auto k0 = static_cast<std::size_t>(pos) % axis.size();
+    const std::size_t k1 = (k0 + 1) % axis.size();
+    return axis[k0] + (pos - std::floor(pos)) * (axis[k1] - axis[k0]);
+  };
+  signal::LowPassFilter lx(filter), ly(filter);
+  const int samples = static_cast<int>(40.0 * fs / f_hz);  // 40 revolutions
+  double worst = 0.0, peak = 0.0;
+  for (int n = 0; n < samples; ++n) {
+    const double revolutions = n * f_hz / fs;
+    const double x = lx.step(model_at(w.fx_N, revolutions));
+    const double y = ly.step(model_at(w.fy_N, revolutions));
+    if (n > samples / 2) {  // the filter's start-up has died away
+      const auto m = lockstep.force_at(kTwoPi * revolutions);  // offset 0: model angle
+      worst = std::max({worst, std::fabs(m[0] - x), std::fabs(m[1] - y)});
+      peak = std::max({peak, std::fabs(x), std::fabs(y)});
+    }
+  }
+  // The two differ by the linear interpolation between the 720 model steps before filtering
+  // (the time-marched side interpolates the force, the lockstep its spectrum): well under 1 %.
+  EXPECT_GT(peak, 0.5);
+  EXPECT_LT(worst, 0.01 * peak);
+}
+
+// Alignment finds a known angle offset between the model and a measured average that is the
+// model itself, shifted.
+TEST(Lockstep, AlignmentFindsAKnownOffset) {
+  const double fs = 50000.0;
+  const double f_hz = 420.0;
+  const auto filter = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
+  Lockstep lockstep(cut(), filter);
+  lockstep.set_spindle_hz(f_hz);
+  const double shift_rad = 1.234;
+  SyncAverage avg(256, 10);
+  // The "measurement": the model at tracker angle a is the model at angle a + shift.
+  for (int r = 0; r < 10; ++r) {
+    for (int n = 0; n < 400; ++n) {
+      const double a = kTwoPi * (n + 0.37) / 400.0;
+      const auto f = lockstep.force_at(a + shift_rad);  // offset still 0
+      avg.add(a, {f[0], f[1], f[2], std::hypot(f[0], f[1])});
+    }
+    avg.end_revolution();
+  }
+  ASSERT_TRUE(lockstep.align(avg));
+  EXPECT_NEAR(std::remainder(lockstep.offset_rad() - shift_rad, kTwoPi), 0.0, 0.004);
+  EXPECT_GT(lockstep.alignment_correlation(), 0.999);
+}
+
+// Following a new speed re-evaluates the model without allocating.
+TEST(Lockstep, FollowingTheSpeedAllocatesNothing) {
+  const auto filter = signal::ButterworthDesign::lowpass(50000.0, 3300.0, 4);
+  Lockstep lockstep(cut(), filter);
+  lockstep.set_spindle_hz(400.0);
+  test::AllocationCounter counter;
+  for (int i = 1; i <= 20; ++i) {
+    EXPECT_TRUE(lockstep.set_spindle_hz(400.0 * (1.0 + 0.005 * i)));
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+}
+
+}  // namespace
+}  // namespace millwatch::monitor
