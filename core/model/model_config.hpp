@@ -31,7 +31,8 @@ struct Tool {
   double helix_deg = 30.0;
   double edge_radius_um = 1.78;
   /// Angular spacing from flute j to flute j+1 (deg), one entry per flute, summing to 360.
-  /// Empty means uniform pitch. Resolved to the model's angle grid.
+  /// Empty means uniform pitch. MillingModel snaps it to its angle grid; the steady-state
+  /// evaluator (steady_state.hpp) uses it exactly.
   std::vector<double> pitch_deg;
 };
 

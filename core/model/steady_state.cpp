@@ -28,6 +28,8 @@ constexpr double kDeficitTolerance_um = 1e-12;
 constexpr double kAreaTolerance = 1e-9;
 /// ψ/Δφ within this of an integer is that integer: rounding of π·k, not a pitch off the grid.
 constexpr double kOnGrid = 1e-9;
+/// ln 1e-6: chips below 10⁻⁶ of the rigid chip count as pushed back (as MillingModel).
+const double kLogFloor = std::log(1e-6);
 
 constexpr unsigned kContact = 1u << 6;
 constexpr unsigned kRemoved = 1u << 7;
@@ -59,11 +61,6 @@ double helix_lag_rad(double radius_mm, double axial_depth_mm, double helix_deg) 
   const double t = axial_depth_mm * std::tan(helix_deg * kPi / 180.0);
   const double c = (2.0 * radius_mm * radius_mm - t * t) / (2.0 * radius_mm * radius_mm);
   return std::acos(std::clamp(c, -1.0, 1.0));
-}
-
-double wrap_2pi(double a) {
-  a = std::fmod(a, 2.0 * kPi);
-  return a < 0.0 ? a + 2.0 * kPi : a;
 }
 
 int positive_mod(int a, int m) {
@@ -166,6 +163,7 @@ struct SteadyStateWorkspace::Impl {
   int flutes = 0, steps = 0, discs = 1, passes = 1;
   double d_phi_rad = 0.0, dz_mm = 0.0, h_min_um = 0.0, disc_stiffness_N_per_um = 0.0;
   double normal_jump_N = 0.0;  // F_n(h_min) − F_n(h_min−) of one disc: the regime switch
+  double log_h_min_um = 0.0, log_below_h_min_um = 0.0;  // ln h_min, ln(h_min·(1 − 1e-12))
   bool deflect = false, accumulate = false, area_law = false, memory = false;
   bool dynamometer = false;
   Effects::Dynamometer dyn;
@@ -240,10 +238,11 @@ struct SteadyStateWorkspace::Impl {
     double h_um = 0.0, log_h_um = 0.0, dh_dhr = 0.0;
     unsigned code = 0;
   };
+  /// @param guess_log_um ln of a chip to start from (+∞: none)
   [[nodiscard]] Deflection solve_deflection(double h_rigid_um, double wear_normal_N,
-                                            double area_mm2, double guess_um) const;
+                                            double area_mm2, double guess_log_um) const;
   template <class Back>
-  PassResult run_pass(int flute, bool engaged_slot, double area_mm2, double guess_um,
+  PassResult run_pass(int flute, bool engaged_slot, double area_mm2, double guess_log_um,
                       Back&& back) const;
   void solve_slots();
   void solve_slot(int disc, int b);
@@ -298,6 +297,8 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   normal_jump_N =
       h_min_um > 0.0 ? law.normal_N(h_min_um, dz_mm) - law.normal_N(h_min_um * (1.0 - 1e-12), dz_mm)
                      : 0.0;
+  log_h_min_um = h_min_um > 0.0 ? std::log(h_min_um) : 0.0;
+  log_below_h_min_um = h_min_um > 0.0 ? std::log(h_min_um * (1.0 - 1e-12)) : 0.0;
   if (std::fabs(normal_jump_N) <= 1e-9 * std::fabs(law.normal_N(h_min_um, dz_mm))) {
     normal_jump_N = 0.0;  // continuous at h_min (up to the 1e-12 step): one branch
   }
@@ -380,7 +381,10 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
         const auto ub = static_cast<std::size_t>(b);
         cos_theta[fs] = cos_grid[ub] * cl + sin_grid[ub] * sl;
         sin_theta[fs] = sin_grid[ub] * cl - cos_grid[ub] * sl;
-        const double theta = wrap_2pi(b * d_phi_rad - back);
+        double theta = b * d_phi_rad - back;  // back ∈ [0, 2π): one wrap at most
+        if (theta < 0.0) {
+          theta += 2.0 * kPi;
+        }
         engaged[fs] = theta >= engage_from && theta <= engage_to ? 1 : 0;
       }
     }
@@ -530,11 +534,12 @@ double SteadyStateWorkspace::Impl::area_input(int slot, int flute) const {
 // bracket (bisection when it would leave it), to |Δu| < 1e-9 (quadratic: ~1e-16 left).
 
 SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflection(
-    double h_rigid, double wear_n, double area_mm2, double guess_um) const {
+    double h_rigid, double wear_n, double area_mm2, double guess_log_um) const {
   Deflection d;
   const double k = disc_stiffness_N_per_um;
+  const double inv_k = 1.0 / k;
   auto excess = [&](double x) {
-    return x + (law.normal_N(x, dz_mm, area_mm2) + wear_n) / k - h_rigid;
+    return x + (law.normal_N(x, dz_mm, area_mm2) + wear_n) * inv_k - h_rigid;
   };
   if (wear_n >= k * h_rigid) {
     d.code = kPushedBack;  // the rubbing force alone pushes the tool back beyond this chip
@@ -551,7 +556,7 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
       lo = h_min_um;  // none below h_min: the cutting branch (certain after a fall)
     } else {
       d.h_um = h_min_um;  // the balance falls into F_n's rise at h_min
-      d.log_h_um = std::log(h_min_um);
+      d.log_h_um = log_h_min_um;
       d.code = kInJump;
       return d;
     }
@@ -560,16 +565,17 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
   // Newton descends monotonically, and from below one step lands above it. So: clamp to the
   // bracket's top (where G ≥ 0) when a step overshoots, and stop when the step is below 1e-7
   // (what is left is then ~1e-14).
-  const double floor_log = std::log(floor_um);
+  const double log_rigid = std::log(h_rigid);
+  const double floor_log = log_rigid + kLogFloor;
   bool floor_checked = lo != floor_um;
-  double ulo = std::log(lo);
-  double uhi = std::log(hi);
-  double u = guess_um > lo && guess_um < hi ? std::log(guess_um) : uhi;
+  double ulo = lo == floor_um ? floor_log : log_h_min_um;
+  double uhi = hi == h_rigid ? log_rigid : log_below_h_min_um;
+  double u = guess_log_um > ulo && guess_log_um < uhi ? guess_log_um : uhi;
   for (int it = 0; it < 100; ++it) {
     const double hu = std::exp(u);
     const auto fs = law.normal_with_slope(hu, u, dz_mm, area_mm2);
-    const double gap = hu + (fs.force_N + wear_n) / k - h_rigid;
-    const double dg_du = hu + fs.slope_N_per_um * hu / k;
+    const double gap = hu + (fs.force_N + wear_n) * inv_k - h_rigid;
+    const double dg_du = hu * (1.0 + fs.slope_N_per_um * inv_k);
     const double step = gap / dg_du;
     double next = u - step;
     if (gap < 0.0) {
@@ -589,7 +595,7 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
     } else if (std::fabs(step) < 1e-7) {
       d.h_um = std::exp(next);
       d.log_h_um = next;
-      d.dh_dhr = 1.0 / (1.0 + fs.slope_N_per_um / k);
+      d.dh_dhr = 1.0 / (1.0 + fs.slope_N_per_um * inv_k);
       return d;
     }
     if (gap >= 0.0) {
@@ -607,7 +613,7 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
 
 template <class Back>
 PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, double area_mm2,
-                                                double guess_um, Back&& back) const {
+                                                double guess_log_um, Back&& back) const {
   PassResult r;
   if (!engaged_slot) {
     return r;  // outside the workpiece: its rigid path is the surface (deficit 0)
@@ -644,8 +650,8 @@ PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, do
   double log_h = 0.0;
   double dh_dhr = 1.0;
   if (deflect) {
-    const Deflection d =
-        solve_deflection(h_rigid, wear_n_N[static_cast<std::size_t>(flute)], area_mm2, guess_um);
+    const Deflection d = solve_deflection(h_rigid, wear_n_N[static_cast<std::size_t>(flute)],
+                                          area_mm2, guess_log_um);
     h = d.h_um;
     log_h = d.log_h_um;
     dh_dhr = d.dh_dhr;
@@ -833,7 +839,7 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
       codes[k] = pr.code;
       trajectory[k] = to_record(pr, deflect);
       if (pr.h_um > 0.0) {
-        guess[uj] = pr.h_um;
+        guess[uj] = pr.log_h_um;
       }
     }
     result.stats.passes += flutes;
@@ -880,7 +886,7 @@ bool SteadyStateWorkspace::Impl::newton(int slot, int first, int p, int r, std::
       y[q] = pr.deficit_um;
       nt_records[q] = to_record(pr, deflect);
       if (pr.h_um > 0.0) {
-        nt_h[q] = pr.h_um;
+        nt_h[q] = pr.log_h_um;
       }
       double* grow = &grads[at * um];
       if (pr.d_deficit != 0.0 && pr.argmin > 0) {
@@ -1122,6 +1128,9 @@ void SteadyStateWorkspace::Impl::accumulate_forces(bool with_cycle) {
         // The mean over the slot's own cycle (exact whatever L); revolution m of the whole
         // cycle has the slot at phase (m − r_s) mod p_s.
         for (int c = 0; c < p; ++c) {
+          if (rec[static_cast<std::size_t>(c) * n + uj].contact == 0) {
+            continue;
+          }
           element(rec[static_cast<std::size_t>(c) * n + uj], j, area_of(us, uj, 0), ct, st, xyz);
           add(flute_mean, at, xyz, 1.0 / p);
           if (cycle) {

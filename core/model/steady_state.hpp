@@ -20,11 +20,18 @@
 //     repeats: after one revolution (a fixed point) or after p revolutions (a cycle: accumulation
 //     skipping passes, [002]; deflection against the jump of [000] eq 5 at h_min). With
 //     deflection the leftover converges geometrically (factor F_n'/(k + F_n') per pass, close to
-//     1 for thin chips), so once the pattern of choices (nearest pass, regime, cut or not) repeats,
-//     Newton's method on the p-revolution map finds the exact periodic state (the Jacobian by the
-//     chain rule through dh/dh_r = 1/(1 + F_n'(h)/k)); a final plain pass confirms it. Slots
-//     without memory (no deflection, no accumulation) need one pass per flute. Converged slots
-//     stop; nothing depends on how long anything was warmed up.
+//     1 for thin chips), so after the first revolution, and again whenever the pattern of
+//     choices (nearest pass, regime, cut or not) repeats, Newton's method on the p-revolution map
+//     looks for the exact periodic state (the Jacobian by the chain rule through
+//     dh/dh_r = 1/(1 + F_n'(h)/k)); its last step is a plain run from that state with the same
+//     pattern, so a success proves itself. Slots without memory (no deflection, no accumulation)
+//     need one pass per flute. Converged slots stop; nothing depends on a warm-up.
+//   Deflection balance ([000] eq 22 with the flank-wear normal force F_w): the cut chip h of
+//     h + (F_n(h) + F_w)/k = h_r. With [000] Table 2's coefficients F_n falls at h_min
+//     (K_np·h_min^a_np > K_nc·h_min^a_nc), so near h_min two roots can exist; the evaluator takes
+//     the smallest (the tool stops at the first balance it meets going in), whatever a starting
+//     guess says. MillingModel takes whichever root its Newton start (the neighbouring step)
+//     leads to, so the two differ there; with a single root they agree to its solver tolerance.
 //   Cycles. Slot s repeats every p_s revolutions from revolution r_s on; revolution R ≥ r_s of
 //   the cut is its phase (R − r_s) mod p_s, counting revolutions from the fresh cut — the same
 //   convention as MillingModel's revolutions after reset(), so the evaluator's revolution m of
@@ -33,7 +40,7 @@
 //   cycle holds the first kMaxCycleRevolutions revolutions and `cycle_exact` is false (each is
 //   exactly that revolution of the cut; only playing them round again is not). The mean
 //   revolution is exact either way: each slot's mean over its own cycle. Skipped passes put
-//   sub-harmonics of the tooth-passing frequency into the cycle, none into the mean.
+//   frequencies between the spindle harmonics (k·f/L) into the cycle, none into the mean.
 //   No snapping. Flute pitches ψ_j (tool.pitch_deg) and runout are used exactly: the geometric
 //   chip comes from the same chip tables as MillingModel (chip_geometry.hpp), read at the exact
 //   spindle angle less the lag by linear interpolation. Without pass memory (no deflection, no
@@ -44,13 +51,17 @@
 //   interpolated onto the grid (weights (ψ_j/Δφ) mod 1; error O(Δφ²) where the force is smooth,
 //   a step smeared over one Δφ at entry and exit). A pitch on the grid (every uniform pitch with
 //   S a multiple of N_z) is exact either way, and the force moves continuously with ψ_j.
-//   Ploughed area ([001] eqs 14-17, linear law with ploughing "area"): integrated along each
-//   flute's pass by the trapezoidal rule on the rigid chip, with the switch to shearing at the
-//   interpolated crossing of h_min — continuous in every parameter (MillingModel sums
-//   rectangles and switches on grid steps: O(Δφ) apart). A pass's area after shearing ends is
-//   its own total minus what it has cut (MillingModel: the previous contact's total; equal in a
-//   steady state). With deflection the area and the chips depend on each other: the slots are
-//   solved again with the areas of the previous solution until the areas settle.
+//   Ploughed area ([001] eqs 14-17, linear law with ploughing "area"): A_c(θ) integrated along
+//   each flute's pass by the trapezoidal rule on the rigid chip (eq 14); chip ≥ h_min: A_pMAX,
+//   the area at the pass's first crossing of h_min, interpolated between passes (eq 16); below
+//   h_min before the pass's largest chip (θ_MAX): A_c(θ) (eq 15); after it: A_c(π) − A_c(θ) with
+//   the pass's own total (eq 17). Continuous in every parameter. MillingModel sums rectangles,
+//   switches on grid steps and takes the previous contact's total after the first shearing: the
+//   same for a rising-falling chip up to O(Δφ), but not under accumulation, whose irregular
+//   chips cross h_min early in a pass. With deflection the area and the chips depend on each
+//   other: the slots are solved again, each pass's balance using its slot's mean area over the
+//   cycle of the previous solution, until the areas settle (at most 6 solutions;
+//   SteadyStateStats::area_converged says whether they did).
 //   Dynamometer ([001]/[003] resonance, effects.dynamometer): a linear filter, applied as its
 //   periodic steady state: harmonic k of the spindle frequency f times H(k·f) (the
 //   continuous-time resonance_response(), dynamometer.hpp) by FFT (periodic_response.hpp) — on
@@ -64,8 +75,8 @@
 // evaluate_steady_state() then allocates nothing for a configuration of that shape, except
 // (a) the first time a cycle of a given length L > 1 meets the dynamometer (its FFT plan is made
 // then and kept), (b) when the slots' cycles together outgrow the record pool reserved for them
-// (accumulation with long cycles; the pool keeps its capacity). Configurations without
-// accumulation never hit either.
+// (accumulation with long cycles; the pool keeps its capacity). Configurations without pass
+// memory never hit either.
 
 #include <array>
 #include <memory>
@@ -96,7 +107,7 @@ void at_actual_speed(const ModelConfig& commanded, double actual_rpm, ModelConfi
 /// What one evaluation did (for benchmarks and for judging a result).
 struct SteadyStateStats {
   int slots = 0;                          ///< (disc, immersion) slots
-  long passes = 0;                        ///< flute passes simulated (iterations, Newton, replay)
+  long passes = 0;                        ///< flute passes simulated (iterations and Newton)
   int newton_slots = 0;                   ///< slots whose periodic state Newton's method found
   int longest_transient_revolutions = 0;  ///< revolutions before the latest slot repeated
   int longest_slot_period_revolutions = 1;
@@ -114,10 +125,12 @@ struct SteadyState {
   /// Mean revolution, force on the tool (N), index k at spindle angle 2πk/S. Equal to every
   /// revolution when cycle_revolutions = 1.
   ForceWaveform mean;
-  /// L: the force repeats every L revolutions (1 without accumulation cycles).
+  /// L: the force repeats every L revolutions (1 unless accumulation skips passes, or a chip
+  /// near h_min settles into a cycle under deflection).
   int cycle_revolutions = 1;
   /// False when the slots' periods have a least common multiple above kMaxCycleRevolutions:
-  /// `cycle` then holds revolutions 0..L−1 exactly, but revolution L is not revolution 0 again.
+  /// `cycle` then holds revolutions 0..L−1 exactly, but revolution L is not revolution 0 again
+  /// (and the dynamometer, applied as if the cycle repeated, is approximate near its ends).
   bool cycle_exact = true;
   /// L·S samples per axis: revolution m of the cycle at [m·S, (m+1)·S). Empty after a
   /// SteadyStateOutput::kMean evaluation.

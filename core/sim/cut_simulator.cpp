@@ -24,7 +24,8 @@ CutSimulator::CutSimulator(const Scenario& scenario)
     : scenario_(scenario),
       spindle_(scenario),
       config_(initial_config(scenario)),
-      model_(config_),
+      workspace_(config_, config_.resolution.steps_per_rev),
+      evaluated_(config_),
       rng_(scenario.seed) {
   feed_rate_um_per_min_ = scenario_.model.process.feed_per_tooth_um * scenario_.model.tool.flutes *
                           scenario_.model.process.spindle_rpm;
@@ -39,10 +40,7 @@ CutSimulator::CutSimulator(const Scenario& scenario)
     current_[a].assign(steps, 0.0);
     next_[a].assign(steps, 0.0);
   }
-  // Start in the steady cut: settle the model at the conditions of t = 0, then take the first
-  // two revolutions.
-  configure_revolution(0.0);
-  model_.warm_up();
+  // Start in the steady cut: the first two revolutions.
   advance_revolution(0.0);
   current_ = next_;
   current_cutting_ = next_cutting_;
@@ -80,10 +78,18 @@ RevolutionTruth CutSimulator::configure_revolution(double start_s) {
   t.runout_angle_rad = runout.enabled ? runout.angle_rad : 0.0;
   t.wear_um = config_.effects.flank_wear.enabled ? config_.effects.flank_wear.wear_um
                                                  : std::vector<double>{0.0};
-  if (t.cutting) {
-    model_.update(config_);
-  }
   return t;
+}
+
+bool CutSimulator::conditions_changed() const {
+  const auto& a = config_;
+  const auto& b = evaluated_;
+  return !has_result_ || a.process.spindle_rpm != b.process.spindle_rpm ||
+         a.process.feed_per_tooth_um != b.process.feed_per_tooth_um ||
+         a.effects.runout.enabled != b.effects.runout.enabled ||
+         a.effects.runout.offset_um != b.effects.runout.offset_um ||
+         a.effects.runout.angle_rad != b.effects.runout.angle_rad ||
+         a.effects.flank_wear.wear_um != b.effects.flank_wear.wear_um;
 }
 
 void CutSimulator::advance_revolution(double start_s) {
@@ -95,11 +101,23 @@ void CutSimulator::advance_revolution(double start_s) {
     }
     return;
   }
-  model_.step_revolution();
-  const auto& f = model_.forces();
-  std::copy(f.fx_N.begin(), f.fx_N.end(), next_[0].begin());
-  std::copy(f.fy_N.begin(), f.fy_N.end(), next_[1].begin());
-  std::copy(f.fz_N.begin(), f.fz_N.end(), next_[2].begin());
+  if (conditions_changed()) {
+    model::evaluate_steady_state(config_, config_.process.spindle_rpm,
+                                 config_.resolution.steps_per_rev, workspace_,
+                                 model::SteadyStateOutput::kMeanAndCycle);
+    evaluated_.process = config_.process;
+    evaluated_.effects.runout = config_.effects.runout;
+    evaluated_.effects.flank_wear.wear_um = config_.effects.flank_wear.wear_um;  // same size
+    has_result_ = true;
+  }
+  // Revolution n of the record plays revolution n mod L of the cycle.
+  const model::SteadyState& state = workspace_.result();
+  const auto n = static_cast<long>(truth_.size()) - 1;
+  const int m = static_cast<int>(n % state.cycle_revolutions);
+  for (int a = 0; a < 3; ++a) {
+    const auto revolution = state.revolution(m, a);
+    std::copy(revolution.begin(), revolution.end(), next_[static_cast<std::size_t>(a)].begin());
+  }
 }
 
 std::array<double, 3> CutSimulator::clean_force(double revolutions) const {

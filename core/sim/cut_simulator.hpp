@@ -1,17 +1,23 @@
 #pragma once
 // Simulates a dynamometer recording of a cut with known truth.
 //
-// Per spindle revolution the milling model (with the scenario's effects, dynamometer resonance
-// included) gives the force on the tool over the spindle angle; each sample takes it at the
-// spindle angle of its time (SpindleProfile) and passes it through the measurement chain:
+// Per spindle revolution the model's periodic steady state at that revolution's conditions
+// (speed, feed, runout, flank wear; model/steady_state.hpp, dynamometer resonance included) gives
+// the force on the tool over the spindle angle. When accumulation makes the force repeat only
+// every L revolutions, revolution n plays revolution n mod L of that cycle (so skipped passes and
+// their sub-harmonics are in the record); the model is evaluated again only when the conditions
+// change. Each sample takes the force at the spindle angle of its time (SpindleProfile) and
+// passes it through the measurement chain:
 //   axis map to the dynamometer's reading (a dynamometer under the workpiece reads −F),
 //   + charge-amplifier drift + mains hum + white noise, then ADC clipping and quantisation.
-// The feed rate is fixed by the commanded speed (f_t·N_z·n_cmd), so a spindle running faster
-// than commanded cuts thinner chips. A stop/start is a feed hold: no cutting from the start of
-// the deceleration until the spindle is back at speed.
+// The feed rate is fixed by the commanded speed (f_t·N_z·n_cmd, as model::at_actual_speed), so a
+// spindle running faster than commanded cuts thinner chips. A stop/start is a feed hold: no
+// cutting from the start of the deceleration until the spindle is back at speed. A change of
+// conditions takes effect at once, without a transient (each revolution is a steady state).
 //
 // Samples come in blocks (next_block); apart from the truth list (reserved for the record's
-// expected revolutions) nothing is allocated once constructed.
+// expected revolutions) nothing is allocated once constructed, except when new conditions give
+// an accumulation cycle of a length not met before (the evaluator plans its FFT then).
 
 #include <array>
 #include <cstdint>
@@ -19,7 +25,7 @@
 #include <span>
 #include <vector>
 
-#include "core/model/milling_model.hpp"
+#include "core/model/steady_state.hpp"
 #include "core/sim/channel_stats.hpp"
 #include "core/sim/scenario.hpp"
 #include "core/sim/spindle_profile.hpp"
@@ -59,16 +65,20 @@ class CutSimulator {
   [[nodiscard]] const ChannelStats& clean_stats() const { return clean_stats_; }
 
  private:
-  /// Sets the model to the conditions at start_s (speed, feed, runout, wear).
+  /// Sets the configuration to the conditions at start_s (speed, feed, runout, wear).
   RevolutionTruth configure_revolution(double start_s);
+  /// Whether the conditions differ from those of the last evaluation.
+  [[nodiscard]] bool conditions_changed() const;
   void advance_revolution(double start_s);
   std::array<double, 3> clean_force(double revolutions) const;
   std::array<double, 3> measure(const std::array<double, 3>& force_N, double time_s);
 
   Scenario scenario_;
   SpindleProfile spindle_;
-  model::ModelConfig config_;
-  model::MillingModel model_;
+  model::ModelConfig config_;  // the current revolution's conditions
+  model::SteadyStateWorkspace workspace_;
+  model::ModelConfig evaluated_;  // the conditions of the workspace's result
+  bool has_result_ = false;
   double feed_rate_um_per_min_ = 0.0;  // f_t·N_z·n_cmd
   std::int64_t total_samples_ = 0;
   std::int64_t next_sample_ = 0;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/config/json_reader.hpp"
+#include "core/model/steady_state.hpp"
 
 namespace millwatch::sim {
 namespace {
@@ -230,6 +231,75 @@ TEST(CutSimulator, RunoutChangeAndWearShowInTruthAndForce) {
     EXPECT_NEAR(t.wear_um[0], 20.0 * std::clamp(t.start_s / 0.2, 0.0, 1.0), 0.6);
   }
   EXPECT_TRUE(seen_before && seen_after);
+}
+
+// Each revolution is the model's steady state at that revolution's conditions: after a runout
+// change the clean force is the evaluator's revolution for the new runout at the actual speed
+// with the commanded feed rate, interpolated at each sample's spindle angle.
+TEST(CutSimulator, EachRevolutionIsTheSteadyStateOfItsConditions) {
+  Scenario s = quiet_scenario();
+  s.duration_s = 0.05;
+  s.spindle.actual_rpm = 24000.0;  // 125 samples per revolution at 50 kHz
+  s.runout_change.enabled = true;
+  s.runout_change.time_s = 0.02;
+  s.runout_change.offset_um = 3.0;
+  s.runout_change.angle_rad = -0.4;
+  s.model.effects.accumulation.enabled = false;  // a one-revolution steady state: no skipped
+  s.model.effects.min_chip.enabled = false;      // passes, no deflection cycles at h_min
+  model::ModelConfig after = model::at_actual_speed(s.model, 24000.0);
+  after.effects.runout.offset_um = 3.0;
+  after.effects.runout.angle_rad = -0.4;
+  model::SteadyStateWorkspace ws;
+  const int steps = after.resolution.steps_per_rev;
+  const model::SteadyState& expected = model::evaluate_steady_state(after, 24000.0, steps, ws);
+  ASSERT_EQ(expected.cycle_revolutions, 1);
+  CutSimulator sim(s);
+  std::vector<double> t(1), fx(1), fy(1), fz(1);
+  int compared = 0;
+  while (sim.next_block(t, fx, fy, fz) == 1) {
+    if (t[0] < 0.0225) {  // the revolution in progress at the change keeps the old runout
+      continue;
+    }
+    const double revs = t[0] * 24000.0 / 60.0;
+    const double pos = (revs - std::floor(revs)) * steps;
+    const auto k0 = static_cast<std::size_t>(pos);
+    const std::size_t k1 = (k0 + 1) % static_cast<std::size_t>(steps);
+    const double w = pos - static_cast<double>(k0);
+    const auto& f = expected.mean;
+    ASSERT_NEAR(sim.last_clean_force_N()[0], f.fx_N[k0] + w * (f.fx_N[k1] - f.fx_N[k0]), 1e-9);
+    ASSERT_NEAR(sim.last_clean_force_N()[1], f.fy_N[k0] + w * (f.fy_N[k1] - f.fy_N[k0]), 1e-9);
+    ++compared;
+  }
+  EXPECT_GT(compared, 1000);
+}
+
+// Accumulation that skips passes makes a force that repeats only every L revolutions; the
+// record plays the cycle's revolutions in turn, so revolution n + L repeats revolution n while
+// neighbouring revolutions differ.
+TEST(CutSimulator, PlaysTheAccumulationCycleRevolutionByRevolution) {
+  Scenario s = quiet_scenario();
+  s.spindle.actual_rpm = 24000.0;  // 125 samples per revolution
+  s.model = model::without_effects(s.model);
+  for (const char* e : {"runout", "trochoidal", "multi_pass", "accumulation", "helix_lag"}) {
+    model::set_effect(s.model, e, true);
+  }
+  s.model.effects.helix_lag.discs = 4;
+  model::SteadyStateWorkspace ws;
+  const model::SteadyState& state = model::evaluate_steady_state(
+      model::at_actual_speed(s.model, 24000.0), 24000.0, s.model.resolution.steps_per_rev, ws);
+  ASSERT_TRUE(state.cycle_exact);
+  const auto cycle = static_cast<std::size_t>(state.cycle_revolutions);
+  ASSERT_GT(cycle, 1u);
+  CutSimulator sim(s);
+  const Record r = run(sim);
+  double repeat = 0.0, neighbour = 0.0, peak = 0.0;
+  for (std::size_t i = 0; i + cycle * 125 < r.fy.size(); ++i) {
+    peak = std::max(peak, std::fabs(r.fy[i]));
+    repeat = std::max(repeat, std::fabs(r.fy[i] - r.fy[i + cycle * 125]));
+    neighbour = std::max(neighbour, std::fabs(r.fy[i] - r.fy[i + 125]));
+  }
+  EXPECT_LT(repeat, 1e-9 * peak);
+  EXPECT_GT(neighbour, 1e-3 * peak);
 }
 
 TEST(Scenario, BadFieldsAreNamedWithValueAndRange) {
