@@ -77,7 +77,7 @@ class LcmOutput : public monitor::PipelineSink {
   ChannelNames channels_;
   monitor::PipelineSink* downstream_;
   SpscQueue<Item, 1024> queue_;
-  SpscQueue<SyncSnapshot, 2> sync_queue_;
+  SpscQueue<SyncSnapshot, 8> sync_queue_;
   SyncSnapshot sync_scratch_;  // filled in the sample thread, then copied into the queue
   std::atomic<std::uint64_t> signal_{0};
   std::atomic<bool> stop_{false};

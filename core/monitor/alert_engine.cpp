@@ -141,7 +141,8 @@ Alert* AlertEngine::emit(AlertKind kind, AlertSeverity severity, bool active,
 
 void AlertEngine::examine(const RevolutionRecord& r) {
   const RevolutionMeasurement& m = r.measured;
-  if (!m.valid || m.flutes < 2 || m.flutes > kMaxFlutes) {
+  // A bounded revolution has each flute's force even when a flute left no event (a broken one).
+  if (!m.bounded || m.flutes < 2 || m.flutes > kMaxFlutes) {
     return;
   }
   Flutes f;

@@ -418,7 +418,9 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     idle_ = false;
     event(PipelineEventKind::kCuttingResumed, first, 0, peak, "cutting force again");
   }
-  if (ev.valid) {
+  // A revolution joins the synchronous average when its bounds (the CE1 events) were found,
+  // even if a flute in between left no event (a flute that does not cut).
+  if (ev.bounded) {
     analyzer_.add_to_average(ev, events_.event_template(), ring_, sync_);
     ++sync_revolutions_since_report_;
     if (config_.lockstep && lockstep_.aligned() && !realigned_ &&

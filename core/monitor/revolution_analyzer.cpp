@@ -74,6 +74,7 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   m.event_sample = events.event_sample;
   m.boundary_sample = events.boundary_sample;
   m.valid = events.valid;
+  m.bounded = events.bounded;
   measure_revolution([&](int c, std::int64_t s) { return ring.at(c, s); }, sample_rate_hz_, m);
   out.spindle_rpm = events.period_samples > 0.0 ? 60.0 * sample_rate_hz_ / events.period_samples
                                                 : 60.0 / m.period_s;

@@ -44,6 +44,9 @@ struct RevolutionMeasurement {
   std::array<std::array<double, 3>, kMaxFlutes> range_N{};
   double delta_fy_N = 0.0;
   bool valid = false;  ///< every event measured (a true valley, a whole pulse)
+  /// The revolution's bounds (both CE1 events) were measured: its peaks and ranges per flute are
+  /// meaningful even when a flute in between left no event (it did not cut: its peaks are ~0).
+  bool bounded = false;
 };
 
 /// Measures one revolution. `channel(c, n)` returns channel c (0 fx, 1 fy, 2 fz) at absolute

@@ -39,23 +39,30 @@ RunSummary::RunSummary(const MonitorConfig& config)
 void RunSummary::add(const RevolutionRecord& r) {
   ++revolutions_;
   rpm_.add(r.spindle_rpm);
-  if (!r.measured.valid) {
+  const auto& m = r.measured;
+  if (!m.bounded) {
     return;
   }
-  ++valid_;
-  const auto& m = r.measured;
-  alpha_.add(m.alpha_deg);
-  delta_fy_.add(m.delta_fy_N);
+  // Bounded (both CE1 events found): each flute's force window is known, even when a flute in
+  // between did not cut. Valid (every event found): its periods and α are known too.
+  ++bounded_;
   for (int j = 0; j < flutes_; ++j) {
     const auto uj = static_cast<std::size_t>(j);
-    period_[uj].add(m.flute_period_s[uj]);
     for (std::size_t a = 0; a < 3; ++a) {
       peak_[uj][a].add(m.peak_N[uj][a]);
     }
     peak_resultant_[uj].add(m.peak_resultant_N[uj]);
   }
+  if (m.valid) {
+    ++valid_;
+    alpha_.add(m.alpha_deg);
+    delta_fy_.add(m.delta_fy_N);
+    for (int j = 0; j < flutes_; ++j) {
+      period_[static_cast<std::size_t>(j)].add(m.flute_period_s[static_cast<std::size_t>(j)]);
+    }
+  }
   if (r.model_valid) {
-    if (r.model.valid) {
+    if (r.model.valid && m.valid) {
       model_alpha_.add(r.model.alpha_deg);
       model_delta_fy_.add(r.model.delta_fy_N);
     }
@@ -147,11 +154,16 @@ nlohmann::json RunSummary::to_json() const {
     rpm_source = tracker_rpm_.n > 0 ? "spindle tracker" : "none";
   }
   const bool explained = !warnings_.empty();  // the pipeline said why nothing was measured
-  if (valid_ == 0 && samples > 0 && !explained) {
-    warn("no revolutions", revolutions_ > 0
-                               ? "no revolution had all its tooth events found; α, periods and "
-                                 "peaks are absent"
-                               : "no revolution was measured; α, periods and peaks are absent");
+  if (revolutions_ == 0 && samples > 0 && !explained) {
+    warn("no revolutions", "no revolution was measured; α, periods and peaks are absent");
+  } else if (bounded_ > 0 && valid_ < bounded_ / 2) {
+    warn("flute events missing",
+         std::to_string(bounded_ - valid_) + " of " + std::to_string(bounded_) +
+             " revolutions had a flute without its tooth event (a flute that does not cut, or "
+             "its valley not found): their peaks count, their periods and α do not" +
+             (valid_ == 0 ? "; α, ΔFy and periods are absent" : ""));
+  } else if (revolutions_ > 0 && bounded_ == 0) {
+    warn("no revolutions", "no revolution had its bounds (the CE1 events) found");
   }
   if (revolutions_ > 0 && status_.cutting_revolutions > 0.0 &&
       static_cast<double>(revolutions_ + status_.idle_revolutions) <

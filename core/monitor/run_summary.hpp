@@ -62,6 +62,7 @@ class RunSummary {
   int flutes_ = 0;
   std::int64_t revolutions_ = 0;
   std::int64_t valid_ = 0;
+  std::int64_t bounded_ = 0;
   Running rpm_, tracker_rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
   std::array<Running, kMaxFlutes> period_{};
   std::array<std::array<Running, 3>, kMaxFlutes> peak_{};

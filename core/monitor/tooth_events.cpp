@@ -169,13 +169,21 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
       ++right;
     }
     interrupted = at(v) <= quiet && left + right + 1 >= min_gap;
-    gap_centre[static_cast<std::size_t>(i)] = v + 0.5 * (right - left);
+    // The middle of the quiet stretch, but never more than a quarter pitch from where the
+    // flutes' valleys are on average: a flute that does not cut leaves one long stretch, and
+    // both boundaries in it must stay a pitch apart.
+    const double nominal = fold_at + i * pitch_bins;
+    const double centre = v + 0.5 * (right - left);
+    const double off = std::remainder(centre - nominal, static_cast<double>(bins));
+    gap_centre[static_cast<std::size_t>(i)] =
+        nominal + std::clamp(off, -0.25 * pitch_bins, 0.25 * pitch_bins);
   }
 
   const double bin_rad = kTwoPi / bins;
   std::array<double, kMaxFlutes> boundary{};
   std::array<double, kMaxFlutes> event{};
   std::array<double, kMaxFlutes> peak{};
+  std::array<double, kMaxFlutes> weight{};
   for (int i = 0; i < flutes; ++i) {
     const auto ui = static_cast<std::size_t>(i);
     const int from = picked[ui];
@@ -196,7 +204,7 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
     // The pulse's centroid of squared force above the quiet level, between the gaps' centres.
     const double g0 = gap_centre[ui];
     double g1 = gap_centre[static_cast<std::size_t>((i + 1) % flutes)];
-    if (g1 <= g0) {
+    while (g1 <= g0) {
       g1 += bins;
     }
     double sum_w = 0.0, sum_wk = 0.0;
@@ -205,8 +213,22 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
       sum_w += w;
       sum_wk += w * static_cast<double>(k);
     }
+    weight[ui] = sum_w;
     boundary[ui] = wrap_2pi(g0 * bin_rad);
     event[ui] = wrap_2pi((sum_w > 0.0 ? sum_wk / sum_w : 0.5 * (g0 + g1)) * bin_rad);
+  }
+  // A flute whose window holds (almost) no pulse does not cut: its event is the middle of its
+  // window, where the tracker will find it quiet.
+  const double heaviest = *std::max_element(weight.begin(), weight.begin() + flutes);
+  for (int i = 0; i < flutes && interrupted; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    if (weight[ui] < 0.05 * heaviest) {
+      double g1 = gap_centre[(ui + 1) % static_cast<std::size_t>(flutes)];
+      while (g1 <= gap_centre[ui]) {
+        g1 += bins;
+      }
+      event[ui] = wrap_2pi(0.5 * (gap_centre[ui] + g1) * bin_rad);
+    }
   }
   const auto ce1 =
       static_cast<int>(std::max_element(peak.begin(), peak.begin() + flutes) - peak.begin());
@@ -245,9 +267,9 @@ EventSearch ToothEventTracker::search(const SampleRing& ring, int flute, double 
     const double from = predicted - lead(flute);
     const double to = predicted + spacing_[static_cast<std::size_t>(flute)] * period_ - lead(next);
     EventSearch e = find_centroid(detect, oldest, ring.newest(), from, to);
-    if (e.status == EventSearch::Status::kFound &&
-        !pulse_around(ring, e.position, 0.5 * (to - from))) {
-      e.status = EventSearch::Status::kNotFound;
+    if (e.status != EventSearch::Status::kWait && e.status != EventSearch::Status::kGone &&
+        !pulse_around(ring, 0.5 * (from + to), 0.5 * (to - from))) {
+      e.status = EventSearch::Status::kQuiet;  // the flute did not cut
     }
     if (e.status != EventSearch::Status::kFound) {
       e.position = predicted;
@@ -391,6 +413,7 @@ bool ToothEventTracker::start(const ToothEventTemplate& tmpl, const signal::Phas
   revolution_.event_sample[0] = start;
   revolution_.boundary_sample[0] = start - lead(0);
   revolution_.found[0] = true;
+  revolution_.quiet[0] = false;
   barren_revolutions_ = 0;
   gone_in_revolution_ = 0;
   sequence_ = 0;
@@ -420,10 +443,12 @@ ToothEventTracker::Step ToothEventTracker::step(const SampleRing& ring) {
     revolution_.event_sample[0] = revolution_.event_sample[n];
     revolution_.boundary_sample[0] = revolution_.boundary_sample[n];
     revolution_.found[0] = revolution_.found[n];
+    revolution_.quiet[0] = revolution_.quiet[n];
   }
   revolution_.event_sample[k] = e.position;
   revolution_.boundary_sample[k] = e.position - lead(flute);
   revolution_.found[k] = found;
+  revolution_.quiet[k] = e.status == EventSearch::Status::kQuiet;
   gone_in_revolution_ += e.status == EventSearch::Status::kGone ? 1 : 0;
   next_flute_ = (flute + 1) % flutes;
   ++events_in_revolution_;
@@ -447,6 +472,7 @@ void ToothEventTracker::close_revolution() {
     any = any || r.found[k];
   }
   r.valid = all;
+  r.bounded = r.found[0] && r.found[n];
   // Events without samples (a gap) say nothing about the cut: such a revolution is skipped.
   r.no_data = gone_in_revolution_ >= flutes;
   gone_in_revolution_ = 0;
@@ -459,12 +485,25 @@ void ToothEventTracker::close_revolution() {
   period_ = v + kGainH * residual;
   period_rate_ += 2.0 * kGainK * residual;
   r.period_samples = period_ - 0.5 * period_rate_;  // over the revolution just closed
-  if (all) {
-    const double total = r.event_sample[n] - r.event_sample[0];
+  // The flutes' spacing follows every event found with its revolution's first: as positions
+  // along the revolution (C_j, C_0 = 0, C_N = 1), so that a flute found only now and then, or
+  // never (it does not cut), leaves its neighbours' spacing free to follow.
+  if (r.found[0]) {
+    std::array<double, kMaxFlutes + 1> c{};
+    for (std::size_t j = 0; j < n; ++j) {
+      c[j + 1] = c[j] + spacing_[j];
+    }
+    for (std::size_t j = 1; j < n; ++j) {
+      if (r.found[j]) {
+        const double measured = (r.event_sample[j] - r.event_sample[0]) / r.period_samples;
+        c[j] += config_.spacing_gain * (measured - c[j]);
+      }
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+      spacing_[j] = std::max(0.05 / flutes, c[j + 1] - c[j]);
+    }
     double sum = 0.0;
     for (std::size_t j = 0; j < n; ++j) {
-      const double fraction = (r.event_sample[j + 1] - r.event_sample[j]) / total;
-      spacing_[j] += config_.spacing_gain * (fraction - spacing_[j]);
       sum += spacing_[j];
     }
     for (std::size_t j = 0; j < n; ++j) {

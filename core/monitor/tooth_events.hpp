@@ -52,7 +52,8 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_a
 
 /// Outcome of one event search.
 struct EventSearch {
-  enum class Status { kFound, kNotFound, kGone, kWait };
+  /// kQuiet: no pulse at all where the flute's should be (it did not cut).
+  enum class Status { kFound, kNotFound, kGone, kWait, kQuiet };
   Status status = Status::kNotFound;
   double position = 0.0;    ///< fractional sample (the prediction when not found)
   std::int64_t needed = 0;  ///< kWait: the newest sample the search needs
@@ -89,9 +90,21 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
   // depend on the prediction.
   std::int64_t fit_center = std::llabs(best - center) <= fit_half ? center : best;
   Extremum e = refine_extremum(detect, fit_center, fit_half, true);
+  const bool retry = !e.valid && std::llabs(best - center) + 1 >= fit_half;
+  if (retry) {
+    // The vertex lies just beyond the window around the prediction (a sharp valley seen by
+    // few samples): start at the minimum, found at that window's edge. Not when the minimum
+    // sits inside it: then the valley has no clean vertex (worn edges, real data) and a
+    // minimum of the noise is no event.
+    fit_center = best;
+    e = refine_extremum(detect, fit_center, fit_half, true);
+  }
   for (int i = 0; i < 3 && e.valid && std::llround(e.position) != fit_center; ++i) {
     fit_center = std::llround(e.position);
     e = refine_extremum(detect, fit_center, fit_half, true);
+  }
+  if (retry && e.valid && std::fabs(e.position - static_cast<double>(best)) > fit_half) {
+    e.valid = false;  // the re-centred fit wandered off to another valley (a ringing rebound)
   }
   if (interior && e.valid) {
     // The fit's window jumps by a sample as the vertex crosses a half sample, and with it the
@@ -168,10 +181,12 @@ struct RevolutionEvents {
   std::array<double, kMaxFlutes + 1> event_sample{};
   std::array<double, kMaxFlutes + 1> boundary_sample{};
   std::array<bool, kMaxFlutes + 1> found{};
+  std::array<bool, kMaxFlutes + 1> quiet{};  ///< no pulse where the flute's should be
   /// The revolution's period (samples), filtered over the last revolutions: its speed is
   /// f_s/period_samples (the raw period e_N − e_0 jitters with the events).
   double period_samples = 0.0;
   bool valid = false;    ///< every event found
+  bool bounded = false;  ///< both CE1 events found: the revolution's span is measured
   bool no_data = false;  ///< the revolution fell into a gap in the samples: nothing measured
 };
 

@@ -30,6 +30,7 @@ RevolutionRecord revolution(std::int64_t n, int flutes, const Forces& force_N) {
   r.revolution = n;
   r.utime_us = n * kRevolution_us;
   r.measured.valid = true;
+  r.measured.bounded = true;
   r.measured.flutes = flutes;
   for (int j = 0; j < flutes; ++j) {
     const auto i = static_cast<std::size_t>(j);
