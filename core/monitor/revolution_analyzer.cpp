@@ -49,6 +49,12 @@ AngleMap angle_map(const RevolutionEvents& e, const ToothEventTemplate& t) {
     return m;
   }
   m.slope_rad_per_sample = (count * sxy - sx * sy) / denominator;
+  if (e.period_samples > 0.0) {
+    // The slope from the tracker's filtered period: a slope fitted to each revolution's own
+    // events carries their noise, and stretches or shrinks that revolution's waveform in the
+    // synchronous average (a smear that grows as k² in harmonic k).
+    m.slope_rad_per_sample = kTwoPi / e.period_samples;
+  }
   m.intercept_rad = (sy - m.slope_rad_per_sample * sx) / count - m.slope_rad_per_sample * n0;
   return m;
 }

@@ -1,0 +1,1029 @@
+#include "core/identify/window_fit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <unsupported/Eigen/FFT>
+
+#include "core/model/dynamometer.hpp"
+#include "core/model/flute_positions.hpp"
+#include "core/model/parameter_map.hpp"
+#include "core/model/steady_state.hpp"
+
+namespace millwatch::identify {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kTwoPi = 2.0 * kPi;
+
+double wrap_pi(double a) {
+  return a - kTwoPi * std::round(a / kTwoPi);
+}
+
+/// The model's settings a fit runs with: the variants of the systematic estimate change these.
+struct Setting {
+  int steps = 720;
+  int harmonics = 0;           // K
+  bool mean = false;           // the mean force (k = 0) compared too
+  std::array<bool, 3> axes{};  // compared
+  int discs = 0;               // helix discs (0: as configured)
+};
+
+/// Step of the central differences, in units of each parameter's scale (0.01 µm of runout,
+/// 1 mrad of alignment). Not smaller: on the angle grid the model's force moves with ρ in steps
+/// too small to see in the fit but large enough to ruin a derivative taken over 1e-5 µm.
+constexpr double kDifferenceStep = 1e-2;
+
+/// Levenberg–Marquardt on a few scaled parameters with a central-difference Jacobian.
+template <typename Residual>
+int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::VectorXd& scale,
+                        int max_iterations, double* cost_out) {
+  Eigen::VectorXd r = residual(x);
+  double cost = r.squaredNorm();
+  double lambda = 1e-3;
+  const auto n = x.size();
+  Eigen::MatrixXd j(r.size(), n);
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      Eigen::VectorXd xp = x;
+      const double h = kDifferenceStep * scale[i];
+      xp[i] += h;
+      Eigen::VectorXd xm = x;
+      xm[i] -= h;
+      j.col(i) = (residual(xp) - residual(xm)) / (2.0 * h);
+    }
+    const Eigen::MatrixXd js = j * scale.asDiagonal();  // scaled parameters
+    const Eigen::MatrixXd jtj = js.transpose() * js;
+    const Eigen::VectorXd g = js.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 10 && !improved; ++tries) {
+      Eigen::MatrixXd a = jtj;
+      a.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
+      const Eigen::VectorXd step = -a.ldlt().solve(g);
+      const Eigen::VectorXd trial = x + scale.cwiseProduct(step);
+      const Eigen::VectorXd rt = residual(trial);
+      const double ct = rt.squaredNorm();
+      if (std::isfinite(ct) && ct < cost) {
+        const double relative = (cost - ct) / std::max(cost, 1e-300);
+        x = trial;
+        r = rt;
+        cost = ct;
+        lambda = std::max(lambda / 3.0, 1e-9);
+        improved = true;
+        if (relative < 1e-5 || step.norm() < 1e-4) {
+          *cost_out = cost;
+          return it + 1;
+        }
+      } else {
+        lambda *= 4.0;
+      }
+    }
+    if (!improved) {
+      break;
+    }
+  }
+  *cost_out = cost;
+  return it;
+}
+
+}  // namespace
+
+std::vector<std::complex<double>> revolution_harmonics(const std::vector<double>& x, int count) {
+  const auto b = static_cast<double>(x.size());
+  std::vector<std::complex<double>> out(static_cast<std::size_t>(count));
+  for (int k = 1; k <= count; ++k) {
+    std::complex<double> sum = 0.0;
+    for (std::size_t n = 0; n < x.size(); ++n) {
+      sum += x[n] * std::polar(1.0, -kTwoPi * k * static_cast<double>(n) / b);
+    }
+    out[static_cast<std::size_t>(k - 1)] = 2.0 / b * sum;
+  }
+  return out;
+}
+
+struct WindowFitter::Impl {
+  model::ModelConfig commanded;
+  FilterResponse filter;
+  FitOptions options;
+  bool separable = true;
+  std::vector<std::string> coefficient_names;  // in θ when not separable
+  model::ParameterMap extra_map;
+  model::ParameterMap coefficient_map;
+
+  // One problem: a setting, the measured harmonics and the model's columns.
+  struct Problem {
+    Impl* owner = nullptr;
+    Setting setting;
+    double rpm = 0.0;
+    model::ModelConfig config;  // at the actual speed, with the trial's values
+    model::SteadyStateWorkspace workspace;
+    std::vector<std::array<std::vector<std::complex<double>>, 3>> measured;  // [1] axes × K
+    // Columns: harmonics of each basis column (and the offset, last) per axis, filtered.
+    std::vector<std::array<std::vector<std::complex<double>>, 3>> columns;
+    std::vector<std::string> column_names;
+    Eigen::FFT<double> fft;
+    std::vector<std::complex<double>> spectrum;
+    std::array<std::vector<std::complex<double>>, 3> gains;  // filter (× resonance) at k·f
+    std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
+    Eigen::VectorXd cached_key;
+    bool have_cache = false;
+    double prior_weight = 0.0;          // rows (u, v)·prior_weight appended when > 0
+    long evaluations = 0;               // model evaluations (for the cost figures)
+    Eigen::VectorXd last_coefficients;  // the linear solve's result at the last residual
+
+    void prepare(const MeasuredRevolution& m) {
+      order.clear();
+      if (setting.mean) {
+        order.push_back(0);
+      }
+      for (int k = 1; k <= setting.harmonics; ++k) {
+        order.push_back(k);
+      }
+      rpm = m.spindle_rpm;
+      config = model::at_actual_speed(owner->commanded, rpm);
+      // The dynamometer's resonance is linear: it joins the filter's gains per axis instead of
+      // filtering every basis column in time.
+      const auto& dyn = config.effects.dynamometer;
+      for (std::size_t a = 0; a < 3; ++a) {
+        gains[a].resize(order.size());
+        for (std::size_t e = 0; e < order.size(); ++e) {
+          const double hz = order[e] * rpm / 60.0;
+          std::complex<double> g = owner->filter(hz);
+          if (dyn.enabled) {
+            g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
+          }
+          gains[a][e] = g;
+        }
+      }
+      config.effects.dynamometer.enabled = false;
+      measured.assign(1, {});
+      for (std::size_t a = 0; a < 3; ++a) {
+        if (!setting.axes[a]) {
+          continue;
+        }
+        auto h = revolution_harmonics(m.force_N[a], setting.harmonics);
+        if (m.shared_bins) {
+          const auto bins = static_cast<double>(m.force_N[a].size());
+          for (int k = 1; k <= setting.harmonics; ++k) {
+            const double x = kPi * k / bins;
+            const double sinc = std::sin(x) / x;
+            h[static_cast<std::size_t>(k - 1)] /= sinc * sinc;
+          }
+        }
+        auto& out = measured[0][a];
+        out.clear();
+        if (setting.mean) {
+          double sum = 0.0;
+          for (const double x : m.force_N[a]) {
+            sum += x;
+          }
+          out.emplace_back(sum / static_cast<double>(m.force_N[a].size()), 0.0);
+        }
+        out.insert(out.end(), h.begin(), h.end());
+      }
+      if (setting.discs > 0) {
+        config.effects.helix_lag.discs = setting.discs;
+      }
+      config.effects.runout.enabled = true;
+      workspace.reserve(config, setting.steps);
+      have_cache = false;
+    }
+
+    /// The entries (harmonics k = 1..K, and the mean) of a waveform on the model grid, times
+    /// the filter's response.
+    void harmonics_of(const std::vector<double>& w, std::size_t axis,
+                      std::vector<std::complex<double>>& out) {
+      const int s = setting.steps;
+      fft.fwd(spectrum, w);
+      out.resize(order.size());
+      for (std::size_t e = 0; e < order.size(); ++e) {
+        const auto k = static_cast<std::size_t>(order[e]);
+        out[e] = (k == 0 ? 1.0 : 2.0) / s * spectrum[k] * gains[axis][e];
+      }
+    }
+
+    /// The model's columns for the nonlinear values other than the alignment.
+    void evaluate(const Eigen::VectorXd& key) {
+      if (have_cache && key.size() == cached_key.size() && key == cached_key) {
+        return;
+      }
+      const double u = key[0], v = key[1];
+      config.effects.runout.offset_um = std::hypot(u, v);
+      config.effects.runout.angle_rad = std::atan2(v, u);
+      const int n_extra = owner->extra_map.size();
+      if (n_extra > 0) {
+        model::set_parameters(owner->extra_map, key.segment(2, n_extra), config);
+      }
+      if (!owner->separable) {
+        model::set_parameters(owner->coefficient_map,
+                              key.segment(2 + n_extra, owner->coefficient_map.size()), config);
+      }
+      const int s = setting.steps;
+      if (owner->separable) {
+        const model::ForceBasis& basis = model::evaluate_force_basis(config, rpm, s, workspace);
+        columns.resize(static_cast<std::size_t>(basis.columns + 1));
+        column_names.assign(basis.names.begin(), basis.names.begin() + basis.columns);
+        for (int c = 0; c <= basis.columns; ++c) {
+          const model::ForceWaveform& w =
+              c < basis.columns ? basis.unit[static_cast<std::size_t>(c)] : basis.offset;
+          const std::array<const std::vector<double>*, 3> axes = {&w.fx_N, &w.fy_N, &w.fz_N};
+          for (std::size_t a = 0; a < 3; ++a) {
+            if (setting.axes[a]) {
+              harmonics_of(*axes[a], a, columns[static_cast<std::size_t>(c)][a]);
+            }
+          }
+        }
+      } else {
+        const model::SteadyState& st = model::evaluate_steady_state(
+            config, rpm, s, workspace, model::SteadyStateOutput::kMean);
+        columns.resize(1);
+        column_names.clear();
+        const std::array<const std::vector<double>*, 3> axes = {&st.mean.fx_N, &st.mean.fy_N,
+                                                                &st.mean.fz_N};
+        for (std::size_t a = 0; a < 3; ++a) {
+          if (setting.axes[a]) {
+            harmonics_of(*axes[a], a, columns[0][a]);
+          }
+        }
+      }
+      cached_key = key;
+      have_cache = true;
+      ++evaluations;
+    }
+
+    [[nodiscard]] int data_size() const { return residual_size() - (prior_weight > 0.0 ? 2 : 0); }
+
+    /// The residual's rows after the data: the runout prior, (u, v)·weight.
+    void append_prior(const Eigen::VectorXd& theta, Eigen::VectorXd& r) const {
+      if (prior_weight > 0.0) {
+        r.conservativeResize(r.size() + 2);
+        r[r.size() - 2] = prior_weight * theta[0];
+        r[r.size() - 1] = prior_weight * theta[1];
+      }
+    }
+
+    [[nodiscard]] int residual_size() const {
+      int axes = 0;
+      for (bool a : setting.axes) {
+        axes += a ? 1 : 0;
+      }
+      return 2 * static_cast<int>(order.size()) * axes + (prior_weight > 0.0 ? 2 : 0);
+    }
+
+    /// Whether θ is inside the configuration's bounds (the runout below a fifth of the tool
+    /// radius, every extra parameter and coefficient within its limits).
+    [[nodiscard]] bool admissible(const Eigen::VectorXd& theta) const {
+      if (std::hypot(theta[0], theta[1]) >= 0.19 * model::tool_radius_um(config)) {
+        return false;
+      }
+      const int ne = owner->extra_map.size();
+      if (ne > 0 && !model::within_bounds(owner->extra_map, theta.segment(2, ne))) {
+        return false;
+      }
+      const int nc = owner->separable ? 0 : owner->coefficient_map.size();
+      return nc == 0 || model::within_bounds(owner->coefficient_map, theta.segment(2 + ne, nc));
+    }
+
+    /// The measured harmonics y, the offset column b0 and the linear columns A at θ (the
+    /// model's columns shifted by the alignment δ = θ's last element).
+    void assemble(const Eigen::VectorXd& theta, Eigen::VectorXd& y, Eigen::VectorXd& b0,
+                  Eigen::MatrixXd& a) {
+      const Eigen::Index nk = theta.size() - 1;
+      evaluate(theta.head(nk));
+      const double delta = theta[nk];
+      const int m = data_size();
+      const auto ncol = static_cast<Eigen::Index>(columns.size()) - 1;
+      y.resize(m);
+      b0.resize(m);
+      a.resize(m, ncol);
+      int row = 0;
+      for (std::size_t ax = 0; ax < 3; ++ax) {
+        if (!setting.axes[ax]) {
+          continue;
+        }
+        for (std::size_t uk = 0; uk < order.size(); ++uk) {
+          const std::complex<double> shift = std::polar(1.0, order[uk] * delta);
+          const std::complex<double> meas = measured[0][ax][uk];
+          const std::complex<double> off = columns.back()[ax][uk] * shift;
+          y[row] = meas.real();
+          y[row + 1] = meas.imag();
+          b0[row] = off.real();
+          b0[row + 1] = off.imag();
+          for (Eigen::Index c = 0; c < ncol; ++c) {
+            const std::complex<double> v = columns[static_cast<std::size_t>(c)][ax][uk] * shift;
+            a(row, c) = v.real();
+            a(row + 1, c) = v.imag();
+          }
+          row += 2;
+        }
+      }
+    }
+
+    /// θ = (u, v, extra..., [coefficients...], δ): the residual, the force-law coefficients
+    /// solved by linear least squares (last_coefficients).
+    Eigen::VectorXd residual(const Eigen::VectorXd& theta) {
+      if (!admissible(theta)) {
+        return Eigen::VectorXd::Constant(residual_size(), 1e6);  // a step the fit must refuse
+      }
+      Eigen::VectorXd y, b0;
+      Eigen::MatrixXd a;
+      assemble(theta, y, b0, a);
+      const Eigen::Index m = y.size();
+      const Eigen::Index ncol = a.cols();
+      Eigen::VectorXd r = y - b0;
+      last_coefficients = Eigen::VectorXd::Zero(ncol);
+      if (ncol > 0) {
+        // Columns no axis compared sees (e.g. the axial coefficients without fz) stay at 0.
+        std::vector<Eigen::Index> used;
+        const double biggest = a.colwise().norm().maxCoeff();
+        for (Eigen::Index c = 0; c < ncol; ++c) {
+          if (a.col(c).norm() > 1e-9 * biggest) {
+            used.push_back(c);
+          }
+        }
+        Eigen::MatrixXd au(m, static_cast<Eigen::Index>(used.size()));
+        for (std::size_t i = 0; i < used.size(); ++i) {
+          au.col(static_cast<Eigen::Index>(i)) = a.col(used[i]);
+        }
+        const Eigen::VectorXd c = au.colPivHouseholderQr().solve(r);
+        for (std::size_t i = 0; i < used.size(); ++i) {
+          last_coefficients[used[i]] = c[static_cast<Eigen::Index>(i)];
+        }
+        r -= au * c;
+      }
+      append_prior(theta, r);
+      return r;
+    }
+
+    /// The best alignment on a grid of `steps` values for the nonlinear values `key` (θ without
+    /// δ): a rotation of the model by δ is a rotation of the measurement by −δ, so the model's
+    /// columns are factored once and each δ costs one projection.
+    std::pair<double, double> scan_alignment(const Eigen::VectorXd& key, int steps) {
+      Eigen::VectorXd theta(key.size() + 1);
+      theta << key, 0.0;
+      Eigen::VectorXd y0, b0;
+      Eigen::MatrixXd a;
+      assemble(theta, y0, b0, a);
+      const Eigen::Index m = y0.size();
+      std::vector<Eigen::Index> used;
+      const double biggest = a.cols() > 0 ? a.colwise().norm().maxCoeff() : 0.0;
+      for (Eigen::Index c = 0; c < a.cols(); ++c) {
+        if (a.col(c).norm() > 1e-9 * biggest) {
+          used.push_back(c);
+        }
+      }
+      Eigen::MatrixXd q(m, static_cast<Eigen::Index>(used.size()));
+      if (!used.empty()) {
+        Eigen::MatrixXd au(m, static_cast<Eigen::Index>(used.size()));
+        for (std::size_t i = 0; i < used.size(); ++i) {
+          au.col(static_cast<Eigen::Index>(i)) = a.col(used[i]);
+        }
+        const Eigen::HouseholderQR<Eigen::MatrixXd> qr(au);
+        q = qr.householderQ() * Eigen::MatrixXd::Identity(m, au.cols());
+      }
+      double best = 1e300, best_delta = 0.0;
+      Eigen::VectorXd z(m);
+      for (int i = 0; i < steps; ++i) {
+        const double delta = kTwoPi * i / steps;
+        int row = 0;
+        for (std::size_t ax = 0; ax < 3; ++ax) {
+          if (!setting.axes[ax]) {
+            continue;
+          }
+          for (std::size_t e = 0; e < order.size(); ++e) {
+            const std::complex<double> v =
+                std::complex<double>(y0[row], y0[row + 1]) * std::polar(1.0, -order[e] * delta);
+            z[row] = v.real() - b0[row];
+            z[row + 1] = v.imag() - b0[row + 1];
+            row += 2;
+          }
+        }
+        double cost = z.squaredNorm();
+        if (q.cols() > 0) {
+          cost -= (q.transpose() * z).squaredNorm();
+        }
+        if (cost < best) {
+          best = cost;
+          best_delta = delta;
+        }
+      }
+      return {best_delta, best};
+    }
+
+    /// The residual at θ with the coefficients held at c: y − b0(θ) − A(θ)·c.
+    Eigen::VectorXd residual_at(const Eigen::VectorXd& theta, const Eigen::VectorXd& c) {
+      Eigen::VectorXd y, b0;
+      Eigen::MatrixXd a;
+      assemble(theta, y, b0, a);
+      Eigen::VectorXd r = c.size() > 0 ? Eigen::VectorXd(y - b0 - a * c) : Eigen::VectorXd(y - b0);
+      append_prior(theta, r);
+      return r;
+    }
+
+    /// ∂r/∂c = −A(θ).
+    Eigen::MatrixXd coefficient_jacobian(const Eigen::VectorXd& theta) {
+      Eigen::VectorXd y, b0;
+      Eigen::MatrixXd a;
+      assemble(theta, y, b0, a);
+      Eigen::MatrixXd j = Eigen::MatrixXd::Zero(residual_size(), a.cols());
+      j.topRows(a.rows()) = -a;
+      return j;
+    }
+  };
+
+  Impl(const model::ModelConfig& model, FilterResponse response, FitOptions o)
+      : commanded(model), filter(std::move(response)), options(std::move(o)) {
+    model::validate(commanded);
+    separable = !commanded.effects.deflection.enabled;
+    if (!options.extra_parameters.empty()) {
+      extra_map = model::make_parameter_map(commanded, options.extra_parameters);
+    }
+    if (!separable) {
+      for (const auto& p : model::parameters_of_effect(commanded, "force_law")) {
+        if (p.rfind("k_", 0) == 0) {  // the coefficients, not the exponents
+          coefficient_names.push_back(p);
+        }
+      }
+      coefficient_map = model::make_parameter_map(commanded, coefficient_names);
+    }
+  }
+
+  /// Harmonics the filter passes at the window's speed.
+  [[nodiscard]] int harmonics_for(double rpm, int bins) const {
+    const double f = rpm / 60.0;
+    int k = 1;
+    while (k < bins / 2 - 1 && std::abs(filter((k + 1) * f)) >= options.passband_gain) {
+      ++k;
+    }
+    return k;
+  }
+
+  /// The nonlinear vector θ and its scales for a problem.
+  [[nodiscard]] Eigen::VectorXd scales(const model::ModelConfig& c) const {
+    const int ne = extra_map.size();
+    const int nc = separable ? 0 : coefficient_map.size();
+    Eigen::VectorXd s(3 + ne + nc);
+    s[0] = s[1] = 1.0;  // µm
+    if (ne > 0) {
+      s.segment(2, ne) = model::parameter_scales(extra_map);
+    }
+    if (nc > 0) {
+      Eigen::VectorXd values(nc);
+      model::get_parameters(coefficient_map, c, values);
+      s.segment(2 + ne, nc) = values.cwiseAbs().cwiseMax(model::parameter_scales(coefficient_map));
+    }
+    s[s.size() - 1] = 0.1;  // rad
+    (void)c;
+    return s;
+  }
+
+  [[nodiscard]] Eigen::VectorXd initial_theta(const model::ModelConfig& c, double u, double v,
+                                              double delta) const {
+    const int ne = extra_map.size();
+    const int nc = separable ? 0 : coefficient_map.size();
+    Eigen::VectorXd t(3 + ne + nc);
+    t[0] = u;
+    t[1] = v;
+    if (ne > 0) {
+      Eigen::VectorXd e(ne);
+      model::get_parameters(extra_map, c, e);
+      t.segment(2, ne) = e;
+    }
+    if (nc > 0) {
+      Eigen::VectorXd e(nc);
+      model::get_parameters(coefficient_map, c, e);
+      t.segment(2 + ne, nc) = e;
+    }
+    t[t.size() - 1] = delta;
+    return t;
+  }
+
+  /// Relabels the flutes so that flute 0 has the largest cut (uniform pitch): γ' = γ + ψ_j*,
+  /// δ' = δ − ψ_j*. The force is unchanged.
+  void relabel(Eigen::VectorXd& theta) const {
+    if (!commanded.tool.pitch_deg.empty()) {
+      return;  // a non-uniform pitch has labelled flutes
+    }
+    const int flutes = commanded.tool.flutes;
+    const double u = theta[0], v = theta[1];
+    const double rho = std::hypot(u, v);
+    const double gamma = std::atan2(v, u);
+    const double radius = model::tool_radius_um(commanded);
+    const std::vector<double> pitch = model::flute_pitch_angles_rad(commanded.tool);
+    const auto pos = model::flute_positions(radius, pitch, rho, gamma);
+    int best = 0;
+    double best_cut = -1e300;
+    for (int j = 0; j < flutes; ++j) {
+      const int prev = (j - 1 + flutes) % flutes;
+      const double cut = pos[static_cast<std::size_t>(j)].radius_um -
+                         pos[static_cast<std::size_t>(prev)].radius_um;
+      if (cut > best_cut + 1e-12) {
+        best_cut = cut;
+        best = j;
+      }
+    }
+    const double psi = pitch[static_cast<std::size_t>(best)];
+    const double g = wrap_pi(gamma + psi);
+    theta[0] = rho * std::cos(g);
+    theta[1] = rho * std::sin(g);
+    theta[theta.size() - 1] = wrap_pi(theta[theta.size() - 1] - psi);
+  }
+
+  /// Best start: runout on a grid, alignment on a fine grid; then the best few refined.
+  /// `grid`: the problem the starts are ranked on (a coarser angle grid: only their order
+  /// matters), or null to refine the seed alone.
+  Eigen::VectorXd solve(Problem& p, Problem* grid, const Eigen::VectorXd* seed, double* cost,
+                        int* iterations) {
+    const Eigen::VectorXd scale = scales(p.config);
+    std::vector<std::pair<double, Eigen::VectorXd>> starts;
+    auto consider = [&](double u, double v) {
+      Eigen::VectorXd t = initial_theta(p.config, u, v, 0.0);
+      if (!p.admissible(t)) {
+        return;
+      }
+      // The alignment on a grid of 2.5° (Levenberg–Marquardt refines it).
+      const auto [delta, c] = grid->scan_alignment(t.head(t.size() - 1), 144);
+      t[t.size() - 1] = delta;
+      starts.emplace_back(c, t);
+    };
+    const double ft = p.config.process.feed_per_tooth_um;
+    if (grid == nullptr) {
+      // Seed only.
+    } else if (options.fit_runout) {
+      consider(0.0, 0.0);
+      // Relabelling the flutes turns (u, v) by a pitch and leaves the force: directions over
+      // one pitch cover every runout. The basin is narrow (about half a micrometre at a few
+      // micrometres of feed), hence rings a fifth of the feed apart.
+      const double sector = kTwoPi / std::max(1, p.config.tool.flutes);
+      for (int ring = 1; ring <= 5; ++ring) {
+        const double rho = 0.2 * ring * ft;
+        for (int g = 0; g < 8; ++g) {
+          const double gamma = sector * (g + 0.5 * (ring % 2)) / 8.0;
+          consider(rho * std::cos(gamma), rho * std::sin(gamma));
+        }
+      }
+    } else {
+      const double rho =
+          commanded.effects.runout.enabled ? commanded.effects.runout.offset_um : 0.0;
+      consider(rho * std::cos(commanded.effects.runout.angle_rad),
+               rho * std::sin(commanded.effects.runout.angle_rad));
+    }
+    std::sort(starts.begin(), starts.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (seed != nullptr) {
+      // A seed (the coarse fit, the previous window) is refined whatever its cost: it is near
+      // the optimum but, in a narrow basin, not necessarily below a start of the grid.
+      starts.insert(starts.begin(), {p.residual(*seed).squaredNorm(), *seed});
+    }
+    // A weak runout prior from the start, at a tenth of the best start's noise level, keeps
+    // Levenberg–Marquardt from wandering along a direction the data hardly pin; fit() sets it
+    // to the converged noise level afterwards.
+    if (options.runout_prior_um > 0.0 && options.fit_runout && !starts.empty()) {
+      const double dof = std::max(1.0, static_cast<double>(p.data_size() - scale.size()));
+      p.prior_weight = 0.1 * std::sqrt(starts.front().first / dof) / options.runout_prior_um;
+    }
+    const auto refined =
+        std::min<std::size_t>(starts.size(), static_cast<std::size_t>(options.refined_starts) +
+                                                 (seed != nullptr ? 1 : 0));
+    Eigen::VectorXd best;
+    double best_cost = 1e300;
+    *iterations = 0;
+    for (std::size_t i = 0; i < refined; ++i) {
+      if (i > (seed != nullptr ? 1U : 0U) &&
+          starts[i].first > 4.0 * starts[seed != nullptr ? 1 : 0].first) {
+        break;  // a start far worse than the best is another, worse basin
+      }
+      Eigen::VectorXd t = starts[i].second;
+      double c = 0.0;
+      *iterations += levenberg_marquardt(
+          [&](const Eigen::VectorXd& x) {
+            Eigen::VectorXd y = x;
+            if (!options.fit_runout) {
+              y.head(2) = starts[i].second.head(2);
+            }
+            return p.residual(y);
+          },
+          t, scale, options.max_iterations, &c);
+      if (c < best_cost) {
+        best_cost = c;
+        best = t;
+      }
+    }
+    relabel(best);
+    const double prior = p.prior_weight;
+    p.prior_weight = 0.0;
+    *cost = p.residual(best).squaredNorm();  // the data's part
+    p.prior_weight = prior;
+    return best;
+  }
+
+  /// Refits from `theta` with another setting (a variant of the model's approximations).
+  Eigen::VectorXd refit(const MeasuredRevolution& m, const Setting& s, const Eigen::VectorXd& theta,
+                        double prior_weight) {
+    Problem p;
+    p.owner = this;
+    p.setting = s;
+    p.prepare(m);
+    p.prior_weight = prior_weight;
+    Eigen::VectorXd t = theta;
+    double c = 0.0;
+    levenberg_marquardt(
+        [&](const Eigen::VectorXd& x) {
+          Eigen::VectorXd y = x;
+          if (!options.fit_runout) {
+            y.head(2) = theta.head(2);
+          }
+          return p.residual(y);
+        },
+        t, scales(p.config), 2, &c);  // the optimum's shift: a step or two
+    relabel(t);
+    p.residual(t);
+    Eigen::VectorXd out(t.size() + p.last_coefficients.size());
+    out << t, p.last_coefficients;
+    return out;
+  }
+
+  FitResult fit(const MeasuredRevolution& m, const FitResult* previous);
+};
+
+FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* previous) {
+  FitResult out;
+  out.config = commanded;
+  const int bins = static_cast<int>(m.force_N[0].size());
+  if (bins < 16 || !(m.spindle_rpm > 0.0)) {
+    out.message = "no revolution average to fit";
+    return out;
+  }
+  Setting base;
+  base.steps = options.steps_per_rev;
+  base.harmonics = harmonics_for(m.spindle_rpm, bins);
+  base.axes = m.use_axis;
+  base.mean = options.use_mean;
+  Problem p;
+  p.owner = this;
+  p.setting = base;
+  p.prepare(m);
+
+  Eigen::VectorXd seed;
+  const Eigen::VectorXd* seed_ptr = nullptr;
+  if (previous != nullptr && previous->ok) {
+    seed = initial_theta(previous->config,
+                         previous->rho_um.value * std::cos(previous->gamma_rad.value),
+                         previous->rho_um.value * std::sin(previous->gamma_rad.value),
+                         previous->alignment_rad.value);
+    seed_ptr = &seed;
+  }
+  double cost = 0.0;
+  int full_iterations = 0;
+  Eigen::VectorXd theta;
+  if (seed_ptr != nullptr) {
+    // From the previous window: refine it alone, and search afresh only when the result fits
+    // much worse than the previous one did (the runout or the cut changed).
+    theta = solve(p, nullptr, seed_ptr, &cost, &full_iterations);
+    const double rms = std::sqrt(cost / std::max(1, p.data_size()));
+    const double before = std::hypot(previous->residual_rms_N[0], previous->residual_rms_N[1],
+                                     previous->residual_rms_N[2]);
+    if (!(rms <= 2.0 * before + 1e-9)) {
+      seed_ptr = nullptr;
+    }
+  }
+  if (seed_ptr == nullptr) {
+    Setting coarse = base;
+    coarse.steps = std::max(90, base.steps / 2);
+    Problem grid;
+    grid.owner = this;
+    grid.setting = coarse;
+    grid.prepare(m);
+    theta = solve(p, &grid, nullptr, &cost, &full_iterations);
+    out.evaluations += grid.evaluations;
+  }
+  out.iterations += full_iterations;
+  // The weak runout prior, at the noise level the data-only fit leaves.
+  if (options.runout_prior_um > 0.0 && options.fit_runout) {
+    const double dof0 = std::max(1.0, static_cast<double>(p.data_size() - theta.size()));
+    p.prior_weight = std::sqrt(cost / dof0) / options.runout_prior_um;
+    double c = 0.0;
+    out.iterations += levenberg_marquardt([&](const Eigen::VectorXd& x) { return p.residual(x); },
+                                          theta, scales(p.config), options.max_iterations, &c);
+    relabel(theta);
+    cost = c;
+  }
+  const Eigen::VectorXd r = p.residual(theta);
+  const Eigen::VectorXd coefficients = p.last_coefficients;
+  const Eigen::Index nt = theta.size();
+  const Eigen::Index nc = coefficients.size();
+  const int mres = p.residual_size();
+
+  // Statistical covariance of all parameters from the full Jacobian at the solution.
+  Eigen::MatrixXd j(mres, nt + nc);
+  {
+    const Eigen::VectorXd scale = scales(p.config);
+    for (Eigen::Index i = 0; i < nt; ++i) {
+      Eigen::VectorXd tp = theta;
+      const double h = kDifferenceStep * scale[i];
+      tp[i] += h;
+      Eigen::VectorXd tm = theta;
+      tm[i] -= h;
+      j.col(i) = (p.residual_at(tp, coefficients) - p.residual_at(tm, coefficients)) / (2.0 * h);
+    }
+    if (nc > 0) {
+      j.rightCols(nc) = p.coefficient_jacobian(theta);
+      // Coefficients the linear solve left at 0 (no axis sees them) are not parameters.
+      for (Eigen::Index c = 0; c < nc; ++c) {
+        if (j.col(nt + c).norm() <= 1e-9 * j.rightCols(nc).colwise().norm().maxCoeff()) {
+          j.col(nt + c).setZero();
+        }
+      }
+    }
+  }
+  // Coefficients no axis sees were not fitted: leave them out of the covariance.
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index i = 0; i < nt + nc; ++i) {
+    if (j.col(i).norm() > 0.0) {
+      free.push_back(i);
+    }
+  }
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd jf(mres, nf);
+  for (Eigen::Index i = 0; i < nf; ++i) {
+    jf.col(i) = j.col(free[static_cast<std::size_t>(i)]);
+  }
+  const double dof = std::max(1.0, static_cast<double>(mres - nf));
+  const double s2 = r.squaredNorm() / dof;
+  // (JᵀJ)⁻¹ through the SVD of the column-scaled J. A direction the data do not pin (a singular
+  // value below 1e-10 of the largest: e.g. ρ·sin γ in a model where only the radii see runout)
+  // must come out with a huge variance, not the zero a pseudo-inverse would give it.
+  Eigen::VectorXd col_scale(nf);
+  for (Eigen::Index i = 0; i < nf; ++i) {
+    col_scale[i] = std::max(jf.col(i).norm(), 1e-300);
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(jf * col_scale.cwiseInverse().asDiagonal(),
+                                              Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double floor = std::max(sv.size() > 0 ? sv[0] : 0.0, 1e-300) * 1e-10;
+  Eigen::VectorXd inv2(sv.size());
+  for (Eigen::Index i = 0; i < sv.size(); ++i) {
+    const double x = std::max(sv[i], floor);
+    inv2[i] = 1.0 / (x * x);
+  }
+  const Eigen::MatrixXd cov_free = s2 * col_scale.cwiseInverse().asDiagonal() * svd.matrixV() *
+                                   inv2.asDiagonal() * svd.matrixV().transpose() *
+                                   col_scale.cwiseInverse().asDiagonal();
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(nt + nc, nt + nc);
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    for (Eigen::Index b = 0; b < nf; ++b) {
+      cov(free[static_cast<std::size_t>(a)], free[static_cast<std::size_t>(b)]) = cov_free(a, b);
+    }
+  }
+
+  // Systematic: the spread of the estimates over variants of the model's approximations.
+  Eigen::VectorXd full(nt + nc);
+  full << theta, coefficients;
+  Eigen::VectorXd sys2 = Eigen::VectorXd::Zero(nt + nc);
+  if (options.systematic) {
+    // Each variant changes one of the model's approximations by a factor of two (coarser, so
+    // that the variants cost less than the fit), or what is compared.
+    std::vector<Setting> variants;
+    Setting coarser = base;
+    coarser.steps = base.steps / 2;
+    variants.push_back(coarser);
+    if (commanded.effects.helix_lag.enabled && commanded.effects.helix_lag.discs >= 2) {
+      Setting discs = base;
+      discs.discs = commanded.effects.helix_lag.discs / 2;
+      variants.push_back(discs);
+    }
+    if (base.harmonics >= 5) {
+      Setting fewer = base;
+      fewer.harmonics = base.harmonics - 2;
+      variants.push_back(fewer);
+    }
+    if (base.axes[2]) {
+      Setting plane = base;
+      plane.axes[2] = false;
+      variants.push_back(plane);
+    }
+    for (const Setting& v : variants) {
+      const Eigen::VectorXd alt = refit(m, v, theta, p.prior_weight);
+      Eigen::VectorXd d = alt - full;
+      d[nt - 1] = wrap_pi(d[nt - 1]);
+      for (Eigen::Index i = 0; i < nt + nc; ++i) {
+        if (cov(i, i) == 0.0 && i >= nt) {
+          d[i] = 0.0;  // not fitted in the base: nothing to compare
+        }
+      }
+      sys2 = sys2.cwiseMax(d.cwiseAbs2());  // the largest shift: each variant is one cause
+    }
+  }
+  if (options.fit_runout) {
+    // What no variant shows: the measurement's own systematic errors (the angle map's jitter
+    // through the synchronous average, the filter's response as modelled). On simulated cuts
+    // with known truth they move (u, v) by up to about 0.2 % of the feed per tooth; half a
+    // percent is the floor of their σ.
+    const double floor_um = 0.005 * commanded.process.feed_per_tooth_um;
+    sys2[0] += floor_um * floor_um;
+    sys2[1] += floor_um * floor_um;
+  }
+
+  // Reported parameters: ρ, γ from (u, v) by the delta method.
+  const double u = theta[0], v = theta[1];
+  const double rho = std::hypot(u, v);
+  const double gamma = std::atan2(v, u);
+  Eigen::MatrixXd t = Eigen::MatrixXd::Identity(nt + nc, nt + nc);
+  if (rho > 0.0) {
+    t(0, 0) = u / rho;
+    t(0, 1) = v / rho;
+    t(1, 0) = -v / (rho * rho);
+    t(1, 1) = u / (rho * rho);
+  }
+  const Eigen::MatrixXd cov_rep = t * cov * t.transpose();
+  // The systematic spread of (u, v) mapped the same way (its components' squares).
+  const Eigen::VectorXd sys2_rep = (t.cwiseAbs2() * sys2);
+  auto estimate = [&](const std::string& name, Eigen::Index i, double value) {
+    Estimate e;
+    e.name = name;
+    e.value = value;
+    e.sigma_stat = std::sqrt(std::max(0.0, cov_rep(i, i)));
+    e.sigma_sys = std::sqrt(std::max(0.0, sys2_rep[i]));
+    e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+    return e;
+  };
+  out.rho_um = estimate("rho_um", 0, rho);
+  out.gamma_rad = estimate("gamma_rad", 1, gamma);
+  // ρ and γ are not linear in (u, v): where one direction is pinned weakly (σ comparable with
+  // ρ), the delta method says nothing useful (∂ρ/∂v = 0 at v = 0). Their spread is taken from
+  // (u, v) drawn from its distribution (statistical and systematic parts), deterministic draws.
+  {
+    Eigen::Matrix2d su = cov.topLeftCorner(2, 2);
+    Eigen::Matrix2d ss = Eigen::Matrix2d::Zero();
+    ss.diagonal() = sys2.head(2);
+    const Eigen::LLT<Eigen::Matrix2d> chol_stat(su + 1e-18 * Eigen::Matrix2d::Identity());
+    const Eigen::LLT<Eigen::Matrix2d> chol_all(su + ss + 1e-18 * Eigen::Matrix2d::Identity());
+    std::mt19937_64 rng(20231);
+    std::normal_distribution<double> z(0.0, 1.0);
+    double rs = 0.0, ra = 0.0, gs = 0.0, ga = 0.0;
+    constexpr int kDraws = 4000;
+    for (int i = 0; i < kDraws; ++i) {
+      const Eigen::Vector2d e(z(rng), z(rng));
+      const Eigen::Vector2d a = Eigen::Vector2d(u, v) + chol_stat.matrixL() * e;
+      const Eigen::Vector2d b = Eigen::Vector2d(u, v) + chol_all.matrixL() * e;
+      rs += std::pow(a.norm() - rho, 2);
+      ra += std::pow(b.norm() - rho, 2);
+      gs += std::pow(wrap_pi(std::atan2(a[1], a[0]) - gamma), 2);
+      ga += std::pow(wrap_pi(std::atan2(b[1], b[0]) - gamma), 2);
+    }
+    out.rho_um.sigma_stat = std::sqrt(rs / kDraws);
+    out.rho_um.sigma = std::sqrt(ra / kDraws);
+    out.rho_um.sigma_sys = std::sqrt(std::max(
+        0.0, out.rho_um.sigma * out.rho_um.sigma - out.rho_um.sigma_stat * out.rho_um.sigma_stat));
+    out.gamma_rad.sigma_stat = std::min(kPi, std::sqrt(gs / kDraws));
+    out.gamma_rad.sigma = std::min(kPi, std::sqrt(ga / kDraws));
+    out.gamma_rad.sigma_sys =
+        std::sqrt(std::max(0.0, out.gamma_rad.sigma * out.gamma_rad.sigma -
+                                    out.gamma_rad.sigma_stat * out.gamma_rad.sigma_stat));
+  }
+  out.alignment_rad = estimate("alignment_rad", nt - 1, theta[nt - 1]);
+  const int ne = extra_map.size();
+  for (int i = 0; i < ne; ++i) {
+    out.extra.push_back(
+        estimate(extra_map.parameters[static_cast<std::size_t>(i)].name, 2 + i, theta[2 + i]));
+  }
+  std::vector<std::string> names(static_cast<std::size_t>(nt + nc));
+  names[0] = "rho_um";
+  names[1] = "gamma_rad";
+  names[static_cast<std::size_t>(nt - 1)] = "alignment_rad";
+  for (int i = 0; i < ne; ++i) {
+    names[static_cast<std::size_t>(2 + i)] = extra_map.parameters[static_cast<std::size_t>(i)].name;
+  }
+  if (!separable) {
+    for (int i = 0; i < coefficient_map.size(); ++i) {
+      const std::string& n = coefficient_map.parameters[static_cast<std::size_t>(i)].name;
+      names[static_cast<std::size_t>(2 + ne + i)] = n;
+      out.coefficients.push_back(estimate(n, 2 + ne + i, theta[2 + ne + i]));
+    }
+  }
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    const std::string& n = p.column_names[static_cast<std::size_t>(c)];
+    names[static_cast<std::size_t>(nt + c)] = n;
+    if (cov(nt + c, nt + c) > 0.0) {
+      out.coefficients.push_back(estimate(n, nt + c, coefficients[c]));
+    }
+  }
+  for (Eigen::Index a = 0; a < nt + nc; ++a) {
+    for (Eigen::Index b = a + 1; b < nt + nc; ++b) {
+      const double d = std::sqrt(cov_rep(a, a) * cov_rep(b, b));
+      if (d > 0.0 && std::fabs(cov_rep(a, b) / d) > 0.9) {
+        out.correlated.emplace_back(names[static_cast<std::size_t>(a)],
+                                    names[static_cast<std::size_t>(b)]);
+      }
+    }
+  }
+
+  // The fitted configuration (commanded speed, fitted values).
+  out.config = commanded;
+  out.config.effects.runout.enabled = true;
+  out.config.effects.runout.offset_um = rho;
+  out.config.effects.runout.angle_rad = gamma;
+  if (ne > 0) {
+    model::set_parameters(extra_map, theta.segment(2, ne), out.config);
+  }
+  if (!separable) {
+    model::set_parameters(coefficient_map, theta.segment(2 + ne, coefficient_map.size()),
+                          out.config);
+  } else if (nc > 0) {
+    std::vector<std::string> fitted;
+    std::vector<double> values;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (cov(nt + c, nt + c) > 0.0) {
+        fitted.push_back(p.column_names[static_cast<std::size_t>(c)]);
+        values.push_back(coefficients[c]);
+      }
+    }
+    const model::ParameterMap map = model::make_parameter_map(commanded, fitted);
+    model::set_parameters(
+        map,
+        Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size())),
+        out.config);
+  }
+
+  // Cutting radii per flute, with σ through (u, v).
+  const int flutes = commanded.tool.flutes;
+  const double radius = model::tool_radius_um(commanded);
+  const std::vector<double> pitch = model::flute_pitch_angles_rad(commanded.tool);
+  auto radii = [&](double uu, double vv) {
+    const auto pos = model::flute_positions(radius, pitch, std::hypot(uu, vv), std::atan2(vv, uu));
+    Eigen::VectorXd rr(flutes);
+    for (int jf2 = 0; jf2 < flutes; ++jf2) {
+      rr[jf2] = pos[static_cast<std::size_t>(jf2)].radius_um;
+    }
+    return rr;
+  };
+  const Eigen::VectorXd r0 = radii(u, v);
+  const double h = 1e-4;
+  Eigen::MatrixXd dr(flutes, 2);
+  dr.col(0) = (radii(u + h, v) - r0) / h;
+  dr.col(1) = (radii(u, v + h) - r0) / h;
+  const Eigen::MatrixXd cov_r = dr * cov.topLeftCorner(2, 2) * dr.transpose();
+  const Eigen::VectorXd sys_r = (dr.cwiseAbs2() * sys2.head(2));
+  for (int jf2 = 0; jf2 < flutes; ++jf2) {
+    Estimate e;
+    e.name = "r_ce" + std::to_string(jf2 + 1) + "_um";
+    e.value = r0[jf2];
+    e.sigma_stat = std::sqrt(std::max(0.0, cov_r(jf2, jf2)));
+    e.sigma_sys = std::sqrt(std::max(0.0, sys_r[jf2]));
+    e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+    out.cutting_radius_um.push_back(e);
+    Eigen::RowVectorXd g = dr.row(jf2) - dr.row(0);
+    Estimate d;
+    d.name = "r_ce" + std::to_string(jf2 + 1) + "_minus_r_ce1_um";
+    d.value = r0[jf2] - r0[0];
+    d.sigma_stat = std::sqrt(std::max(0.0, (g * cov.topLeftCorner(2, 2) * g.transpose())(0, 0)));
+    d.sigma_sys = std::sqrt(std::max(0.0, (g.cwiseAbs2() * sys2.head(2))(0, 0)));
+    d.sigma = std::hypot(d.sigma_stat, d.sigma_sys);
+    out.radius_from_ce1_um.push_back(d);
+  }
+
+  // Residual and measured RMS per axis over the harmonics compared: √(Σ|X_k|²/2).
+  int row = 0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (!base.axes[a]) {
+      continue;
+    }
+    double rr = 0.0, mm = 0.0;
+    for (std::size_t e = 0; e < p.order.size(); ++e) {
+      if (p.order[e] > 0) {  // about the mean: the harmonics' share of the RMS
+        rr += r[row] * r[row] + r[row + 1] * r[row + 1];
+        mm += std::norm(p.measured[0][a][e]);
+      }
+      row += 2;
+    }
+    out.residual_rms_N[a] = std::sqrt(rr / 2.0);
+    out.measured_rms_N[a] = std::sqrt(mm / 2.0);
+  }
+  out.harmonics = base.harmonics;
+  out.effective_samples = p.data_size();
+  out.evaluations += p.evaluations;
+  out.ok = std::isfinite(cost);
+  out.message = out.ok ? "converged" : "the fit did not converge";
+  return out;
+}
+
+WindowFitter::WindowFitter(const model::ModelConfig& model, FilterResponse filter,
+                           FitOptions options)
+    : impl_(std::make_unique<Impl>(model, std::move(filter), std::move(options))) {}
+WindowFitter::~WindowFitter() = default;
+WindowFitter::WindowFitter(WindowFitter&&) noexcept = default;
+WindowFitter& WindowFitter::operator=(WindowFitter&&) noexcept = default;
+
+FitResult WindowFitter::fit(const MeasuredRevolution& measured, const FitResult* previous) {
+  return impl_->fit(measured, previous);
+}
+
+const FitOptions& WindowFitter::options() const {
+  return impl_->options;
+}
+
+}  // namespace millwatch::identify

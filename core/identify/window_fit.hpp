@@ -1,0 +1,147 @@
+#pragma once
+// Identification of runout and force coefficients from the measured force alone.
+//
+// What is fitted: the revolution-synchronous average of the measured force over a window of
+// revolutions (each revolution mapped to the spindle angle through its own tooth events), in the
+// tracker's angle frame. What fits it: the model's periodic steady state at the window's speed
+// (model::evaluate_steady_state, feed rate fixed by the commanded speed), through the same
+// low-pass filter as the measurement (its response H at each spindle harmonic), rotated by an
+// alignment δ between the tracker's angle zero and the model's flute 0.
+//
+// In the spindle-harmonic domain. Both sides are expanded in spindle harmonics k = 1..K, K the
+// last harmonic the filter passes at |H| ≥ passband_gain; the fit compares the complex harmonics
+// of every axis used (2·K·axes real numbers: for a signal low-passed at f_c these are its
+// independent samples, the "effective number" a low-passed signal has — not the raw sample
+// count). The mean force (k = 0) is left out: the charge amplifiers' offset and drift live there.
+// The alignment is then an exact phase factor e^{ikδ}.
+//
+// Separable least squares. With deflection off the force is linear in the force law's
+// coefficients (model::evaluate_force_basis): for each trial of the nonlinear parameters θ
+// (runout as u = ρ·cos γ, v = ρ·sin γ — smooth through ρ = 0, no wrap in γ —, the alignment δ,
+// and any extra parameter such as h_min) the coefficients are solved by linear least squares
+// (variable projection), and Levenberg–Marquardt moves θ only. With deflection on the
+// coefficients join θ. Starts: runout on a grid of offsets and 8 directions, each with the best
+// alignment on a fine grid of δ; the best few are refined.
+//
+// Flute labelling: without a once-per-revolution reference the flutes are known only modulo the
+// pitch. The result is relabelled (uniform pitch) so that flute 0 — CE1 — is the flute with the
+// largest cut, the monitor's convention: γ and δ move by a pitch, the force does not change.
+//
+// Uncertainty. Statistical: the covariance s²·(JᵀJ)⁻¹ of all parameters (θ and coefficients)
+// from the Jacobian at the solution, s² = RSS/(M − p) with M the real harmonic values compared
+// (the effective count above). The runout carries a weak prior, (u, v) ~ N(0, σ_p²): where the
+// data pin a direction the prior does not matter; where they do not (ρ·sin γ when only the
+// cutting radii see the runout) the estimate stays at 0 with σ ≈ σ_p instead of wandering along
+// a flat valley to wherever the model's small errors push it. Systematic: the model is not the cut,
+// and a fit can match the waveform to millinewtons while a weakly pinned parameter (ρ·sin γ: see
+// physics-notes, "What the force can tell about runout") sits far from the truth. So the fit is
+// repeated with the model's own approximations changed — a finer angle grid, twice the helix discs,
+// fewer harmonics, the in-plane axes alone — and the spread of the estimates over these variants is
+// added in quadrature. Parameters whose correlation exceeds 0.9 in magnitude are flagged.
+//
+// Runs in a worker thread (allocates; not for the sample path). One fitter per thread.
+
+#include <array>
+#include <complex>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/model/model_config.hpp"
+
+namespace millwatch::identify {
+
+/// The measurement to fit: the revolution-synchronous average over a window.
+struct MeasuredRevolution {
+  /// Average force on the tool per axis (fx, fy, fz; N) on a uniform grid of the tracker's
+  /// spindle angle, bin b at 2πb/B.
+  std::array<std::vector<double>, 3> force_N;
+  std::array<bool, 3> use_axis = {true, true, false};  ///< axes compared (fz only if measured)
+  double spindle_rpm = 0.0;                            ///< the window's mean actual speed
+  int revolutions = 0;                                 ///< revolutions averaged
+  /// The grid was filled as monitor::SyncAverage does, each sample shared between its two nearest
+  /// bins: a triangular kernel one bin wide, which scales harmonic k by sinc²(πk/B). The fit
+  /// divides it out. False for a grid sampled exactly.
+  bool shared_bins = true;
+};
+
+/// The measurement chain's filter, as the model must go through it: H(f) (complex).
+using FilterResponse = std::function<std::complex<double>(double frequency_hz)>;
+
+struct FitOptions {
+  int steps_per_rev = 720;                    ///< the model's angle grid
+  double passband_gain = 0.1;                 ///< harmonics used: |H(k·f)| ≥ this
+  bool fit_runout = true;                     ///< ρ and γ free (else as configured)
+  std::vector<std::string> extra_parameters;  ///< other nonlinear parameters (parameter_map names)
+  int max_iterations = 30;                    ///< Levenberg–Marquardt iterations per start
+  int refined_starts = 2;                     ///< best starts refined
+  bool systematic = true;                     ///< estimate the model-discrepancy spread
+  /// Compare the mean force (k = 0) too. Off by default: the charge amplifiers' offset and drift
+  /// live there; on when the channels are known to be tared (a calibration on short cuts).
+  bool use_mean = false;
+  /// σ of a weak prior on ρ·cos γ and ρ·sin γ around 0 (µm; 0: none): what the data do not pin
+  /// (ρ·sin γ, weakly) stays near 0 with this σ instead of wandering along a flat valley.
+  double runout_prior_um = 5.0;
+};
+
+/// One estimated parameter.
+struct Estimate {
+  std::string name;
+  double value = 0.0;
+  double sigma = 0.0;       ///< total: statistical and systematic in quadrature
+  double sigma_stat = 0.0;  ///< from the Jacobian and the residual
+  double sigma_sys = 0.0;   ///< spread over the model variants
+};
+
+struct FitResult {
+  bool ok = false;
+  std::string message;        ///< why not, or how the fit ended
+  model::ModelConfig config;  ///< the configuration with every fitted value in place
+  Estimate rho_um;            ///< tool-centre offset ρ ([000] eq 9), at the tool tip
+  Estimate gamma_rad;         ///< its direction relative to flute 0 (CE1), in (−π, π]
+  Estimate alignment_rad;     ///< model angle minus tracker angle
+  /// Each flute's cutting radius r_j = |O→edge j| (µm) and r_j − r_0, with σ.
+  std::vector<Estimate> cutting_radius_um;
+  std::vector<Estimate> radius_from_ce1_um;
+  std::vector<Estimate> coefficients;  ///< force-law coefficients fitted (parameter_map names)
+  std::vector<Estimate> extra;         ///< extra nonlinear parameters
+  std::vector<std::pair<std::string, std::string>> correlated;  ///< |correlation| > 0.9
+  std::array<double, 3> residual_rms_N{};  ///< per axis, over the harmonics compared
+  std::array<double, 3> measured_rms_N{};  ///< the measurement's, same harmonics
+  int harmonics = 0;                       ///< K
+  int effective_samples = 0;               ///< M: real harmonic values compared
+  int iterations = 0;
+  long evaluations = 0;  ///< model evaluations (each: the force basis at one runout)
+  std::string flute_labelling =
+      "flute 0 = CE1, the flute with the largest cut (no once-per-revolution reference)";
+};
+
+class WindowFitter {
+ public:
+  /// @param model the cut as commanded (process.spindle_rpm is the commanded speed); its effects
+  ///        and force law are the model fitted; its values are the starting point
+  /// @param filter the measurement's filter response (causal H, or |H|² for zero phase)
+  WindowFitter(const model::ModelConfig& model, FilterResponse filter, FitOptions options = {});
+  ~WindowFitter();
+  WindowFitter(WindowFitter&&) noexcept;
+  WindowFitter& operator=(WindowFitter&&) noexcept;
+  WindowFitter(const WindowFitter&) = delete;
+  WindowFitter& operator=(const WindowFitter&) = delete;
+
+  /// Fits one window. `previous` (optional) seeds the search with an earlier result.
+  FitResult fit(const MeasuredRevolution& measured, const FitResult* previous = nullptr);
+
+  [[nodiscard]] const FitOptions& options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The spindle harmonics k = 1..count of a revolution on a uniform grid: X[k] = (2/B)·Σ_b x[b]·
+/// e^{−2πikb/B} (amplitude convention: x ≈ mean + Σ Re(X[k]·e^{ikφ})).
+std::vector<std::complex<double>> revolution_harmonics(const std::vector<double>& x, int count);
+
+}  // namespace millwatch::identify
