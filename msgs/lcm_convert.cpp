@@ -156,4 +156,48 @@ pipeline_status2_t pipeline_status(const monitor::PipelineStatus& s, std::int64_
   return p;
 }
 
+runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w) {
+  runout_estimate_t m{};
+  m.utime = w.utime_us;
+  m.revolution = w.revolution;
+  m.window_revolutions = w.window_revolutions;
+  m.method = "window fit (flute 0 = CE1, the flute with the largest cut)";
+  const identify::FitResult& f = w.fit;
+  m.valid = f.ok && std::isfinite(f.rho_um.value) && std::isfinite(f.rho_um.sigma);
+  if (!m.valid) {
+    m.method = "window fit failed: " + f.message;
+    return m;
+  }
+  m.offset_um = f.rho_um.value;
+  m.angle_rad = f.gamma_rad.value;
+  m.offset_sigma_um = f.rho_um.sigma;
+  m.angle_sigma_rad = f.gamma_rad.sigma;
+  m.r_ce1_um = f.cutting_radius_um.empty() ? 0.0 : f.cutting_radius_um[0].value;
+  m.r_ce2_um = f.cutting_radius_um.size() < 2 ? 0.0 : f.cutting_radius_um[1].value;
+  m.alpha_deg = 0.0;  // not part of the fit
+  return m;
+}
+
+force_coefficients_t force_coefficients(const identify::IdentifiedWindow& w) {
+  force_coefficients_t m{};
+  m.utime = w.utime_us;
+  m.revolution = w.revolution;
+  m.window_revolutions = w.window_revolutions;
+  m.valid = w.fit.ok;
+  if (!m.valid) {
+    return m;
+  }
+  for (const identify::Estimate& e : w.fit.coefficients) {
+    if (!std::isfinite(e.value) || !std::isfinite(e.sigma)) {
+      continue;
+    }
+    m.name.push_back(e.name);
+    m.value.push_back(e.value);
+    m.sigma.push_back(e.sigma);
+  }
+  m.num_coefficients = static_cast<std::int32_t>(m.name.size());
+  m.residual_rms_N = std::hypot(w.fit.residual_rms_N[0], w.fit.residual_rms_N[1]);
+  return m;
+}
+
 }  // namespace millwatch::messaging

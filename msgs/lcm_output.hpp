@@ -28,6 +28,7 @@ struct ChannelNames {
   std::string residual = "MILLWATCH_RESIDUAL";
   std::string sync_average = "MILLWATCH_SYNC_AVERAGE";
   std::string runout = "MILLWATCH_RUNOUT";
+  std::string coefficients = "MILLWATCH_COEFFICIENTS";
   std::string alert = "MILLWATCH_ALERT";
   std::string status = "MILLWATCH_STATUS";
 };

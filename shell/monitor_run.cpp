@@ -1,6 +1,10 @@
 #include "shell/monitor_run.hpp"
 
+#include <complex>
 #include <utility>
+
+#include "core/identify/fit_json.hpp"
+#include "msgs/lcm_convert.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -35,9 +39,36 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
         std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);
   }
   pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
+  if (options_.identify) {
+    const signal::ButterworthDesign filter = pipeline_->filter();
+    identifier_ = std::make_unique<identify::Identifier>(
+        config.model,
+        [filter, zero_phase = config.filter_zero_phase](double hz) {
+          // Zero phase: the filter forwards and backwards, |H|² without delay.
+          const std::complex<double> h = filter.response(hz);
+          return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
+        },
+        identify::FitOptions{}, [this](const identify::IdentifiedWindow& w) { on_identified(w); });
+    shell_sink_.set_identifier(identifier_.get());
+  }
 }
 
-MonitorRun::~MonitorRun() = default;
+MonitorRun::~MonitorRun() {
+  if (identifier_) {
+    shell_sink_.set_identifier(nullptr);
+    identifier_->finish();
+  }
+}
+
+void MonitorRun::on_identified(const identify::IdentifiedWindow& w) {
+  if (options_.lcm != nullptr) {
+    const std::lock_guard lock(publish_mutex_);
+    const runout_estimate_t runout = messaging::runout_estimate(w);
+    const force_coefficients_t coefficients = messaging::force_coefficients(w);
+    options_.lcm->publish(options_.channels.runout, &runout);
+    options_.lcm->publish(options_.channels.coefficients, &coefficients);
+  }
+}
 
 monitor::PipelineSink& MonitorRun::sink() {
   if (output_) {
@@ -93,6 +124,13 @@ void MonitorRun::finish() {
     output_->publish_status(final_status);
   }
   summary_.finish(final_status);
+  if (identifier_) {
+    shell_sink_.set_identifier(nullptr);
+    identifier_->finish();  // the window in progress and the one waiting are fitted
+    if (const auto last = identifier_->latest()) {
+      summary_.set_identification(identify::to_json(*last));
+    }
+  }
 }
 
 void MonitorRun::drain() {

@@ -18,9 +18,11 @@
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/identify/identifier.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
@@ -41,6 +43,9 @@ class MonitorRun {
     /// Adds what the source lost before the pipeline saw it to a status (called from the thread
     /// that calls process(), finish() and status()).
     std::function<void(monitor::PipelineStatus&)> source_losses;
+    /// Identify runout and force coefficients on every synchronous-average window, in a worker
+    /// thread (published on LCM when the run publishes; the last one in the summary).
+    bool identify = true;
   };
 
   /// Builds the pipeline. @throws config::ConfigError or std::invalid_argument for a
@@ -78,6 +83,7 @@ class MonitorRun {
 
  private:
   void publish_status();
+  void on_identified(const identify::IdentifiedWindow& w);
 
   Options options_;
   monitor::RunSummary summary_;
@@ -88,6 +94,8 @@ class MonitorRun {
   bool status_due_ = true;           // the first block always gives a status
   std::int64_t next_status_utime_us_ = 0;
   std::chrono::steady_clock::time_point last_status_wall_;
+  std::mutex publish_mutex_;                          // the identifier's thread publishes too
+  std::unique_ptr<identify::Identifier> identifier_;  // last: its thread uses the members above
 };
 
 }  // namespace millwatch::shell

@@ -4,6 +4,30 @@
 
 namespace millwatch::shell {
 
+void ShellSink::on_revolution(const monitor::RevolutionRecord& r) {
+  summary_.add(r);
+  if (r.measured.bounded && r.spindle_rpm > 0.0) {
+    rpm_sum_ += r.spindle_rpm;
+    ++rpm_count_;
+  }
+}
+
+void ShellSink::on_sync_average(const monitor::SyncAverage& measured,
+                                const monitor::Lockstep* /*model*/, std::int64_t revolution,
+                                std::int64_t utime_us) {
+  if (identifier_ == nullptr || rpm_count_ == 0 || measured.revolutions() == 0) {
+    return;
+  }
+  for (int a = 0; a < 3; ++a) {
+    measured.average(a, window_.force_N[static_cast<std::size_t>(a)]);
+  }
+  window_.spindle_rpm = rpm_sum_ / rpm_count_;
+  window_.revolutions = measured.revolutions();
+  rpm_sum_ = 0.0;
+  rpm_count_ = 0;
+  identifier_->submit(window_, revolution, utime_us);
+}
+
 void ShellSink::on_alert(const monitor::Alert& a) {
   summary_.add(a);
   if (a.active) {

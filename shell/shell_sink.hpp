@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
 
@@ -16,7 +17,11 @@ class ShellSink : public monitor::PipelineSink {
   ShellSink(monitor::RunSummary& summary, std::string source)
       : summary_(summary), source_(std::move(source)) {}
 
-  void on_revolution(const monitor::RevolutionRecord& r) override { summary_.add(r); }
+  void on_revolution(const monitor::RevolutionRecord& r) override;
+  /// A window of revolutions goes to the identifier (if one is set).
+  void on_sync_average(const monitor::SyncAverage& measured, const monitor::Lockstep* model,
+                       std::int64_t revolution, std::int64_t utime_us) override;
+  void set_identifier(identify::Identifier* identifier) { identifier_ = identifier; }
   void on_spindle(const monitor::SpindleUpdate& u) override { summary_.add(u); }
   void on_alert(const monitor::Alert& a) override;
   void on_event(const monitor::PipelineEvent& e) override;
@@ -25,6 +30,10 @@ class ShellSink : public monitor::PipelineSink {
   monitor::RunSummary& summary_;
   std::string source_;
   std::array<std::int64_t, 16> logged_{};  // per event kind
+  identify::Identifier* identifier_ = nullptr;
+  identify::MeasuredRevolution window_;  // reused: no allocation after the first window
+  double rpm_sum_ = 0.0;                 // the revolutions' speeds since the last window
+  int rpm_count_ = 0;
 };
 
 }  // namespace millwatch::shell

@@ -183,6 +183,19 @@ nlohmann::json RunSummary::to_json() const {
                              " revolutions, fewer than tooth_periods.window_revolutions (" +
                              std::to_string(config_.alpha_window_revolutions) + ")");
   }
+  if (identification_.is_null()) {
+    warn("no identification",
+         "no window of revolutions was fitted (runout and coefficients "
+         "need one full synchronous-average window of measured revolutions)");
+  } else if (!identification_.contains("runout")) {
+    warn("no identification", "the fit of the last window failed: " +
+                                  identification_["fit"].value("reason", std::string("?")));
+  } else if (const double u = identification_["fit"].value("unexplained_fraction", 1.0); u > 0.2) {
+    warn("model does not fit",
+         "the identified model leaves " + std::to_string(std::lround(100.0 * u)) +
+             " % of the measured force unexplained: runout and coefficients describe this cut "
+             "poorly (see `millwatch diagnose`)");
+  }
   json warnings = json::array();
   for (const std::vector<Warning>* list :
        std::array<const std::vector<Warning>*, 2>{&warnings_, &derived_}) {
@@ -198,43 +211,48 @@ nlohmann::json RunSummary::to_json() const {
                    {"fy", number_or_null(residual_[1].rms())},
                    {"fz", number_or_null(residual_[2].rms())},
                    {"measured", number_or_null(measured_rms_.rms())}};
-  return json{{"samples", samples},
-              {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
-              {"revolutions", valid_},
-              {"revolutions_measured", revolutions_},
-              {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
-              {"spindle_rpm", number_or_null(rpm)},
-              {"spindle_rpm_std", number_or_null(rpm_.n > 1 ? rpm_.stddev() : std::nan(""))},
-              {"spindle_rpm_source", rpm_source},
-              {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
-              {"tooth_event", std::string(status_.event_kind)},
-              {"flute_labelling",
-               "flute 0 = CE1, the flute whose period holds the largest force (no "
-               "once-per-revolution reference)"},
-              {"alpha_deg",
-               {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
-              {"tooth_period_s", periods},
-              {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
-              {"delta_fy_N", number_or_null(delta_fy_.mean())},
-              {"residual_rms_N", residual},
-              {"model",
-               {{"alpha_deg", number_or_null(model_alpha_.mean())},
-                {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
-                {"lockstep", config_.lockstep},
-                {"builds", status_.model_builds}}},
-              {"alerts", alerts_},
-              {"dropped_samples", in.samples_dropped},
-              {"warnings", warnings},
-              {"counters",
-               {{"samples_in", in.samples_in},
-                {"samples_flagged", in.samples_flagged},
-                {"nonfinite_samples", in.nonfinite_samples},
-                {"saturated_samples", in.saturated_samples},
-                {"gaps", in.gaps},
-                {"out_of_order_blocks", in.out_of_order_blocks},
-                {"blocks_rejected", in.blocks_rejected},
-                {"idle_revolutions", status_.idle_revolutions}}},
-              {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
+  json out{{"samples", samples},
+           {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
+           {"revolutions", valid_},
+           {"revolutions_measured", revolutions_},
+           {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
+           {"spindle_rpm", number_or_null(rpm)},
+           {"spindle_rpm_std", number_or_null(rpm_.n > 1 ? rpm_.stddev() : std::nan(""))},
+           {"spindle_rpm_source", rpm_source},
+           {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
+           {"tooth_event", std::string(status_.event_kind)},
+           {"flute_labelling",
+            "flute 0 = CE1, the flute whose period holds the largest force (no "
+            "once-per-revolution reference)"},
+           {"alpha_deg",
+            {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
+           {"tooth_period_s", periods},
+           {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
+           {"delta_fy_N", number_or_null(delta_fy_.mean())},
+           {"residual_rms_N", residual},
+           {"model",
+            {{"alpha_deg", number_or_null(model_alpha_.mean())},
+             {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
+             {"lockstep", config_.lockstep},
+             {"builds", status_.model_builds}}},
+           {"alerts", alerts_},
+           {"dropped_samples", in.samples_dropped},
+           {"warnings", warnings},
+           {"counters",
+            {{"samples_in", in.samples_in},
+             {"samples_flagged", in.samples_flagged},
+             {"nonfinite_samples", in.nonfinite_samples},
+             {"saturated_samples", in.saturated_samples},
+             {"gaps", in.gaps},
+             {"out_of_order_blocks", in.out_of_order_blocks},
+             {"blocks_rejected", in.blocks_rejected},
+             {"idle_revolutions", status_.idle_revolutions}}},
+           {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
+  for (const char* key : {"runout", "coefficients", "fit"}) {
+    out[key] = identification_.is_object() && identification_.contains(key) ? identification_[key]
+                                                                            : json(nullptr);
+  }
+  return out;
 }
 
 }  // namespace millwatch::monitor

@@ -31,6 +31,10 @@ class RunSummary {
   void add(const PipelineEvent& e);
   /// The pipeline's final status (counters, samples).
   void finish(const PipelineStatus& status);
+  /// The last identified window: {"runout", "coefficients", "fit"} (identify::to_json).
+  void set_identification(nlohmann::json identification) {
+    identification_ = std::move(identification);
+  }
 
   [[nodiscard]] nlohmann::json to_json() const;
   [[nodiscard]] std::int64_t valid_revolutions() const { return valid_; }
@@ -74,6 +78,7 @@ class RunSummary {
   void warn(const std::string& kind, const std::string& detail) const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
+  nlohmann::json identification_;  // null until a window is fitted
 };
 
 }  // namespace millwatch::monitor

@@ -5,10 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
+#include <span>
 #include <vector>
 
+#include "core/model/flute_positions.hpp"
+#include "millwatch/force_coefficients_t.hpp"
 #include "millwatch/pipeline_status2_t.hpp"
+#include "millwatch/runout_estimate_t.hpp"
+#include "tests/support/recording.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -93,6 +100,106 @@ TEST(MonitorRun, ReplacedPipelinesAndSourceLossesAreCounted) {
   EXPECT_EQ(j["samples"], 20000);
   EXPECT_EQ(j["dropped_samples"], 1007);
   EXPECT_EQ(j["counters"]["blocks_rejected"], 3);
+}
+
+struct IdentityLog {
+  std::vector<runout_estimate_t> runout;
+  std::vector<force_coefficients_t> coefficients;
+  void on_runout(const lcm::ReceiveBuffer*, const std::string&, const runout_estimate_t* m) {
+    runout.push_back(*m);
+  }
+  void on_coefficients(const lcm::ReceiveBuffer*, const std::string&,
+                       const force_coefficients_t* m) {
+    coefficients.push_back(*m);
+  }
+};
+
+// A simulated 3-flute cut with known runout (noise, quantisation, a finer truth, the actual speed
+// 1 % below the commanded one): the run identifies it in its worker thread, publishes each
+// window on LCM and puts the last one in the summary.
+TEST(MonitorRun, IdentifiesRunoutAndCoefficientsPublishesThemAndSummarises) {
+  sim::Scenario s;
+  s.sample_rate_hz = kRate_hz;
+  s.duration_s = 0.5;
+  s.seed = 3;
+  auto& m = s.model;
+  m = model::without_effects(m);
+  m.material.law = model::ForceLawKind::kLinearEdge;
+  m.tool.flutes = 3;
+  m.tool.diameter_mm = 0.6;
+  m.process.operation = model::Operation::kSlot;
+  m.process.radial_depth_mm = 0.6;
+  m.process.feed_per_tooth_um = 3.0;
+  m.process.axial_depth_mm = 0.05;
+  model::set_effect(m, "runout", true);
+  m.effects.runout.offset_um = 1.2;
+  m.effects.runout.angle_rad = 0.5;
+  s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
+  s.noise.enabled = true;
+  s.noise.sigma_N = {0.015, 0.015, 0.015};
+  s.quantisation.enabled = true;
+  s.quantisation.bits = 16;
+  s.quantisation.range_N = {327.68, 327.68, 327.68};
+  m.resolution.steps_per_rev = 2880;
+  monitor::MonitorConfig c = test::monitor_for(s);
+  c.model.resolution.steps_per_rev = 720;
+  c.model.effects.runout.offset_um = 0.0;
+  c.model.material.linear_edge.k_tc_N_per_mm2 *= 0.7;
+
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  IdentityLog rx;
+  lcm.subscribe("MILLWATCH_RUNOUT", &IdentityLog::on_runout, &rx)->setQueueCapacity(1000);
+  lcm.subscribe("MILLWATCH_COEFFICIENTS", &IdentityLog::on_coefficients, &rx)
+      ->setQueueCapacity(1000);
+  MonitorRun::Options options;
+  options.lcm = &lcm;
+  const test::Recording r = test::record(s);
+  {
+    MonitorRun run(c, options);
+    for (std::size_t from = 0; from < r.t.size(); from += kBlock) {
+      const std::size_t n = std::min(kBlock, r.t.size() - from);
+      run.process({std::llround(r.t[from] * 1e6), static_cast<std::int64_t>(from / kBlock),
+                   kRate_hz, std::span<const double>(r.fx).subspan(from, n),
+                   std::span<const double>(r.fy).subspan(from, n),
+                   std::span<const double>(r.fz).subspan(from, n)});
+    }
+    run.finish();
+    run.drain();
+    const nlohmann::json summary = run.summary();
+    ASSERT_TRUE(summary["runout"].is_object()) << summary.dump(1);
+    const auto truth =
+        model::flute_positions(300.0, model::flute_pitch_angles_rad(m.tool), 1.2, 0.5);
+    // Up to the labelling: the identified radii relative to CE1 are the truth's from some flute.
+    double best = 1e9;
+    for (int sh = 0; sh < 3; ++sh) {
+      double worst = 0.0;
+      for (int j = 0; j < 3; ++j) {
+        const double t = truth[static_cast<std::size_t>((j + sh) % 3)].radius_um -
+                         truth[static_cast<std::size_t>(sh)].radius_um;
+        worst =
+            std::max(worst, std::fabs(summary["runout"]["r_minus_r_ce1_um"][j].get<double>() - t));
+      }
+      best = std::min(best, worst);
+    }
+    EXPECT_LT(best, 0.1);
+    EXPECT_NEAR(summary["runout"]["rho_um"].get<double>(), 1.2,
+                std::max(0.2, 2.0 * summary["runout"]["rho_std_um"].get<double>()));
+    const double ktc = summary["coefficients"]["k_tc_N_per_mm2"]["value"].get<double>();
+    EXPECT_NEAR(ktc, m.material.linear_edge.k_tc_N_per_mm2,
+                0.05 * m.material.linear_edge.k_tc_N_per_mm2);
+    EXPECT_GT(summary["coefficients"]["k_tc_N_per_mm2"]["std"].get<double>(), 0.0);
+    EXPECT_LT(summary["fit"]["unexplained_fraction"].get<double>(), 0.05);
+    EXPECT_GE(summary["fit"]["revolutions"].get<int>(), 1);
+  }
+  while (lcm.handleTimeout(50) > 0) {
+  }
+  ASSERT_FALSE(rx.runout.empty());
+  EXPECT_EQ(rx.runout.size(), rx.coefficients.size());
+  EXPECT_TRUE(rx.runout.back().valid);
+  EXPECT_NEAR(rx.runout.back().offset_um, 1.2,
+              std::max(0.2, 2.0 * rx.runout.back().offset_sigma_um));
+  EXPECT_GE(rx.coefficients.back().num_coefficients, 4);
 }
 
 }  // namespace

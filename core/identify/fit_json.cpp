@@ -1,0 +1,85 @@
+#include "core/identify/fit_json.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace millwatch::identify {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+/// A finite number, or null (never NaN in a summary).
+nlohmann::json number(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+nlohmann::json to_json(const IdentifiedWindow& w) {
+  const FitResult& f = w.fit;
+  nlohmann::json fit = {{"ok", f.ok},
+                        {"revolutions", w.window_revolutions},
+                        {"last_revolution", w.revolution},
+                        {"iterations", f.iterations},
+                        {"evaluations", f.evaluations},
+                        {"harmonics", f.harmonics},
+                        {"effective_samples", f.effective_samples},
+                        {"fit_ms", number(1e3 * w.fit_seconds)}};
+  if (!f.ok) {
+    fit["reason"] = f.message;
+    return {{"fit", fit}};
+  }
+  fit["residual_rms_N"] = {number(f.residual_rms_N[0]), number(f.residual_rms_N[1]),
+                           number(f.residual_rms_N[2])};
+  fit["measured_rms_N"] = {number(f.measured_rms_N[0]), number(f.measured_rms_N[1]),
+                           number(f.measured_rms_N[2])};
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const auto& [a, b] : f.correlated) {
+    pairs.push_back({a, b});
+  }
+  fit["correlated"] = pairs;
+  double residual2 = 0.0, measured2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    residual2 += f.residual_rms_N[static_cast<std::size_t>(a)] *
+                 f.residual_rms_N[static_cast<std::size_t>(a)];
+    measured2 += f.measured_rms_N[static_cast<std::size_t>(a)] *
+                 f.measured_rms_N[static_cast<std::size_t>(a)];
+  }
+  // The share of the measured (harmonic) force the model leaves unexplained.
+  fit["unexplained_fraction"] = number(measured2 > 0.0 ? std::sqrt(residual2 / measured2) : 1.0);
+
+  nlohmann::json radii = nlohmann::json::array();
+  nlohmann::json radii_std = nlohmann::json::array();
+  nlohmann::json from_ce1 = nlohmann::json::array();
+  nlohmann::json from_ce1_std = nlohmann::json::array();
+  for (const Estimate& e : f.cutting_radius_um) {
+    radii.push_back(number(e.value));
+    radii_std.push_back(number(e.sigma));
+  }
+  for (const Estimate& e : f.radius_from_ce1_um) {
+    from_ce1.push_back(number(e.value));
+    from_ce1_std.push_back(number(e.sigma));
+  }
+  const nlohmann::json runout = {{"rho_um", number(f.rho_um.value)},
+                                 {"rho_std_um", number(f.rho_um.sigma)},
+                                 {"gamma_deg", number(f.gamma_rad.value * kDegPerRad)},
+                                 {"gamma_std_deg", number(f.gamma_rad.sigma * kDegPerRad)},
+                                 {"r_ce_um", radii},
+                                 {"r_ce_std_um", radii_std},
+                                 {"r_minus_r_ce1_um", from_ce1},
+                                 {"r_minus_r_ce1_std_um", from_ce1_std},
+                                 {"alignment_deg", number(f.alignment_rad.value * kDegPerRad)},
+                                 {"flute_labelling", f.flute_labelling}};
+  nlohmann::json coefficients = nlohmann::json::object();
+  for (const Estimate& e : f.coefficients) {
+    if (e.sigma > 0.0) {  // a coefficient no compared axis sees was not fitted: left out
+      coefficients[e.name] = {{"value", number(e.value)}, {"std", number(e.sigma)}};
+    }
+  }
+  for (const Estimate& e : f.extra) {
+    coefficients[e.name] = {{"value", number(e.value)}, {"std", number(e.sigma)}};
+  }
+  return {{"runout", runout}, {"coefficients", coefficients}, {"fit", fit}};
+}
+
+}  // namespace millwatch::identify

@@ -1,0 +1,94 @@
+// The continuous identifier: windows fitted in its worker thread, the newest one first, each
+// result handed to the callback; a finished identifier ignores later windows.
+
+#include "core/identify/identifier.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <complex>
+#include <thread>
+
+#include "core/model/flute_positions.hpp"
+#include "core/model/steady_state.hpp"
+
+namespace millwatch::identify {
+namespace {
+
+model::ModelConfig three_flute_slot(double rho_um, double gamma_rad) {
+  model::ModelConfig m = model::without_effects(model::ModelConfig{});
+  m.material.law = model::ForceLawKind::kLinearEdge;
+  m.tool.flutes = 3;
+  m.tool.diameter_mm = 0.5;
+  m.process.operation = model::Operation::kSlot;
+  m.process.radial_depth_mm = 0.5;
+  m.process.feed_per_tooth_um = 3.0;
+  m.process.axial_depth_mm = 0.05;
+  model::set_effect(m, "runout", true);
+  m.effects.runout.offset_um = rho_um;
+  m.effects.runout.angle_rad = gamma_rad;
+  return m;
+}
+
+/// The exact revolution of a finer model (1440 steps against the fitter's 720).
+MeasuredRevolution window_of(const model::ModelConfig& truth) {
+  model::SteadyStateWorkspace ws;
+  const auto& ss = model::evaluate_steady_state(truth, truth.process.spindle_rpm, 1440, ws);
+  MeasuredRevolution m;
+  m.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
+  m.spindle_rpm = truth.process.spindle_rpm;
+  m.revolutions = 30;
+  m.shared_bins = false;
+  return m;
+}
+
+std::complex<double> pass_band(double hz) {
+  return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
+}
+
+TEST(Identifier, FitsEveryWindowItGetsToAndCountsTheRest) {
+  const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
+  model::ModelConfig start = truth;
+  start.effects.runout.offset_um = 0.0;
+  std::atomic<int> calls{0};
+  Identifier id(start, pass_band, FitOptions{}, [&](const IdentifiedWindow&) { ++calls; });
+  const MeasuredRevolution w = window_of(truth);
+  for (int k = 1; k <= 5; ++k) {
+    id.submit(w, 30 * k, 1000 * k);  // faster than the worker fits: some are superseded
+  }
+  id.finish();
+  id.submit(w, 999, 999);  // after finish(): ignored
+  EXPECT_EQ(id.fitted() + id.superseded(), 5);
+  EXPECT_GE(id.fitted(), 1);
+  EXPECT_EQ(calls.load(), id.fitted());
+  const auto last = id.latest();
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->revolution, 150);  // the newest window is never dropped
+  ASSERT_TRUE(last->fit.ok) << last->fit.message;
+  EXPECT_NEAR(last->fit.rho_um.value, 1.2, 2.0 * last->fit.rho_um.sigma);
+  EXPECT_LT(last->fit.rho_um.sigma, 0.05);
+  EXPECT_GT(last->fit_seconds, 0.0);
+}
+
+TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
+  const model::ModelConfig before = three_flute_slot(0.8, 0.4);
+  const model::ModelConfig after = three_flute_slot(2.0, -1.0);
+  model::ModelConfig start = before;
+  start.effects.runout.offset_um = 0.0;
+  Identifier id(start, pass_band, FitOptions{}, nullptr);
+  id.submit(window_of(before), 30, 1);
+  while (id.fitted() < 1) {
+    std::this_thread::yield();
+  }
+  const double rho_before = id.latest()->fit.rho_um.value;
+  id.submit(window_of(after), 60, 2);  // seeded with the old runout: must search afresh
+  id.finish();
+  const auto last = id.latest();
+  ASSERT_TRUE(last.has_value() && last->fit.ok);
+  EXPECT_NEAR(rho_before, 0.8, 0.05);
+  EXPECT_NEAR(last->fit.rho_um.value, 2.0, std::max(0.05, 2.0 * last->fit.rho_um.sigma));
+}
+
+}  // namespace
+}  // namespace millwatch::identify
