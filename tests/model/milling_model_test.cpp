@@ -345,26 +345,121 @@ TEST(MillingModel, FlankWearRaisesTheForceOfTheWornFlute) {
   EXPECT_GT(f0_worn, f1_worn * 1.05);
 }
 
-TEST(MillingModel, KronenbergAndPloughingAreaLawsRun) {
-  ModelConfig c;
+// Kronenberg's law ([003] eqs 7-8) on the analytic case of LinearLawSlotMatchesClosedForm:
+// one disc of the full depth, h = f_t·sin θ, so F_t = K_s0·S^(1 − 1/m) with S = h·a_p (mm²),
+// F_n = radial_ratio·F_t, F_a = axial_ratio·F_t, projected by [000] eq 7.
+TEST(MillingModel, KronenbergLawSlotMatchesClosedForm) {
+  ModelConfig c = without_effects(ModelConfig{});
   c.material.law = ForceLawKind::kKronenberg;
-  MillingModel k(c);
-  k.warm_up();
-  EXPECT_GT(peak_resultant_N(k.forces()), 0.0);
+  c.material.kronenberg.k_s0_N_per_mm2 = 1000.0;
+  c.material.kronenberg.m = 4.0;
+  c.material.kronenberg.radial_ratio = 0.5;
+  c.material.kronenberg.axial_ratio = 0.2;
+  MillingModel m(c);
+  m.step_revolution();
+  const auto& f = m.forces();
+  const double ap = c.process.axial_depth_mm;
+  const double ft_mm = c.process.feed_per_tooth_um * 1e-3;
+  // By hand at the slot centre (flute 0 at θ = π/2, flute 1 out of the cut): h = 4 µm,
+  // S = 0.004 mm · 0.04 mm = 1.6e-4 mm², F_t = 1000·(1.6e-4)^0.75 = 1.42262 N, which points
+  // along +y there; F_n = 0.71131 N points along −x.
+  const int centre = m.steps_per_rev() / 4;
+  EXPECT_NEAR(f.fy_N[static_cast<std::size_t>(centre)], 1.4226235, 1e-6);
+  EXPECT_NEAR(f.fx_N[static_cast<std::size_t>(centre)], -0.5 * 1.4226235, 1e-6);
+  EXPECT_NEAR(f.fz_N[static_cast<std::size_t>(centre)], 0.2 * 1.4226235, 1e-6);
+  for (int k = 0; k < m.steps_per_rev(); ++k) {
+    const double phi = 2.0 * kPi * k / m.steps_per_rev();
+    double fx = 0.0, fy = 0.0, fz = 0.0;
+    for (int j = 0; j < 2; ++j) {
+      const double theta = std::fmod(phi - j * kPi + 4.0 * kPi, 2.0 * kPi);
+      const double h_mm = ft_mm * std::sin(theta);
+      if (theta > kPi || h_mm <= 0.0) {
+        continue;
+      }
+      const double ft = 1000.0 * std::pow(h_mm * ap, 1.0 - 1.0 / 4.0);
+      const double fn = 0.5 * ft;
+      fx += -ft * std::cos(theta) - fn * std::sin(theta);
+      fy += ft * std::sin(theta) - fn * std::cos(theta);
+      fz += 0.2 * ft;
+    }
+    // h^0.75 is steep at zero: the rounding of sin π at the slot's end leaves ~1e-12 N.
+    ASSERT_NEAR(f.fx_N[static_cast<std::size_t>(k)], fx, 1e-9) << k;
+    ASSERT_NEAR(f.fy_N[static_cast<std::size_t>(k)], fy, 1e-9) << k;
+    ASSERT_NEAR(f.fz_N[static_cast<std::size_t>(k)], fz, 1e-9) << k;
+  }
+}
+
+// [001] eqs 14-21 on the analytic slot (circular path, no runout, one rigid disc):
+// h = f_t·sin θ, so the cut area so far is A_c(θ) = ∫₀^θ h·R dθ' = f_t·R·(1 − cos θ) (eq 14).
+// The ploughed area is A_c(θ) while h < MUCT on entry (eq 15), A_c(θ₁) from θ₁ = asin(MUCT/f_t)
+// on (eq 16), and A_c(π) − A_c(θ) = f_t·R·(1 + cos θ) when h drops below MUCT on exit
+// (eq 17); F_t = (K_ts·h + K_tp·A_p)·a_p, F_r = (K_rs·h + K_rp·A_p)·a_p (eqs 18-19), on the
+// tool by [000] eq 7. The model sums eq 14 step by step (rectangles of h·R·dφ); where the area
+// matters h < MUCT, so each sum is off the integral by under MUCT·R·dφ, and A_pMAX, taken at the
+// first step past θ₁, by under twice that.
+TEST(MillingModel, PloughingAreaLawFollowsAbeniEquations14To17) {
+  ModelConfig c = without_effects(ModelConfig{});
   c.material.law = ForceLawKind::kLinearEdge;
   c.material.linear_edge.ploughing_area = true;
+  c.material.linear_edge.k_tc_N_per_mm2 = 1100.0;
+  c.material.linear_edge.k_nc_N_per_mm2 = 450.0;
+  c.material.linear_edge.k_ac_N_per_mm2 = 200.0;
   c.material.linear_edge.k_tp_N_per_mm3 = 5000.0;
   c.material.linear_edge.k_np_N_per_mm3 = 8000.0;
+  c.material.linear_edge.k_ap_N_per_mm3 = 3000.0;
+  c.effects.min_chip.enabled = true;  // MUCT; accumulation stays off
   c.effects.min_chip.h_min_um = 1.0;
-  MillingModel p(c);
-  p.warm_up();
-  c.material.linear_edge.ploughing_area = false;
-  c.material.linear_edge.k_te_N_per_mm = 0.0;
-  c.material.linear_edge.k_ne_N_per_mm = 0.0;
-  MillingModel shear_only(c);
-  shear_only.warm_up();
-  // The ploughing term adds force on top of shearing.
-  EXPECT_GT(peak_resultant_N(p.forces()), peak_resultant_N(shear_only.forces()));
+  c.resolution.steps_per_rev = 7200;
+  MillingModel m(c);
+  m.warm_up(3);  // eq 17 needs the previous pass's total area
+  const auto& f = m.forces();
+  const auto& le = c.material.linear_edge;
+  const double ap = c.process.axial_depth_mm;
+  const double ft_mm = c.process.feed_per_tooth_um * 1e-3;
+  const double muct_mm = 1e-3 * c.effects.min_chip.h_min_um;
+  const double r_mm = 0.5 * c.tool.diameter_mm;
+  const double theta1 = std::asin(muct_mm / ft_mm);
+  const double area_max = ft_mm * r_mm * (1.0 - std::cos(theta1));  // 2.54e-5 mm²
+  const double d_phi = 2.0 * kPi / m.steps_per_rev();
+  const double area_tol = 2.0 * muct_mm * r_mm * d_phi;
+  const double force_tol = area_tol * ap * std::hypot(le.k_tp_N_per_mm3, le.k_np_N_per_mm3);
+  // The ploughing term is far above the tolerance: ignoring A_p, or using the wrong phase's
+  // area, fails.
+  ASSERT_GT(area_max * ap * le.k_tp_N_per_mm3, 30.0 * force_tol);
+  int entry = 0, middle = 0, exit = 0;
+  for (int k = 0; k < m.steps_per_rev(); ++k) {
+    const double phi = k * d_phi;
+    double fx = 0.0, fy = 0.0, fz = 0.0;
+    for (int j = 0; j < 2; ++j) {
+      const double theta = std::fmod(phi - j * kPi + 4.0 * kPi, 2.0 * kPi);
+      const double h_mm = ft_mm * std::sin(theta);
+      if (theta > kPi || h_mm <= 0.0) {
+        continue;
+      }
+      double area = area_max;  // eq 16
+      if (h_mm < muct_mm && theta < kPi / 2) {
+        area = ft_mm * r_mm * (1.0 - std::cos(theta));  // eq 15
+        ++entry;
+      } else if (h_mm < muct_mm) {
+        area = ft_mm * r_mm * (1.0 + std::cos(theta));  // eq 17
+        ++exit;
+      } else {
+        ++middle;
+      }
+      const double ft = (le.k_tc_N_per_mm2 * h_mm + le.k_tp_N_per_mm3 * area) * ap;
+      const double fn = (le.k_nc_N_per_mm2 * h_mm + le.k_np_N_per_mm3 * area) * ap;
+      fx += -ft * std::cos(theta) - fn * std::sin(theta);
+      fy += ft * std::sin(theta) - fn * std::cos(theta);
+      fz += (le.k_ac_N_per_mm2 * h_mm + le.k_ap_N_per_mm3 * area) * ap;
+    }
+    ASSERT_NEAR(f.fx_N[static_cast<std::size_t>(k)], fx, force_tol) << k;
+    ASSERT_NEAR(f.fy_N[static_cast<std::size_t>(k)], fy, force_tol) << k;
+    ASSERT_NEAR(f.fz_N[static_cast<std::size_t>(k)], fz, area_tol * ap * le.k_ap_N_per_mm3) << k;
+  }
+  // All three regimes were visited (θ₁ = 14.5°: about 290 steps of 0.05° at each end).
+  EXPECT_GT(entry, 500);
+  EXPECT_GT(exit, 500);
+  EXPECT_GT(middle, 5000);
 }
 
 }  // namespace
