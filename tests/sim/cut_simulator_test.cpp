@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -206,9 +208,60 @@ TEST(CutSimulator, RampChangesTheRevolutionPeriod) {
   EXPECT_NEAR(last.feed_per_tooth_um, 4.0 * 25000.0 / 20000.0, 1e-9);
 }
 
+/// The force on the tool (x, y) of the analytic two-flute slot: circular path with runout radii
+/// r_j = √(R² + ρ² + 2Rρ·cos(γ + ψ_j)) ([001] eq 1 form), rigid tool, one disc, chip against the
+/// envelope of the previous two passes h_j = min_m (m·f_t·sin θ + r_j − r_{j−m}), the power law of
+/// [000] eq 5 (cutting coefficients only) plus flank-wear rubbing K_w·VB per engaged flute, and
+/// [000] eq 7.
+std::array<double, 2> analytic_slot_force_N(const model::ModelConfig& c, double phi_rad,
+                                            double rho_um, double gamma_rad, double ft_um,
+                                            double wear_um) {
+  const double radius_um = 500.0 * c.tool.diameter_mm;
+  const double ap = c.process.axial_depth_mm;
+  const auto& pl = c.material.power_law;
+  const auto& w = c.effects.flank_wear;
+  std::array<double, 2> r{};
+  for (int j = 0; j < 2; ++j) {
+    r[static_cast<std::size_t>(j)] =
+        std::sqrt(radius_um * radius_um + rho_um * rho_um +
+                  2.0 * radius_um * rho_um * std::cos(gamma_rad + j * kPi));
+  }
+  std::array<double, 2> f{};
+  for (int j = 0; j < 2; ++j) {
+    const double theta = std::fmod(phi_rad - j * kPi + 4.0 * kPi, 2.0 * kPi);
+    if (theta > kPi) {
+      continue;
+    }
+    const double other = r[static_cast<std::size_t>(1 - j)];
+    const double self = r[static_cast<std::size_t>(j)];
+    const double h_um =
+        std::min(ft_um * std::sin(theta) + self - other, 2.0 * ft_um * std::sin(theta));
+    if (h_um <= 1e-9) {  // what is left at θ = π is the rounding of sin π
+      continue;
+    }
+    const double h_mm = 1e-3 * h_um;
+    const double ft =
+        pl.k_tc_Nmm * std::pow(h_mm, pl.a_tc) * ap + w.k_wt_N_per_mm2 * 1e-3 * wear_um * ap;
+    const double fn =
+        pl.k_nc_Nmm * std::pow(h_mm, pl.a_nc) * ap + w.k_wn_N_per_mm2 * 1e-3 * wear_um * ap;
+    f[0] += -ft * std::cos(theta) - fn * std::sin(theta);
+    f[1] += ft * std::sin(theta) - fn * std::cos(theta);
+  }
+  return f;
+}
+
+// The runout becomes ρ = 4 µm at γ = 0 after 0.1 s while the flank wear grows from 0 to 20 µm.
+// Every clean sample is the analytic slot force of its revolution's conditions (the model with
+// only runout and multi-pass on, so that the force has a closed form). In particular: before
+// the change both flutes cut (f_t = 4 µm > 2ρ·cos γ = 3.03 µm), after it flute 1 never does
+// (f_t < 2ρ = 8 µm, [000] Sect. 2.1) and flute 1's half-revolution is silent; and within
+// each runout the peak grows with the wear's rubbing force.
 TEST(CutSimulator, RunoutChangeAndWearShowInTruthAndForce) {
   Scenario s = quiet_scenario();
   s.duration_s = 0.2;
+  s.model = model::without_effects(s.model);
+  s.model.effects.runout.enabled = true;  // 1.82 µm at 0.58 rad
+  s.model.effects.multi_pass.enabled = true;
   s.runout_change.enabled = true;
   s.runout_change.time_s = 0.1;
   s.runout_change.offset_um = 4.0;
@@ -217,20 +270,64 @@ TEST(CutSimulator, RunoutChangeAndWearShowInTruthAndForce) {
   s.wear.start_um = {0.0};
   s.wear.end_um = {20.0};
   CutSimulator sim(s);
-  const Record r = run(sim);
-  const auto& truth = sim.truth();
+  const double rpm = s.model.process.spindle_rpm;  // 120 samples a revolution, on the 720 grid
+
+  std::vector<double> t(1), fx(1), fy(1), fz(1);
+  // Per revolution: peak resultant in flute 0's and flute 1's own half (outside the other's).
+  std::vector<std::array<double, 2>> peaks;
+  int compared = 0;
+  while (sim.next_block(t, fx, fy, fz) == 1) {
+    const double revs = t[0] * rpm / 60.0;
+    const auto rev = static_cast<std::size_t>(std::floor(revs + 1e-9));
+    const RevolutionTruth& truth = sim.truth()[rev];
+    const double phi = 2.0 * kPi * (revs - std::floor(revs + 1e-9));
+    const auto expected =
+        analytic_slot_force_N(s.model, phi, truth.runout_offset_um, truth.runout_angle_rad,
+                              truth.feed_per_tooth_um, truth.wear_um[0]);
+    const auto& clean = sim.last_clean_force_N();
+    ASSERT_NEAR(clean[0], expected[0], 1e-9) << "t " << t[0];
+    ASSERT_NEAR(clean[1], expected[1], 1e-9) << "t " << t[0];
+    ++compared;
+    if (peaks.size() <= rev) {
+      peaks.resize(rev + 1, {0.0, 0.0});
+    }
+    const double resultant = std::hypot(clean[0], clean[1]);
+    auto& p = peaks[rev][phi < kPi ? 0 : 1];
+    p = std::max(p, resultant);
+  }
+  EXPECT_EQ(compared, 10000);
+
   bool seen_before = false, seen_after = false;
-  for (const auto& t : truth) {
-    if (t.start_s < 0.099) {
-      EXPECT_DOUBLE_EQ(t.runout_offset_um, 1.82);
+  std::size_t first_after = 0;                          // the first revolution with the new runout
+  for (std::size_t n = 0; n + 1 < peaks.size(); ++n) {  // the last one may be cut short
+    const auto& truth = sim.truth()[n];
+    EXPECT_NEAR(truth.wear_um[0], 20.0 * std::clamp(truth.start_s / 0.2, 0.0, 1.0), 0.6);
+    if (truth.start_s < 0.099) {
+      EXPECT_DOUBLE_EQ(truth.runout_offset_um, 1.82);
       seen_before = true;
-    } else if (t.start_s > 0.101 && t.start_s < 0.2) {
-      EXPECT_DOUBLE_EQ(t.runout_offset_um, 4.0);
+    } else if (truth.start_s > 0.101) {
+      EXPECT_DOUBLE_EQ(truth.runout_offset_um, 4.0);
       seen_after = true;
     }
-    EXPECT_NEAR(t.wear_um[0], 20.0 * std::clamp(t.start_s / 0.2, 0.0, 1.0), 0.6);
+    if (truth.runout_offset_um == 1.82) {
+      EXPECT_GT(peaks[n][1], 0.3) << "revolution " << n << ": flute 1 cuts before the change";
+      EXPECT_GT(peaks[n][0], peaks[n][1]) << n;  // flute 0 is the long one (cos 0.58 > 0)
+    } else {
+      EXPECT_EQ(peaks[n][1], 0.0) << "revolution " << n << ": flute 1 must be out of the cut";
+      first_after = first_after == 0 ? n : first_after;
+    }
   }
-  EXPECT_TRUE(seen_before && seen_after);
+  ASSERT_TRUE(seen_before && seen_after);
+  ASSERT_GT(first_after, 0u);
+  // Wear: flute 0's peak grows from revolution to revolution within each runout.
+  for (std::size_t n = 0; n + 2 < peaks.size(); ++n) {
+    if (n + 1 != first_after) {
+      EXPECT_GT(peaks[n + 1][0], peaks[n][0]) << "revolution " << n;
+    }
+  }
+  // Flute 0's chip grows from f_t + 2ρ·cos γ = 7.0 µm to 2·f_t = 8 µm at the change; with
+  // F ∝ h^0.32…h^0.53 (Table 2) its peak jumps by 4-7 %.
+  EXPECT_GT(peaks[first_after][0], 1.03 * peaks[first_after - 1][0]);
 }
 
 // Each revolution is the model's steady state at that revolution's conditions: after a runout
