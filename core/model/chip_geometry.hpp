@@ -15,6 +15,13 @@
 //               which is [000] eq 13 multiplied by cos θ (no singularity at θ = π/2; physics-notes)
 //               and [000] eqs 16-18 in vector form (the same point, without the arctan of eq 18).
 // The tables are computed once per configuration on the model's spindle-angle grid.
+//
+// Discs. With helix lag, disc i's edge trails the tip by lag_i; the model reads the tables at
+// τ = φ − lag_i. A rigid offset of the tool axis (RunoutHelix::kRigidAxis, model_config.hpp)
+// keeps the centre at ρ towards φ + γ = τ + (γ + lag_i), so disc i's chip is the tip's formula
+// with the runout angle γ + lag_i (the feed's constant shift v·lag_i cancels in Q − C): one
+// table per disc, each with its own radii r_{j,i} and edge shifts. Without per-disc angles (the
+// tip's pattern for every disc, [000] eqs 1-2), or with ρ = 0, one table serves every disc.
 
 #include <cmath>
 #include <span>
@@ -49,21 +56,28 @@ double circular_chip_um(const PathGeometry& path, double immersion_rad, double p
                         double radius_j_um, double radius_k_um);
 
 /// Tables of the rigid chip of every flute against each of the previous `passes` passes, on a
-/// uniform spindle-angle grid. Entry (j, n, k): flute j at spindle angle 2πk/steps against the
-/// pass n back (n = 1..passes).
+/// uniform spindle-angle grid, per axial disc. Entry (j, n, k) of disc i: flute j at spindle
+/// angle τ = 2πk/steps (of that disc's geometry) against the pass n back (n = 1..passes).
 class ChipGeometry {
  public:
-  /// Allocates when the sizes change; otherwise refills in place.
+  /// Allocates when the sizes grow; otherwise refills in place. With `disc_angle_rad` given,
+  /// room for one table per disc is reserved even while ρ = 0 lets one table serve them all.
   /// @param pitch_rad cumulative pitch ψ_j of each flute (ψ_0 = 0)
   /// @param window_from_rad, window_to_rad immersion range where the model may use the table;
   ///        outside it the (cheap) circular chip is stored instead of the trochoidal one.
+  /// @param disc_angle_rad per disc, the angle added to path.offset_angle_rad (γ) for that
+  ///        disc's geometry (lag_i for a rigid tool axis); empty: one geometry, γ, for every disc
   void configure(const PathGeometry& path, std::span<const double> pitch_rad, int passes,
                  int steps_per_rev, bool trochoidal, double window_from_rad = 0.0,
-                 double window_to_rad = 7.0);
+                 double window_to_rad = 7.0, std::span<const double> disc_angle_rad = {});
+
+  /// Room for `discs` tables of this shape, so that later configure() calls of that shape
+  /// allocate nothing (whether or not ρ > 0 then needs one table per disc).
+  void reserve(int flutes, int passes, int steps_per_rev, int discs);
 
   /// Linear interpolation at a fractional grid position (wraps around the revolution).
-  [[nodiscard]] double chip_um(int flute, int pass_back, double grid_position) const {
-    const double* row = row_of(flute, pass_back);
+  [[nodiscard]] double chip_um(int flute, int pass_back, double grid_position, int disc = 0) const {
+    const double* row = row_of(flute, pass_back, disc);
     const double whole = std::floor(grid_position);
     const double frac = grid_position - whole;
     int k0 = static_cast<int>(whole) % steps_;
@@ -73,36 +87,64 @@ class ChipGeometry {
     const int k1 = k0 + 1 == steps_ ? 0 : k0 + 1;
     return row[k0] + frac * (row[k1] - row[k0]);
   }
-  /// The table row of flute j against the pass n back (steps() values).
-  [[nodiscard]] const double* row(int flute, int pass_back) const {
-    return row_of(flute, pass_back);
+  /// The table row of flute j against the pass n back for disc i (steps() values).
+  [[nodiscard]] const double* row(int flute, int pass_back, int disc = 0) const {
+    return row_of(flute, pass_back, disc);
   }
   /// Table value at a grid index.
-  [[nodiscard]] double at(int flute, int pass_back, int step) const {
-    return row_of(flute, pass_back)[step];
+  [[nodiscard]] double at(int flute, int pass_back, int step, int disc = 0) const {
+    return row_of(flute, pass_back, disc)[step];
   }
 
   [[nodiscard]] int passes() const { return passes_; }
   [[nodiscard]] int steps() const { return steps_; }
   [[nodiscard]] int flutes() const { return flutes_; }
+  /// Discs given to configure (1 without disc angles).
+  [[nodiscard]] int discs() const { return discs_; }
+  /// Distinct tables held: discs() with per-disc angles and ρ > 0, else 1.
+  [[nodiscard]] int tables() const { return tables_; }
   /// Newton iterations of the last configure (0 for the circular model), for benchmarks.
   [[nodiscard]] long newton_iterations() const { return newton_iterations_; }
-  /// Cutting radius and angular shift of each flute.
-  [[nodiscard]] std::span<const FlutePosition> flutes_at() const { return flute_positions_; }
+  /// Cutting radius and angular shift of each flute at disc i (flute_positions.hpp with the
+  /// disc's runout angle).
+  [[nodiscard]] std::span<const FlutePosition> flutes_at(int disc = 0) const {
+    return std::span<const FlutePosition>(flute_positions_)
+        .subspan(static_cast<std::size_t>(table_of(disc) * flutes_),
+                 static_cast<std::size_t>(flutes_));
+  }
 
  private:
-  [[nodiscard]] const double* row_of(int flute, int pass_back) const {
-    return table_.data() + static_cast<std::size_t>((flute * passes_ + pass_back - 1) * steps_);
+  [[nodiscard]] int table_of(int disc) const { return tables_ == 1 ? 0 : disc; }
+  [[nodiscard]] const double* row_of(int flute, int pass_back, int disc) const {
+    return table_.data() +
+           static_cast<std::size_t>(((table_of(disc) * flutes_ + flute) * passes_ + pass_back - 1) *
+                                    steps_);
   }
-  void fill_row(const PathGeometry& path, std::span<const double> pitch_rad, int flute,
-                int pass_back, bool trochoidal, double window_from_rad, double window_to_rad);
+  void fill_rows(const PathGeometry& path, std::span<const double> pitch_rad,
+                 std::span<const double> disc_angle_rad, int flute, int pass_back, bool trochoidal,
+                 double window_from_rad, double window_to_rad);
 
   int flutes_ = 0;
   int passes_ = 0;
   int steps_ = 0;
+  int discs_ = 1;
+  int tables_ = 1;
   long newton_iterations_ = 0;
   std::vector<double> table_;
-  std::vector<FlutePosition> flute_positions_;
+  std::vector<FlutePosition> flute_positions_;  // per (table, flute)
+  std::vector<FlutePosition> scratch_positions_;
+  /// One disc's row being filled and its Newton warm start.
+  struct DiscRow {
+    double* row = nullptr;
+    double rj_um = 0.0, rk_um = 0.0;          // cutting radii of the flute and of the pass n back
+    double sin_gamma = 0.0, cos_gamma = 1.0;  // of the disc's runout angle
+    double last_rad = 0.0, slope_rad = 0.0;   // last crossing Δ and its change per step
+    int known = 0;                            // entries behind it that converged (0..2)
+  };
+  std::vector<DiscRow> rows_;
+  std::vector<double> circular_row_;  // v·Δψ_n·sin θ of the row being filled
+  std::vector<unsigned char> in_window_;
+  std::vector<double> cos_grid_, sin_grid_;  // cos, sin of 2πk/steps
 };
 
 /// Angle from the flute `n` passes back to flute j, summing pitch intervals (rad, > 0).

@@ -180,6 +180,118 @@ TEST(ChipGeometry, SinglePassOverestimatesTheLongFluteWhenTheShortOneMisses) {
   EXPECT_NEAR(g.at(0, 2, centre), 4.0, 1e-9);
 }
 
+/// The trochoidal crossing solved independently of ChipGeometry's Newton solver: bisection on
+/// the cross product of [000] eq 13 (× cos θ) with fresh trigonometry at every point, then the
+/// chip along the ray ([000] eqs 16-18 in vector form).
+double chip_by_bisection(const PathGeometry& p, double tau, double psi_j, double psi_k,
+                         double back) {
+  auto crossing = [&](double delta, double* chip) {
+    const double theta = tau - psi_j;
+    const double tp = tau + delta;
+    const double dx = p.feed_per_rad_um * delta + p.offset_um * std::sin(tp + p.offset_angle_rad) +
+                      p.radius_um * std::sin(tp - psi_k) -
+                      p.offset_um * std::sin(tau + p.offset_angle_rad);
+    const double dy = p.offset_um * std::cos(tp + p.offset_angle_rad) +
+                      p.radius_um * std::cos(tp - psi_k) -
+                      p.offset_um * std::cos(tau + p.offset_angle_rad);
+    if (chip != nullptr) {
+      *chip = p.radius_um - (dx * std::sin(theta) + dy * std::cos(theta));
+    }
+    return dx * std::cos(theta) - dy * std::sin(theta);
+  };
+  double lo = -back - 0.3;
+  double hi = -back + 0.3;
+  const double f_lo = crossing(lo, nullptr);
+  EXPECT_LT(f_lo * crossing(hi, nullptr), 0.0);
+  for (int i = 0; i < 80; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if ((crossing(mid, nullptr) < 0.0) == (f_lo < 0.0)) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  double chip = 0.0;
+  crossing(0.5 * (lo + hi), &chip);
+  return chip;
+}
+
+// A rigid offset of the tool axis (model_config.hpp RunoutHelix::kRigidAxis): disc i's table is
+// the tip's geometry with the runout angle γ + a_i. Each disc's radii are [001] eq 1's
+// √(R² + ρ² + 2Rρ·cos(γ + a_i + ψ_j)), its trochoidal entries the crossing solved independently
+// (bisection) at γ + a_i, its circular entries f_t·N·Δψ/(2π)·sin θ + r_{j,i} − r_{k,i}.
+TEST(ChipGeometry, EachDiscHasTheRunoutAngleItsEdgeSees) {
+  const int flutes = 3;
+  const auto pitch = uniform_pitch(flutes);
+  const double radius = 200.0;
+  const double rho = 2.5;
+  const double gamma = 0.58;
+  const std::vector<double> disc_angles = {0.01, 0.04, 0.07, 0.3};
+  const int steps = 360;
+  const auto p = path(radius, 4.0, flutes, rho, gamma);
+  const double window_from = 0.2;
+  const double window_to = 2.9;
+  ChipGeometry g;
+  g.configure(p, pitch, 2, steps, true, window_from, window_to, disc_angles);
+  ASSERT_EQ(g.discs(), 4);
+  ASSERT_EQ(g.tables(), 4);
+  int trochoidal = 0;
+  int circular = 0;
+  for (int i = 0; i < 4; ++i) {
+    const double gamma_i = gamma + disc_angles[static_cast<std::size_t>(i)];
+    for (int j = 0; j < flutes; ++j) {
+      const double r = std::sqrt(radius * radius + rho * rho +
+                                 2.0 * radius * rho * std::cos(gamma_i + pitch[j]));
+      EXPECT_NEAR(g.flutes_at(i)[static_cast<std::size_t>(j)].radius_um, r, 1e-12);
+    }
+    PathGeometry pi = p;
+    pi.offset_angle_rad = gamma_i;
+    for (int j = 0; j < flutes; ++j) {
+      for (int n = 1; n <= 2; ++n) {
+        const int k_flute = ((j - n) % flutes + flutes) % flutes;
+        const double back = pitch_back_rad(pitch, j, n);
+        for (int k = 0; k < steps; k += 7) {
+          const double tau = 2.0 * kPi * k / steps;
+          const double theta = std::remainder(tau - pitch[j], 2.0 * kPi);
+          const double table = g.at(j, n, k, i);
+          if (theta > window_from && theta < window_to) {
+            EXPECT_NEAR(table, chip_by_bisection(pi, tau, pitch[j], pitch[j] - back, back), 1e-9)
+                << i << " " << j << " " << n << " " << k;
+            ++trochoidal;
+          } else if (theta < window_from - 0.05 || theta > window_to + 0.05) {
+            const double rj = g.flutes_at(i)[static_cast<std::size_t>(j)].radius_um;
+            const double rk = g.flutes_at(i)[static_cast<std::size_t>(k_flute)].radius_um;
+            EXPECT_NEAR(table, p.feed_per_rad_um * back * std::sin(theta) + rj - rk, 1e-12);
+            ++circular;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(trochoidal, 500);
+  EXPECT_GT(circular, 200);
+
+  // Without runout every disc's geometry is the same: one table serves them all.
+  g.configure(path(radius, 4.0, flutes), pitch, 2, steps, true, window_from, window_to,
+              disc_angles);
+  EXPECT_EQ(g.tables(), 1);
+  EXPECT_EQ(g.row(1, 2, 3), g.row(1, 2, 0));
+  // Without disc angles (the tip's pattern, [000] eqs 1-2): one table at γ for every disc.
+  ChipGeometry tip;
+  tip.configure(p, pitch, 2, steps, true, window_from, window_to);
+  EXPECT_EQ(tip.tables(), 1);
+  EXPECT_NEAR(tip.flutes_at()[0].radius_um,
+              std::sqrt(radius * radius + rho * rho + 2.0 * radius * rho * std::cos(gamma)), 1e-12);
+  // One disc with helix has one table, at γ plus that disc's angle.
+  ChipGeometry one;
+  const std::vector<double> one_angle = {0.3};
+  one.configure(p, pitch, 2, steps, true, window_from, window_to, one_angle);
+  EXPECT_EQ(one.tables(), 1);
+  EXPECT_NEAR(one.flutes_at(0)[0].radius_um,
+              std::sqrt(radius * radius + rho * rho + 2.0 * radius * rho * std::cos(gamma + 0.3)),
+              1e-12);
+}
+
 TEST(ChipGeometry, InterpolationBetweenGridStepsIsLinearAndWraps) {
   const auto pitch = uniform_pitch(2);
   ChipGeometry g;
