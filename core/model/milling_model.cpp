@@ -31,13 +31,6 @@ int passes_to_look_back(const ModelConfig& c) {
   return std::max(passes, flutes);
 }
 
-/// Total helix lag over the axial depth, [000] eq 4.
-double helix_lag_rad(double radius_mm, double axial_depth_mm, double helix_deg) {
-  const double t = axial_depth_mm * std::tan(helix_deg * kPi / 180.0);
-  const double c = (2.0 * radius_mm * radius_mm - t * t) / (2.0 * radius_mm * radius_mm);
-  return std::acos(std::clamp(c, -1.0, 1.0));
-}
-
 double wrap_2pi(double a) {
   a = std::fmod(a, 2.0 * kPi);
   return a < 0.0 ? a + 2.0 * kPi : a;
@@ -69,6 +62,11 @@ void MillingModel::allocate() {
   sin_phi_.resize(s);
   cos_offset_.resize(d * f);
   sin_offset_.resize(d * f);
+  disc_angles_rad_.reserve(d);
+  geometry_disc_angles_rad_.reserve(d);
+  if (config_.effects.runout.helix == RunoutHelix::kRigidAxis) {
+    geometry_.reserve(flutes_, passes_, steps_, discs_);  // runout switched on allocates nothing
+  }
   lag_steps_.resize(d);
   lag_floor_.resize(d);
   lag_frac_.resize(d);
@@ -132,18 +130,18 @@ void MillingModel::derive(bool keep_state) {
   } else if (c.process.operation == Operation::kDownMilling) {
     engage_from_rad_ = kPi - side_rad;
   }
-  const double beta =
-      e.helix_lag.enabled
-          ? helix_lag_rad(c.tool.diameter_mm / 2.0, c.process.axial_depth_mm, c.tool.helix_deg)
-          : 0.0;
+  const double beta = helix_lag_total_rad(c);
+  runout_disc_angles_rad(c, disc_angles_rad_);
   const double margin_rad = 4.0 * d_phi_rad_;
   const GeometryKey key{path,   e.trochoidal.enabled,          passes_,
                         steps_, engage_from_rad_ - margin_rad, engage_to_rad_ + beta + margin_rad};
-  if (!keep_state || !(key == geometry_key_) || pitch_changed) {
+  if (!keep_state || !(key == geometry_key_) || pitch_changed ||
+      disc_angles_rad_ != geometry_disc_angles_rad_) {
     // The Newton tables are the costly part of an update: redo them only when the path changed.
     geometry_.configure(path, pitch_rad_, passes_, steps_, e.trochoidal.enabled,
-                        key.window_from_rad, key.window_to_rad);
+                        key.window_from_rad, key.window_to_rad, disc_angles_rad_);
     geometry_key_ = key;
+    geometry_disc_angles_rad_ = disc_angles_rad_;  // same size after the first time
   }
 
   h_min_um_ = e.min_chip.enabled ? e.min_chip.h_min_um : 0.0;
@@ -182,10 +180,12 @@ void MillingModel::derive(bool keep_state) {
       wear_n_N_[static_cast<std::size_t>(j)] = e.flank_wear.k_wn_N_per_mm2 * vb_mm * dz_mm_;
     }
   }
-  tool_radius_mm_.resize(static_cast<std::size_t>(flutes_));
-  for (int j = 0; j < flutes_; ++j) {
-    tool_radius_mm_[static_cast<std::size_t>(j)] =
-        1e-3 * geometry_.flutes_at()[static_cast<std::size_t>(j)].radius_um;
+  tool_radius_mm_.resize(static_cast<std::size_t>(discs_ * flutes_));
+  for (int i = 0; i < discs_; ++i) {
+    for (int j = 0; j < flutes_; ++j) {
+      tool_radius_mm_[static_cast<std::size_t>(i * flutes_ + j)] =
+          1e-3 * geometry_.flutes_at(i)[static_cast<std::size_t>(j)].radius_um;
+    }
   }
 
   if (e.dynamometer.enabled) {
@@ -340,7 +340,7 @@ void MillingModel::march_step(int k) {
     const int k1 = k0 + 1 == steps_ ? 0 : k0 + 1;
     const double w = lag_frac_[static_cast<std::size_t>(i)];
     auto table_chip = [&](int flute, int n) {
-      const double* row = geometry_.row(flute, n);
+      const double* row = geometry_.row(flute, n, i);
       return row[k0] + w * (row[k1] - row[k0]);
     };
     for (int j = 0; j < flutes_; ++j) {
@@ -386,7 +386,7 @@ void MillingModel::march_step(int k) {
             area_cut_mm2_[ij] = 0.0;
             sheared_[ij] = 0;
           }
-          area_cut_mm2_[ij] += 1e-3 * h_rigid * tool_radius_mm_[uj] * d_phi_rad_;
+          area_cut_mm2_[ij] += 1e-3 * h_rigid * tool_radius_mm_[ij] * d_phi_rad_;
           if (sheared_[ij] == 0) {
             if (h_rigid < h_min_um_) {
               area = area_cut_mm2_[ij];

@@ -13,9 +13,13 @@
 //   4. forces on the tool, projected by [000] eq 7 at the disc's immersion and summed over discs
 //      and flutes ([000] eq 8); flank-wear rubbing adds K_w·VB·dz per engaged element.
 //   5. dynamometer dynamics, if on, filter the summed forces with state carried across steps.
-// Helix lag ([000] eqs 2-4, 6): disc i (of K, thickness dz = a_p/K) trails the tool tip by
-// lag_i = (i − ½)·β/K, β = arccos((2R² − a_p²·tan²λ)/(2R²)); we take each disc's midpoint
-// where [000] eq 2 takes its top edge.
+// Helix lag ([000] eqs 2-4, 6): disc i (i = 0..K−1 from the tip, thickness dz = a_p/K) trails
+// the tool tip by lag_i = (i + ½)·β/K, β = arccos((2R² − a_p²·tan²λ)/(2R²)); we take each disc's
+// midpoint where [000] eq 2 takes its top edge. Disc i reads its chip tables at φ − lag_i. With
+// runout and helix "rigid_axis" each disc has its own tables, for the runout angle γ + lag_i its
+// edge sees (the tool axis is offset rigidly; γ holds at the tip); with "tip_pattern" (the
+// default) every disc reads the tip's tables, [000] eqs 1-2 as printed (model_config.hpp
+// RunoutHelix, chip_geometry.hpp "Discs").
 //
 // Set up once per configuration (allocates); step_revolution() then allocates nothing.
 
@@ -128,10 +132,12 @@ class MillingModel {
   std::vector<double> lag_steps_;  // lag_i in grid steps (fractional)
   std::vector<int> lag_floor_;     // floor(−lag_i): disc i reads the chip table from k + this...
   std::vector<double> lag_frac_;   // ...interpolating this far towards the next step
-  std::vector<double> cos_phi_, sin_phi_;        // per step
-  std::vector<double> cos_offset_, sin_offset_;  // per (disc, flute): ψ_j + lag_i
-  std::vector<double> wear_t_N_, wear_n_N_;      // per flute, per disc element
-  std::vector<double> tool_radius_mm_;           // per flute cutting radius
+  std::vector<double> cos_phi_, sin_phi_;         // per step
+  std::vector<double> cos_offset_, sin_offset_;   // per (disc, flute): ψ_j + lag_i
+  std::vector<double> wear_t_N_, wear_n_N_;       // per flute, per disc element
+  std::vector<double> tool_radius_mm_;            // per (disc, flute) cutting radius
+  std::vector<double> disc_angles_rad_;           // per disc, added to γ (rigid axis), or empty
+  std::vector<double> geometry_disc_angles_rad_;  // those the tables were made for
 
   std::vector<double> deficit_um_;      // per (disc, immersion step, pass ring slot)
   std::vector<int> ring_head_;          // per (disc, immersion step)

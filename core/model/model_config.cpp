@@ -1,5 +1,6 @@
 #include "core/model/model_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -129,6 +130,10 @@ Effects read_effects(ObjectReader r, int flutes) {
     e.runout.offset_um = s.number("offset_um", e.runout.offset_um, non_negative(100.0, "um"));
     e.runout.angle_rad = s.number("angle_rad", e.runout.angle_rad,
                                   closed(-2.0 * std::numbers::pi, 2.0 * std::numbers::pi, "rad"));
+    e.runout.helix =
+        s.choice("helix", to_string(e.runout.helix), {"rigid_axis", "tip_pattern"}) == "tip_pattern"
+            ? RunoutHelix::kTipPattern
+            : RunoutHelix::kRigidAxis;
     s.finish();
   }
   {
@@ -223,6 +228,34 @@ std::string to_string(ForceLawKind law) {
       break;
   }
   return "power_law";
+}
+
+std::string to_string(RunoutHelix helix) {
+  return helix == RunoutHelix::kTipPattern ? "tip_pattern" : "rigid_axis";
+}
+
+double helix_lag_total_rad(const ModelConfig& c) {
+  if (!c.effects.helix_lag.enabled) {
+    return 0.0;
+  }
+  const double radius_mm = c.tool.diameter_mm / 2.0;
+  const double t = c.process.axial_depth_mm * std::tan(c.tool.helix_deg * std::numbers::pi / 180.0);
+  const double cos_beta = (2.0 * radius_mm * radius_mm - t * t) / (2.0 * radius_mm * radius_mm);
+  return std::acos(std::clamp(cos_beta, -1.0, 1.0));
+}
+
+void runout_disc_angles_rad(const ModelConfig& c, std::vector<double>& out) {
+  const auto& e = c.effects;
+  if (!e.runout.enabled || e.runout.helix != RunoutHelix::kRigidAxis || !e.helix_lag.enabled) {
+    out.clear();
+    return;
+  }
+  const double beta = helix_lag_total_rad(c);
+  const int discs = e.helix_lag.discs;
+  out.resize(static_cast<std::size_t>(discs));
+  for (int i = 0; i < discs; ++i) {
+    out[static_cast<std::size_t>(i)] = (i + 0.5) * beta / discs;
+  }
 }
 
 void flute_pitch_angles_rad(const Tool& tool, std::vector<double>& psi) {
@@ -375,7 +408,8 @@ nlohmann::json to_json(const ModelConfig& c) {
        {{"runout",
          {{"enabled", e.runout.enabled},
           {"offset_um", e.runout.offset_um},
-          {"angle_rad", e.runout.angle_rad}}},
+          {"angle_rad", e.runout.angle_rad},
+          {"helix", to_string(e.runout.helix)}}},
         {"trochoidal", {{"enabled", e.trochoidal.enabled}}},
         {"multi_pass", {{"enabled", e.multi_pass.enabled}, {"passes", e.multi_pass.passes}}},
         {"min_chip", {{"enabled", e.min_chip.enabled}, {"h_min_um", e.min_chip.h_min_um}}},

@@ -12,7 +12,9 @@
 //   Flute j sits at θ_j = φ − ψ_j where φ is the spindle angle and ψ_j its cumulative pitch
 //   (ψ_0 = 0). Runout offsets the tool centre from the spindle axis by ρ towards immersion
 //   angle φ + γ ([000] eq 9; γ is [000]'s runout angle "α", renamed to keep α for [001]'s
-//   cutting-edge phase angle).
+//   cutting-edge phase angle). φ, θ_j and γ refer to the tool tip (z = 0, the bottom of the
+//   cut); with helix the edge at height z trails the tip by lag(z) ≈ z·tan λ/R, and how the
+//   runout follows it is Effects::Runout::helix.
 //
 // Defaults are [000]'s cp-Ti case (0.4 mm 2-flute 30° helix, 25,000 rpm, a_p 40 µm, Table 2).
 
@@ -92,12 +94,32 @@ struct Material {
   Kronenberg kronenberg;
 };
 
+/// How runout meets the helix (effects.runout.helix).
+enum class RunoutHelix {
+  /// A rigid, parallel offset of the tool axis: the centre is ρ towards φ + γ at every height,
+  /// while the edge of flute j at height z sits at φ − ψ_j − lag(z). So the edge at height z
+  /// sees the runout angle γ + ψ_j + lag(z): disc i (lag_i, milling_model.hpp) has its own
+  /// cutting radii r_{j,i} = |ρ·e(γ + lag_i) + R·e(−ψ_j)| = √(R² + ρ² + 2Rρ·cos(γ + ψ_j + lag_i))
+  /// and edge shifts (flute_positions.hpp with γ + lag_i). γ is the runout angle at the tool tip.
+  kRigidAxis,
+  /// [000] eqs 1-2 as printed: every disc replays the tip's chip pattern lag_i later, so every
+  /// disc sees the tip's runout angle γ + ψ_j (the runout turns with the helix, which a rigid
+  /// tool does not do). Then ρ·sin γ reaches the force only through the trochoid's pitch term.
+  kTipPattern,
+};
+
 /// Each physical effect: a switch and its parameters. Off costs nothing at run time.
 struct Effects {
   struct Runout {
     bool enabled = true;
     double offset_um = 1.82;  ///< ρ, tool-centre offset from the spindle axis
-    double angle_rad = 0.58;  ///< γ, offset direction relative to flute 0 ([000] "α")
+    /// γ, offset direction relative to flute 0 at the tool tip ([000] "α"); see RunoutHelix
+    /// for the other heights.
+    double angle_rad = 0.58;
+    /// JSON "tip_pattern" (default) or "rigid_axis"; no effect without helix_lag. The default
+    /// is the model the monitor and the identification (core/identify) were built and tested on;
+    /// rigid_axis is the physical reading but the window fit does not handle it yet (README).
+    RunoutHelix helix = RunoutHelix::kTipPattern;
   } runout;
   /// Exact trochoidal flute path by Newton-Raphson ([002] eqs 2-10, [000] eqs 9-18); off: the
   /// circular path h = f_t·sin θ + (r_j − r_{j−1}).
@@ -174,6 +196,7 @@ ModelConfig without_effects(ModelConfig config);
 
 std::string to_string(Operation op);
 std::string to_string(ForceLawKind law);
+std::string to_string(RunoutHelix helix);
 
 /// Reads a configuration; every field optional (defaults above), unknown keys and values out of
 /// range rejected with a config::ConfigError naming the field. Cross-field checks included.
@@ -192,5 +215,15 @@ inline double tool_radius_um(const ModelConfig& c) {
 std::vector<double> flute_pitch_angles_rad(const Tool& tool);
 /// The same into `out` (resized to the flute count; no allocation when it already fits).
 void flute_pitch_angles_rad(const Tool& tool, std::vector<double>& out);
+
+/// Total helix lag β over the axial depth, [000] eq 4 (0 with helix_lag off):
+///   β = arccos((2R² − a_p²·tan²λ)/(2R²))  (≈ a_p·tan λ/R; the chord of the edge's arc).
+/// Disc i of K (dz = a_p/K) is centred at height (i + ½)·dz and trails the tip by
+/// lag_i = (i + ½)·β/K (both models take each disc's midpoint).
+double helix_lag_total_rad(const ModelConfig& config);
+/// Per disc, the angle added to γ for that disc's runout geometry: lag_i with runout on, helix
+/// "rigid_axis" and helix_lag on (RunoutHelix::kRigidAxis); empty otherwise (every disc sees the
+/// tip's runout angle). `out` keeps its capacity.
+void runout_disc_angles_rad(const ModelConfig& config, std::vector<double>& out);
 
 }  // namespace millwatch::model

@@ -56,13 +56,6 @@ int passes_to_look_back(const ModelConfig& c) {
   return std::max(passes, flutes);
 }
 
-/// Total helix lag over the axial depth, [000] eq 4.
-double helix_lag_rad(double radius_mm, double axial_depth_mm, double helix_deg) {
-  const double t = axial_depth_mm * std::tan(helix_deg * kPi / 180.0);
-  const double c = (2.0 * radius_mm * radius_mm - t * t) / (2.0 * radius_mm * radius_mm);
-  return std::acos(std::clamp(c, -1.0, 1.0));
-}
-
 int positive_mod(int a, int m) {
   const int r = a % m;
   return r < 0 ? r + m : r;
@@ -165,6 +158,7 @@ struct SteadyStateWorkspace::Impl {
   double normal_jump_N = 0.0;  // F_n(h_min) − F_n(h_min−) of one disc: the regime switch
   double log_h_min_um = 0.0, log_below_h_min_um = 0.0;  // ln h_min, ln(h_min·(1 − 1e-12))
   bool deflect = false, accumulate = false, area_law = false, memory = false;
+  bool rigid_axis_discs = false;  // helix on and RunoutHelix::kRigidAxis
   bool dynamometer = false;
   Effects::Dynamometer dyn;
   double spindle_hz = 0.0;
@@ -180,11 +174,14 @@ struct SteadyStateWorkspace::Impl {
   int key_passes = 0, key_steps = 0;
   double key_from = 0.0, key_to = 0.0;
   std::vector<double> key_pitch;
+  std::vector<double> key_disc_angles;
 
-  std::vector<double> pitch_rad;                      // ψ_j, exact
-  std::vector<double> wear_t_N, wear_n_N, radius_mm;  // per flute
-  std::vector<int> land_steps;                        // ⌊ψ_j/Δφ⌋
-  std::vector<double> land_frac;                      // (ψ_j/Δφ) mod 1
+  std::vector<double> pitch_rad;           // ψ_j, exact
+  std::vector<double> disc_angles;         // per disc, added to γ (rigid tool axis), or empty
+  std::vector<double> wear_t_N, wear_n_N;  // per flute
+  std::vector<double> radius_mm;           // per (disc, flute): cutting radius
+  std::vector<int> land_steps;             // ⌊ψ_j/Δφ⌋
+  std::vector<double> land_frac;           // (ψ_j/Δφ) mod 1
   // Without pass memory each flute has its own immersion grid, shifted by land_frac so that its
   // passes land on the output grid; with memory the flutes share the slots and flute j's force
   // is interpolated onto the grid (weight land_frac).
@@ -275,6 +272,7 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   flutes = c.tool.flutes;
   steps = steps_per_rev;
   discs = e.helix_lag.enabled ? e.helix_lag.discs : 1;
+  rigid_axis_discs = e.helix_lag.enabled && e.runout.helix == RunoutHelix::kRigidAxis;
   passes = passes_to_look_back(c);
   d_phi_rad = 2.0 * kPi / steps;
   dz_mm = c.process.axial_depth_mm / discs;
@@ -335,10 +333,8 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   } else if (c.process.operation == Operation::kDownMilling) {
     engage_from = kPi - side_rad;
   }
-  const double beta =
-      e.helix_lag.enabled
-          ? helix_lag_rad(c.tool.diameter_mm / 2.0, c.process.axial_depth_mm, c.tool.helix_deg)
-          : 0.0;
+  const double beta = helix_lag_total_rad(c);
+  runout_disc_angles_rad(c, disc_angles);
   const double margin = 4.0 * d_phi_rad;
   const double from = engage_from - margin;
   const double to = engage_to + beta + margin;
@@ -347,9 +343,9 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
       key_path.feed_per_rad_um == path.feed_per_rad_um && key_path.offset_um == path.offset_um &&
       key_path.offset_angle_rad == path.offset_angle_rad &&
       key_trochoidal == e.trochoidal.enabled && key_passes == passes && key_steps == steps &&
-      key_from == from && key_to == to && key_pitch == pitch_rad;
+      key_from == from && key_to == to && key_pitch == pitch_rad && key_disc_angles == disc_angles;
   if (!same_geometry) {
-    geometry.configure(path, pitch_rad, passes, steps, e.trochoidal.enabled, from, to);
+    geometry.configure(path, pitch_rad, passes, steps, e.trochoidal.enabled, from, to, disc_angles);
     geometry_valid = true;
     key_path = path;
     key_trochoidal = e.trochoidal.enabled;
@@ -358,6 +354,7 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     key_from = from;
     key_to = to;
     key_pitch = pitch_rad;  // same size after the first time: no allocation
+    key_disc_angles = disc_angles;
   }
 
   for (int i = 0; i < discs; ++i) {
@@ -400,7 +397,10 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
       wear_t_N[uj] = e.flank_wear.k_wt_N_per_mm2 * vb_mm * dz_mm;
       wear_n_N[uj] = e.flank_wear.k_wn_N_per_mm2 * vb_mm * dz_mm;
     }
-    radius_mm[uj] = 1e-3 * geometry.flutes_at()[uj].radius_um;
+    for (int i = 0; i < discs; ++i) {
+      radius_mm[static_cast<std::size_t>(i * flutes + j)] =
+          1e-3 * geometry.flutes_at(i)[uj].radius_um;
+    }
   }
 }
 
@@ -412,7 +412,12 @@ void SteadyStateWorkspace::Impl::size_storage() {
   pitch_rad.resize(n);
   wear_t_N.resize(n);
   wear_n_N.resize(n);
-  radius_mm.resize(n);
+  radius_mm.resize(d * n);
+  disc_angles.reserve(d);
+  key_disc_angles.reserve(d);
+  // One chip table per disc when runout meets the helix on a rigid axis: reserved whether or not
+  // runout is on now, so that switching it on allocates nothing.
+  geometry.reserve(flutes, passes, steps, rigid_axis_discs ? discs : 1);
   land_steps.resize(n);
   land_frac.resize(n);
   table_offset.resize(d * n);
@@ -510,7 +515,7 @@ void SteadyStateWorkspace::Impl::fill_geometric_chips(int disc, int b) {
     const int k1 = k0 + 1 == steps ? 0 : k0 + 1;
     const double w = table_frac[ij];
     for (int n = 1; n <= passes; ++n) {
-      const double* row = geometry.row(j, n);
+      const double* row = geometry.row(j, n, disc);
       g[static_cast<std::size_t>(j * passes + n - 1)] = row[k0] + w * (row[k1] - row[k0]);
     }
   }
@@ -991,7 +996,8 @@ void SteadyStateWorkspace::Impl::compute_areas() {
           break;
         }
       }
-      const double scale_mm2 = 1e-3 * radius_mm[uj] * d_phi_rad;  // µm·rad → mm²
+      const double scale_mm2 =
+          1e-3 * radius_mm[static_cast<std::size_t>(i * flutes + j)] * d_phi_rad;  // µm·rad → mm²
       auto store = [&](int q, double value) {
         const int b = slot_of(q);
         const auto us = static_cast<std::size_t>(i * steps + b);

@@ -89,6 +89,7 @@ ModelConfig distinct_config() {
   e.runout.enabled = false;
   e.runout.offset_um = 2.5;
   e.runout.angle_rad = -1.25;
+  e.runout.helix = RunoutHelix::kRigidAxis;
   e.trochoidal.enabled = false;
   e.multi_pass.enabled = false;
   e.multi_pass.passes = 5;
@@ -177,6 +178,7 @@ TEST(ModelConfig, JsonRoundTripPreservesEveryField) {
   EXPECT_FALSE(e.runout.enabled);
   EXPECT_EQ(e.runout.offset_um, 2.5);
   EXPECT_EQ(e.runout.angle_rad, -1.25);
+  EXPECT_EQ(e.runout.helix, RunoutHelix::kRigidAxis);
   EXPECT_FALSE(e.trochoidal.enabled);
   EXPECT_FALSE(e.multi_pass.enabled);
   EXPECT_EQ(e.multi_pass.passes, 5);
@@ -199,14 +201,15 @@ TEST(ModelConfig, JsonRoundTripPreservesEveryField) {
   // The values above really are not the defaults (a field the reader ignores would fail).
   EXPECT_NE(b.tool.diameter_mm, d.tool.diameter_mm);
   EXPECT_NE(b.effects.runout.enabled, d.effects.runout.enabled);
+  EXPECT_NE(b.effects.runout.helix, d.effects.runout.helix);
   EXPECT_NE(b.effects.accumulation.enabled, d.effects.accumulation.enabled);
   EXPECT_NE(b.material.linear_edge.ploughing_area, d.material.linear_edge.ploughing_area);
   EXPECT_NE(b.effects.flank_wear.enabled, d.effects.flank_wear.enabled);
   EXPECT_NE(b.resolution.steps_per_rev, d.resolution.steps_per_rev);
 }
 
-// Each choice of the two enumerations survives the trip.
-TEST(ModelConfig, JsonRoundTripKeepsEveryOperationAndLaw) {
+// Each choice of the enumerations (operation, force law, runout along the helix) survives.
+TEST(ModelConfig, JsonRoundTripKeepsEveryChoiceOfEveryEnumeration) {
   for (Operation op : {Operation::kSlot, Operation::kUpMilling, Operation::kDownMilling}) {
     ModelConfig c;
     c.process.operation = op;
@@ -218,6 +221,11 @@ TEST(ModelConfig, JsonRoundTripKeepsEveryOperationAndLaw) {
     ModelConfig c;
     c.material.law = law;
     EXPECT_EQ(round_trip(c).material.law, law) << to_string(law);
+  }
+  for (RunoutHelix helix : {RunoutHelix::kRigidAxis, RunoutHelix::kTipPattern}) {
+    ModelConfig c;
+    c.effects.runout.helix = helix;
+    EXPECT_EQ(round_trip(c).effects.runout.helix, helix) << to_string(helix);
   }
 }
 
@@ -263,7 +271,7 @@ TEST(ModelConfig, MissingFieldTakesItsDefault) {
   const json defaults = to_json(ModelConfig{});
   std::vector<json::json_pointer> objects, leaves;
   collect(full, json::json_pointer(), objects, leaves);
-  EXPECT_EQ(leaves.size(), 65u);  // every field of ModelConfig
+  EXPECT_EQ(leaves.size(), 66u);  // every field of ModelConfig
   std::vector<std::string> refused;
   for (const auto& at : leaves) {
     json j = full;

@@ -167,18 +167,26 @@ TEST(SteadyState, MatchesTheTimeMarchingModelForEveryEffectCombination) {
       {"runout and accumulation", {"runout", "multi_pass", "accumulation"}},
   };
   for (const auto& combination : combinations) {
-    SCOPED_TRACE(combination.name);
     ModelConfig c = without_effects(reference_case());
     for (const char* e : combination.effects) {
       set_effect(c, e, true);
     }
     c.effects.flank_wear.wear_um = {6.0, 2.0};
-    const Agreement a = compare_with_time_marching(c);
-    EXPECT_GT(a.chips_compared, 20 * a.chips_unsettled);
-    EXPECT_LT(a.chip_difference_um, 1e-7);
-    if (a.exact && a.cycle <= 16) {
-      EXPECT_GT(a.forces_compared, 20 * a.forces_unsettled);
-      EXPECT_LT(a.force_difference_N, 1e-7 * std::max(1.0, a.peak_N));
+    // Runout with helix: the rigid axis (per-disc geometry, the default) and [000]'s tip pattern.
+    const bool both = c.effects.runout.enabled && c.effects.helix_lag.enabled;
+    for (RunoutHelix helix : {RunoutHelix::kRigidAxis, RunoutHelix::kTipPattern}) {
+      if (helix == RunoutHelix::kTipPattern && !both) {
+        continue;
+      }
+      SCOPED_TRACE(std::string(combination.name) + ", " + to_string(helix));
+      c.effects.runout.helix = helix;
+      const Agreement a = compare_with_time_marching(c);
+      EXPECT_GT(a.chips_compared, 20 * a.chips_unsettled);
+      EXPECT_LT(a.chip_difference_um, 1e-7);
+      if (a.exact && a.cycle <= 16) {
+        EXPECT_GT(a.forces_compared, 20 * a.forces_unsettled);
+        EXPECT_LT(a.force_difference_N, 1e-7 * std::max(1.0, a.peak_N));
+      }
     }
   }
 }
@@ -411,6 +419,282 @@ TEST(SteadyState, ForceMovesInProportionToSmallRunoutChanges) {
     EXPECT_GT(change[0], 0.0) << which;
     EXPECT_NEAR(change[1] / change[0], 10.0, 1.0) << which;
   }
+}
+
+/// Root-mean-square of the resultant (Fx, Fy) over a revolution, and of a difference.
+double rms_xy(const ForceWaveform& a, const ForceWaveform* b = nullptr) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < a.fx_N.size(); ++k) {
+    const double x = a.fx_N[k] - (b != nullptr ? b->fx_N[k] : 0.0);
+    const double y = a.fy_N[k] - (b != nullptr ? b->fy_N[k] : 0.0);
+    sum += x * x + y * y;
+  }
+  return std::sqrt(sum / static_cast<double>(a.fx_N.size()));
+}
+
+/// The evaluator's mean revolution and MillingModel's settled revolution of one configuration.
+struct BothModels {
+  ForceWaveform evaluator, marching;
+};
+BothModels both_models(const ModelConfig& c) {
+  SteadyStateWorkspace ws;
+  BothModels out;
+  out.evaluator = evaluate_steady_state(c, c.process.spindle_rpm, c.resolution.steps_per_rev, ws,
+                                        SteadyStateOutput::kMean)
+                      .mean;
+  MillingModel m(c);
+  m.warm_up();
+  out.marching = m.forces();
+  return out;
+}
+
+// The rigid tool axis (RunoutHelix::kRigidAxis) gives disc i the runout angle
+// γ + lag_i; it must reduce to [000]'s tip pattern wherever the two cannot differ:
+//   helix lag off (one disc at the tip, lag 0): the same model, every effect on;
+//   one disc with helix (lag_0 = β/2 at its midpoint): the tip pattern with γ + β/2;
+//   no runout, or ρ = 0: nothing for the angle to act on;
+//   one flute on the circular path: the chip f_t·sin θ + r_0 − r_0 has no radius term.
+// Both the evaluator and MillingModel, to rounding.
+TEST(SteadyState, RigidAxisRunoutReducesToTheTipPatternWhereTheyCannotDiffer) {
+  auto expect_same = [](const ModelConfig& rigid, const ModelConfig& tip, const char* what) {
+    SCOPED_TRACE(what);
+    ASSERT_EQ(rigid.effects.runout.helix, RunoutHelix::kRigidAxis);
+    ASSERT_EQ(tip.effects.runout.helix, RunoutHelix::kTipPattern);
+    const BothModels a = both_models(rigid);
+    const BothModels b = both_models(tip);
+    const double peak = peak_of(a.evaluator);
+    EXPECT_GT(peak, 0.1);
+    EXPECT_LE(max_difference(a.evaluator, b.evaluator), 1e-12 * peak);
+    EXPECT_LE(max_difference(a.marching, b.marching), 1e-12 * peak);
+  };
+  ModelConfig full = reference_case(360);
+  full.effects.deflection.enabled = false;  // the same root either way; keeps this test short
+  full.effects.flank_wear.enabled = true;
+  full.effects.flank_wear.wear_um = {4.0, 1.0};
+  full.effects.runout.helix = RunoutHelix::kRigidAxis;
+  ModelConfig tip = full;
+  tip.effects.runout.helix = RunoutHelix::kTipPattern;
+
+  ModelConfig rigid = full;
+  rigid.effects.helix_lag.enabled = false;
+  ModelConfig tip_case = tip;
+  tip_case.effects.helix_lag.enabled = false;
+  expect_same(rigid, tip_case, "helix lag off");
+
+  rigid = full;
+  rigid.effects.helix_lag.discs = 1;
+  tip_case = tip;
+  tip_case.effects.helix_lag.discs = 1;
+  tip_case.effects.runout.angle_rad += 0.5 * helix_lag_total_rad(tip_case);
+  expect_same(rigid, tip_case, "one disc, tip pattern at gamma + beta/2");
+
+  rigid = full;
+  rigid.effects.runout.offset_um = 0.0;
+  tip_case = tip;
+  tip_case.effects.runout.offset_um = 0.0;
+  expect_same(rigid, tip_case, "rho = 0");
+
+  rigid = full;
+  rigid.tool.flutes = 1;
+  rigid.effects.trochoidal.enabled = false;
+  rigid.effects.flank_wear.wear_um = {4.0};
+  rigid.effects.runout.offset_um = 5.0;
+  tip_case = rigid;
+  tip_case.effects.runout.helix = RunoutHelix::kTipPattern;
+  expect_same(rigid, tip_case, "one flute, circular path");
+
+  // ... and where they can differ, they do.
+  const BothModels a = both_models(full);
+  const BothModels b = both_models(tip);
+  EXPECT_GT(max_difference(a.evaluator, b.evaluator), 0.01 * peak_of(a.evaluator));
+}
+
+// Closed form of the rigid-axis circular chip: one pass back, linear law without edge force,
+// 2 flutes, 4 discs whose lags fall on the 0.5° grid (β = 8°: lag_i = 1°, 3°, 5°, 7°). Flute j
+// at disc i, immersion θ_ij = φ − ψ_j − lag_i, cuts
+//   h_ij = max(0, f_t·sin θ_ij + r_{j,i} − r_{j−1,i}),
+//   r_{j,i} = √(R² + ρ² + 2Rρ·cos(γ + ψ_j + lag_i))
+// with F_t = K_t·h·dz, F_n = K_n·h·dz, F_a = K_a·h·dz projected by [000] eq 7; the tip pattern
+// is the same with lag_i left out of r. Both models, to 1e-12 N.
+TEST(SteadyState, RigidAxisCircularChipHasEachDiscsRadiiInClosedForm) {
+  ModelConfig c = without_effects(ModelConfig{});
+  c.effects.runout.enabled = true;
+  c.effects.runout.offset_um = 2.0;
+  c.effects.runout.angle_rad = 1.2;  // cos(γ + lag) changes a lot over the discs
+  c.effects.helix_lag.enabled = true;
+  c.effects.helix_lag.discs = 4;
+  c.tool.helix_deg = 30.0;
+  const double radius_mm = c.tool.diameter_mm / 2.0;
+  const double beta = 8.0 * kPi / 180.0;
+  // [000] eq 4 inverted: a_p·tan λ = 2R·sin(β/2)
+  c.process.axial_depth_mm = 2.0 * radius_mm * std::sin(beta / 2.0) / std::tan(kPi / 6.0);
+  ASSERT_NEAR(helix_lag_total_rad(c), beta, 1e-14);
+  c.material.law = ForceLawKind::kLinearEdge;
+  c.material.linear_edge.k_te_N_per_mm = 0.0;
+  c.material.linear_edge.k_ne_N_per_mm = 0.0;
+  c.material.linear_edge.k_ac_N_per_mm2 = 200.0;
+  const int steps = 720;
+  c.resolution.steps_per_rev = steps;
+  const auto& le = c.material.linear_edge;
+  const double r_um = 1e3 * radius_mm;
+  const double rho = c.effects.runout.offset_um;
+  const double dz = c.process.axial_depth_mm / 4.0;
+  for (RunoutHelix helix : {RunoutHelix::kRigidAxis, RunoutHelix::kTipPattern}) {
+    SCOPED_TRACE(to_string(helix));
+    c.effects.runout.helix = helix;
+    auto cutting_radius = [&](int j, double lag) {
+      const double angle =
+          c.effects.runout.angle_rad + j * kPi + (helix == RunoutHelix::kRigidAxis ? lag : 0.0);
+      return std::sqrt(r_um * r_um + rho * rho + 2.0 * r_um * rho * std::cos(angle));
+    };
+    const BothModels m = both_models(c);
+    int compared = 0;
+    for (int k = 0; k < steps; ++k) {
+      const double phi = 2.0 * kPi * k / steps;
+      std::array<double, 3> f = {0.0, 0.0, 0.0};
+      bool at_an_edge = false;
+      for (int i = 0; i < 4; ++i) {
+        const double lag = (2 * i + 1) * kPi / 180.0;
+        for (int j = 0; j < 2; ++j) {
+          const double theta = std::fmod(phi - j * kPi - lag + 6.0 * kPi, 2.0 * kPi);
+          at_an_edge = at_an_edge || std::fabs(theta) < 1e-9 || std::fabs(theta - kPi) < 1e-9 ||
+                       std::fabs(theta - 2.0 * kPi) < 1e-9;
+          if (theta > kPi) {
+            continue;
+          }
+          const double h_um = c.process.feed_per_tooth_um * std::sin(theta) +
+                              cutting_radius(j, lag) - cutting_radius(1 - j, lag);
+          const double h = 1e-3 * std::max(h_um, 0.0);
+          const double ft = le.k_tc_N_per_mm2 * h * dz;
+          const double fn = le.k_nc_N_per_mm2 * h * dz;
+          f[0] += -ft * std::cos(theta) - fn * std::sin(theta);
+          f[1] += ft * std::sin(theta) - fn * std::cos(theta);
+          f[2] += le.k_ac_N_per_mm2 * h * dz;
+        }
+      }
+      if (at_an_edge) {
+        continue;  // entry and exit: ±1e-16 in θ decides whether a chip r_j − r_k counts
+      }
+      ++compared;
+      const auto uk = static_cast<std::size_t>(k);
+      for (const ForceWaveform* w : {&m.evaluator, &m.marching}) {
+        ASSERT_NEAR(w->fx_N[uk], f[0], 1e-12) << k;
+        ASSERT_NEAR(w->fy_N[uk], f[1], 1e-12) << k;
+        ASSERT_NEAR(w->fz_N[uk], f[2], 1e-12) << k;
+      }
+    }
+    EXPECT_GT(compared, steps - 20);
+  }
+}
+
+// What the rigid axis changes for identification (physics-notes, "What the force can tell about
+// runout"): ρ·cos γ sets the flutes' radius difference 2ρ·cos γ; in the tip pattern ρ·sin γ
+// reaches the force only through the trochoid's pitch term f_t·(2ρ/R)·sin γ/π, but on a rigid
+// axis disc i sees 2ρ·cos(γ + lag_i) ≈ 2ρ·cos γ − 2ρ·sin γ·lag_i. Moving ρ·sin γ from 0 to 2 µm
+// at ρ·cos γ = 1 µm ([000]'s case, 10 discs, β = 6.6°), as RMS of the change over RMS force:
+//                                 tip pattern    rigid axis
+//   circular path (lockstep)        0.00 %         5.7 %
+//   trochoidal, multi-pass          1.2 %          6.1 %
+// and at γ = 90° (a pure pitch error, ρ = 2 µm) the flutes' peaks differ by 0.57 % (tip) and
+// 5.9 % (rigid). Without helix lag the two are the same model.
+TEST(SteadyState, RhoSinGammaReachesTheForceThroughTheHelixOnARigidAxis) {
+  auto flute_peak = [](const ForceWaveform& f, int flute) {
+    const std::size_t half = f.fx_N.size() / 2;
+    double peak = 0.0;
+    for (std::size_t k = flute * half; k < (flute + 1) * half; ++k) {
+      peak = std::max(peak, std::hypot(f.fx_N[k], f.fy_N[k]));
+    }
+    return peak;
+  };
+  for (bool trochoidal : {false, true}) {
+    SCOPED_TRACE(trochoidal ? "trochoidal" : "circular");
+    std::array<double, 2> change{};      // tip, rigid
+    std::array<double, 2> flute_diff{};  // tip, rigid
+    for (bool helix : {false, true}) {
+      std::array<ForceWaveform, 2> without_helix;
+      for (RunoutHelix mode : {RunoutHelix::kTipPattern, RunoutHelix::kRigidAxis}) {
+        ModelConfig c = without_effects(ModelConfig{});
+        for (const char* e : {"runout", "multi_pass"}) {
+          set_effect(c, e, true);
+        }
+        c.effects.trochoidal.enabled = trochoidal;
+        c.effects.helix_lag.enabled = helix;
+        c.effects.runout.helix = mode;
+        SteadyStateWorkspace ws;
+        c.effects.runout.offset_um = 1.0;
+        c.effects.runout.angle_rad = 0.0;
+        const ForceWaveform a = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+        c.effects.runout.offset_um = std::sqrt(5.0);  // ρ·cos γ = 1 µm, ρ·sin γ = 2 µm
+        c.effects.runout.angle_rad = std::atan2(2.0, 1.0);
+        const ForceWaveform b = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+        c.effects.runout.offset_um = 2.0;
+        c.effects.runout.angle_rad = kPi / 2.0;
+        const ForceWaveform pitch = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+        const auto m = static_cast<std::size_t>(mode == RunoutHelix::kRigidAxis);
+        if (!helix) {
+          without_helix[m] = b;
+          continue;
+        }
+        change[m] = rms_xy(b, &a) / rms_xy(a);
+        flute_diff[m] = std::fabs(flute_peak(pitch, 0) - flute_peak(pitch, 1)) /
+                        std::max(flute_peak(pitch, 0), flute_peak(pitch, 1));
+      }
+      if (!helix) {
+        EXPECT_EQ(max_difference(without_helix[0], without_helix[1]), 0.0);
+      }
+    }
+    const double tip = change[0];
+    const double rigid = change[1];
+    EXPECT_GT(rigid, 0.04);
+    EXPECT_LT(rigid, 0.08);
+    EXPECT_GT(flute_diff[1], 0.04);
+    EXPECT_LT(flute_diff[0], 0.01);  // physics-notes: "well under 1 %"
+    if (trochoidal) {
+      EXPECT_GT(tip, 0.005);  // the pitch term
+      EXPECT_GT(rigid, 3.0 * tip);
+    } else {
+      EXPECT_LT(tip, 1e-4);  // only through ρ² in the radii
+    }
+  }
+}
+
+// Continuous in the runout angle: the force moves in proportion to a small change of γ wherever
+// γ + lag_i lies (including a pure pitch error, γ = ±90°), does not notice a turn of 2π, and
+// meets the one-table geometry of ρ = 0 continuously as ρ → 0.
+TEST(SteadyState, ForceIsContinuousInTheRunoutAngleOnARigidAxis) {
+  ModelConfig c = without_effects(reference_case(720));
+  for (const char* e : {"runout", "trochoidal", "multi_pass", "helix_lag"}) {
+    set_effect(c, e, true);
+  }
+  c.material.law = ForceLawKind::kLinearEdge;
+  c.material.linear_edge.k_te_N_per_mm = 0.0;
+  c.material.linear_edge.k_ne_N_per_mm = 0.0;
+  c.effects.runout.helix = RunoutHelix::kRigidAxis;
+  SteadyStateWorkspace ws;
+  for (double gamma : {0.58, kPi / 2.0, -kPi / 2.0 + 0.05, 3.1}) {
+    SCOPED_TRACE(gamma);
+    c.effects.runout.angle_rad = gamma;
+    const ForceWaveform base = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+    std::array<double, 2> change{};
+    for (int s = 0; s < 2; ++s) {
+      ModelConfig d = c;
+      d.effects.runout.angle_rad += s == 0 ? 1e-6 : 1e-5;
+      change[static_cast<std::size_t>(s)] =
+          max_difference(evaluate_steady_state(d, 25000.0, 720, ws).mean, base);
+    }
+    EXPECT_GT(change[0], 0.0);
+    EXPECT_NEAR(change[1] / change[0], 10.0, 1.0);
+    ModelConfig turned = c;
+    turned.effects.runout.angle_rad = gamma > 0.0 ? gamma - 2.0 * kPi : gamma + 2.0 * kPi;
+    EXPECT_LT(max_difference(evaluate_steady_state(turned, 25000.0, 720, ws).mean, base),
+              1e-12 * peak_of(base));
+  }
+  c.effects.runout.offset_um = 0.0;
+  const ForceWaveform none = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+  c.effects.runout.offset_um = 1e-7;
+  const ForceWaveform tiny = evaluate_steady_state(c, 25000.0, 720, ws).mean;
+  EXPECT_GT(max_difference(tiny, none), 0.0);
+  EXPECT_LT(max_difference(tiny, none), 1e-6 * peak_of(none));
 }
 
 // [001] eqs 14-17 for a circular chip h = f_t·sin θ (no runout, one disc): A_c(θ) =
@@ -826,6 +1110,19 @@ TEST(SteadyState, EvaluationAllocatesNothingAfterSetUp) {
       }
       evaluate_force_basis(at_speed, rpm, 720, ws);
     }
+    EXPECT_EQ(counter.allocations(), 0);
+  }
+  {
+    // Switching runout on gives every disc its own chip table (rigid axis): room for them was
+    // made when the workspace was sized.
+    ModelConfig rigid = commanded;
+    rigid.effects.runout.helix = RunoutHelix::kRigidAxis;
+    ModelConfig no_runout = rigid;
+    no_runout.effects.runout.enabled = false;
+    SteadyStateWorkspace off_ws(no_runout, 720);
+    evaluate_steady_state(no_runout, 25000.0, 720, off_ws, SteadyStateOutput::kMean);
+    test::AllocationCounter counter;
+    evaluate_steady_state(rigid, 25000.0, 720, off_ws, SteadyStateOutput::kMean);
     EXPECT_EQ(counter.allocations(), 0);
   }
   ModelConfig full;
