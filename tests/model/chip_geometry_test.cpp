@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <vector>
 
 namespace millwatch::model {
@@ -128,41 +129,82 @@ double best_chip_um(int flutes, int flute, double feed_per_tooth_um, double rho_
   return best;
 }
 
-// With zero runout angle the short flute of two stops cutting at f_t/ρ = N_z = 2 exactly
-// ([000] Sect. 2.1): r_0 − r_1 = 2ρ must be covered by one feed per tooth.
-TEST(ChipGeometry, ShortToothOfTwoFlutesStopsCuttingAtTwiceTheOffset) {
+// When does a flute stop cutting? At γ = 0 flute j's chip against the pass n back is, at the
+// slot centre (θ = π/2, where every pass's chip peaks), n·f_t·s_{j,n} + r_j − r_{j−n}, with the
+// radii r_j = √(R² + ρ² + 2Rρ·cos ψ_j) and s_{j,n} = (2πn/N − ε_j + ε_{j−n})/(2πn/N) the flute's
+// actual spacing from the pass n back over the nominal one (edge shifts
+// ε_j = atan2(ρ·sin ψ_j, R + ρ·cos ψ_j); the trochoid's own correction vanishes at θ = π/2).
+// The chip is the smallest over the passes, so flute j never cuts when
+//   f_t ≤ f*_j = max_n (r_{j−n} − r_j)/(n·s_{j,n}).
+// To first order in ρ (r_j ≈ R + ρ·cos ψ_j, s = 1):
+//   N = 2: flute 1 f* = 2ρ (= N_z·ρ, [000] Sect. 2.1).
+//   N = 3: radii R + ρ, R − ρ/2, R − ρ/2. Flute 1 (after the long flute) f* = 1.5ρ (n = 1);
+//          flute 2 cuts f_t against flute 1 while flute 1 cuts, and only once that stops does
+//          it meet flute 0's path two feeds back: f* = (1.5ρ)/2 = 0.75ρ (n = 2).
+//   N = 4: radii R + ρ, R, R − ρ, R. Flute 1 (after the long flute) f* = ρ (n = 1). Flute 2
+//          (opposite the long one) f* = ρ: against flute 1 (n = 1, ρ/1) and flute 0 (n = 2,
+//          2ρ/2) alike. Flute 3 cuts f_t + ρ against flute 2 and 2·f_t against flute 1, but
+//          only 3·f_t − ρ against flute 0: f* = ρ/3 (n = 3).
+// (Which flute is "the shortest" is not the question for N > 2: flutes 1 and 2 of N = 3 tie.)
+// The tables (trochoidal, N passes) must show each flute's largest chip ≤ 0 at 0.99·f*_j and
+// > 0 at 1.01·f*_j, and that largest chip equal to min_n(n·f_t·s_{j,n} + r_j − r_{j−n}).
+TEST(ChipGeometry, ShortToothThresholdFollowsTheRadiiAndPitchOfEveryFlute) {
   const double rho = 3.0;
-  EXPECT_LE(best_chip_um(2, 1, 0.97 * 2.0 * rho, rho), 0.0);
-  EXPECT_GT(best_chip_um(2, 1, 1.03 * 2.0 * rho, rho), 0.0);
-}
-
-// More flutes, γ = 0: flute j sits at r_j ≈ R + ρ·cos ψ_j, ψ_j = 2πj/N_z. On the circular path
-// its chip against the pass m flutes back is m·f_t·sin θ + r_j − r_{j−m}, largest at θ = π/2,
-// and it cuts only if it reaches beyond the envelope of all earlier passes: m·f_t > r_{j−m} − r_j
-// for every m = 1..N_z−1. So flute j cuts above f_t = ρ·max_m (cos ψ_{j−m} − cos ψ_j)/m:
-//   N_z = 3 (r = R+ρ, R−ρ/2, R−ρ/2): flute 1 at 1.5·ρ (m = 1, behind the long flute 0);
-//     flute 2 at 0.75·ρ (m = 2: flute 1 is as short, so it is flute 0's path that matters).
-//   N_z = 4 (r = R+ρ, R, R−ρ, R): flute 1 at ρ (m = 1); flute 2 at ρ (m = 1 and m = 2 alike);
-//     flute 3 at ρ/3 (m = 3, flute 0's path three feeds back).
-// The short flutes' thresholds are not N_z·ρ. Second-order terms (ρ²/R, the pitch shift
-// ρ/R·sin ψ, the trochoid) move them by under 0.6 % here; the checks sit 2 % either side.
-TEST(ChipGeometry, ShortFluteThresholdsForThreeAndFourFlutesFollowTheEnvelope) {
-  const double rho = 3.0;
-  struct Case {
-    int flutes;
-    int flute;
+  const double radius = 400.0;  // as best_chip_um
+  struct FirstOrder {
+    int flutes, flute;
     double threshold_per_rho;
   };
-  for (const Case& c : {Case{3, 1, 1.5}, Case{3, 2, 0.75}, Case{4, 1, 1.0}, Case{4, 2, 1.0},
-                        Case{4, 3, 1.0 / 3.0}}) {
-    const double threshold = c.threshold_per_rho * rho;
-    EXPECT_LE(best_chip_um(c.flutes, c.flute, 0.98 * threshold, rho), 0.0)
-        << "N_z=" << c.flutes << " flute " << c.flute << " must not cut below f_t=" << threshold;
-    EXPECT_GT(best_chip_um(c.flutes, c.flute, 1.02 * threshold, rho), 0.0)
-        << "N_z=" << c.flutes << " flute " << c.flute << " must cut above f_t=" << threshold;
+  // The first-order thresholds above, which the exact formula must reproduce to O(ρ/R).
+  for (const FirstOrder& f :
+       {FirstOrder{2, 1, 2.0}, FirstOrder{3, 1, 1.5}, FirstOrder{3, 2, 0.75}, FirstOrder{4, 1, 1.0},
+        FirstOrder{4, 2, 1.0}, FirstOrder{4, 3, 1.0 / 3.0}}) {
+    SCOPED_TRACE(std::to_string(f.flutes) + " flutes, flute " + std::to_string(f.flute));
+    const auto pitch = uniform_pitch(f.flutes);
+    std::vector<double> r(pitch.size()), eps(pitch.size());
+    for (std::size_t j = 0; j < pitch.size(); ++j) {
+      r[j] = std::sqrt(radius * radius + rho * rho + 2.0 * radius * rho * std::cos(pitch[j]));
+      eps[j] = std::atan2(rho * std::sin(pitch[j]), radius + rho * std::cos(pitch[j]));
+    }
+    const int n_z = f.flutes;
+    const auto j = static_cast<std::size_t>(f.flute);
+    auto spacing = [&](int n) {
+      const auto k = static_cast<std::size_t>(((f.flute - n) % n_z + n_z) % n_z);
+      const double nominal = 2.0 * kPi * n / n_z;
+      return (nominal - eps[j] + eps[k]) / nominal;
+    };
+    auto behind = [&](int n) {  // r_{j−n} − r_j
+      return r[static_cast<std::size_t>(((f.flute - n) % n_z + n_z) % n_z)] - r[j];
+    };
+    double threshold = -1e9;
+    for (int n = 1; n <= n_z; ++n) {
+      threshold = std::max(threshold, behind(n) / (n * spacing(n)));
+    }
+    EXPECT_NEAR(threshold / rho, f.threshold_per_rho, 0.02 * f.threshold_per_rho);
+    for (double ratio : {0.99, 1.01}) {
+      const double ft = ratio * threshold;
+      const double best = best_chip_um(n_z, f.flute, ft, rho);
+      double expected = 1e9;  // the chip at the slot centre, the smallest over the passes
+      for (int n = 1; n <= n_z; ++n) {
+        expected = std::min(expected, n * ft * spacing(n) - behind(n));
+      }
+      if (ratio < 1.0) {
+        EXPECT_LE(best, 0.0) << "f_t/rho = " << ft / rho;
+      } else {
+        EXPECT_GT(best, 0.0) << "f_t/rho = " << ft / rho;
+        // The grid (0.125° for N = 2) misses the peak by f_t·Δθ²/2 < 1e-4 µm; leaving out the
+        // pitch factor s would be off by 5-15e-3 µm.
+        EXPECT_NEAR(best, expected, 2e-4) << "f_t/rho = " << ft / rho;
+      }
+    }
   }
-  // Below every short flute's threshold the long flute 0 alone removes a revolution's feed.
-  for (int flutes : {3, 4}) {
+}
+
+// Below every short flute's threshold (the smallest is ρ/3, 4 flutes) the long flute 0 alone
+// removes a revolution's feed, N_z·f_t, at the slot centre.
+TEST(ChipGeometry, BelowTheThresholdsTheLongFluteCutsEveryFeed) {
+  const double rho = 3.0;
+  for (int flutes : {2, 3, 4}) {
     const double ft = 0.25 * rho;
     EXPECT_NEAR(best_chip_um(flutes, 0, ft, rho), flutes * ft, 0.01 * flutes * ft);
   }
