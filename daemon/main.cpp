@@ -167,8 +167,10 @@ int run(const std::string& config_path, const std::string& url_override,
   }
 
   // Reload hand-over: the main thread reads the new file and builds its pipeline, the sample
-  // thread swaps it in between two blocks and hands the old one back (FFTW's planner, used by
-  // a pipeline's construction and destruction, must stay in one thread).
+  // thread swaps it in between two blocks and hands the old one back to be destroyed here, so
+  // that neither the build nor the teardown (FFTW plans, model tables) stalls the samples. The
+  // sample thread plans too (the lockstep model at a new speed): FFTW's planner is guarded by
+  // signal::fftw_planner_mutex().
   struct Reload {
     daemon::DaemonConfig config;
     std::unique_ptr<monitor::Pipeline> pipeline;

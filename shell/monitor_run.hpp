@@ -63,7 +63,8 @@ class MonitorRun {
   /// No block came: a status goes out when a status period of wall-clock time has passed.
   void idle();
   /// Between two blocks: finishes the running pipeline, keeps its counts and hands it back (to
-  /// be destroyed in the thread that built its successor: FFTW's planner is not thread-safe).
+  /// be destroyed off the sample thread; FFTW plans may be destroyed in any thread, see
+  /// signal/fftw_planner.hpp).
   std::unique_ptr<monitor::Pipeline> replace_pipeline(std::unique_ptr<monitor::Pipeline> next);
   void set_status_period(double status_period_s) { options_.status_period_s = status_period_s; }
 

@@ -8,16 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "core/signal/fftw_planner.hpp"
+
 namespace millwatch::model {
-namespace {
-
-/// FFTW's planner is not thread-safe; execution is.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
-}  // namespace
 
 PeriodicResponse::PeriodicResponse(int samples_per_period) {
   if (samples_per_period < 2) {
@@ -27,7 +20,7 @@ PeriodicResponse::PeriodicResponse(int samples_per_period) {
   samples_ = samples_per_period;
   const auto n = static_cast<std::size_t>(samples_);
   const std::size_t h = n / 2 + 1;
-  const std::lock_guard lock(planner_mutex());
+  const std::lock_guard lock(signal::fftw_planner_mutex());  // fftw_planner.hpp
   time_ = fftw_alloc_real(n);
   auto* spectrum = fftw_alloc_complex(h);
   spectrum_ = reinterpret_cast<std::complex<double>*>(spectrum);
@@ -70,7 +63,7 @@ void PeriodicResponse::release() {
   if (time_ == nullptr && forward_ == nullptr && backward_ == nullptr) {
     return;
   }
-  const std::lock_guard lock(planner_mutex());
+  const std::lock_guard lock(signal::fftw_planner_mutex());  // fftw_planner.hpp
   if (forward_ != nullptr) {
     fftw_destroy_plan(forward_);
   }

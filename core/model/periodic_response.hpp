@@ -20,8 +20,9 @@
 // At an even N the Nyquist harmonic k = N/2 is a real cosine (−1)ⁿ: a gain g acts on it as Re(g)
 // (the sampled output of cos(πn + arg g)·|g| is Re(g)·(−1)ⁿ).
 //
-// Set up once per period length (allocates FFTW buffers and plans, FFTW_ESTIMATE; planning is
-// serialised by a mutex); apply() then allocates nothing and may run in a real-time thread.
+// Set up once per period length (allocates FFTW buffers and plans, FFTW_ESTIMATE; plans are made
+// and destroyed under signal::fftw_planner_mutex(), so any thread may do it); apply() then
+// allocates nothing, takes no lock and may run in a real-time thread.
 // One object per thread (the buffers are the object's own).
 
 #include <complex>

@@ -4,9 +4,11 @@
 #include <bit>
 #include <cmath>
 #include <complex>
+#include <mutex>
 #include <numbers>
 
 #include "core/config/json_reader.hpp"
+#include "core/signal/fftw_planner.hpp"
 
 namespace millwatch::signal {
 namespace {
@@ -114,6 +116,7 @@ SpindleTracker::~SpindleTracker() {
 
 void SpindleTracker::release() {
   if (plan_ != nullptr) {
+    const std::lock_guard lock(fftw_planner_mutex());  // the planner is not thread-safe
     fftw_destroy_plan(plan_);
     plan_ = nullptr;
   }
@@ -148,7 +151,10 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
   scratch_.reserve(fft_size_ / 2 + 1);
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
-  plan_ = fftw_plan_dft_r2c_1d(static_cast<int>(fft_size_), fft_in_, fft_out_, FFTW_ESTIMATE);
+  {
+    const std::lock_guard lock(fftw_planner_mutex());  // the planner is not thread-safe
+    plan_ = fftw_plan_dft_r2c_1d(static_cast<int>(fft_size_), fft_in_, fft_out_, FFTW_ESTIMATE);
+  }
   restart(0);
 }
 

@@ -38,8 +38,8 @@
 // one window; the monitor measures each revolution's own speed from its tooth events, so the
 // tracker needs to be consistent, not precise.
 //
-// setup() creates FFTW plans (not thread-safe: set up trackers from one thread at a time);
-// process() never allocates.
+// setup() creates an FFTW plan (under fftw_planner_mutex(): trackers may be set up and destroyed
+// in any thread); process() never allocates and takes no lock.
 
 #include <fftw3.h>
 
