@@ -101,6 +101,21 @@ void BM_SteadyStateFullAfterRunoutChange(benchmark::State& state) {
 }
 BENCHMARK(BM_SteadyStateFullAfterRunoutChange)->Unit(benchmark::kMicrosecond);
 
+/// The same on a rigid tool axis: one chip table per disc (10) instead of one.
+void BM_SteadyStateFullAfterRunoutChangeRigidAxis(benchmark::State& state) {
+  ModelConfig c = full_model();
+  c.effects.runout.helix = millwatch::model::RunoutHelix::kRigidAxis;
+  millwatch::model::SteadyStateWorkspace ws(c, kSteps);
+  int i = 0;
+  for (auto _ : state) {
+    c.effects.runout.offset_um = 1.5 + 0.001 * (i++ % 100);
+    benchmark::DoNotOptimize(millwatch::model::evaluate_steady_state(
+                                 c, 25000.0, kSteps, ws, millwatch::model::SteadyStateOutput::kMean)
+                                 .mean.fx_N.data());
+  }
+}
+BENCHMARK(BM_SteadyStateFullAfterRunoutChangeRigidAxis)->Unit(benchmark::kMicrosecond);
+
 /// The six linear-edge basis waveforms of the lockstep model (rigid, so the basis is valid).
 void BM_ForceBasisLinearEdge(benchmark::State& state) {
   ModelConfig c = lockstep_model();
@@ -176,6 +191,18 @@ void BM_ModelUpdateAfterRunoutChange(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ModelUpdateAfterRunoutChange)->Unit(benchmark::kMicrosecond);
+
+void BM_ModelUpdateAfterRunoutChangeRigidAxis(benchmark::State& state) {
+  ModelConfig c = full_model();
+  c.effects.runout.helix = millwatch::model::RunoutHelix::kRigidAxis;
+  millwatch::model::MillingModel model(c);
+  int i = 0;
+  for (auto _ : state) {
+    c.effects.runout.offset_um = 1.5 + 0.001 * (i++ % 100);
+    model.update(c);
+  }
+}
+BENCHMARK(BM_ModelUpdateAfterRunoutChangeRigidAxis)->Unit(benchmark::kMicrosecond);
 
 /// The simulator's samples per second. With flank wear growing over the record the model is
 /// evaluated again every revolution (the conditions change); steady conditions evaluate once.
