@@ -59,7 +59,9 @@ const char* kTerminal =
     "set terminal pngcairo size 1200,700 font 'DejaVu Sans,12' linewidth 1.5\n"
     "set datafile separator ','\n"
     "set grid lc rgb '#d0d0d0'\n"
-    "set key outside right top box opaque\n"
+    "set key inside right top opaque box samplen 2 spacing 1.1\n"
+    "set lmargin 12\n"
+    "set rmargin 4\n"
     "set border lw 1\n";
 
 const char* kFluteColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
@@ -166,9 +168,9 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   if (!rec.spindle().empty() || valid > 0) {
     add_png("speed.png");
     script += fmt::format(
-        "set title \"{} — spindle speed\"\nset xlabel 'time [s]'\nset ylabel 'speed [rpm]'\n"
-        "set format y '%.0f'\n",
-        head);
+        "set title \"{} — spindle speed (commanded {:.0f} rpm)\"\nset xlabel 'time [s]'\n"
+        "set ylabel 'speed [rpm]'\nset format y '%.0f'\n",
+        head, commanded);
     std::string plot = "plot ";
     if (!rec.spindle().empty()) {
       plot += quoted(abs / "spindle.csv") +
@@ -178,9 +180,6 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     if (valid > 0) {
       plot += std::string(plot.size() > 5 ? ", " : "") + quoted(rev_csv) +
               " skip 1 using 2:3 with lines lc rgb '#1f77b4' lw 2 title 'each revolution'";
-    }
-    if (commanded > 0.0) {
-      plot += fmt::format(", {} with lines dt 2 lc rgb '#d62728' title 'commanded'", commanded);
     }
     script += plot + "\nunset format\n";
   } else {
@@ -280,7 +279,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     script += fmt::format(
         "set title \"{} — force spectrum ({} samples as recorded, {:.1f} Hz resolution)\"\n"
         "set xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
-        "set xrange [0:{}]\n",
+        "set format y '10^{{%L}}'\nset xrange [0:{}]\nset key bottom right\n",
         head, rec.raw()[0].size(), f.size() > 1 ? f[1] : 0.0, num(f_max));
     if (tooth_hz > 0.0) {
       for (int k = 1; k * tooth_hz <= f_max; ++k) {
@@ -295,7 +294,8 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         "1:3 with lines lc rgb '#d62728' title 'fy', '' skip 1 using 1:4 with lines lc rgb "
         "'#2ca02c' title 'fz', NaN with lines dt 3 lc rgb '#555555' title 'k × tooth passing "
         "({1:.1f} Hz{2})'\n"
-        "unset logscale y\nunset arrow\nunset label\nset xrange [*:*]\n",
+        "unset logscale y\nunset arrow\nunset label\nset xrange [*:*]\nunset format\n"
+        "set key top right\n",
         quoted(abs / "spectrum.csv"), tooth_hz, rpm > 0.0 ? ", measured" : ", commanded");
   } else {
     notes += "spectrum.png: left out, too few samples\n";
