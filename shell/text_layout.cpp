@@ -241,7 +241,7 @@ double estimate_rate(std::istream& in, const TextLayout& l) {
   }
   in.clear();
   in.seekg(start);
-  if (t.size() < 3) {
+  if (t.size() < 2) {
     return 0.0;
   }
   std::vector<double> dt;
@@ -250,7 +250,7 @@ double estimate_rate(std::istream& in, const TextLayout& l) {
       dt.push_back(t[i] - t[i - 1]);
     }
   }
-  if (dt.size() < 2) {
+  if (dt.empty()) {
     return 0.0;
   }
   std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
