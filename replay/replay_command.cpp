@@ -255,7 +255,7 @@ int replay_one(const ReplayOptions& o) {
   g_stop = false;
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
-  Progress progress(o.progress && speed == 0.0);
+  Progress progress(o.progress);
   const auto block_samples = static_cast<std::size_t>(o.block_samples);
   while (!g_stop) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
