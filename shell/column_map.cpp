@@ -117,7 +117,8 @@ std::string ColumnMap::to_string() const {
     s += kKeys[i];
     s += '=';
     s += c.describe_source();
-    if (c.scale != 1.0) {
+    // A name with a '*' of its own gets its scale written out, so that it reads back the same.
+    if (c.scale != 1.0 || c.source.find('*') != std::string::npos) {
       char text[32];
       const auto r = std::to_chars(text, text + sizeof text, c.scale);
       s += '*';

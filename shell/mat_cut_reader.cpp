@@ -1,5 +1,6 @@
 #include "shell/mat_cut_reader.hpp"
 
+#include <H5public.h>
 #include <matio.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <utility>
 
 #include "core/monitor/input_check.hpp"
+#include "shell/mat_file_check.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -31,7 +33,15 @@ extern "C" void matio_log(int /*level*/, char* message) {
 }
 void quiet_matio() {
   static std::once_flag once;
-  std::call_once(once, [] { Mat_LogInitFunc("millwatch", matio_log); });
+  std::call_once(once, [] {
+    // HDF5 1.10.8 cannot close a file whose H5Fopen failed half-way (a damaged v7.3 file): its
+    // cleanup at exit then prints "HDF5: infinite loop closing library" and a line of
+    // abbreviations after our error. Only read here, so nothing needs HDF5's cleanup. It must
+    // come before HDF5's first use (Mat_LogInitFunc is one: it turns HDF5's error printing off);
+    // in a process that wrote a v7.3 file before, it comes too late and changes nothing.
+    H5dont_atexit();
+    Mat_LogInitFunc("millwatch", matio_log);
+  });
 }
 
 struct MatFile {
@@ -217,6 +227,10 @@ class Reader {
   Reader(const fs::path& path, std::int64_t max_elements)
       : name_(path.string()), max_elements_(max_elements) {
     quiet_matio();
+    const MatFileCheck check = check_mat_file(path, max_elements * 8);
+    if (!check.problem.empty()) {
+      throw std::runtime_error(name_ + ": " + check.problem);
+    }
     g_matio_message.clear();
     file_.mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
     if (file_.mat == nullptr) {
@@ -229,9 +243,6 @@ class Reader {
         break;
       case MAT_FT_MAT5:
         version_ = "v5";
-        break;
-      case MAT_FT_MAT4:
-        version_ = "v4";
         break;
       default:
         version_ = "?";
@@ -253,6 +264,13 @@ class Reader {
       }
     }
     Mat_Rewind(file_.mat);
+    if (names_.empty()) {
+      // matio opens a v7.3 file whose HDF5 structure cannot be read (H5Fopen fails) as one
+      // without variables (found by fuzz_mat_cut_reader).
+      throw std::runtime_error(name_ + ": no variable can be read from this " + version_ +
+                               " MAT-file (empty or damaged" +
+                               (version_ == "v7.3" ? ": HDF5 cannot open it)" : ")"));
+    }
   }
 
   [[nodiscard]] const std::string& version() const { return version_; }
@@ -531,6 +549,12 @@ MatCutReader::MatCutReader(const fs::path& path, const ColumnMap& columns, doubl
     throw std::runtime_error(name_ +
                              ": no sample rate: no rate variable (fs), no usable time "
                              "vector and none in the configuration (sample_rate_hz)");
+  }
+  // Without a time vector sample k is at k / rate: that must stay within the utime range.
+  if (t_.empty() && !(static_cast<double>(f_[0].size()) / rate_hz_ * 1e6 <=
+                      static_cast<double>(monitor::kMaxAbsUtime_us))) {
+    throw std::runtime_error(name_ + ": a sample rate of " + number(rate_hz_) + " Hz makes " +
+                             std::to_string(f_[0].size()) + " samples last beyond 2^53 µs");
   }
 }
 

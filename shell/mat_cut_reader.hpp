@@ -1,6 +1,7 @@
 #pragma once
-// Reads a recorded cut from a MATLAB .mat file (v4, v5 — compressed or not — and v7.3/HDF5,
-// through Debian's libmatio) into sample blocks.
+// Reads a recorded cut from a MATLAB .mat file (v5 — compressed or not — and v7.3/HDF5,
+// through Debian's libmatio, after shell/mat_file_check.hpp found its structure sound) into
+// sample blocks.
 //
 // The forces are three vectors or one N×3 (or 3×N) matrix, the time an optional vector and the
 // sample rate an optional scalar. A ColumnMap names them (`fx=Fx,fy=Fy,fz=Fz,t=t,fs=fs`;

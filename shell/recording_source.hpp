@@ -4,7 +4,8 @@
 //
 //   LCM log          lcm-logger's event log (sync word 0xEDA1DA01): the raw channel's blocks
 //   MATLAB .mat      v5 ("MATLAB 5.0 MAT-file" header) and v7.3 (HDF5 with that header in its
-//                    user block); v4 (no header) when the name ends in .mat
+//                    user block); a binary file named .mat is taken for one (and a v4 file,
+//                    which has no header, is refused with a word on how to save it)
 //   millwatch CSV, DynoWare export, delimited text with a column map (text_layout.hpp)
 //
 // The sample rate a recording states (DynoWare's preamble, a .mat's fs variable) is its rate;

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <matio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -228,6 +229,29 @@ TEST(ReplayFormats, DynoWareAndMatExportsOfACutGiveItsResults) {
               std::string::npos)
         << m["input_format"];
   }
+
+  // A damaged v7.3 file (the root group's object header claims 8 MiB) is one line of error: no
+  // HDF5 diagnostics after it, nor HDF5's complaint at exit about the file it could not close.
+  const fs::path damaged = dir / "damaged.mat";
+  fs::copy_file(dir / "v73.mat", damaged);
+  {
+    std::fstream f(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    std::string head(12, '\0');
+    f.seekg(608);
+    f.read(head.data(), static_cast<std::streamsize>(head.size()));
+    ASSERT_EQ(head.substr(0, 4), std::string("\x01\x00\x01\x00", 4));  // the object header
+    f.seekp(618);
+    f.put('\x80');
+  }
+  const auto bad = test::run_command(test::millwatch_cli() + " replay " + damaged.string() +
+                                     " --sidecar " + config);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find(damaged.string() +
+                            ": no variable can be read from this v7.3 MAT-file (empty or "
+                            "damaged: HDF5 cannot open it)\n"),
+            std::string::npos)
+      << bad.output;
+  EXPECT_EQ(std::count(bad.output.begin(), bad.output.end(), '\n'), 1) << bad.output;
 }
 
 TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {

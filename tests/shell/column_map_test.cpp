@@ -35,6 +35,14 @@ TEST(ColumnMap, NamesIndicesAndScales) {
   EXPECT_EQ(parse_column_map(m.to_string()).to_string(), m.to_string());
 }
 
+TEST(ColumnMap, ANameWithAStarWritesItsScale) {
+  // Found by fuzz_text_recording: "fy=a*1" is the name "a" scaled by 1, written back as "fy=a".
+  const ColumnMap m = parse_column_map("fx=1,fy=F*x*1,fz=2");
+  EXPECT_EQ(m.force(1).source, "F*x");
+  EXPECT_EQ(m.to_string(), "fx=1,fy=F*x*1,fz=2");
+  EXPECT_EQ(parse_column_map(m.to_string()).force(1).source, "F*x");
+}
+
 TEST(ColumnMap, MatrixSlicesKeepTheirComma) {
   const ColumnMap m = parse_column_map("fx=F(:,1),fy=F(:,2),fz=F(3,:),fs=rate");
   EXPECT_EQ(m.force(0).source, "F(:,1)");
