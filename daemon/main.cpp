@@ -183,6 +183,20 @@ int run(const std::string& config_path, const std::string& url_override,
   std::vector<std::unique_ptr<monitor::Pipeline>> retired;
   std::atomic<bool> reload{false};
 
+  const std::string running = fmt::format("source {}, LCM {}",
+                                          config.source.kind == daemon::SourceConfig::Kind::kLcm
+                                              ? "lcm:" + config.source.channel
+                                              : "comedi:" + config.source.device,
+                                          config.lcm_url);
+  spdlog::info("millwatchd running: {}", running);
+  // READY=1 now that the source is open, before the sample loop's first WATCHDOG=1 (sent from
+  // the sample thread, it came first now and then).
+  notifier.ready("monitoring: " + running);
+  if (notifier.watchdog_interval().count() > 0) {
+    spdlog::info("systemd watchdog: {} ms; pinged from the sample loop",
+                 notifier.watchdog_interval().count() / 1000);
+  }
+
   const auto started = std::chrono::steady_clock::now();
   std::thread sample_thread([&] {
     auto slot = std::make_unique<daemon::BlockSlot>();
@@ -230,17 +244,6 @@ int run(const std::string& config_path, const std::string& url_override,
     run->finish();
   });
 
-  const std::string running = fmt::format("source {}, LCM {}",
-                                          config.source.kind == daemon::SourceConfig::Kind::kLcm
-                                              ? "lcm:" + config.source.channel
-                                              : "comedi:" + config.source.device,
-                                          config.lcm_url);
-  spdlog::info("millwatchd running: {}", running);
-  notifier.ready("monitoring: " + running);
-  if (notifier.watchdog_interval().count() > 0) {
-    spdlog::info("systemd watchdog: {} ms; pinged from the sample loop",
-                 notifier.watchdog_interval().count() / 1000);
-  }
   while (true) {
     int signal = 0;
     sigwait(&signals, &signal);
