@@ -136,20 +136,24 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     script += "set output " + quoted(abs / name) + "\n";
   };
 
-  // Revolutions (valid ones) as data.
+  // Revolutions with their bounds as data (α and ΔFy NaN, a gap, where not every event was
+  // found: the summary's rule).
   std::string rows = "revolution,t_s,spindle_rpm,alpha_deg,delta_fy_N";
   for (int j = 1; j <= flutes; ++j) {
     rows += fmt::format(",peak_resultant_N_{}", j);
   }
   rows += "\n";
   std::size_t valid = 0;
+  std::size_t bounded = 0;
+  const double nan = std::nan("");
   for (const auto& r : rec.rows()) {
-    if (!r.valid) {
+    if (!r.bounded) {
       continue;
     }
-    ++valid;
+    ++bounded;
+    valid += r.valid ? 1 : 0;
     rows += fmt::format("{},{},{},{},{}", r.revolution, num(r.t_s), num(r.spindle_rpm),
-                        num(r.alpha_deg), num(r.delta_fy_N));
+                        num(r.valid ? r.alpha_deg : nan), num(r.valid ? r.delta_fy_N : nan));
     for (int j = 0; j < flutes; ++j) {
       rows += ',';
       rows += num(r.peak_resultant_N[static_cast<std::size_t>(j)]);
@@ -165,11 +169,11 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   const fs::path rev_csv = abs / "revolutions.csv";
 
   // 1. Speed over time.
-  if (!rec.spindle().empty() || valid > 0) {
+  if (!rec.spindle().empty() || bounded > 0) {
     add_png("speed.png");
     script += fmt::format(
         "set title \"{} — spindle speed (commanded {:.0f} rpm)\"\nset xlabel 'time [s]'\n"
-        "set ylabel 'speed [rpm]'\nset format y '%.0f'\n",
+        "set ylabel 'speed [rpm]'\n",
         head, commanded);
     std::string plot = "plot ";
     if (!rec.spindle().empty()) {
@@ -177,11 +181,11 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
               " skip 1 using 1:2 with points pt 7 ps 0.6 lc rgb '#7f7f7f' title 'tracker "
               "(spectrum windows)'";
     }
-    if (valid > 0) {
+    if (bounded > 0) {
       plot += std::string(plot.size() > 5 ? ", " : "") + quoted(rev_csv) +
               " skip 1 using 2:3 with lines lc rgb '#1f77b4' lw 2 title 'each revolution'";
     }
-    script += plot + "\nunset format\n";
+    script += plot + "\n";
   } else {
     notes += "speed.png: left out, no speed was measured\n";
   }
@@ -198,6 +202,10 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         "Fy = |Fy peak CE1| - |Fy peak CE2|'\n"
         "unset multiplot\n",
         head, quoted(rev_csv), quoted(rev_csv));
+  } else {
+    notes += "alpha_delta_fy.png: left out, no revolution had all its tooth events found\n";
+  }
+  if (bounded > 0) {
     add_png("flute_peaks.png");
     script += fmt::format(
         "set title \"{} — peak in-plane force per flute\"\nset xlabel 'revolution'\n"
@@ -211,7 +219,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     }
     script += "\n";
   } else {
-    notes += "alpha_delta_fy.png, flute_peaks.png: left out, no revolution was measured\n";
+    notes += "flute_peaks.png: left out, no revolution was measured\n";
   }
 
   // 4. Synchronous average, measured vs model.

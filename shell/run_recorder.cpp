@@ -71,9 +71,13 @@ std::string RunRecorder::active_alerts() const {
 void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
   const auto& m = r.measured;
   const int flutes = std::min(flutes_, monitor::kMaxFlutes);
-  const double t_s = static_cast<double>(r.utime_us) * 1e-6;
+  // Divided, not multiplied by 1e-6: 14694 µs is written 0.014694, not 0.014693999999999999.
+  const double t_s = static_cast<double>(r.utime_us) / 1e6;
   const double nan = std::nan("");
+  // As in the summary: periods, α and ΔFy need every tooth event (valid); each flute's peaks
+  // only the revolution's bounds, both CE1 events (a flute that did not cut peaks near 0).
   auto valid_or_nan = [&](double v) { return m.valid ? v : nan; };
+  auto bounded_or_nan = [&](double v) { return m.bounded ? v : nan; };
   if (file_) {
     std::string& s = line_;
     s.clear();
@@ -97,14 +101,14 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         s += std::string(a > 0 ? "," : "") + "\"" + axes[a] + "\":[";
         for (int j = 0; j < flutes; ++j) {
           s += j > 0 ? "," : "";
-          append_json_number(s, valid_or_nan(m.peak_N[static_cast<std::size_t>(j)][a]));
+          append_json_number(s, bounded_or_nan(m.peak_N[static_cast<std::size_t>(j)][a]));
         }
         s += "]";
       }
       s += ",\"resultant\":[";
       for (int j = 0; j < flutes; ++j) {
         s += j > 0 ? "," : "";
-        append_json_number(s, valid_or_nan(m.peak_resultant_N[static_cast<std::size_t>(j)]));
+        append_json_number(s, bounded_or_nan(m.peak_resultant_N[static_cast<std::size_t>(j)]));
       }
       s += "]},\"delta_fy_N\":";
       append_json_number(s, valid_or_nan(m.delta_fy_N));
@@ -144,10 +148,10 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         const auto uj = static_cast<std::size_t>(j);
         for (std::size_t a = 0; a < 3; ++a) {
           s += ",";
-          append_number(s, valid_or_nan(m.peak_N[uj][a]));
+          append_number(s, bounded_or_nan(m.peak_N[uj][a]));
         }
         s += ",";
-        append_number(s, valid_or_nan(m.peak_resultant_N[uj]));
+        append_number(s, bounded_or_nan(m.peak_resultant_N[uj]));
       }
       s += ",";
       append_number(s, valid_or_nan(m.delta_fy_N));
@@ -175,6 +179,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
       row.t_s = t_s;
       row.spindle_rpm = r.spindle_rpm;
       row.valid = m.valid;
+      row.bounded = m.bounded;
       row.alpha_deg = m.alpha_deg;
       row.delta_fy_N = m.delta_fy_N;
       for (int j = 0; j < flutes; ++j) {
@@ -188,7 +193,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
 
 void RunRecorder::on_spindle(const monitor::SpindleUpdate& u) {
   if (keep_ && u.estimate.valid && spindle_.size() < 4 * kMaxRowsKept) {
-    spindle_.push_back({static_cast<double>(u.utime_us) * 1e-6, u.estimate.spindle_rpm});
+    spindle_.push_back({static_cast<double>(u.utime_us) / 1e6, u.estimate.spindle_rpm});
   }
 }
 
@@ -203,14 +208,13 @@ void RunRecorder::on_sync_average(const monitor::SyncAverage& measured,
   sync_.window_revolutions = measured.revolutions();
   sync_.model_valid = model != nullptr;
   for (std::size_t a = 0; a < 3; ++a) {
-    sync_.measured[a].resize(static_cast<std::size_t>(bins));
+    // The whole grid at once: a bin no sample reached takes its neighbours' mean (bin by bin it
+    // would read 0, a spike to zero in the plot).
+    measured.average(static_cast<int>(a), sync_.measured[a]);
     sync_.model[a].assign(static_cast<std::size_t>(bins), std::nan(""));
   }
   for (int b = 0; b < bins; ++b) {
     const auto ub = static_cast<std::size_t>(b);
-    for (std::size_t a = 0; a < 3; ++a) {
-      sync_.measured[a][ub] = measured.average(static_cast<int>(a), b);
-    }
     if (model != nullptr) {
       const auto m = model->force_at(2.0 * std::numbers::pi * b / bins);
       for (std::size_t a = 0; a < 3; ++a) {

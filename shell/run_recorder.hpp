@@ -6,7 +6,9 @@
 //
 // A revolution's row: revolution, t_s, spindle_rpm, valid, cutting, each flute's period_s,
 // alpha_deg, each flute's peak fx, fy, fz and resultant (N), delta_fy_N, residual_rms_N per axis
-// (empty while the model is not aligned), alerts (the kinds active, separated by ';').
+// (empty while the model is not aligned), alerts (the kinds active, separated by ';'). Periods,
+// α and ΔFy are empty unless the revolution is valid (every tooth event found); the peaks unless
+// its bounds (both CE1 events) were found — what the summary averages.
 
 #include <array>
 #include <cstdint>
@@ -27,7 +29,8 @@ class RunRecorder : public monitor::PipelineSink {
     std::int64_t revolution = 0;
     double t_s = 0.0;
     double spindle_rpm = 0.0;
-    bool valid = false;
+    bool valid = false;    ///< every tooth event found: α and ΔFy
+    bool bounded = false;  ///< both CE1 events found: the peaks
     double alpha_deg = 0.0;
     double delta_fy_N = 0.0;
     std::array<double, monitor::kMaxFlutes> peak_resultant_N{};

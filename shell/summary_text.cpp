@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -80,13 +81,18 @@ std::string summary_text(const json& j) {
   }
   const json& periods = j.value("tooth_period_s", json::array());
   const json& peaks = j.value("peak_force_N", json::object());
-  bool any_period = false;
-  for (const auto& p : periods) {
-    any_period = any_period || p.is_number();
+  // Peaks come from every revolution with its bounds, periods only from those with every tooth
+  // event: a flute that does not cut leaves peaks without periods.
+  const json& resultant = peaks.value("resultant", json::array());
+  bool any_value = false;
+  for (const json* values : {&periods, &resultant}) {
+    for (const auto& v : *values) {
+      any_value = any_value || v.is_number();
+    }
   }
-  if (any_period) {
+  if (any_value) {
     s += fmt::format("  {:<16}", "flute");
-    for (std::size_t f = 0; f < periods.size(); ++f) {
+    for (std::size_t f = 0; f < std::max(periods.size(), resultant.size()); ++f) {
       s += fmt::format("{:>10}", f + 1);
     }
     s += "\n";
