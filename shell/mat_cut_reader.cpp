@@ -136,14 +136,18 @@ std::int64_t elements(const matvar_t* v) {
   return n;
 }
 
-/// "F 5000×3 double".
-std::string describe(const matvar_t* v) {
-  std::string s = v->name != nullptr ? v->name : "?";
-  s += " ";
+/// "5000×3 double".
+std::string shape(const matvar_t* v) {
+  std::string s;
   for (int i = 0; i < v->rank && v->dims != nullptr && i < 8; ++i) {
     s += (i > 0 ? "\xC3\x97" : "") + std::to_string(v->dims[i]);
   }
   return s + " " + class_name(v->class_type);
+}
+
+/// "F 5000×3 double".
+std::string describe(const matvar_t* v) {
+  return std::string(v->name != nullptr ? v->name : "?") + " " + shape(v);
 }
 
 /// What a ColumnSpec names in a .mat: variable, optional struct field, optional row/column.
@@ -352,6 +356,7 @@ class Reader {
       }
     }
     const std::string what = s.text();
+    const std::string base = s.variable + (s.field.empty() ? "" : "." + s.field);  // no slice
     const std::size_t size = element_size(v->class_type);
     const std::int64_t n = elements(v);
     if (size == 0 || v->isComplex != 0) {
@@ -372,22 +377,22 @@ class Reader {
     std::size_t stride = 1;
     if (s.slice == 'c') {
       if (s.k >= cols) {
-        throw std::runtime_error(name_ + ": " + key + ": " + what + ": " + describe(v) + " has " +
-                                 std::to_string(cols) + " columns");
+        throw std::runtime_error(name_ + ": " + key + ": " + what + ": " + base + " (" + shape(v) +
+                                 ") has " + std::to_string(cols) + " columns");
       }
       first = s.k * rows;
       count = rows;
     } else if (s.slice == 'r') {
       if (s.k >= rows) {
-        throw std::runtime_error(name_ + ": " + key + ": " + what + ": " + describe(v) + " has " +
-                                 std::to_string(rows) + " rows");
+        throw std::runtime_error(name_ + ": " + key + ": " + what + ": " + base + " (" + shape(v) +
+                                 ") has " + std::to_string(rows) + " rows");
       }
       first = s.k;
       count = cols;
       stride = rows;
     } else if (rows != 1 && cols != 1) {
-      throw std::runtime_error(name_ + ": " + key + ": " + what + " is a " + describe(v) +
-                               " matrix; name a column (" + what + "(:,1)) or a row");
+      throw std::runtime_error(name_ + ": " + key + ": " + what + " (" + shape(v) +
+                               ") is a matrix; name a column (" + what + "(:,1)) or a row");
     }
     std::vector<double> out;
     switch (v->class_type) {

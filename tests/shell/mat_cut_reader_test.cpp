@@ -241,10 +241,10 @@ TEST(MatCutReader, ErrorsNameTheVariable) {
       << none;
   EXPECT_EQ(error_of(dir / "other.mat", "fx=A,fy=b,fz=c"),
             (dir / "other.mat").string() +
-                ": fx: A is a A 2×2 double matrix; name a column "
+                ": fx: A (2×2 double) is a matrix; name a column "
                 "(A(:,1)) or a row");
   EXPECT_EQ(error_of(dir / "other.mat", "fx=A(:,3),fy=b,fz=b", 100.0),
-            (dir / "other.mat").string() + ": fx: A(:,3): A 2×2 double has 2 columns");
+            (dir / "other.mat").string() + ": fx: A(:,3): A (2×2 double) has 2 columns");
   EXPECT_EQ(error_of(dir / "other.mat", "fx=A(:,1),fy=A(:,2),fz=zz", 100.0),
             (dir / "other.mat").string() +
                 ": no variable \"zz\" for fz (variables: A 2×2 double, b 1×1 double)");
