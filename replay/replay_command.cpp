@@ -256,6 +256,11 @@ int replay_one(const ReplayOptions& o) {
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
   Progress progress(o.progress);
+  // The record's in-plane force √(Fx² + Fy²), in the model's frame and before any filter: what
+  // the record holds even where no revolution can be measured (a campaign's first, light cuts).
+  double in_plane_sum_sq = 0.0;
+  double in_plane_max = 0.0;
+  std::int64_t in_plane_samples = 0;
   const auto block_samples = static_cast<std::size_t>(o.block_samples);
   while (!g_stop) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
@@ -279,6 +284,15 @@ int replay_one(const ReplayOptions& o) {
     if (recorder) {
       recorder->add_samples(block);
     }
+    for (std::size_t k = 0; k < block.fx_N.size(); ++k) {
+      const auto f = config.axis_map.to_model({block.fx_N[k], block.fy_N[k], block.fz_N[k]});
+      const double r2 = f[0] * f[0] + f[1] * f[1];
+      if (std::isfinite(r2)) {
+        in_plane_sum_sq += r2;
+        in_plane_max = std::max(in_plane_max, std::sqrt(r2));
+        ++in_plane_samples;
+      }
+    }
     run.process(block);
     progress.update(source->progress(), static_cast<double>(block.utime_us - first_utime) * 1e-6);
   }
@@ -293,6 +307,12 @@ int replay_one(const ReplayOptions& o) {
   j["input_format"] = source->description();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = source->bad_records();
+  j["record_in_plane_force_N"] =
+      in_plane_samples > 0
+          ? nlohmann::json{{"rms",
+                            std::sqrt(in_plane_sum_sq / static_cast<double>(in_plane_samples))},
+                           {"max", in_plane_max}}
+          : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
   if (recorder) {
     recorder->commit();
     if (!o.revolutions.empty()) {

@@ -82,8 +82,8 @@ double peak(const json& s, int flute) {
 std::string cut_table_csv(const std::vector<CutResult>& cuts) {
   const int flutes = flutes_of(cuts);
   std::string s =
-      "file,status,samples,duration_s,spindle_rpm,revolutions,revolutions_cutting,"
-      "alpha_mean_deg,alpha_std_deg";
+      "file,status,samples,duration_s,in_plane_force_rms_N,in_plane_force_max_N,spindle_rpm,"
+      "revolutions,revolutions_cutting,alpha_mean_deg,alpha_std_deg";
   for (int f = 1; f <= flutes; ++f) {
     s += fmt::format(",peak_resultant_N_{}", f);
   }
@@ -94,6 +94,8 @@ std::string cut_table_csv(const std::vector<CutResult>& cuts) {
                                        csv_field(status(c)),
                                        csv_number(at(j, "/samples")),
                                        csv_number(at(j, "/duration_s")),
+                                       csv_number(at(j, "/record_in_plane_force_N/rms")),
+                                       csv_number(at(j, "/record_in_plane_force_N/max")),
                                        csv_number(at(j, "/spindle_rpm")),
                                        csv_number(at(j, "/revolutions")),
                                        csv_number(at(j, "/revolutions_cutting")),
@@ -122,10 +124,10 @@ std::string cut_table_text(const std::vector<CutResult>& cuts) {
   auto cell = [](double v, const char* format, int w) {
     return std::isfinite(v) ? fmt::format(fmt::runtime(format), v) : fmt::format("{:>{}}", "—", w);
   };
-  std::string s =
-      fmt::format("{:<{}}  {:>9}  {:>5}  {:>15}  {:>{}}  {:>8}  {:>6}  {}\n", "file", width, "rpm",
-                  "revs", "alpha [deg]", fmt::format("peak |Fxy| per flute [N]"),
-                  std::max(flutes * 8, 24), "dFy [N]", "alerts", "warnings");
+  std::string s = fmt::format("{:<{}}  {:>9}  {:>5}  {:>10}  {:>15}  {:>{}}  {:>8}  {:>6}  {}\n",
+                              "file", width, "rpm", "revs", "|Fxy| rms", "alpha [deg]",
+                              fmt::format("peak |Fxy| per flute [N]"), std::max(flutes * 8, 24),
+                              "dFy [N]", "alerts", "warnings");
   for (const auto& c : cuts) {
     const json& j = c.summary;
     std::string peaks;
@@ -136,13 +138,17 @@ std::string cut_table_text(const std::vector<CutResult>& cuts) {
     const std::string alpha = std::isfinite(a_mean)
                                   ? fmt::format("{:.1f} ± {:.1f}", a_mean, at(j, "/alpha_deg/std"))
                                   : std::string("—");
-    s += fmt::format("{:<{}}  {}  {}  {:>15}  {:>{}}  {}  {:>6}  {}\n",
+    s += fmt::format("{:<{}}  {}  {}  {}  {:>15}  {:>{}}  {}  {:>6}  {}\n",
                      std::filesystem::path(c.file).filename().string(), width,
                      cell(at(j, "/spindle_rpm"), "{:>9.1f}", 9),
-                     cell(at(j, "/revolutions"), "{:>5.0f}", 5), alpha, peaks,
+                     cell(at(j, "/revolutions"), "{:>5.0f}", 5),
+                     cell(at(j, "/record_in_plane_force_N/rms"), "{:>8.2f} N", 10), alpha, peaks,
                      std::max(flutes * 8, 24), cell(at(j, "/delta_fy_N"), "{:>8.3f}", 8),
                      j.is_object() ? std::to_string(alerts_raised(j)) : std::string("—"),
                      status(c) == "ok" ? warning_kinds(j) : status(c));
+    while (s.size() >= 2 && s[s.size() - 2] == ' ') {  // no warnings: no blanks before the end
+      s.erase(s.size() - 2, 1);
+    }
   }
   return s;
 }

@@ -49,6 +49,11 @@ std::string summary_text(const json& j) {
   if (has_number(j, "bad_lines") && j["bad_lines"].get<double>() > 0) {
     s += fmt::format(", {:.0f} bad records skipped", j["bad_lines"].get<double>());
   }
+  const json& record = j.value("record_in_plane_force_N", json::object());
+  if (has_number(record, "rms")) {
+    s += fmt::format("; in-plane force {:.3f} N RMS, {:.3f} N max", num(record, "rms"),
+                     num(record, "max"));
+  }
   s += "\n";
   const double rpm = num(j, "spindle_rpm");
   const double commanded = num(j, "spindle_rpm_commanded");

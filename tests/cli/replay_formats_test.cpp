@@ -4,6 +4,7 @@
 // readable summary and --json, --revolutions (CSV, JSON Lines), --plot, the progress line on a
 // terminal, and a campaign of the three PHM windows replayed side by side into a table.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <matio.h>
 
@@ -275,6 +276,12 @@ TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {
   const nlohmann::json summary = nlohmann::json::parse(json.output);
   const int measured = summary["revolutions_measured"].get<int>();
   ASSERT_GT(measured, 150);
+  // The record's in-plane force, in the JSON and on the record line.
+  const double rms = summary["record_in_plane_force_N"]["rms"].get<double>();
+  EXPECT_GT(rms, 0.1);
+  EXPECT_GT(summary["record_in_plane_force_N"]["max"].get<double>(), rms);
+  EXPECT_NE(text.output.find(fmt::format("in-plane force {:.3f} N RMS", rms)), std::string::npos)
+      << text.output;
 
   // One CSV row per revolution with the header's columns, α averaging to the summary's.
   const auto rows = lines_of(read_text(dir / "revs.csv"));
@@ -392,6 +399,28 @@ TEST(ReplayFormats, CampaignOfThePhmWindowsShowsTheForcesRisingWithWear) {
   for (const char* flute : {"peak_resultant_N_1", "peak_resultant_N_2", "peak_resultant_N_3"}) {
     EXPECT_GT(std::stod(cut[2][column(flute)]), 2.0 * std::stod(cut[1][column(flute)])) << flute;
   }
+  // The whole record's in-plane force needs no revolution: it rises from cut 1 on (1.8, 17.3,
+  // 52.3 N RMS; computed here from the CSVs, as √(fx² + fy²) of every row).
+  for (std::size_t c = 0; c < 3; ++c) {
+    const char* names[] = {"c1_cut001_window.csv", "c1_cut158_window.csv", "c1_cut315_window.csv"};
+    const auto csv = lines_of(read_text(phm_dir() / names[c]));
+    double sum_sq = 0.0;
+    double max = 0.0;
+    for (std::size_t i = 1; i < csv.size(); ++i) {
+      const auto f = split(csv[i]);
+      const double r2 = std::stod(f[1]) * std::stod(f[1]) + std::stod(f[2]) * std::stod(f[2]);
+      sum_sq += r2;
+      max = std::max(max, std::sqrt(r2));
+    }
+    EXPECT_NEAR(std::stod(cut[c][column("in_plane_force_rms_N")]),
+                std::sqrt(sum_sq / static_cast<double>(csv.size() - 1)), 1e-5)
+        << names[c];
+    EXPECT_NEAR(std::stod(cut[c][column("in_plane_force_max_N")]), max, 1e-5) << names[c];
+  }
+  EXPECT_GT(std::stod(cut[1][column("in_plane_force_rms_N")]),
+            5.0 * std::stod(cut[0][column("in_plane_force_rms_N")]));
+  EXPECT_GT(std::stod(cut[2][column("in_plane_force_rms_N")]),
+            2.0 * std::stod(cut[1][column("in_plane_force_rms_N")]));
   // The per-cut summaries are there too, and the table on stdout has a row per cut.
   EXPECT_EQ(read_json(dir / "summaries" / "c1_cut158_window.json")["revolutions"],
             std::stoi(cut[1][column("revolutions")]));
