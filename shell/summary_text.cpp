@@ -129,6 +129,13 @@ std::string summary_text(const json& j) {
     }
     s += "\n";
   }
+  // The identified runout (core/identify), when a window was fitted.
+  const json& runout = j.value("runout", json::object());
+  if (has_number(runout, "rho_um")) {
+    s += fmt::format("  runout        {:.3f} ± {:.3f} µm at {:.1f}° ± {:.1f}° (identified)\n",
+                     num(runout, "rho_um"), num(runout, "rho_std_um"), num(runout, "gamma_deg"),
+                     num(runout, "gamma_std_deg"));
+  }
   const json& alerts = j.value("alerts", json::array());
   if (alerts.empty()) {
     s += "  alerts        none\n";

@@ -282,6 +282,16 @@ TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {
   EXPECT_GT(summary["record_in_plane_force_N"]["max"].get<double>(), rms);
   EXPECT_NE(text.output.find(fmt::format("in-plane force {:.3f} N RMS", rms)), std::string::npos)
       << text.output;
+  // The identified runout, when there is one, on a line of its own.
+  if (summary.contains("runout") && summary["runout"].contains("rho_um") &&
+      summary["runout"]["rho_um"].is_number()) {
+    EXPECT_NE(text.output.find(fmt::format("runout        {:.3f} ± ",
+                                           summary["runout"]["rho_um"].get<double>())),
+              std::string::npos)
+        << text.output;
+  } else {
+    EXPECT_EQ(text.output.find("runout  "), std::string::npos) << text.output;
+  }
 
   // One CSV row per revolution with the header's columns, α averaging to the summary's.
   const auto rows = lines_of(read_text(dir / "revs.csv"));
