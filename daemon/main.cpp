@@ -7,7 +7,10 @@
 // published and logged), SIGHUP reloads the configuration between two blocks (a bad file is
 // reported and the running configuration kept). A reload applies the monitor section,
 // status_period_s and log_level; the source and the LCM set-up take a restart (said so).
+// Under systemd (Type=notify): READY=1 once the source is open, WATCHDOG=1 from the sample loop,
+// RELOADING=1/READY=1 around a reload, STOPPING=1 (daemon/service_notifier.hpp).
 
+#include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -27,6 +30,7 @@
 #include "daemon/comedi_source.hpp"
 #include "daemon/daemon_config.hpp"
 #include "daemon/lcm_source.hpp"
+#include "daemon/service_notifier.hpp"
 #include "shell/json_file.hpp"
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
@@ -109,7 +113,8 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
 }
 
 int run(const std::string& config_path, const std::string& url_override,
-        const std::string& summary_path) {
+        const std::string& summary_path, double stall_after_s) {
+  daemon::ServiceNotifier notifier;
   daemon::DaemonConfig config = load(config_path, url_override);
   spdlog::set_level(spdlog::level::from_str(config.log_level));
 
@@ -180,9 +185,34 @@ int run(const std::string& config_path, const std::string& url_override,
   std::vector<std::unique_ptr<monitor::Pipeline>> retired;
   std::atomic<bool> reload{false};
 
+  const std::string running = fmt::format("source {}, LCM {}",
+                                          config.source.kind == daemon::SourceConfig::Kind::kLcm
+                                              ? "lcm:" + config.source.channel
+                                              : "comedi:" + config.source.device,
+                                          config.lcm_url);
+  spdlog::info("millwatchd running: {}", running);
+  // READY=1 now that the source is open, before the sample loop's first WATCHDOG=1 (sent from
+  // the sample thread, it came first now and then).
+  notifier.ready("monitoring: " + running);
+  if (notifier.watchdog_interval().count() > 0) {
+    spdlog::info("systemd watchdog: {} ms; pinged from the sample loop",
+                 notifier.watchdog_interval().count() / 1000);
+  }
+
+  const auto started = std::chrono::steady_clock::now();
   std::thread sample_thread([&] {
     auto slot = std::make_unique<daemon::BlockSlot>();
     while (true) {
+      notifier.watchdog();  // a stalled loop stops the pings: systemd restarts the daemon
+      if (stall_after_s > 0.0 && std::chrono::steady_clock::now() - started >
+                                     std::chrono::duration<double>(stall_after_s)) {
+        // Test hook (--test-stall-sample-thread): the sample thread hangs until told to stop.
+        spdlog::warn("test: the sample thread stalls");
+        while (!stop.load()) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        stall_after_s = 0.0;
+      }
       if (reload.load()) {
         std::unique_ptr<Reload> next;
         {
@@ -216,15 +246,11 @@ int run(const std::string& config_path, const std::string& url_override,
     run->finish();
   });
 
-  spdlog::info("millwatchd running: source {}, LCM {}",
-               config.source.kind == daemon::SourceConfig::Kind::kLcm
-                   ? "lcm:" + config.source.channel
-                   : "comedi:" + config.source.device,
-               config.lcm_url);
   while (true) {
     int signal = 0;
     sigwait(&signals, &signal);
     if (signal == SIGHUP) {
+      notifier.reloading();
       try {
         {
           std::lock_guard<std::mutex> lock(reload_mutex);
@@ -242,8 +268,10 @@ int run(const std::string& config_path, const std::string& url_override,
         pending = std::move(next);
         reload.store(true);
         spdlog::info("SIGHUP: {} read; applying it", config_path);
+        notifier.ready("monitoring: " + running + "; configuration reloaded");
       } catch (const std::exception& e) {
         spdlog::error("SIGHUP: {}; keeping the running configuration", e.what());
+        notifier.ready("monitoring: " + running + "; reload failed, running configuration kept");
       }
       continue;
     }
@@ -251,6 +279,7 @@ int run(const std::string& config_path, const std::string& url_override,
     break;
   }
   // Stop the source first, then let the sample thread drain what was queued.
+  notifier.stopping();
   stop.store(true);
   if (receiver.joinable()) {
     receiver.join();
@@ -281,12 +310,16 @@ int main(int argc, char** argv) {
   std::string url;
   std::string summary_path;
   bool check = false;
+  double stall_after_s = 0.0;
   app.add_option("-c,--config", config_path, "Daemon configuration JSON")
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--lcm-url", url, "Override the configuration's LCM URL");
   app.add_option("--summary", summary_path, "Write the final summary JSON here on exit");
   app.add_flag("--check", check, "Validate the configuration and exit");
+  // Tests only (hidden): the sample thread hangs after this many seconds, as a stuck pipeline
+  // would, so that the systemd watchdog's pings stop.
+  app.add_option("--test-stall-sample-thread", stall_after_s)->group("");
   CLI11_PARSE(app, argc, argv);
   try {
     if (check) {
@@ -296,7 +329,7 @@ int main(int argc, char** argv) {
       std::printf("%s: configuration is valid\n", config_path.c_str());
       return 0;
     }
-    return run(config_path, url, summary_path);
+    return run(config_path, url, summary_path, stall_after_s);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;

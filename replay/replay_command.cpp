@@ -1,26 +1,44 @@
 #include "replay/replay_command.hpp"
 
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spawn.h>
 #include <spdlog/spdlog.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "core/config/json_reader.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "replay/command_exit.hpp"
-#include "shell/csv_cut_reader.hpp"
+#include "shell/column_map.hpp"
+#include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
-#include "shell/lcm_log_reader.hpp"
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
+#include "shell/recording_source.hpp"
+#include "shell/run_plots.hpp"
+#include "shell/run_recorder.hpp"
+#include "shell/summary_text.hpp"
+
+extern char** environ;
 
 namespace millwatch::shell {
 namespace {
@@ -33,43 +51,121 @@ extern "C" void on_stop(int /*signal*/) {
 }
 
 struct ReplayOptions {
-  std::string input;
+  std::vector<std::string> inputs;
   std::string sidecar;
   std::string config;
+  std::string columns;
   std::string summary;
+  std::string revolutions;
+  std::string plot;
+  std::string table;
   std::string publish_url;
   std::string raw_channel = "MILLWATCH_FORCE_RAW";
   double speed = 0.0;  // 0: as fast as possible
+  int jobs = 1;
+  bool json = false;
   bool realtime = false;
   bool publish_raw = false;
   bool zero_phase = false;
+  bool progress = true;
   int block_samples = 1000;
 };
 
-bool is_lcm_log(const fs::path& p) {
-  const std::string ext = p.extension().string();
-  return ext == ".lcmlog" || ext == ".log" || ext == ".lcm";
+/// --config's JSON without its "columns" (the shell's, not the monitor's), and that map.
+struct ConfigFile {
+  nlohmann::json monitor = nlohmann::json::object();
+  std::optional<ColumnMap> columns;
+};
+
+ConfigFile read_config(const std::string& path) {
+  ConfigFile c;
+  if (path.empty()) {
+    return c;
+  }
+  nlohmann::json j = read_json_file(path);
+  auto take_columns = [&](nlohmann::json& object, const std::string& where) {
+    if (object.is_object() && object.contains("columns")) {
+      try {
+        c.columns = column_map_from_json(object["columns"], where);
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(path + ": " + e.what());
+      }
+      object.erase("columns");
+    }
+  };
+  take_columns(j, "columns");
+  if (j.is_object() && j.contains("monitor")) {
+    j = j["monitor"];
+    take_columns(j, "monitor.columns");
+  }
+  c.monitor = j;
+  return c;
 }
 
-/// The monitor configuration: the sidecar's cut under --config's overrides; a daemon config's
-/// "monitor" section is accepted as --config too.
-monitor::MonitorConfig build_config(const ReplayOptions& o, const fs::path& input,
-                                    double log_sample_rate_hz) {
-  nlohmann::json overrides = nlohmann::json::object();
-  std::string config_name = "(defaults)";
-  if (!o.config.empty()) {
-    overrides = read_json_file(o.config);
-    if (overrides.is_object() && overrides.contains("monitor")) {
-      overrides = overrides["monitor"];
+std::string rate_text(double hz) {
+  return fmt::format("{:.6g} Hz", hz);
+}
+
+/// Progress on stderr when it is a terminal and the replay has run for a while.
+class Progress {
+ public:
+  explicit Progress(bool enabled)
+      : enabled_(enabled && isatty(STDERR_FILENO) != 0),
+        start_(std::chrono::steady_clock::now()),
+        next_(start_ + std::chrono::seconds(2)) {}
+  void update(double fraction, double sample_time_s) {
+    if (!enabled_) {
+      return;
     }
-    config_name = o.config;
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_) {
+      return;
+    }
+    next_ = now + std::chrono::milliseconds(250);
+    const double wall_s = std::chrono::duration<double>(now - start_).count();
+    const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
+    std::fprintf(stderr,
+                 "\r  %5.1f %%  %.1f s of recording in %.1f s (%.0f× real time), %.0f s left\033[K",
+                 100.0 * fraction, sample_time_s, wall_s, sample_time_s / wall_s, left_s);
+    std::fflush(stderr);
+    shown_ = true;
   }
+  void done() {
+    if (shown_) {
+      std::fprintf(stderr, "\r\033[K");
+      std::fflush(stderr);
+    }
+  }
+
+ private:
+  bool enabled_;
+  bool shown_ = false;
+  std::chrono::steady_clock::time_point start_, next_;
+};
+
+int replay_one(const ReplayOptions& o) {
+  const fs::path input = o.inputs.front();
+  const RecordingFormat format = detect_recording_format(input);
+  const bool lcm_log = format == RecordingFormat::kLcmLog;
+  ConfigFile config_file = read_config(o.config);
+  ColumnMap columns = config_file.columns.value_or(ColumnMap{});
+  if (!o.columns.empty()) {
+    try {
+      columns = parse_column_map(o.columns);  // the command line beats the configuration
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--") + e.what());
+    }
+  }
+
+  // The configuration: the sidecar's cut under --config's overrides.
+  const nlohmann::json& overrides = config_file.monitor;
+  std::string config_name = o.config.empty() ? "(defaults)" : o.config;
   fs::path sidecar = o.sidecar;
-  if (sidecar.empty() && !is_lcm_log(input)) {
+  if (sidecar.empty() && !lcm_log) {
     sidecar = input;
     sidecar.replace_extension(".json");
     if (!fs::exists(sidecar) && !o.config.empty()) {
-      sidecar.clear();  // no sidecar beside the CSV: --config describes the cut alone
+      sidecar.clear();  // no sidecar beside the recording: --config describes the cut alone
     }
   }
   nlohmann::json base;
@@ -86,46 +182,52 @@ monitor::MonitorConfig build_config(const ReplayOptions& o, const fs::path& inpu
     config_name = sidecar.string() + (o.config.empty() ? "" : " + " + o.config);
   } else {
     base = overrides;
-    if (!base.contains("sample_rate_hz") && log_sample_rate_hz > 0.0) {
-      base["sample_rate_hz"] = log_sample_rate_hz;
+  }
+  const double config_rate_hz =
+      base.is_object() && base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
+          ? base["sample_rate_hz"].get<double>()
+          : 0.0;
+
+  std::int64_t bad = 0;
+  const char* unit = lcm_log ? "events" : format == RecordingFormat::kMat ? "samples" : "lines";
+  RecordingOptions ro;
+  ro.columns = columns;
+  ro.config_rate_hz = config_rate_hz;
+  ro.lcm_channel = o.raw_channel;
+  ro.on_bad = [&](std::int64_t where, const std::string& problem) {
+    ++bad;
+    if (bad <= 20) {
+      if (format == RecordingFormat::kMat) {
+        spdlog::warn("{}: sample {}: {}; skipped", input.string(), where, problem);
+      } else {
+        spdlog::warn("{}:{}: {}; skipped", input.string(), where, problem);
+      }
+    } else if (bad == 21) {
+      spdlog::warn("{}: more bad {} follow; counted in the summary", input.string(), unit);
+    }
+  };
+  std::unique_ptr<RecordingSource> source = open_recording(input, ro);
+  spdlog::info("{}: {}", input.string(), source->description());
+  // The rate: a recording that states one beats the configuration (said so if they differ).
+  const double source_rate_hz = source->sample_rate_hz();
+  if (source_rate_hz > 0.0 && base.is_object()) {
+    if (config_rate_hz > 0.0 && source->rate_stated() &&
+        std::fabs(source_rate_hz - config_rate_hz) > 1e-3 * config_rate_hz) {
+      spdlog::warn("{}: the recording states {}, {} says {}; using the recording's", input.string(),
+                   rate_text(source_rate_hz), config_name, rate_text(config_rate_hz));
+    }
+    if (config_rate_hz <= 0.0 || source->rate_stated()) {
+      base["sample_rate_hz"] = source_rate_hz;
     }
   }
+  monitor::MonitorConfig config;
   try {
-    return monitor::monitor_config_from_json(base);
+    config = monitor::monitor_config_from_json(base);
   } catch (const config::ConfigError& e) {
     throw std::runtime_error(config_name + ": " + e.what());
   }
-}
-
-int run_replay(const ReplayOptions& o) {
-  const fs::path input = o.input;
-  const bool lcm_log = is_lcm_log(input);
-  std::int64_t bad_lines = 0;
-  auto warn_line = [&](std::int64_t where, const std::string& problem) {
-    ++bad_lines;
-    if (bad_lines <= 20) {
-      spdlog::warn("{}:{}: {}; skipped", input.string(), where, problem);
-    } else if (bad_lines == 21) {
-      spdlog::warn("{}: more bad {} follow; counted in the summary", input.string(),
-                   lcm_log ? "events" : "lines");
-    }
-  };
-
-  std::unique_ptr<LcmLogReader> log;
-  std::optional<monitor::SampleBlock> first_block;  // read to learn the log's sample rate
-  double log_rate = 0.0;
-  if (lcm_log) {
-    log = std::make_unique<LcmLogReader>(input, o.raw_channel, warn_line);
-    first_block = log->next();
-    log_rate = log->first_sample_rate_hz();
-  }
-  monitor::MonitorConfig config = build_config(o, input, log_rate);
   if (o.zero_phase) {
     config.filter_zero_phase = true;
-  }
-  std::unique_ptr<CsvCutReader> csv;
-  if (!lcm_log) {
-    csv = std::make_unique<CsvCutReader>(input, config.sample_rate_hz, warn_line);
   }
 
   std::unique_ptr<lcm::LCM> lcm;
@@ -135,9 +237,15 @@ int run_replay(const ReplayOptions& o) {
       throw std::runtime_error("cannot open LCM at " + o.publish_url);
     }
   }
+  std::unique_ptr<RunRecorder> recorder;
+  if (!o.revolutions.empty() || !o.plot.empty()) {
+    recorder =
+        std::make_unique<RunRecorder>(config.model.tool.flutes, o.revolutions, !o.plot.empty());
+  }
   MonitorRun::Options run_options;
   run_options.source_name = input.string();
   run_options.lcm = lcm.get();  // none: the summary and the log only
+  run_options.observer = recorder.get();
   MonitorRun run(config, run_options);
 
   const double speed = o.realtime ? 1.0 : o.speed;
@@ -147,18 +255,15 @@ int run_replay(const ReplayOptions& o) {
   g_stop = false;
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
-  auto next_block = [&]() -> std::optional<monitor::SampleBlock> {
-    if (first_block) {
-      return std::exchange(first_block, std::nullopt);
-    }
-    if (lcm_log) {
-      return log->next();
-    }
-    const monitor::SampleBlock b = csv->next(static_cast<std::size_t>(o.block_samples));
-    return b.fx_N.empty() ? std::nullopt : std::optional(b);
-  };
+  Progress progress(o.progress);
+  // The record's in-plane force √(Fx² + Fy²), in the model's frame and before any filter: what
+  // the record holds even where no revolution can be measured (a campaign's first, light cuts).
+  double in_plane_sum_sq = 0.0;
+  double in_plane_max = 0.0;
+  std::int64_t in_plane_samples = 0;
+  const auto block_samples = static_cast<std::size_t>(o.block_samples);
   while (!g_stop) {
-    const std::optional<monitor::SampleBlock> next = next_block();
+    const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
       break;
     }
@@ -176,8 +281,22 @@ int run_replay(const ReplayOptions& o) {
       const force_block_t raw = messaging::to_message(block);
       lcm->publish(o.raw_channel, &raw);
     }
+    if (recorder) {
+      recorder->add_samples(block);
+    }
+    for (std::size_t k = 0; k < block.fx_N.size(); ++k) {
+      const auto f = config.axis_map.to_model({block.fx_N[k], block.fy_N[k], block.fz_N[k]});
+      const double r2 = f[0] * f[0] + f[1] * f[1];
+      if (std::isfinite(r2)) {
+        in_plane_sum_sq += r2;
+        in_plane_max = std::max(in_plane_max, std::sqrt(r2));
+        ++in_plane_samples;
+      }
+    }
     run.process(block);
+    progress.update(source->progress(), static_cast<double>(block.utime_us - first_utime) * 1e-6);
   }
+  progress.done();
   run.finish();
   if (g_stop) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
@@ -185,13 +304,186 @@ int run_replay(const ReplayOptions& o) {
   run.drain();
   nlohmann::json j = run.summary();
   j["input"] = input.string();
+  j["input_format"] = source->description();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
-  j["bad_lines"] = lcm_log ? log->bad_events() : csv->bad_lines();
+  j["bad_lines"] = source->bad_records();
+  j["record_in_plane_force_N"] =
+      in_plane_samples > 0
+          ? nlohmann::json{{"rms",
+                            std::sqrt(in_plane_sum_sq / static_cast<double>(in_plane_samples))},
+                           {"max", in_plane_max}}
+          : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
+  if (recorder) {
+    recorder->commit();
+    if (!o.revolutions.empty()) {
+      spdlog::info("{}: {} revolutions written", o.revolutions, recorder->rows_written());
+    }
+    if (!o.plot.empty()) {
+      const auto pngs = write_plots(*recorder, j, o.plot, input.filename().string());
+      spdlog::info("{}: {} plots drawn ({})", o.plot, pngs.size(),
+                   (fs::path(o.plot) / "plots.txt").string());
+    }
+  }
   if (!o.summary.empty()) {
     write_text_file(o.summary, j.dump(2) + "\n");
   }
-  std::printf("%s\n", j.dump(2).c_str());
+  if (o.json) {
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s", summary_text(j).c_str());
+  }
+  std::fflush(stdout);
   return 0;
+}
+
+/// Runs `argv` with stdout to /dev/null; returns its pid.
+pid_t spawn(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const auto& a : args) {
+    argv.push_back(const_cast<char*>(a.c_str()));
+  }
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, args[0].c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    throw std::runtime_error("cannot run " + args[0] + ": " + std::strerror(rc));
+  }
+  return pid;
+}
+
+/// Names per cut for per-cut outputs: the file's stem, made unique.
+std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
+  std::vector<std::string> stems;
+  std::map<std::string, int> seen;
+  for (const auto& in : inputs) {
+    std::string stem = fs::path(in).stem().string();
+    const int n = ++seen[stem];
+    stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
+  }
+  return stems;
+}
+
+int replay_many(const ReplayOptions& o) {
+  if (!o.publish_url.empty() || o.realtime || o.speed > 0.0) {
+    throw std::runtime_error(
+        "--publish, --realtime and --speed take one recording at a time (several are replayed "
+        "as fast as possible, side by side)");
+  }
+  const std::size_t n = o.inputs.size();
+  const int jobs =
+      o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::vector<std::string> stems = unique_stems(o.inputs);
+  for (const std::string* dir : {&o.summary, &o.revolutions, &o.plot}) {
+    if (!dir->empty()) {
+      fs::create_directories(*dir);
+    }
+  }
+  // Each cut's summary goes to a scratch folder (or --summary DIR) and is read back.
+  const fs::path scratch =
+      fs::temp_directory_path() / fmt::format("millwatch-replay-{}", static_cast<long>(getpid()));
+  fs::create_directories(scratch);
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  std::vector<fs::path> summaries(n);
+  std::vector<int> exit_codes(n, -1);
+  std::map<pid_t, std::size_t> running;
+  std::size_t next = 0;
+  std::size_t done = 0;
+  g_stop = false;
+  std::signal(SIGINT, on_stop);
+  std::signal(SIGTERM, on_stop);
+  while (done < n) {
+    while (!g_stop && next < n && static_cast<int>(running.size()) < jobs) {
+      const std::size_t k = next++;
+      summaries[k] = o.summary.empty() ? scratch / fmt::format("{}.json", k)
+                                       : fs::path(o.summary) / (stems[k] + ".json");
+      std::vector<std::string> args = {
+          self, "replay", o.inputs[k], "--summary", summaries[k].string(), "--no-progress"};
+      auto pass = [&args](const char* flag, const std::string& value) {
+        if (!value.empty()) {
+          args.push_back(flag);
+          args.push_back(value);
+        }
+      };
+      pass("--sidecar", o.sidecar);
+      pass("--config", o.config);
+      pass("--columns", o.columns);
+      pass("--channel", o.raw_channel);
+      pass("--block", std::to_string(o.block_samples));
+      if (!o.revolutions.empty()) {
+        pass("--revolutions", (fs::path(o.revolutions) / (stems[k] + ".csv")).string());
+      }
+      if (!o.plot.empty()) {
+        pass("--plot", (fs::path(o.plot) / stems[k]).string());
+      }
+      if (o.zero_phase) {
+        args.push_back("--zero-phase");
+      }
+      running[spawn(args)] = k;
+    }
+    if (running.empty()) {
+      break;  // interrupted before the rest started
+    }
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      throw std::runtime_error(std::string("waitpid: ") + std::strerror(errno));
+    }
+    const auto it = running.find(pid);
+    if (it == running.end()) {
+      continue;
+    }
+    const std::size_t k = it->second;
+    running.erase(it);
+    exit_codes[k] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    ++done;
+    spdlog::info("[{}/{}] {}: {}", done, n, o.inputs[k],
+                 exit_codes[k] == 0 ? "done" : fmt::format("failed (exit {})", exit_codes[k]));
+  }
+  std::vector<CutResult> results;
+  for (std::size_t k = 0; k < n; ++k) {
+    CutResult r;
+    r.file = o.inputs[k];
+    r.exit_code = exit_codes[k];
+    if (exit_codes[k] == 0 && fs::exists(summaries[k])) {
+      r.summary = read_json_file(summaries[k]);
+    }
+    results.push_back(std::move(r));
+  }
+  fs::remove_all(scratch);
+  if (!o.table.empty()) {
+    write_text_file(o.table, cut_table_csv(results));
+  }
+  if (o.json) {
+    nlohmann::json all = nlohmann::json::array();
+    for (const auto& r : results) {
+      all.push_back(r.summary.is_null()
+                        ? nlohmann::json{{"input", r.file}, {"exit_code", r.exit_code}}
+                        : r.summary);
+    }
+    std::printf("%s\n", all.dump(2).c_str());
+  } else {
+    std::printf("%s", cut_table_text(results).c_str());
+  }
+  const bool failed = std::any_of(results.begin(), results.end(),
+                                  [](const CutResult& r) { return r.exit_code != 0; });
+  if (g_stop) {
+    spdlog::warn("interrupted: {} of {} cuts replayed", done, n);
+  }
+  return failed || g_stop ? 1 : 0;
+}
+
+int run_replay(const ReplayOptions& o) {
+  if (o.inputs.size() > 1 || !o.table.empty()) {
+    return replay_many(o);
+  }
+  return replay_one(o);
 }
 
 }  // namespace
@@ -199,16 +491,35 @@ int run_replay(const ReplayOptions& o) {
 void add_replay_command(CLI::App& app) {
   auto o = std::make_shared<ReplayOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "replay", "Replay a recorded cut (CSV + JSON sidecar, or an LCM log) through the monitor");
-  cmd->add_option("input", o->input,
-                  "Recorded cut: CUT.csv (sidecar CUT.json beside it) or LOG.lcmlog")
+      "replay",
+      "Replay recorded cuts (millwatch CSV, DynoWare export, delimited text, MATLAB .mat, LCM "
+      "log) through the monitor");
+  cmd->add_option("input", o->inputs,
+                  "Recorded cut(s): the format is found from the content (a CUT.json sidecar "
+                  "beside a file describes its cut)")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--sidecar", o->sidecar, "JSON describing the cut (default: beside the CSV)");
+  cmd->add_option("--sidecar", o->sidecar, "JSON describing the cut (default: beside the file)");
   cmd->add_option(
       "--config", o->config,
       "Monitor configuration JSON (or a daemon configuration), merged over the sidecar");
-  cmd->add_option("--summary", o->summary, "Also write the summary JSON to this file");
+  cmd->add_option("--columns", o->columns,
+                  "Which columns (or .mat variables) hold time and forces: "
+                  "t=Time,fx=Fx,fy=Fy,fz=Fz (names or 1-based indices, optional *scale; .mat: "
+                  "fx=F(:,1), fs=rate variable)");
+  cmd->add_option("--summary", o->summary,
+                  "Write the summary JSON to this file (several cuts: a folder, one per cut)");
+  cmd->add_flag("--json", o->json, "Print the summary JSON instead of the readable summary");
+  cmd->add_option("--revolutions", o->revolutions,
+                  "Write one row per revolution to this file: CSV, or JSON Lines for .jsonl "
+                  "(several cuts: a folder, one CSV per cut)");
+  cmd->add_option(
+      "--plot", o->plot,
+      "Draw PNG plots with gnuplot into this folder (several cuts: one folder per cut)");
+  cmd->add_option("--table", o->table, "Several cuts: write one row per cut to this CSV file");
+  cmd->add_option("-j,--jobs", o->jobs, "Several cuts: replay this many at once (0: one per core)")
+      ->check(CLI::Range(0, 256));
+  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->add_option("--speed", o->speed, "Pace: k times real time (default: as fast as possible)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)");
@@ -219,7 +530,7 @@ void add_replay_command(CLI::App& app) {
                 "Filter forwards and backwards (no phase, no delay; same -3 dB cut-off) instead "
                 "of causally (= \"filter\": {\"mode\": \"zero_phase\"} in --config)");
   cmd->add_option("--channel", o->raw_channel, "LCM channel of the raw samples in a log");
-  cmd->add_option("--block", o->block_samples, "CSV samples per block")
+  cmd->add_option("--block", o->block_samples, "Samples per block (text and .mat files)")
       ->check(CLI::Range(1, 65536));
   cmd->callback([o] { run_subcommand([&o] { return run_replay(*o); }); });
 }

@@ -1,7 +1,12 @@
 #pragma once
-// `millwatch replay CUT.csv|LOG.lcmlog`: the recorded cut through the monitoring pipeline, at
-// real-time pace, k times it, or as fast as possible; optionally publishing on LCM; prints (and
-// writes with --summary) the run's summary JSON.
+// `millwatch replay CUT [CUT...]`: recorded cuts (millwatch CSV, DynoWare export, delimited text
+// with a column map, MATLAB .mat, LCM log) through the monitoring pipeline.
+//
+// One cut: at real-time pace, k times it, or as fast as possible; optionally publishing on LCM;
+// prints a readable summary (the JSON with --json), writes the summary JSON (--summary), one row
+// per revolution (--revolutions, CSV or .jsonl) and plots (--plot DIR); a progress line on a
+// terminal. Several cuts (or --table): each replayed by a child process, N at a time (-j), one
+// row per cut in the table (--table cuts.csv) and on stdout.
 
 #include <CLI/CLI.hpp>
 

@@ -9,6 +9,7 @@ packages=(
   liblcm-dev liblcm-bin liblcm-java default-jdk-headless
   libgtest-dev libgmock-dev libbenchmark-dev libcomedi-dev
   python3 python3-numpy python3-scipy iproute2 util-linux
+  libmatio-dev libhdf5-dev zlib1g-dev libsystemd-dev gnuplot-nox fonts-dejavu-core systemd dpkg-dev
 )
 
 missing=()

@@ -88,6 +88,37 @@ CsvCutReader::CsvCutReader(std::istream& in, const std::string& name, double sam
   read_header(name);
 }
 
+CsvCutReader::CsvCutReader(std::istream& in, const TextLayout& layout, double sample_rate_hz,
+                           OnBadLine on_bad_line)
+    : in_(&in),
+      layout_(layout),
+      sample_rate_hz_(sample_rate_hz),
+      on_bad_line_(std::move(on_bad_line)),
+      line_(layout.header_lines) {
+  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
+    throw std::invalid_argument("CsvCutReader: the sample rate must be positive");
+  }
+}
+
+std::string CsvCutReader::parse_mapped(double* v) {
+  const TextLayout& l = layout_;
+  split_fields(text_, l.delimiter, fields_);
+  if (fields_.size() < static_cast<std::size_t>(l.needed_columns)) {
+    return "fewer than " + std::to_string(l.needed_columns) + " columns";
+  }
+  for (std::size_t q = 0; q < 4; ++q) {
+    if (l.column[q] < 0) {  // no time column: the row's place
+      v[q] = static_cast<double>(data_rows_ - 1) / sample_rate_hz_;
+      continue;
+    }
+    if (!parse_number(fields_[static_cast<std::size_t>(l.column[q])], l.decimal_comma, v[q])) {
+      return l.label[q] + " is not a number";
+    }
+    v[q] *= l.scale[q];
+  }
+  return {};
+}
+
 void CsvCutReader::read_header(const std::string& name) {
   if (!read_line() || text_ != kHeader) {
     throw std::runtime_error(name + ":1: header is \"" + text_.substr(0, 80) + "\"; expected \"" +
@@ -120,18 +151,27 @@ bool CsvCutReader::parse_next(Row& row) {
     if (text_.empty()) {
       continue;
     }
-    if (const char* problem = parse_row(text_, v); problem != nullptr) {
+    if (layout_.format != TextFormat::kMillwatch) {
+      ++data_rows_;
+      if (const std::string problem = parse_mapped(v); !problem.empty()) {
+        bad(line_, problem + " in \"" + text_.substr(0, 60) + "\"");
+        continue;
+      }
+    } else if (const char* problem = parse_row(text_, v); problem != nullptr) {
       bad(line_, std::string(problem) + " in \"" + text_.substr(0, 60) + "\"");
       continue;
     }
     if (!std::isfinite(v[0])) {
-      bad(line_, "t_s is not finite (" +
-                     text_.substr(0, std::min<std::size_t>(text_.find(','), 30)) + ")");
+      const std::string_view time_text =
+          layout_.format == TextFormat::kMillwatch
+              ? std::string_view(text_).substr(0, std::min<std::size_t>(text_.find(','), 30))
+              : fields_[static_cast<std::size_t>(layout_.column[0])].substr(0, 30);
+      bad(line_, layout_.label[0] + " is not finite (" + std::string(time_text) + ")");
       continue;
     }
     // In range: the block's utime (µs) stays within what the pipeline accepts.
     if (!(std::fabs(v[0] * 1e6) <= static_cast<double>(monitor::kMaxAbsUtime_us))) {
-      bad(line_, "t_s " + number(v[0]) + " is out of range (more than " +
+      bad(line_, layout_.label[0] + " " + number(v[0]) + " is out of range (more than " +
                      number(static_cast<double>(monitor::kMaxAbsUtime_us) * 1e-6) + " s from 0)");
       continue;
     }
@@ -155,8 +195,9 @@ bool CsvCutReader::next_row(Row& row) {
       return false;
     }
     if (have_last_ && !(row.t_s > last_.t_s)) {
-      bad(row.line, "t_s " + number(row.t_s) + " is not after the previous row's (" +
-                        at_line(last_.t_s, last_.line) + ")");
+      bad(row.line, layout_.label[0] + " " + number(row.t_s) +
+                        " is not after the previous row's (" + at_line(last_.t_s, last_.line) +
+                        ")");
       continue;
     }
     // A jump ahead (or the first row): a damaged time if the next row comes back before it;
@@ -167,7 +208,8 @@ bool CsvCutReader::next_row(Row& row) {
         ahead_ = next;
         have_ahead_ = true;
         if (next.t_s < row.t_s && (!have_last_ || next.t_s > last_.t_s)) {
-          bad(row.line, "t_s " + number(row.t_s) + " jumps ahead of the rows around it (" +
+          bad(row.line, layout_.label[0] + " " + number(row.t_s) +
+                            " jumps ahead of the rows around it (" +
                             (have_last_ ? at_line(last_.t_s, last_.line) + ", " : "") +
                             at_line(next.t_s, next.line) + ")");
           continue;

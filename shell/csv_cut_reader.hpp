@@ -1,13 +1,19 @@
 #pragma once
-// Reads a recorded cut's CSV (header `t_s,fx_N,fy_N,fz_N`, a row per sample) into sample
-// blocks. A bad row is reported with its line number and skipped; a block ends where the
-// sample times stop following each other at the sample rate, so that a skipped row or a jump
-// in time reaches the pipeline as a gap (counted there), never as silently shifted samples.
+// Reads a recorded cut in delimited text into sample blocks: millwatch's CSV (header
+// `t_s,fx_N,fy_N,fz_N`, a row per sample), a DynoWare export or any delimited text with a
+// column map (shell/text_layout.hpp says how each is recognised). A bad row is reported with its
+// line number and skipped; a block ends where the sample times stop following each other at the
+// sample rate, so that a skipped row or a jump in time reaches the pipeline as a gap (counted
+// there), never as silently shifted samples.
 //
-// Bad rows: not four numbers; a time that is not finite, or beyond ±kMaxAbsUtime_us (about
-// ±9.0e9 s); a time not after the previous good row's (repeated or going back); a time that
-// jumps ahead of both its neighbours (the next row is between the previous good row and it: a
-// damaged time, not a gap in the recording, which would leave the next row after it).
+// Without a time column, row k (counting the bad ones, so that a bad row is a gap) is at
+// k / sample rate.
+//
+// Bad rows: not four numbers (or, with a column map, a mapped column missing or not a number); a
+// time that is not finite, or beyond ±kMaxAbsUtime_us (about ±9.0e9 s); a time not after the
+// previous good row's (repeated or going back); a time that jumps ahead of both its neighbours (the
+// next row is between the previous good row and it: a damaged time, not a gap in the recording,
+// which would leave the next row after it).
 
 #include <cstdint>
 #include <filesystem>
@@ -19,6 +25,7 @@
 #include <vector>
 
 #include "core/monitor/sample_block.hpp"
+#include "shell/text_layout.hpp"
 
 namespace millwatch::shell {
 
@@ -35,6 +42,10 @@ class CsvCutReader {
   /// @throws std::runtime_error "NAME:1: header is ...; expected ...".
   CsvCutReader(std::istream& in, const std::string& name, double sample_rate_hz,
                OnBadLine on_bad_line);
+  /// Reads `in` laid out as `layout` (read_text_layout() left it at the first sample row).
+  /// @param sample_rate_hz the rate (> 0): the layout's, or the configuration's
+  CsvCutReader(std::istream& in, const TextLayout& layout, double sample_rate_hz,
+               OnBadLine on_bad_line);
   CsvCutReader(const CsvCutReader&) = delete;
   CsvCutReader& operator=(const CsvCutReader&) = delete;
 
@@ -43,6 +54,7 @@ class CsvCutReader {
   monitor::SampleBlock next(std::size_t max_samples);
   [[nodiscard]] std::int64_t bad_lines() const { return bad_lines_; }
   [[nodiscard]] std::int64_t lines() const { return line_; }
+  [[nodiscard]] const TextLayout& layout() const { return layout_; }
 
  private:
   struct Row {
@@ -59,9 +71,14 @@ class CsvCutReader {
   /// The next row whose time is in order; false at the end.
   bool next_row(Row& row);
   void bad(std::int64_t line, const std::string& problem);
+  /// A row of layout_ (not millwatch's) into t and forces; the problem, or empty.
+  std::string parse_mapped(double* v);
 
   std::unique_ptr<std::ifstream> file_;  // when reading a path
   std::istream* in_ = nullptr;
+  TextLayout layout_;
+  std::int64_t data_rows_ = 0;  // non-empty rows after the header (time of a row without t)
+  std::vector<std::string_view> fields_;
   double sample_rate_hz_;
   OnBadLine on_bad_line_;
   std::int64_t line_ = 1;

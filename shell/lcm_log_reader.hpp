@@ -42,6 +42,11 @@ class LcmLogReader {
   std::optional<monitor::SampleBlock> next();
   [[nodiscard]] std::int64_t events() const { return events_; }
   [[nodiscard]] std::int64_t bad_events() const { return bad_events_; }
+  /// Fraction of the log's bytes read so far.
+  [[nodiscard]] double progress() const {
+    return size_bytes_ > 0 ? static_cast<double>(position_) / static_cast<double>(size_bytes_)
+                           : 1.0;
+  }
   /// Sample rate of the first block (0 before it).
   [[nodiscard]] double first_sample_rate_hz() const { return first_rate_hz_; }
 

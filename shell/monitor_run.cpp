@@ -34,6 +34,7 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
       summary_(config),
       shell_sink_(summary_, options_.source_name),
       last_status_wall_(std::chrono::steady_clock::now()) {
+  shell_sink_.set_observer(options_.observer);
   if (options_.lcm != nullptr) {
     output_ =
         std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);

@@ -46,6 +46,9 @@ class MonitorRun {
     /// Identify runout and force coefficients on every synchronous-average window, in a worker
     /// thread (published on LCM when the run publishes; the last one in the summary).
     bool identify = true;
+    /// Also receives every output of the pipeline (not owned; null: none), in the thread that
+    /// calls process(): the replay's RunRecorder.
+    monitor::PipelineSink* observer = nullptr;
   };
 
   /// Builds the pipeline. @throws config::ConfigError or std::invalid_argument for a

@@ -6,6 +6,9 @@ namespace millwatch::shell {
 
 void ShellSink::on_revolution(const monitor::RevolutionRecord& r) {
   summary_.add(r);
+  if (observer_ != nullptr) {
+    observer_->on_revolution(r);
+  }
   if (r.measured.bounded && r.spindle_rpm > 0.0) {
     rpm_sum_ += r.spindle_rpm;
     ++rpm_count_;
@@ -13,8 +16,11 @@ void ShellSink::on_revolution(const monitor::RevolutionRecord& r) {
 }
 
 void ShellSink::on_sync_average(const monitor::SyncAverage& measured,
-                                const monitor::Lockstep* /*model*/, std::int64_t revolution,
+                                const monitor::Lockstep* model, std::int64_t revolution,
                                 std::int64_t utime_us) {
+  if (observer_ != nullptr) {
+    observer_->on_sync_average(measured, model, revolution, utime_us);
+  }
   if (identifier_ == nullptr || rpm_count_ == 0 || measured.revolutions() == 0) {
     return;
   }
@@ -30,6 +36,9 @@ void ShellSink::on_sync_average(const monitor::SyncAverage& measured,
 
 void ShellSink::on_alert(const monitor::Alert& a) {
   summary_.add(a);
+  if (observer_ != nullptr) {
+    observer_->on_alert(a);
+  }
   if (a.active) {
     spdlog::warn("{}: ALERT {} at revolution {}: {}", source_, monitor::to_string(a.kind),
                  a.revolution, a.message.data());
@@ -40,6 +49,9 @@ void ShellSink::on_alert(const monitor::Alert& a) {
 
 void ShellSink::on_event(const monitor::PipelineEvent& e) {
   summary_.add(e);
+  if (observer_ != nullptr) {
+    observer_->on_event(e);
+  }
   const auto kind = static_cast<std::size_t>(e.kind);
   const std::int64_t n = ++logged_[kind % logged_.size()];
   const double t_s = static_cast<double>(e.utime_us) * 1e-6;

@@ -17,18 +17,27 @@ class ShellSink : public monitor::PipelineSink {
   ShellSink(monitor::RunSummary& summary, std::string source)
       : summary_(summary), source_(std::move(source)) {}
 
+  /// Also hands every output to `observer` (not owned; null: none), e.g. a RunRecorder.
+  void set_observer(monitor::PipelineSink* observer) { observer_ = observer; }
+
   void on_revolution(const monitor::RevolutionRecord& r) override;
-  /// A window of revolutions goes to the identifier (if one is set).
+  /// A window of revolutions goes to the identifier (if one is set) and the observer.
   void on_sync_average(const monitor::SyncAverage& measured, const monitor::Lockstep* model,
                        std::int64_t revolution, std::int64_t utime_us) override;
   void set_identifier(identify::Identifier* identifier) { identifier_ = identifier; }
-  void on_spindle(const monitor::SpindleUpdate& u) override { summary_.add(u); }
+  void on_spindle(const monitor::SpindleUpdate& u) override {
+    summary_.add(u);
+    if (observer_ != nullptr) {
+      observer_->on_spindle(u);
+    }
+  }
   void on_alert(const monitor::Alert& a) override;
   void on_event(const monitor::PipelineEvent& e) override;
 
  private:
   monitor::RunSummary& summary_;
   std::string source_;
+  monitor::PipelineSink* observer_ = nullptr;
   std::array<std::int64_t, 16> logged_{};  // per event kind
   identify::Identifier* identifier_ = nullptr;
   identify::MeasuredRevolution window_;  // reused: no allocation after the first window

@@ -61,8 +61,7 @@ AngleMap angle_map(const RevolutionEvents& e, const ToothEventTemplate& t) {
 
 RevolutionAnalyzer::RevolutionAnalyzer(const MonitorConfig& config,
                                        std::size_t max_revolution_samples)
-    : flutes_(config.model.tool.flutes),
-      sample_rate_hz_(config.sample_rate_hz),
+    : sample_rate_hz_(config.sample_rate_hz),
       search_fraction_(config.search_fraction_of_pitch),
       sectors_(std::clamp(config.residual_sectors, 1, kMaxSectors)) {
   for (auto& s : scratch_) {

@@ -60,7 +60,6 @@ class RevolutionAnalyzer {
   void residuals(const RevolutionMeasurement& m, const SampleRing& ring, const AngleMap& map,
                  RevolutionRecord& out) const;
 
-  int flutes_ = 0;
   double sample_rate_hz_ = 0.0;
   double search_fraction_ = 0.3;
   int sectors_ = 0;

@@ -1,0 +1,339 @@
+#include "shell/run_plots.hpp"
+
+#include <fcntl.h>
+#include <fftw3.h>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <numbers>
+#include <stdexcept>
+
+extern char** environ;
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string quoted(const fs::path& p) {
+  std::string s = "'";
+  for (char c : p.string()) {
+    s += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return s + "'";
+}
+
+/// gnuplot's text: no enhanced-mode specials from a file name.
+std::string plain(const std::string& text) {
+  std::string s;
+  for (char c : text) {
+    if (c == '_' || c == '^' || c == '{' || c == '}' || c == '@' || c == '&' || c == '~') {
+      s += '\\';
+      s += '\\';
+    }
+    if (c == '"') {
+      s += '\\';
+    }
+    s += c;
+  }
+  return s;
+}
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+  if (!out) {
+    throw std::runtime_error(p.string() + ": cannot write");
+  }
+}
+
+std::string num(double v) {
+  return std::isfinite(v) ? fmt::format("{:.9g}", v) : std::string("NaN");
+}
+
+const char* kTerminal =
+    "set terminal pngcairo size 1200,700 font 'DejaVu Sans,12' linewidth 1.5\n"
+    "set datafile separator ','\n"
+    "set grid lc rgb '#d0d0d0'\n"
+    "set key inside right top opaque box samplen 2 spacing 1.1\n"
+    "set lmargin 12\n"
+    "set rmargin 4\n"
+    "set border lw 1\n";
+
+const char* kFluteColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
+                               "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
+
+}  // namespace
+
+void amplitude_spectrum(const std::vector<double>& x, double rate_hz, std::size_t max_segment,
+                        std::vector<double>& frequency_hz, std::vector<double>& amplitude) {
+  frequency_hz.clear();
+  amplitude.clear();
+  std::size_t n = 64;
+  while (n * 2 <= std::min(x.size(), max_segment)) {
+    n *= 2;
+  }
+  if (x.size() < 64) {
+    return;
+  }
+  double mean = 0.0;
+  for (double v : x) {
+    mean += std::isfinite(v) ? v : 0.0;
+  }
+  mean /= static_cast<double>(x.size());
+  std::vector<double> window(n);
+  double window_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
+                                     static_cast<double>(n));
+    window_sum += window[i];
+  }
+  double* in = fftw_alloc_real(n);
+  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in, out, FFTW_ESTIMATE);
+  std::vector<double> power(n / 2 + 1, 0.0);
+  int segments = 0;
+  for (std::size_t start = 0; start + n <= x.size(); start += n / 2) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = x[start + i];
+      in[i] = (std::isfinite(v) ? v - mean : 0.0) * window[i];
+    }
+    fftw_execute(plan);
+    for (std::size_t k = 0; k <= n / 2; ++k) {
+      power[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
+    }
+    ++segments;
+  }
+  fftw_destroy_plan(plan);
+  fftw_free(in);
+  fftw_free(out);
+  for (std::size_t k = 0; k <= n / 2; ++k) {
+    frequency_hz.push_back(static_cast<double>(k) * rate_hz / static_cast<double>(n));
+    // Peak amplitude of a sinusoid: 2|X|/Σw (the mean of the segments' powers).
+    amplitude.push_back(2.0 * std::sqrt(power[k] / segments) / window_sum);
+  }
+}
+
+std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& summary,
+                                  const fs::path& dir, const std::string& title) {
+  fs::create_directories(dir);
+  const fs::path abs = fs::absolute(dir);
+  const int flutes = rec.flutes();
+  std::string script = kTerminal;
+  std::string notes;
+  std::vector<fs::path> pngs;
+  const std::string head = plain(title);
+  const double commanded = summary.value("spindle_rpm_commanded", 0.0);
+  const double rpm = summary.contains("spindle_rpm") && summary["spindle_rpm"].is_number()
+                         ? summary["spindle_rpm"].get<double>()
+                         : 0.0;
+  auto add_png = [&](const std::string& name) {
+    pngs.push_back(abs / name);
+    script += "set output " + quoted(abs / name) + "\n";
+  };
+
+  // Revolutions with their bounds as data (α and ΔFy NaN, a gap, where not every event was
+  // found: the summary's rule).
+  std::string rows = "revolution,t_s,spindle_rpm,alpha_deg,delta_fy_N";
+  for (int j = 1; j <= flutes; ++j) {
+    rows += fmt::format(",peak_resultant_N_{}", j);
+  }
+  rows += "\n";
+  std::size_t valid = 0;
+  std::size_t bounded = 0;
+  const double nan = std::nan("");
+  for (const auto& r : rec.rows()) {
+    if (!r.bounded) {
+      continue;
+    }
+    ++bounded;
+    valid += r.valid ? 1 : 0;
+    rows += fmt::format("{},{},{},{},{}", r.revolution, num(r.t_s), num(r.spindle_rpm),
+                        num(r.valid ? r.alpha_deg : nan), num(r.valid ? r.delta_fy_N : nan));
+    for (int j = 0; j < flutes; ++j) {
+      rows += ',';
+      rows += num(r.peak_resultant_N[static_cast<std::size_t>(j)]);
+    }
+    rows += "\n";
+  }
+  write_file(abs / "revolutions.csv", rows);
+  std::string speed = "t_s,spindle_rpm\n";
+  for (const auto& p : rec.spindle()) {
+    speed += num(p.t_s) + "," + num(p.rpm) + "\n";
+  }
+  write_file(abs / "spindle.csv", speed);
+  const fs::path rev_csv = abs / "revolutions.csv";
+
+  // 1. Speed over time.
+  if (!rec.spindle().empty() || bounded > 0) {
+    add_png("speed.png");
+    script += fmt::format(
+        "set title \"{} — spindle speed (commanded {:.0f} rpm)\"\nset xlabel 'time [s]'\n"
+        "set ylabel 'speed [rpm]'\n",
+        head, commanded);
+    std::string plot = "plot ";
+    if (!rec.spindle().empty()) {
+      plot += quoted(abs / "spindle.csv") +
+              " skip 1 using 1:2 with points pt 7 ps 0.6 lc rgb '#7f7f7f' title 'tracker "
+              "(spectrum windows)'";
+    }
+    if (bounded > 0) {
+      plot += std::string(plot.size() > 5 ? ", " : "") + quoted(rev_csv) +
+              " skip 1 using 2:3 with lines lc rgb '#1f77b4' lw 2 title 'each revolution'";
+    }
+    script += plot + "\n";
+  } else {
+    notes += "speed.png: left out, no speed was measured\n";
+  }
+
+  // 2. α and ΔFy per revolution; 3. per-flute peaks.
+  if (valid > 0) {
+    add_png("alpha_delta_fy.png");
+    script += fmt::format(
+        "set multiplot layout 2,1 title \"{} — per revolution\"\nunset title\n"
+        "set xlabel ''\nset ylabel 'alpha [deg]'\n"
+        "plot {} skip 1 using 1:4 with linespoints pt 7 ps 0.4 lc rgb '#1f77b4' title 'alpha'\n"
+        "set xlabel 'revolution'\nset ylabel 'delta Fy [N]'\n"
+        "plot {} skip 1 using 1:5 with linespoints pt 7 ps 0.4 lc rgb '#d62728' title 'delta "
+        "Fy = |Fy peak CE1| - |Fy peak CE2|'\n"
+        "unset multiplot\n",
+        head, quoted(rev_csv), quoted(rev_csv));
+  } else {
+    notes += "alpha_delta_fy.png: left out, no revolution had all its tooth events found\n";
+  }
+  if (bounded > 0) {
+    add_png("flute_peaks.png");
+    script += fmt::format(
+        "set title \"{} — peak in-plane force per flute\"\nset xlabel 'revolution'\n"
+        "set ylabel 'peak |Fxy| [N]'\nplot ",
+        head);
+    for (int j = 0; j < flutes; ++j) {
+      script += fmt::format(
+          "{}{} skip 1 using 1:{} with linespoints pt 7 ps 0.4 lc rgb '{}' title 'flute {}{}'",
+          j > 0 ? ", " : "", quoted(rev_csv), 6 + j, kFluteColours[j % 8], j + 1,
+          j == 0 ? " (CE1)" : "");
+    }
+    script += "\n";
+  } else {
+    notes += "flute_peaks.png: left out, no revolution was measured\n";
+  }
+
+  // 4. Synchronous average, measured vs model.
+  const auto& sync = rec.sync();
+  if (!sync.measured[0].empty()) {
+    const std::size_t bins = sync.measured[0].size();
+    std::string data = "angle_deg,fx_N,fy_N,fz_N,model_fx_N,model_fy_N,model_fz_N\n";
+    for (std::size_t b = 0; b <= bins; ++b) {  // closed: the first bin again at 360°
+      const std::size_t i = b % bins;
+      data += num(360.0 * static_cast<double>(b) / static_cast<double>(bins));
+      for (std::size_t a = 0; a < 3; ++a) {
+        data += ',';
+        data += num(sync.measured[a][i]);
+      }
+      for (std::size_t a = 0; a < 3; ++a) {
+        data += ',';
+        data += num(sync.model[a][i]);
+      }
+      data += "\n";
+    }
+    write_file(abs / "sync_average.csv", data);
+    add_png("sync_average.png");
+    script += fmt::format(
+        "set multiplot layout 3,1 title \"{} — synchronous average of {} revolutions (at "
+        "revolution {}), force on the tool\"\nunset title\nset xrange [0:360]\nset xtics 45\n",
+        head, sync.window_revolutions, sync.revolution);
+    const char* axes[] = {"Fx", "Fy", "Fz"};
+    for (int a = 0; a < 3; ++a) {
+      script += fmt::format(
+          "set ylabel '{} [N]'\nset xlabel '{}'\nplot {} skip 1 using 1:{} with "
+          "lines lw 2 lc rgb '#1f77b4' title 'measured'",
+          axes[a], a == 2 ? "spindle angle [deg]" : "", quoted(abs / "sync_average.csv"), 2 + a);
+      if (sync.model_valid) {
+        script += fmt::format(
+            ", '' skip 1 using 1:{} with lines lw 2 dt 2 lc rgb '#d62728' "
+            "title 'model'",
+            5 + a);
+      }
+      script += "\n";
+    }
+    script += "unset multiplot\nset xrange [*:*]\nset xtics autofreq\n";
+    if (!sync.model_valid) {
+      notes += "sync_average.png: the model was not aligned; measured only\n";
+    }
+  } else {
+    notes += "sync_average.png: left out, no synchronous average (no lock)\n";
+  }
+
+  // 5. Spectrum with the tooth-passing harmonics.
+  if (rec.raw()[0].size() >= 256 && rec.raw_rate_hz() > 0.0) {
+    std::vector<double> f, ax, ay, az;
+    amplitude_spectrum(rec.raw()[0], rec.raw_rate_hz(), 1 << 15, f, ax);
+    amplitude_spectrum(rec.raw()[1], rec.raw_rate_hz(), 1 << 15, f, ay);
+    amplitude_spectrum(rec.raw()[2], rec.raw_rate_hz(), 1 << 15, f, az);
+    const double spindle_hz = (rpm > 0.0 ? rpm : commanded) / 60.0;
+    const double tooth_hz = spindle_hz * flutes;
+    const double f_max = std::min(rec.raw_rate_hz() / 2.0,
+                                  tooth_hz > 0.0 ? 10.5 * tooth_hz : rec.raw_rate_hz() / 2.0);
+    std::string data = "frequency_hz,fx_N,fy_N,fz_N\n";
+    for (std::size_t k = 1; k < f.size() && f[k] <= f_max; ++k) {
+      data += num(f[k]) + "," + num(ax[k]) + "," + num(ay[k]) + "," + num(az[k]) + "\n";
+    }
+    write_file(abs / "spectrum.csv", data);
+    add_png("spectrum.png");
+    script += fmt::format(
+        "set title \"{} — force spectrum ({} samples as recorded, {:.1f} Hz resolution)\"\n"
+        "set xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
+        "set format y '10^{{%L}}'\nset xrange [0:{}]\nset key bottom right\n",
+        head, rec.raw()[0].size(), f.size() > 1 ? f[1] : 0.0, num(f_max));
+    if (tooth_hz > 0.0) {
+      for (int k = 1; k * tooth_hz <= f_max; ++k) {
+        script += fmt::format(
+            "set arrow from {0},graph 0 to {0},graph 1 nohead dt 3 lw 1 lc rgb '#555555'\n"
+            "set label '{1}×' at {0},graph 0.97 offset 0.3,0 font ',9' tc rgb '#555555'\n",
+            num(k * tooth_hz), k);
+      }
+    }
+    script += fmt::format(
+        "plot {0} skip 1 using 1:2 with lines lc rgb '#1f77b4' title 'fx', '' skip 1 using "
+        "1:3 with lines lc rgb '#d62728' title 'fy', '' skip 1 using 1:4 with lines lc rgb "
+        "'#2ca02c' title 'fz', NaN with lines dt 3 lc rgb '#555555' title 'k × tooth passing "
+        "({1:.1f} Hz{2})'\n"
+        "unset logscale y\nunset arrow\nunset label\nset xrange [*:*]\nunset format\n"
+        "set key top right\n",
+        quoted(abs / "spectrum.csv"), tooth_hz, rpm > 0.0 ? ", measured" : ", commanded");
+  } else {
+    notes += "spectrum.png: left out, too few samples\n";
+  }
+  script += "unset output\n";
+  write_file(abs / "plots.gp", script);
+  write_file(abs / "plots.txt", notes.empty() ? "every plot drawn\n" : notes);
+
+  // gnuplot plots.gp, its messages in gnuplot.log.
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log = (abs / "gnuplot.log").string();
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  const std::string script_path = (abs / "plots.gp").string();
+  std::string program = "gnuplot";
+  char* argv[] = {program.data(), const_cast<char*>(script_path.c_str()), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    throw std::runtime_error(std::string("--plot: cannot run gnuplot (") + std::strerror(rc) +
+                             "); install it (Debian: gnuplot-nox)");
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw std::runtime_error("--plot: gnuplot failed on " + script_path + "; see " + log);
+  }
+  return pngs;
+}
+
+}  // namespace millwatch::shell

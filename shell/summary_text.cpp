@@ -1,0 +1,170 @@
+#include "shell/summary_text.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace millwatch::shell {
+namespace {
+
+using nlohmann::json;
+
+bool has_number(const json& j, const char* key) {
+  return j.is_object() && j.contains(key) && j[key].is_number();
+}
+
+double num(const json& j, const char* key) {
+  return has_number(j, key) ? j[key].get<double>() : std::nan("");
+}
+
+/// A table row of per-flute values: "  peak Fx [N]     -1.48    -0.85".
+std::string flute_row(const std::string& label, const json& values, double scale,
+                      const char* format) {
+  std::string s = fmt::format("  {:<16}", label);
+  for (const auto& v : values) {
+    s += v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>() * scale)
+                       : fmt::format("{:>10}", "—");
+  }
+  return s + "\n";
+}
+
+}  // namespace
+
+std::string summary_text(const json& j) {
+  std::string s;
+  const std::string input = j.value("input", std::string("recording"));
+  const double samples = num(j, "samples");
+  const double duration = num(j, "duration_s");
+  s += fmt::format("{}", input);
+  if (j.contains("input_format") && j["input_format"].is_string()) {
+    s += fmt::format("  ({})", j["input_format"].get<std::string>());
+  }
+  s += "\n";
+  s += fmt::format("  record        {:.3f} s, {:.0f} samples", duration, samples);
+  if (has_number(j, "dropped_samples") && j["dropped_samples"].get<double>() > 0) {
+    s += fmt::format(", {:.0f} dropped", j["dropped_samples"].get<double>());
+  }
+  if (has_number(j, "bad_lines") && j["bad_lines"].get<double>() > 0) {
+    s += fmt::format(", {:.0f} bad records skipped", j["bad_lines"].get<double>());
+  }
+  const json& record = j.value("record_in_plane_force_N", json::object());
+  if (has_number(record, "rms")) {
+    s += fmt::format("; in-plane force {:.3f} N RMS, {:.3f} N max", num(record, "rms"),
+                     num(record, "max"));
+  }
+  s += "\n";
+  const double rpm = num(j, "spindle_rpm");
+  const double commanded = num(j, "spindle_rpm_commanded");
+  if (std::isfinite(rpm)) {
+    s += fmt::format("  speed         {:.1f} rpm measured", rpm);
+    if (has_number(j, "spindle_rpm_std")) {
+      s += fmt::format(" (± {:.1f})", num(j, "spindle_rpm_std"));
+    }
+    s += fmt::format(", {:.0f} commanded ({:+.2f} %)\n", commanded,
+                     100.0 * (rpm - commanded) / commanded);
+  } else {
+    s += fmt::format("  speed         not measured ({:.0f} rpm commanded)\n", commanded);
+  }
+  s += fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting",
+                   num(j, "revolutions"), num(j, "revolutions_cutting"));
+  if (has_number(j, "revolutions_measured") &&
+      num(j, "revolutions_measured") != num(j, "revolutions")) {
+    s += fmt::format(" ({:.0f} seen, some without all their tooth events)",
+                     num(j, "revolutions_measured"));
+  }
+  s += "\n";
+  const json& alpha = j.value("alpha_deg", json::object());
+  if (has_number(alpha, "mean")) {
+    s += fmt::format("  alpha         {:.2f}° ± {:.2f}°", num(alpha, "mean"), num(alpha, "std"));
+    const json& model = j.value("model", json::object());
+    if (has_number(model, "alpha_deg")) {
+      s += fmt::format("   (model {:.2f}°)", num(model, "alpha_deg"));
+    }
+    s += "\n";
+  }
+  const json& periods = j.value("tooth_period_s", json::array());
+  const json& peaks = j.value("peak_force_N", json::object());
+  // Peaks come from every revolution with its bounds, periods only from those with every tooth
+  // event: a flute that does not cut leaves peaks without periods.
+  const json& resultant = peaks.value("resultant", json::array());
+  bool any_value = false;
+  for (const json* values : {&periods, &resultant}) {
+    for (const auto& v : *values) {
+      any_value = any_value || v.is_number();
+    }
+  }
+  if (any_value) {
+    s += fmt::format("  {:<16}", "flute");
+    for (std::size_t f = 0; f < std::max(periods.size(), resultant.size()); ++f) {
+      s += fmt::format("{:>10}", f + 1);
+    }
+    s += "\n";
+    s += flute_row("period [ms]", periods, 1e3, "{:>10.4f}");
+    const char* axes[][2] = {{"fx", "peak Fx [N]"},
+                             {"fy", "peak Fy [N]"},
+                             {"fz", "peak Fz [N]"},
+                             {"resultant", "peak |Fxy| [N]"}};
+    for (const auto& a : axes) {
+      if (peaks.contains(a[0])) {
+        s += flute_row(a[1], peaks[a[0]], 1.0, "{:>10.3f}");
+      }
+    }
+  }
+  if (has_number(j, "delta_fy_N")) {
+    s += fmt::format("  delta Fy      {:.3f} N", num(j, "delta_fy_N"));
+    const json& model = j.value("model", json::object());
+    if (has_number(model, "delta_fy_N")) {
+      s += fmt::format("   (model {:.3f} N)", num(model, "delta_fy_N"));
+    }
+    s += "\n";
+  }
+  const json& residual = j.value("residual_rms_N", json::object());
+  if (has_number(residual, "fx")) {
+    s += fmt::format("  residual RMS  fx {:.3f}  fy {:.3f}  fz {:.3f} N", num(residual, "fx"),
+                     num(residual, "fy"), num(residual, "fz"));
+    if (has_number(residual, "measured")) {
+      s += fmt::format("   (measured force {:.3f} N RMS)", num(residual, "measured"));
+    }
+    s += "\n";
+  }
+  // The identified runout (core/identify), when a window was fitted.
+  const json& runout = j.value("runout", json::object());
+  if (has_number(runout, "rho_um")) {
+    s += fmt::format("  runout        {:.3f} ± {:.3f} µm at {:.1f}° ± {:.1f}° (identified)\n",
+                     num(runout, "rho_um"), num(runout, "rho_std_um"), num(runout, "gamma_deg"),
+                     num(runout, "gamma_std_deg"));
+  }
+  const json& alerts = j.value("alerts", json::array());
+  if (alerts.empty()) {
+    s += "  alerts        none\n";
+  } else {
+    s += fmt::format("  alerts        {}\n", alerts.size());
+    for (const auto& a : alerts) {
+      s += fmt::format("    rev {:>6}  {} {}\n", a.value("revolution", std::int64_t{0}),
+                       a.value("active", true) ? "RAISED " : "cleared",
+                       a.value("message", std::string()));
+    }
+  }
+  const json& warnings = j.value("warnings", json::array());
+  if (warnings.empty()) {
+    s += "  warnings      none\n";
+  } else {
+    s += fmt::format("  warnings      {}\n", warnings.size());
+    for (const auto& w : warnings) {
+      std::string detail = w.value("detail", std::string());
+      if (detail.size() > 160) {
+        detail = detail.substr(0, 157) + "...";
+      }
+      s += fmt::format("    {}: {}", w.value("kind", std::string()), detail);
+      if (w.value("occurrences", std::int64_t{1}) > 1) {
+        s += fmt::format(" (×{})", w.value("occurrences", std::int64_t{1}));
+      }
+      s += "\n";
+    }
+  }
+  return s;
+}
+
+}  // namespace millwatch::shell

@@ -1,0 +1,121 @@
+// The replay's per-revolution rows and the synchronous average it keeps for the plots, fed by
+// hand: which values a row carries for a valid, a bounded and an unbounded revolution (the
+// summary's rules), and a bin of the average that no sample reached.
+
+#include "shell/run_recorder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/monitor/sync_average.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> fields(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream in(line);
+  std::string f;
+  while (std::getline(in, f, ',')) {
+    out.push_back(f);
+  }
+  if (!line.empty() && line.back() == ',') {
+    out.emplace_back();
+  }
+  return out;
+}
+
+monitor::RevolutionRecord revolution(std::int64_t n, bool valid, bool bounded) {
+  monitor::RevolutionRecord r;
+  r.revolution = n;
+  r.utime_us = 14694 + n * 1000;
+  r.spindle_rpm = 10421.5;
+  auto& m = r.measured;
+  m.flutes = 2;
+  m.valid = valid;
+  m.bounded = bounded;
+  m.flute_period_s = {0.003, 0.0027};
+  m.alpha_deg = 170.0;
+  m.delta_fy_N = 1.5;
+  m.peak_N[0] = {-10.0, -4.0, -2.0};
+  m.peak_N[1] = {-8.0, -3.0, -1.0};
+  m.peak_resultant_N = {10.5, 8.5};
+  return r;
+}
+
+TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
+  const fs::path path = test::fresh_temp_dir() / "revolutions.csv";
+  RunRecorder rec(2, path, true);
+  rec.on_revolution(revolution(0, true, true));    // every event
+  rec.on_revolution(revolution(1, false, true));   // both CE1 events, flute 2's missing
+  rec.on_revolution(revolution(2, false, false));  // not even its bounds
+  rec.commit();
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = fields(line);
+  auto column = [&](const std::string& name) {
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      if (header[i] == name) {
+        return i;
+      }
+    }
+    ADD_FAILURE() << "no column " << name << " in " << line;
+    return std::size_t{0};
+  };
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line)) {
+    rows.push_back(fields(line));
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0][column("t_s")], "0.014694");
+  EXPECT_EQ(rows[0][column("alpha_deg")], "170");
+  EXPECT_EQ(rows[0][column("period_s_2")], "0.0027");
+  EXPECT_EQ(rows[0][column("peak_resultant_N_2")], "8.5");
+  EXPECT_EQ(rows[1][column("valid")], "0");
+  EXPECT_EQ(rows[1][column("alpha_deg")], "");
+  EXPECT_EQ(rows[1][column("period_s_1")], "");
+  EXPECT_EQ(rows[1][column("delta_fy_N")], "");
+  EXPECT_EQ(rows[1][column("peak_fx_N_1")], "-10");
+  EXPECT_EQ(rows[1][column("peak_resultant_N_2")], "8.5");
+  EXPECT_EQ(rows[2][column("peak_resultant_N_1")], "");
+  EXPECT_EQ(rows[2][column("spindle_rpm")], "10421.5");
+  // What the plots keep: the bounded revolutions, α only where valid.
+  ASSERT_EQ(rec.rows().size(), 3u);
+  EXPECT_TRUE(rec.rows()[1].bounded);
+  EXPECT_FALSE(rec.rows()[1].valid);
+  EXPECT_FALSE(rec.rows()[2].bounded);
+}
+
+TEST(RunRecorder, ABinNoSampleReachedTakesItsNeighboursMean) {
+  // 8 bins, one revolution with a sample at each bin's angle but bin 3's: bin 3 reads the mean
+  // of bins 2 and 4, not 0 (which drew a spike to zero in sync_average.png).
+  monitor::SyncAverage sync(8, 2);
+  for (int b = 0; b < 8; ++b) {
+    if (b != 3) {
+      const double v = 10.0 + b;
+      sync.add(2.0 * std::numbers::pi * b / 8.0, {v, v, v, v});
+    }
+  }
+  sync.end_revolution();
+  RunRecorder rec(2, "", true);
+  rec.on_sync_average(sync, nullptr, 1, 0);
+  ASSERT_EQ(rec.sync().measured[0].size(), 8u);
+  EXPECT_DOUBLE_EQ(rec.sync().measured[0][2], 12.0);
+  EXPECT_DOUBLE_EQ(rec.sync().measured[0][3], 13.0);
+  EXPECT_DOUBLE_EQ(rec.sync().measured[1][4], 14.0);
+  EXPECT_TRUE(std::isnan(rec.sync().model[0][3]));
+}
+
+}  // namespace
+}  // namespace millwatch::shell
