@@ -27,7 +27,7 @@ cmake --build "$build" -j "$(nproc)" --target fuzzers
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 # Leaks in third-party code we cannot fix, each with its reason (HDF5 on a damaged v7.3 file).
-export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp
+export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 for target in "${targets[@]}"; do
   case $target in

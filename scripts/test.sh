@@ -16,7 +16,7 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMILLWATCH_
   -DMILLWATCH_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build/asan -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp ctest --test-dir build/asan -j "$jobs" --output-on-failure --timeout 1200
+  LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 ctest --test-dir build/asan -j "$jobs" --output-on-failure --timeout 1200
 
 echo "== libFuzzer targets (clang, ASan + UBSan)"
 ./scripts/fuzz.sh "${MILLWATCH_FUZZ_SECONDS:-20}"
