@@ -194,7 +194,7 @@ nlohmann::json RunSummary::to_json() const {
     warn("model does not fit",
          "the identified model leaves " + std::to_string(std::lround(100.0 * u)) +
              " % of the measured force unexplained: runout and coefficients describe this cut "
-             "poorly (see `millwatch diagnose`)");
+             "poorly");
   }
   json warnings = json::array();
   for (const std::vector<Warning>* list :
