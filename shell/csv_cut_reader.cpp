@@ -10,25 +10,12 @@
 #include <stdexcept>
 
 #include "core/monitor/input_check.hpp"
+#include "shell/out_of_range_number.hpp"
 
 namespace millwatch::shell {
 namespace {
 
 constexpr const char* kHeader = "t_s,fx_N,fy_N,fz_N";
-
-/// A number out of a double's range ("1e400", "-1e999", "1e-400") as the value it stands for:
-/// ±infinity, or zero when the exponent is negative.
-double out_of_range_value(const char* first, const char* last) {
-  const bool negative = first < last && *first == '-';
-  bool tiny = false;
-  for (const char* p = first; p + 1 < last; ++p) {
-    if (*p == 'e' || *p == 'E') {
-      tiny = p[1] == '-';
-    }
-  }
-  const double magnitude = tiny ? 0.0 : std::numeric_limits<double>::infinity();
-  return negative ? -magnitude : magnitude;
-}
 
 /// Parses "a,b,c,d" into four doubles ("nan" and "inf" are numbers, found later as non-finite).
 const char* parse_row(const std::string& s, double* v) {

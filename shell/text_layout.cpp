@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "shell/out_of_range_number.hpp"
+
 namespace millwatch::shell {
 namespace {
 
@@ -23,20 +25,6 @@ std::string lower(std::string_view s) {
 
 bool starts_with_ci(std::string_view s, std::string_view prefix) {
   return s.size() >= prefix.size() && lower(s.substr(0, prefix.size())) == lower(prefix);
-}
-
-/// A number out of a double's range as the value it stands for: ±infinity, or 0 for a
-/// negative exponent.
-double out_of_range_value(const char* first, const char* last) {
-  const bool negative = first < last && *first == '-';
-  bool tiny = false;
-  for (const char* p = first; p + 1 < last; ++p) {
-    if (*p == 'e' || *p == 'E') {
-      tiny = p[1] == '-';
-    }
-  }
-  const double magnitude = tiny ? 0.0 : std::numeric_limits<double>::infinity();
-  return negative ? -magnitude : magnitude;
 }
 
 /// Reads a line without its end of line; false at the end.
