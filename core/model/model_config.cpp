@@ -505,4 +505,23 @@ ModelConfig without_effects(ModelConfig c) {
   return c;
 }
 
+int passes_to_look_back(const ModelConfig& c) {
+  constexpr int kMaxAutoPasses = 32;
+  constexpr double kPi = std::numbers::pi;
+  const int flutes = c.tool.flutes;
+  if (!c.effects.multi_pass.enabled) {
+    return 1;
+  }
+  if (c.effects.multi_pass.passes > 0) {
+    return c.effects.multi_pass.passes;
+  }
+  int passes = flutes;
+  if (c.effects.accumulation.enabled && c.effects.min_chip.h_min_um > 0.0) {
+    const double per_pass_um = c.process.feed_per_tooth_um * std::sin(2.0 * kPi / 180.0);
+    const double extra = std::ceil(c.effects.min_chip.h_min_um / per_pass_um);
+    passes = static_cast<int>(std::min<double>(kMaxAutoPasses, flutes * (1.0 + extra)));
+  }
+  return std::max(passes, flutes);
+}
+
 }  // namespace millwatch::model

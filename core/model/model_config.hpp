@@ -194,6 +194,11 @@ bool effect_enabled(const ModelConfig& config, const std::string& name);
 /// All effects off: the plain circular-path, single-disc, rigid, sharp-tool model.
 ModelConfig without_effects(ModelConfig config);
 
+/// Passes a chip looks back (MillingModel and the steady-state evaluator alike): one without
+/// multi-pass; with it N_z (or as configured), plus enough for accumulation to find a
+/// surface-defining pass near the entry where the nominal chip is smallest (at most 32).
+int passes_to_look_back(const ModelConfig& config);
+
 std::string to_string(Operation op);
 std::string to_string(ForceLawKind law);
 std::string to_string(RunoutHelix helix);

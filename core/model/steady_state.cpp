@@ -18,7 +18,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kNoCut = std::numeric_limits<double>::infinity();
-constexpr int kMaxAutoPasses = 32;
 constexpr int kMaxNewtonDim = 32;
 constexpr int kMaxNewtonIterations = 12;
 constexpr int kMaxAreaSweeps = 6;
@@ -36,25 +35,6 @@ constexpr unsigned kRemoved = 1u << 7;
 constexpr unsigned kPloughing = 1u << 8;
 constexpr unsigned kInJump = 1u << 9;
 constexpr unsigned kPushedBack = 1u << 10;
-
-/// Passes looked back: the same rule as MillingModel (one without multi-pass; with it N_z, plus
-/// enough for accumulation to find a surface-defining pass near the entry).
-int passes_to_look_back(const ModelConfig& c) {
-  const int flutes = c.tool.flutes;
-  if (!c.effects.multi_pass.enabled) {
-    return 1;
-  }
-  if (c.effects.multi_pass.passes > 0) {
-    return c.effects.multi_pass.passes;
-  }
-  int passes = flutes;
-  if (c.effects.accumulation.enabled && c.effects.min_chip.h_min_um > 0.0) {
-    const double per_pass_um = c.process.feed_per_tooth_um * std::sin(2.0 * kPi / 180.0);
-    const double extra = std::ceil(c.effects.min_chip.h_min_um / per_pass_um);
-    passes = static_cast<int>(std::min<double>(kMaxAutoPasses, flutes * (1.0 + extra)));
-  }
-  return std::max(passes, flutes);
-}
 
 int positive_mod(int a, int m) {
   const int r = a % m;
