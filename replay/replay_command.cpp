@@ -68,6 +68,7 @@ struct ReplayOptions {
   bool publish_raw = false;
   bool zero_phase = false;
   bool progress = true;
+  bool identify = true;
   int block_samples = 1000;
 };
 
@@ -246,6 +247,10 @@ int replay_one(const ReplayOptions& o) {
   run_options.source_name = input.string();
   run_options.lcm = lcm.get();  // none: the summary and the log only
   run_options.observer = recorder.get();
+  run_options.identify = o.identify;
+  // Offline, each identified result is taken at its due revolution even when the fit is slower
+  // than the replay: the results do not depend on the machine's speed.
+  run_options.hand_over = identify::HandOver::kWait;
   MonitorRun run(config, run_options);
 
   const double speed = o.realtime ? 1.0 : o.speed;
@@ -520,6 +525,9 @@ void add_replay_command(CLI::App& app) {
   cmd->add_option("-j,--jobs", o->jobs, "Several cuts: replay this many at once (0: one per core)")
       ->check(CLI::Range(0, 256));
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
+  cmd->add_flag("!--no-identify", o->identify,
+                "No identification of runout and coefficients (the model in lockstep keeps the "
+                "configured parameters; faster)");
   cmd->add_option("--speed", o->speed, "Pace: k times real time (default: as fast as possible)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)");

@@ -22,6 +22,8 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   t.gaps += c.gaps;
   t.out_of_order_blocks += c.out_of_order_blocks;
   t.blocks_rejected += c.blocks_rejected;
+  total.identifications_taken += s.identifications_taken;
+  total.identifications_rejected += s.identifications_rejected;
   total.revolutions += s.revolutions;
   total.valid_revolutions += s.valid_revolutions;
   total.idle_revolutions += s.idle_revolutions;
@@ -41,22 +43,30 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
   }
   pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
   if (options_.identify) {
-    const signal::ButterworthDesign filter = pipeline_->filter();
-    identifier_ = std::make_unique<identify::Identifier>(
-        config.model,
-        [filter, zero_phase = config.filter_zero_phase](double hz) {
-          // Zero phase: the filter forwards and backwards, |H|² without delay.
-          const std::complex<double> h = filter.response(hz);
-          return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
-        },
-        identify::FitOptions{}, [this](const identify::IdentifiedWindow& w) { on_identified(w); });
-    shell_sink_.set_identifier(identifier_.get());
+    start_identifier(config);
   }
+}
+
+void MonitorRun::start_identifier(const monitor::MonitorConfig& config) {
+  const signal::ButterworthDesign filter = pipeline_->filter();
+  identify::FilterResponse response = [filter, zero_phase = config.filter_zero_phase](double hz) {
+    // Zero phase: the filter forwards and backwards, |H|² without delay.
+    const std::complex<double> h = filter.response(hz);
+    return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
+  };
+  if (identifier_) {
+    identifier_->restart(config.model, std::move(response));  // does not wait for a fit
+  } else {
+    identifier_ = std::make_unique<identify::Identifier>(
+        config.model, std::move(response), identify::FitOptions{},
+        [this](const identify::IdentifiedWindow& w) { on_identified(w); }, options_.hand_over);
+  }
+  pipeline_->attach_identifier(identifier_.get());
 }
 
 MonitorRun::~MonitorRun() {
   if (identifier_) {
-    shell_sink_.set_identifier(nullptr);
+    pipeline_->attach_identifier(nullptr);
     identifier_->finish();
   }
 }
@@ -99,7 +109,12 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
     std::unique_ptr<monitor::Pipeline> next) {
   pipeline_->finish();  // samples held for zero-phase filtering are measured first
   carry(carried_, pipeline_->status());
-  return std::exchange(pipeline_, std::move(next));
+  std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
+  if (options_.identify) {
+    old->attach_identifier(nullptr);
+    start_identifier(pipeline_->config());  // the new configuration's model
+  }
+  return old;
 }
 
 monitor::PipelineStatus MonitorRun::status() const {
@@ -126,10 +141,14 @@ void MonitorRun::finish() {
   }
   summary_.finish(final_status);
   if (identifier_) {
-    shell_sink_.set_identifier(nullptr);
+    pipeline_->attach_identifier(nullptr);
     identifier_->finish();  // the window in progress and the one waiting are fitted
     if (const auto last = identifier_->latest()) {
-      summary_.set_identification(identify::to_json(*last));
+      nlohmann::json j = identify::to_json(*last);
+      j["fit"]["windows_fitted"] = identifier_->fitted();
+      j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
+      j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due
+      summary_.set_identification(j);
     }
   }
 }

@@ -20,6 +20,7 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "core/identify/identifier.hpp"
@@ -46,6 +47,9 @@ class MonitorRun {
     /// Identify runout and force coefficients on every synchronous-average window, in a worker
     /// thread (published on LCM when the run publishes; the last one in the summary).
     bool identify = true;
+    /// When an identified result is due but still being fitted: wait (replay, deterministic) or
+    /// not (live; counted as late).
+    identify::HandOver hand_over = identify::HandOver::kWhenReady;
     /// Also receives every output of the pipeline (not owned; null: none), in the thread that
     /// calls process(): the replay's RunRecorder.
     monitor::PipelineSink* observer = nullptr;
@@ -88,6 +92,8 @@ class MonitorRun {
  private:
   void publish_status();
   void on_identified(const identify::IdentifiedWindow& w);
+  /// An identifier for `config`'s model, attached to the running pipeline.
+  void start_identifier(const monitor::MonitorConfig& config);
 
   Options options_;
   monitor::RunSummary summary_;

@@ -9,29 +9,6 @@ void ShellSink::on_revolution(const monitor::RevolutionRecord& r) {
   if (observer_ != nullptr) {
     observer_->on_revolution(r);
   }
-  if (r.measured.bounded && r.spindle_rpm > 0.0) {
-    rpm_sum_ += r.spindle_rpm;
-    ++rpm_count_;
-  }
-}
-
-void ShellSink::on_sync_average(const monitor::SyncAverage& measured,
-                                const monitor::Lockstep* model, std::int64_t revolution,
-                                std::int64_t utime_us) {
-  if (observer_ != nullptr) {
-    observer_->on_sync_average(measured, model, revolution, utime_us);
-  }
-  if (identifier_ == nullptr || rpm_count_ == 0 || measured.revolutions() == 0) {
-    return;
-  }
-  for (int a = 0; a < 3; ++a) {
-    measured.average(a, window_.force_N[static_cast<std::size_t>(a)]);
-  }
-  window_.spindle_rpm = rpm_sum_ / rpm_count_;
-  window_.revolutions = measured.revolutions();
-  rpm_sum_ = 0.0;
-  rpm_count_ = 0;
-  identifier_->submit(window_, revolution, utime_us);
 }
 
 void ShellSink::on_alert(const monitor::Alert& a) {
@@ -61,6 +38,14 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
       return;
     case monitor::PipelineEventKind::kModelAligned:
       spdlog::info("{}: model aligned (correlation {:.3f})", source_, e.value);
+      return;
+    case monitor::PipelineEventKind::kModelUpdated:
+      if (n == 1) {  // then every window: the first says it happens
+        spdlog::info(
+            "{}: the model in lockstep takes the identified parameters (window ending at "
+            "revolution {}, {:.1f} % unexplained)",
+            source_, e.count, 100.0 * e.value);
+      }
       return;
     case monitor::PipelineEventKind::kCuttingResumed:
       spdlog::info("{}: cutting resumed (t = {:.3f} s)", source_, t_s);

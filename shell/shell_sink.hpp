@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <string>
 
-#include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
 
@@ -21,10 +20,12 @@ class ShellSink : public monitor::PipelineSink {
   void set_observer(monitor::PipelineSink* observer) { observer_ = observer; }
 
   void on_revolution(const monitor::RevolutionRecord& r) override;
-  /// A window of revolutions goes to the identifier (if one is set) and the observer.
   void on_sync_average(const monitor::SyncAverage& measured, const monitor::Lockstep* model,
-                       std::int64_t revolution, std::int64_t utime_us) override;
-  void set_identifier(identify::Identifier* identifier) { identifier_ = identifier; }
+                       std::int64_t revolution, std::int64_t utime_us) override {
+    if (observer_ != nullptr) {
+      observer_->on_sync_average(measured, model, revolution, utime_us);
+    }
+  }
   void on_spindle(const monitor::SpindleUpdate& u) override {
     summary_.add(u);
     if (observer_ != nullptr) {
@@ -39,10 +40,6 @@ class ShellSink : public monitor::PipelineSink {
   std::string source_;
   monitor::PipelineSink* observer_ = nullptr;
   std::array<std::int64_t, 16> logged_{};  // per event kind
-  identify::Identifier* identifier_ = nullptr;
-  identify::MeasuredRevolution window_;  // reused: no allocation after the first window
-  double rpm_sum_ = 0.0;                 // the revolutions' speeds since the last window
-  int rpm_count_ = 0;
 };
 
 }  // namespace millwatch::shell

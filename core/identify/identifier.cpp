@@ -1,14 +1,43 @@
 #include "core/identify/identifier.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <utility>
 
 namespace millwatch::identify {
+namespace {
+
+FitOptions quick(FitOptions o) {
+  o.systematic = false;
+  return o;
+}
+
+/// `e` with the systematic part of `from` (same name) added.
+void carry_systematic(const std::vector<Estimate>& from, std::vector<Estimate>& to) {
+  for (Estimate& e : to) {
+    for (const Estimate& f : from) {
+      if (f.name == e.name) {
+        e.sigma_sys = f.sigma_sys;
+        e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+      }
+    }
+  }
+}
+
+void carry_systematic(const Estimate& from, Estimate& to) {
+  to.sigma_sys = from.sigma_sys;
+  to.sigma = std::hypot(to.sigma_stat, to.sigma_sys);
+}
+
+}  // namespace
 
 Identifier::Identifier(const model::ModelConfig& model, FilterResponse filter, FitOptions options,
-                       Callback on_result)
-    : fitter_(model, std::move(filter), std::move(options)),
+                       Callback on_result, HandOver hand_over)
+    : fitter_(model, filter, options),
+      quick_fitter_(model, std::move(filter), quick(options)),
       on_result_(std::move(on_result)),
+      hand_over_(hand_over),
+      options_(std::move(options)),
       worker_([this] { run(); }) {}
 
 Identifier::~Identifier() {
@@ -16,16 +45,76 @@ Identifier::~Identifier() {
 }
 
 void Identifier::submit(const MeasuredRevolution& window, std::int64_t revolution,
-                        std::int64_t utime_us) {
+                        std::int64_t utime_us, std::int64_t due_revolution) {
   {
     const std::lock_guard lock(mutex_);
     if (stop_) {
       return;
     }
-    superseded_ += pending_.has_value() ? 1 : 0;
-    pending_ = window;
-    pending_revolution_ = revolution;
-    pending_utime_us_ = utime_us;
+    if (hand_over_ == HandOver::kWhenReady) {
+      int waiting = 0;
+      for (const Entry& e : queue_) {
+        waiting += !e.fitting && !e.result ? 1 : 0;
+      }
+      if (waiting >= kMaxWaiting) {
+        for (auto it = queue_.begin(); it != queue_.end(); ++it) {
+          if (!it->fitting && !it->result) {
+            queue_.erase(it);
+            ++superseded_;
+            break;
+          }
+        }
+      }
+    }
+    Entry& e = queue_.emplace_back();
+    e.window = window;
+    e.revolution = revolution;
+    e.utime_us = utime_us;
+    e.due_revolution = due_revolution;
+  }
+  wake_.notify_one();
+}
+
+Identifier::Entry* Identifier::front() {
+  for (Entry& e : queue_) {
+    if (!e.stale) {
+      return &e;
+    }
+  }
+  return nullptr;
+}
+
+std::optional<IdentifiedWindow> Identifier::take_due(std::int64_t revolution) {
+  std::unique_lock lock(mutex_);
+  Entry* first = front();
+  if (first == nullptr || first->due_revolution > revolution) {
+    return std::nullopt;
+  }
+  Entry& due = *first;
+  if (!due.result) {
+    if (hand_over_ == HandOver::kWhenReady) {
+      late_ += due.counted_late ? 0 : 1;
+      due.counted_late = true;
+      return std::nullopt;
+    }
+    done_.wait(lock, [&] { return due.result.has_value() || stopped_; });
+    if (!due.result) {
+      return std::nullopt;
+    }
+  }
+  std::optional<IdentifiedWindow> out = std::move(due.result);
+  queue_.remove_if([&](const Entry& e) { return &e == &due; });
+  return out;
+}
+
+void Identifier::restart(const model::ModelConfig& model, FilterResponse filter) {
+  {
+    const std::lock_guard lock(mutex_);
+    queue_.remove_if([](const Entry& e) { return !e.fitting; });
+    for (Entry& e : queue_) {
+      e.stale = true;  // the one being fitted: removed when it ends
+    }
+    next_model_.emplace(model, std::move(filter));
   }
   wake_.notify_one();
 }
@@ -56,25 +145,52 @@ std::int64_t Identifier::superseded() const {
   return superseded_;
 }
 
+std::int64_t Identifier::late() const {
+  const std::lock_guard lock(mutex_);
+  return late_;
+}
+
 void Identifier::run() {
   std::optional<FitResult> previous;
+  const auto next = [this]() -> Entry* {
+    for (Entry& e : queue_) {
+      if (!e.fitting && !e.result) {
+        return &e;
+      }
+    }
+    return nullptr;
+  };
   for (;;) {
-    MeasuredRevolution window;
+    Entry* entry = nullptr;
     IdentifiedWindow out;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [this] { return stop_ || pending_.has_value(); });
-      if (!pending_.has_value()) {
-        return;  // stopped with nothing waiting
+      wake_.wait(lock, [&] { return stop_ || next() != nullptr || next_model_.has_value(); });
+      if (next_model_) {
+        auto [model, filter] = std::move(*next_model_);
+        next_model_.reset();
+        lock.unlock();
+        fitter_ = WindowFitter(model, filter, options_);
+        quick_fitter_ = WindowFitter(model, std::move(filter), quick(options_));
+        previous.reset();
+        systematic_.reset();
+        continue;
       }
-      window = std::move(*pending_);
-      pending_.reset();
-      out.revolution = pending_revolution_;
-      out.utime_us = pending_utime_us_;
+      entry = next();
+      if (entry == nullptr) {  // stopped with nothing waiting
+        stopped_ = true;
+        done_.notify_all();
+        return;
+      }
+      entry->fitting = true;
+      out.revolution = entry->revolution;
+      out.utime_us = entry->utime_us;
+      out.window_revolutions = entry->window.revolutions;
     }
-    out.window_revolutions = window.revolutions;
+    // The entry stays in the list while it is being fitted (only finished entries are taken,
+    // only waiting ones dropped), and list nodes do not move.
     const auto start = std::chrono::steady_clock::now();
-    out.fit = fitter_.fit(window, previous ? &*previous : nullptr);
+    out.fit = fit(entry->window, previous);
     out.fit_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (out.fit.ok) {
@@ -82,13 +198,59 @@ void Identifier::run() {
     }
     {
       const std::lock_guard lock(mutex_);
+      if (entry->stale) {  // fitted for a model replaced meanwhile
+        queue_.remove_if([&](const Entry& e) { return &e == entry; });
+        continue;
+      }
+      entry->fitting = false;
+      entry->result = out;
       latest_ = out;
       ++fitted_;
     }
+    done_.notify_all();
     if (on_result_) {
       on_result_(out);
     }
   }
+}
+
+}  // namespace millwatch::identify
+
+namespace millwatch::identify {
+
+FitResult Identifier::fit(const MeasuredRevolution& window,
+                          const std::optional<FitResult>& previous) {
+  const FitResult* seed = previous ? &*previous : nullptr;
+  if (!options_.systematic || !systematic_ || ++since_systematic_ >= kSystematicEvery) {
+    FitResult full = fitter_.fit(window, seed);
+    if (full.ok) {
+      systematic_ = full;
+      since_systematic_ = 0;
+    }
+    return full;
+  }
+  FitResult r = quick_fitter_.fit(window, seed);
+  const FitResult& s = *systematic_;
+  // Moved by more than the uncertainty since the variants were fitted: fit them again.
+  const double moved_um = std::hypot(
+      r.rho_um.value * std::cos(r.gamma_rad.value) - s.rho_um.value * std::cos(s.gamma_rad.value),
+      r.rho_um.value * std::sin(r.gamma_rad.value) - s.rho_um.value * std::sin(s.gamma_rad.value));
+  if (!r.ok || moved_um > s.rho_um.sigma) {
+    FitResult full = fitter_.fit(window, seed);
+    if (full.ok) {
+      systematic_ = full;
+      since_systematic_ = 0;
+    }
+    return full;
+  }
+  carry_systematic(s.rho_um, r.rho_um);
+  carry_systematic(s.gamma_rad, r.gamma_rad);
+  carry_systematic(s.alignment_rad, r.alignment_rad);
+  carry_systematic(s.cutting_radius_um, r.cutting_radius_um);
+  carry_systematic(s.radius_from_ce1_um, r.radius_from_ce1_um);
+  carry_systematic(s.coefficients, r.coefficients);
+  carry_systematic(s.extra, r.extra);
+  return r;
 }
 
 }  // namespace millwatch::identify

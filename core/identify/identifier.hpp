@@ -1,20 +1,35 @@
 #pragma once
 // Continuous identification: the monitor's synchronous-average windows are fitted in a worker
-// thread, never in the caller's (the sample thread only copies a window and signals). A window
-// that arrives while a fit runs replaces the one waiting: the worker always fits the newest,
-// seeded with its previous result.
+// thread, never in the caller's (the sample thread only copies a window and signals), each
+// seeded with the previous result.
 //
-//   Identifier id(model, filter, options, [](const IdentifiedWindow& w) { publish(w); });
-//   id.submit(window);           // from the sample thread: a copy under a mutex, no fit
-//   ...
-//   id.finish();                 // waits for the window in progress and the one waiting
+// Hand-over on a schedule. Each window is submitted with the revolution at which its result is
+// due (the pipeline: its end plus a fixed lag). take_due(revolution) hands over the oldest result
+// whose due revolution has come — always at that revolution in a replay (HandOver::kWait: the
+// caller waits for the fit, so a replay is deterministic), and live (kWhenReady) at that
+// revolution when the fit is done in time, else at the first call after it is done, counted as
+// late. Live and replay therefore agree revolution by revolution whenever no result was late.
+// Live, a worker that falls behind drops the oldest window still waiting (counted as superseded)
+// rather than let the queue grow.
+//
+// Cost. The systematic part of the uncertainty (the spread over model variants, window_fit.hpp)
+// costs several refits; the model's discrepancy changes slowly, so it is re-estimated on the
+// first window, every kSystematicEvery windows and whenever the estimate moved by more than its
+// uncertainty since, and carried over (per parameter) in between.
+//
+//   Identifier id(model, filter, options, publish, HandOver::kWhenReady);
+//   id.submit(window, revolution, utime_us, due_revolution);  // sample thread: a copy, no fit
+//   if (auto w = id.take_due(revolution)) use(*w);            // sample thread, per revolution
+//   id.finish();                                              // fits what is waiting, stops
 
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <list>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 
 #include "core/identify/window_fit.hpp"
 
@@ -29,43 +44,82 @@ struct IdentifiedWindow {
   double fit_seconds = 0.0;  ///< wall-clock time the fit took
 };
 
+/// How take_due() treats a result whose fit is still running when it is due.
+enum class HandOver {
+  kWait,       ///< wait for it (replay: deterministic)
+  kWhenReady,  ///< never wait; hand it over when done, counted as late (live)
+};
+
 class Identifier {
  public:
   using Callback = std::function<void(const IdentifiedWindow&)>;
 
   /// @param on_result called in the worker thread after each fit
   Identifier(const model::ModelConfig& model, FilterResponse filter, FitOptions options,
-             Callback on_result);
+             Callback on_result, HandOver hand_over = HandOver::kWhenReady);
   ~Identifier();
   Identifier(const Identifier&) = delete;
   Identifier& operator=(const Identifier&) = delete;
 
-  /// Hands a window to the worker (replaces a window still waiting).
-  void submit(const MeasuredRevolution& window, std::int64_t revolution, std::int64_t utime_us);
+  /// Queues a window (ending at `revolution`) whose result is due at `due_revolution`.
+  void submit(const MeasuredRevolution& window, std::int64_t revolution, std::int64_t utime_us,
+              std::int64_t due_revolution);
+  /// The oldest result due at or before `revolution`, if any (see HandOver).
+  std::optional<IdentifiedWindow> take_due(std::int64_t revolution);
+  /// A new model (a reconfiguration): windows still waiting are dropped, the fit in progress is
+  /// discarded, and the worker fits later windows with the new model. Does not wait.
+  void restart(const model::ModelConfig& model, FilterResponse filter);
   /// Fits what is waiting and stops the worker; later submits are ignored.
   void finish();
 
   /// The newest result, if any.
   [[nodiscard]] std::optional<IdentifiedWindow> latest() const;
-  /// Windows fitted, and windows replaced before the worker got to them.
+  /// Windows fitted; windows dropped before the worker got to them; results handed over after
+  /// their due revolution.
   [[nodiscard]] std::int64_t fitted() const;
   [[nodiscard]] std::int64_t superseded() const;
+  [[nodiscard]] std::int64_t late() const;
 
  private:
-  void run();
+  struct Entry {
+    MeasuredRevolution window;
+    std::int64_t revolution = 0;
+    std::int64_t utime_us = 0;
+    std::int64_t due_revolution = 0;
+    bool fitting = false;
+    bool counted_late = false;
+    bool stale = false;  // submitted for a model replaced since: never handed over
+    std::optional<IdentifiedWindow> result;
+  };
+  /// Windows still waiting in a live queue before the oldest is dropped.
+  static constexpr int kMaxWaiting = 2;
+  static constexpr int kSystematicEvery = 10;
 
-  WindowFitter fitter_;
+  void run();
+  /// Fits one window, with or without the systematic variants (see Cost above).
+  FitResult fit(const MeasuredRevolution& window, const std::optional<FitResult>& previous);
+  /// The first entry that may be handed over (not stale), or null.
+  Entry* front();
+
+  WindowFitter fitter_;                  // the worker's
+  WindowFitter quick_fitter_;            // the same without the systematic variants
+  std::optional<FitResult> systematic_;  // the last fit with them
+  int since_systematic_ = 0;
+  std::optional<std::pair<model::ModelConfig, FilterResponse>> next_model_;  // restart()
   Callback on_result_;
+  HandOver hand_over_;
   mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  std::optional<MeasuredRevolution> pending_;
-  std::int64_t pending_revolution_ = 0;
-  std::int64_t pending_utime_us_ = 0;
+  FitOptions options_;
+  std::condition_variable wake_;  // the worker: a window came, a new model, or stop
+  std::condition_variable done_;  // take_due(): a fit ended
+  std::list<Entry> queue_;        // in submission order; list: the worker holds a reference
   std::optional<IdentifiedWindow> latest_;
   std::int64_t fitted_ = 0;
   std::int64_t superseded_ = 0;
+  std::int64_t late_ = 0;
   bool stop_ = false;
-  std::thread worker_;  // last: started once everything above exists
+  bool stopped_ = false;  // the worker has returned
+  std::thread worker_;    // last: started once everything above exists
 };
 
 }  // namespace millwatch::identify

@@ -54,6 +54,19 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   return true;
 }
 
+void Lockstep::set_parameters(const model::ModelConfig& model, double alignment_rad,
+                              bool use_alignment) {
+  commanded_ = model;
+  if (built_) {
+    built_ = false;  // rebuilt at the speed it was built for
+    set_spindle_hz(spindle_hz_);
+  }
+  if (use_alignment) {
+    offset_rad_ = wrap_2pi(alignment_rad);
+    aligned_ = built_;
+  }
+}
+
 void Lockstep::filter_periodic() {
   // The causal filter's steady state on the periodic model force (or |H|² for forwards and
   // backwards): each harmonic k of the spindle frequency times H(k·f).

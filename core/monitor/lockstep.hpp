@@ -38,6 +38,11 @@ class Lockstep {
   bool set_spindle_hz(double spindle_hz);
   [[nodiscard]] bool has_model() const { return built_; }
 
+  /// Takes identified parameters: `model` (commanded speed, as identify::FitResult::config) and,
+  /// when `use_alignment`, its alignment (model angle minus tracker angle, rad); rebuilt at the
+  /// current speed. Without the alignment the old offset stands until align() is called.
+  void set_parameters(const model::ModelConfig& model, double alignment_rad, bool use_alignment);
+
   /// Aligns the model with the measured synchronous average; returns false when there is
   /// nothing to align (no model, empty average).
   bool align(const SyncAverage& measured);

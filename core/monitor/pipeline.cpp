@@ -10,10 +10,11 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr int kRingChannels = 4;  // fx, fy, fz, Fx² + Fy²
 constexpr int kDetectChannel = 3;
-constexpr double kMaxBridgedGap_s = 0.05;    // shorter gaps keep the lock
-constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest revolution analysed
-constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
-constexpr int kIdleToStop = 3;               // idle revolutions in a row: cutting has stopped
+constexpr double kMaxBridgedGap_s = 0.05;     // shorter gaps keep the lock
+constexpr double kSlowestFraction = 0.4;      // of the commanded speed: longest revolution analysed
+constexpr double kModelSpeedChange = 0.002;   // relative: the lockstep model follows the speed
+constexpr int kIdleToStop = 3;                // idle revolutions in a row: cutting has stopped
+constexpr double kAcceptedUnexplained = 0.2;  // the model takes fits that explain more
 
 InputCheckConfig input_config(const MonitorConfig& c) {
   InputCheckConfig i;
@@ -64,6 +65,8 @@ std::string_view to_string(PipelineEventKind kind) {
       return "spindle lock lost";
     case PipelineEventKind::kModelAligned:
       return "model aligned";
+    case PipelineEventKind::kModelUpdated:
+      return "model updated";
     case PipelineEventKind::kCuttingStopped:
       return "cutting stopped";
     case PipelineEventKind::kCuttingResumed:
@@ -206,6 +209,7 @@ void Pipeline::process(const SampleBlock& block) {
 
   if (sync_revolutions_since_report_ >= config_.sync_window_revolutions) {
     sync_revolutions_since_report_ = 0;
+    submit_window();
     sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, revolutions_,
                           input_.utime_of(ring_.newest()));
   }
@@ -362,6 +366,9 @@ void Pipeline::start_events() {
   }
   sync_.clear();
   sync_revolutions_since_report_ = 0;
+  window_rpm_sum_ = 0.0;
+  window_rpm_count_ = 0;
+  lock_revolution_ = revolutions_;
   stats_.clear_window();
   alerts_.rebaseline();
   ever_locked_ = true;
@@ -382,10 +389,59 @@ void Pipeline::follow_speed(double spindle_hz) {
   ++model_builds_;
 }
 
+void Pipeline::submit_window() {
+  if (identifier_ == nullptr || window_rpm_count_ == 0 || sync_.revolutions() == 0) {
+    return;
+  }
+  for (int a = 0; a < 3; ++a) {
+    sync_.average(a, window_.force_N[static_cast<std::size_t>(a)]);
+  }
+  window_.spindle_rpm = window_rpm_sum_ / window_rpm_count_;
+  window_.revolutions = sync_.revolutions();
+  window_rpm_sum_ = 0.0;
+  window_rpm_count_ = 0;
+  // Due when the next window ends: the fit has a window's time to finish.
+  identifier_->submit(window_, revolutions_ - 1, input_.utime_of(ring_.newest()),
+                      revolutions_ + config_.sync_window_revolutions);
+}
+
+void Pipeline::take_identification() {
+  if (identifier_ == nullptr) {
+    return;
+  }
+  const std::optional<identify::IdentifiedWindow> w = identifier_->take_due(revolutions_);
+  if (!w) {
+    return;
+  }
+  const identify::FitResult& fit = w->fit;
+  double residual2 = 0.0, measured2 = 0.0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    residual2 += fit.residual_rms_N[a] * fit.residual_rms_N[a];
+    measured2 += fit.measured_rms_N[a] * fit.measured_rms_N[a];
+  }
+  const double unexplained = measured2 > 0.0 ? residual2 / measured2 : 1.0;
+  if (!config_.lockstep || !fit.ok || !(unexplained <= kAcceptedUnexplained)) {
+    ++identifications_rejected_;
+    return;
+  }
+  // The window's alignment holds while the tracker's angle zero is the one it was measured in.
+  const bool same_lock = w->revolution - w->window_revolutions + 1 >= lock_revolution_;
+  lockstep_.set_parameters(fit.config, fit.alignment_rad.value, same_lock);
+  if (!same_lock) {
+    lockstep_.align(sync_);
+  }
+  realigned_ = true;  // the fit's alignment, not a correlation on the old model's shape
+  ++identifications_taken_;
+  ++model_builds_;
+  event(PipelineEventKind::kModelUpdated, measured_until_, w->revolution, unexplained,
+        "identified parameters taken by the model in lockstep");
+}
+
 void Pipeline::on_revolution(const RevolutionEvents& ev) {
   if (ev.no_data) {
     return;  // inside a gap in the samples (counted with the gap)
   }
+  take_identification();
   const auto n = static_cast<std::size_t>(ev.flutes);
   const auto first = static_cast<std::int64_t>(std::llround(ev.event_sample[0]));
   // The model follows the filtered revolution period, not one revolution's jitter.
@@ -423,6 +479,10 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   if (ev.bounded) {
     analyzer_.add_to_average(ev, events_.event_template(), ring_, sync_);
     ++sync_revolutions_since_report_;
+    if (r.spindle_rpm > 0.0) {
+      window_rpm_sum_ += r.spindle_rpm;
+      ++window_rpm_count_;
+    }
     if (config_.lockstep && lockstep_.aligned() && !realigned_ &&
         sync_.revolutions() >= sync_.window()) {
       realigned_ = true;  // once more on a full window of revolutions measured one by one
@@ -449,6 +509,8 @@ PipelineStatus Pipeline::status() const {
   s.valid_revolutions = valid_revolutions_;
   s.idle_revolutions = idle_revolutions_;
   s.model_builds = model_builds_;
+  s.identifications_taken = identifications_taken_;
+  s.identifications_rejected = identifications_rejected_;
   s.cutting_revolutions = cutting_revolutions_;
   s.utime_us = input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1));
   const auto& e = tracker_.estimate();

@@ -22,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/identify/identifier.hpp"
 #include "core/monitor/alert_engine.hpp"
 #include "core/monitor/conditioner.hpp"
 #include "core/monitor/input_check.hpp"
@@ -55,6 +56,7 @@ enum class PipelineEventKind {
   kLockAcquired,    ///< value: spindle rpm; count: revolutions found before the lock
   kLockLost,        ///< detail: why
   kModelAligned,    ///< value: alignment correlation
+  kModelUpdated,    ///< identified parameters taken by the model; value: unexplained fraction
   kCuttingStopped,  ///< value: the revolution's peak force, N
   kCuttingResumed,  ///< value: the revolution's peak force, N
   kRecordTooShort,  ///< value: seconds the configured windows need; count: samples there were
@@ -76,10 +78,12 @@ struct PipelineEvent {
 
 struct PipelineStatus {
   InputCounters input;
-  std::int64_t revolutions = 0;        ///< revolutions reported (cutting)
-  std::int64_t valid_revolutions = 0;  ///< ... with every tooth event found
-  std::int64_t idle_revolutions = 0;   ///< measured without a cutting force (not reported)
-  std::int64_t model_builds = 0;       ///< lockstep model (re)builds: locks and speed changes
+  std::int64_t revolutions = 0;            ///< revolutions reported (cutting)
+  std::int64_t valid_revolutions = 0;      ///< ... with every tooth event found
+  std::int64_t idle_revolutions = 0;       ///< measured without a cutting force (not reported)
+  std::int64_t model_builds = 0;           ///< lockstep model (re)builds: locks and speed changes
+  std::int64_t identifications_taken = 0;  ///< identified parameters the model took
+  std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
   /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
   /// durations times their speeds) — what "every revolution" is measured against.
   double cutting_revolutions = 0.0;
@@ -114,6 +118,14 @@ class Pipeline {
   /// the record was too short for.
   void finish();
 
+  /// Identification (not owned; null: none). Every synchronous-average window goes to it, due
+  /// back a window of revolutions after its end (when the next window ends); at that revolution
+  /// the model in lockstep takes the identified parameters (runout, force-law coefficients,
+  /// alignment) when the fit explains the window (at most 20 % of its variance unexplained),
+  /// else keeps its own. Revolution-counted, so a replay hands over exactly where the live run
+  /// did when no result came late (identify::Identifier).
+  void attach_identifier(identify::Identifier* identifier) { identifier_ = identifier; }
+
   [[nodiscard]] PipelineStatus status() const;
   [[nodiscard]] const MonitorConfig& config() const { return config_; }
   /// The tracker's phase model at full rate (valid while locked).
@@ -136,6 +148,10 @@ class Pipeline {
   void on_revolution(const RevolutionEvents& events);
   /// The lockstep model follows the spindle speed (rebuilt when it moved by more than 0.2 %).
   void follow_speed(double spindle_hz);
+  /// The window just completed goes to the identifier.
+  void submit_window();
+  /// The identified parameters due at this revolution, if any, go to the model.
+  void take_identification();
   void event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
              std::string_view detail, std::int64_t block_seq = 0);
 
@@ -177,6 +193,13 @@ class Pipeline {
   std::int64_t max_bridged_gap_ = 0;
   double tooth_delay_s_ = 0.0;
   RevolutionRecord record_;  // scratch for the revolution being analysed
+  identify::Identifier* identifier_ = nullptr;
+  identify::MeasuredRevolution window_;  // reused: no allocation after the first window
+  double window_rpm_sum_ = 0.0;          // speeds of the window's bounded revolutions
+  int window_rpm_count_ = 0;
+  std::int64_t lock_revolution_ = 0;  // first revolution of the current lock
+  std::int64_t identifications_taken_ = 0;
+  std::int64_t identifications_rejected_ = 0;
   std::vector<double> template_average_;
 };
 

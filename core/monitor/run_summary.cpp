@@ -98,6 +98,7 @@ void RunSummary::add(const PipelineEvent& e) {
     case PipelineEventKind::kLockAcquired:
     case PipelineEventKind::kLockLost:
     case PipelineEventKind::kModelAligned:
+    case PipelineEventKind::kModelUpdated:
     case PipelineEventKind::kCuttingStopped:
     case PipelineEventKind::kCuttingResumed:
       return;  // normal operation, not a warning
@@ -234,7 +235,10 @@ nlohmann::json RunSummary::to_json() const {
             {{"alpha_deg", number_or_null(model_alpha_.mean())},
              {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
              {"lockstep", config_.lockstep},
-             {"builds", status_.model_builds}}},
+             {"builds", status_.model_builds},
+             // Identified parameters the model in lockstep took (and fits it did not take).
+             {"identified_parameters_taken", status_.identifications_taken},
+             {"identified_parameters_rejected", status_.identifications_rejected}}},
            {"alerts", alerts_},
            {"dropped_samples", in.samples_dropped},
            {"warnings", warnings},

@@ -276,9 +276,24 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   EXPECT_DOUBLE_EQ(offline["alpha_deg"]["mean"].get<double>(),
                    live["alpha_deg"]["mean"].get<double>());
   EXPECT_DOUBLE_EQ(offline["delta_fy_N"].get<double>(), live["delta_fy_N"].get<double>());
+  // The residuals are against the model with the identified parameters, taken at each result's
+  // due revolution: the replay waits for every fit, the live run never does. They agree exactly
+  // when the live identifier kept up (no window dropped, no result late); on a machine too busy
+  // for that, the live run said so in its summary and the residuals agree to a few percent.
+  ASSERT_TRUE(live.contains("fit")) << live.dump(2);
+  const bool kept_up =
+      live["fit"]["windows_dropped"].get<int>() == 0 && live["fit"]["results_late"].get<int>() == 0;
+  EXPECT_GT(offline["model"]["identified_parameters_taken"].get<int>(), 0) << offline.dump(2);
+  EXPECT_EQ(offline["fit"]["windows_dropped"].get<int>(), 0);
+  EXPECT_EQ(offline["fit"]["results_late"].get<int>(), 0);
   for (const char* axis : {"fx", "fy", "fz"}) {
-    EXPECT_DOUBLE_EQ(offline["residual_rms_N"][axis].get<double>(),
-                     live["residual_rms_N"][axis].get<double>());
+    const double a = offline["residual_rms_N"][axis].get<double>();
+    const double b = live["residual_rms_N"][axis].get<double>();
+    if (kept_up) {
+      EXPECT_DOUBLE_EQ(a, b) << axis;
+    } else {
+      EXPECT_NEAR(a, b, 0.05 * b) << axis << ": the live identifier fell behind";
+    }
   }
 
   // lcm-logplayer feeds the recorded raw log into a fresh daemon, stopped by SIGINT this time:

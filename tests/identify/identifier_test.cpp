@@ -1,5 +1,7 @@
-// The continuous identifier: windows fitted in its worker thread, the newest one first, each
-// result handed to the callback; a finished identifier ignores later windows.
+// The continuous identifier: windows fitted in its worker thread, each result handed to the
+// callback and handed over at its due revolution — waited for in a replay, taken when ready
+// live (late ones counted, a backlog dropped oldest first); a finished identifier ignores later
+// windows.
 
 #include "core/identify/identifier.hpp"
 
@@ -47,28 +49,69 @@ std::complex<double> pass_band(double hz) {
   return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
 }
 
-TEST(Identifier, FitsEveryWindowItGetsToAndCountsTheRest) {
+TEST(Identifier, LiveItFitsWhatItGetsToDropsTheBacklogAndCountsLateResults) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
   model::ModelConfig start = truth;
   start.effects.runout.offset_um = 0.0;
   std::atomic<int> calls{0};
-  Identifier id(start, pass_band, FitOptions{}, [&](const IdentifiedWindow&) { ++calls; });
+  Identifier id(
+      start, pass_band, FitOptions{}, [&](const IdentifiedWindow&) { ++calls; },
+      HandOver::kWhenReady);
   const MeasuredRevolution w = window_of(truth);
-  for (int k = 1; k <= 5; ++k) {
-    id.submit(w, 30 * k, 1000 * k);  // faster than the worker fits: some are superseded
+  id.submit(w, 30, 1000, 60);
+  // Due at once, but a fit takes tens of milliseconds: not waited for, counted late once.
+  EXPECT_FALSE(id.take_due(60).has_value());
+  EXPECT_FALSE(id.take_due(61).has_value());
+  EXPECT_EQ(id.late(), 1);
+  for (int k = 2; k <= 6; ++k) {
+    id.submit(w, 30 * k, 1000 * k, 30 * k + 30);  // far faster than the worker fits
   }
   id.finish();
-  id.submit(w, 999, 999);  // after finish(): ignored
-  EXPECT_EQ(id.fitted() + id.superseded(), 5);
-  EXPECT_GE(id.fitted(), 1);
+  id.submit(w, 999, 999, 999);  // after finish(): ignored
+  // One fitting and at most two waiting at any time: at least three of six dropped.
+  EXPECT_EQ(id.fitted() + id.superseded(), 6);
+  EXPECT_GE(id.superseded(), 3);
   EXPECT_EQ(calls.load(), id.fitted());
+  // Every result fitted is handed over, oldest first, the newest last.
+  std::int64_t previous = 0;
+  int handed = 0;
+  while (const auto r = id.take_due(1000)) {
+    EXPECT_GT(r->revolution, previous);
+    previous = r->revolution;
+    ++handed;
+  }
+  EXPECT_EQ(handed, id.fitted());
+  EXPECT_EQ(previous, 180);
   const auto last = id.latest();
   ASSERT_TRUE(last.has_value());
-  EXPECT_EQ(last->revolution, 150);  // the newest window is never dropped
+  EXPECT_EQ(last->revolution, 180);  // the newest window is never dropped
   ASSERT_TRUE(last->fit.ok) << last->fit.message;
   EXPECT_NEAR(last->fit.rho_um.value, 1.2, 2.0 * last->fit.rho_um.sigma);
   EXPECT_LT(last->fit.rho_um.sigma, 0.05);
   EXPECT_GT(last->fit_seconds, 0.0);
+}
+
+TEST(Identifier, InAReplayEveryResultIsHandedOverAtItsDueRevolutionInOrder) {
+  const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
+  model::ModelConfig start = truth;
+  start.effects.runout.offset_um = 0.0;
+  Identifier id(start, pass_band, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution w = window_of(truth);
+  for (int k = 1; k <= 3; ++k) {
+    id.submit(w, 30 * k, 1000 * k, 30 * k + 45);
+  }
+  EXPECT_FALSE(id.take_due(74).has_value());  // nothing due yet: no waiting either
+  for (int k = 1; k <= 3; ++k) {
+    const auto r = id.take_due(30 * k + 45);  // waits for the fit
+    ASSERT_TRUE(r.has_value());
+    EXPECT_EQ(r->revolution, 30 * k);
+    ASSERT_TRUE(r->fit.ok) << r->fit.message;
+    EXPECT_NEAR(r->fit.rho_um.value, 1.2, std::max(0.05, 2.0 * r->fit.rho_um.sigma));
+  }
+  EXPECT_FALSE(id.take_due(1000).has_value());
+  EXPECT_EQ(id.fitted(), 3);
+  EXPECT_EQ(id.superseded(), 0);
+  EXPECT_EQ(id.late(), 0);
 }
 
 TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
@@ -77,12 +120,12 @@ TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
   model::ModelConfig start = before;
   start.effects.runout.offset_um = 0.0;
   Identifier id(start, pass_band, FitOptions{}, nullptr);
-  id.submit(window_of(before), 30, 1);
+  id.submit(window_of(before), 30, 1, 60);
   while (id.fitted() < 1) {
     std::this_thread::yield();
   }
   const double rho_before = id.latest()->fit.rho_um.value;
-  id.submit(window_of(after), 60, 2);  // seeded with the old runout: must search afresh
+  id.submit(window_of(after), 60, 2, 90);  // seeded with the old runout: must search afresh
   id.finish();
   const auto last = id.latest();
   ASSERT_TRUE(last.has_value() && last->fit.ok);
