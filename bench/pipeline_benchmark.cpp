@@ -9,6 +9,7 @@
 #include <chrono>
 #include <vector>
 
+#include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/sim/cut_simulator.hpp"
 
@@ -98,6 +99,53 @@ void BM_Pipeline(benchmark::State& state) {
 }
 // Blocks of 1 ms at each rate (a DAQ bridge's typical message).
 BENCHMARK(BM_Pipeline)->Args({50000, 50})->Args({333300, 333})->Unit(benchmark::kMillisecond);
+
+/// The daemon's sample thread at 333.3 kHz while identification runs in its worker thread (live
+/// hand-over: never waits): throughput of the sample thread with a fit in progress most of the
+/// time, and what the worker kept up with (windows fitted, dropped, results late, taken).
+void BM_PipelineWithIdentification(benchmark::State& state) {
+  const double fs = 333300.0;
+  const std::size_t block = 333;
+  const Recording r = make_recording(fs, 2.5);
+  monitor::MonitorConfig c;
+  c.sample_rate_hz = fs;
+  double processed_s = 0.0;
+  std::int64_t fitted = 0, dropped = 0, late = 0, taken = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    monitor::PipelineSink sink;
+    monitor::Pipeline p(c, sink);
+    const signal::ButterworthDesign filter = p.filter();
+    identify::Identifier id(
+        c.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
+        nullptr, identify::HandOver::kWhenReady);
+    p.attach_identifier(&id);
+    state.ResumeTiming();
+    for (std::size_t i = 0; i < r.t.size(); i += block) {
+      const std::size_t n = std::min(block, r.t.size() - i);
+      p.process({std::llround(r.t[i] * 1e6), 0, fs, std::span(r.fx).subspan(i, n),
+                 std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
+    }
+    state.PauseTiming();
+    processed_s += static_cast<double>(r.t.size()) / fs;
+    p.attach_identifier(nullptr);
+    id.finish();
+    fitted += id.fitted();
+    dropped += id.superseded();
+    late += id.late();
+    taken += p.status().identifications_taken;
+    state.ResumeTiming();
+  }
+  state.counters["x_realtime"] = benchmark::Counter(processed_s, benchmark::Counter::kIsRate);
+  const auto per_run = [&](std::int64_t x) {
+    return static_cast<double>(x) / static_cast<double>(state.iterations());
+  };
+  state.counters["windows_fitted"] = per_run(fitted);
+  state.counters["windows_dropped"] = per_run(dropped);
+  state.counters["results_late"] = per_run(late);
+  state.counters["taken"] = per_run(taken);
+}
+BENCHMARK(BM_PipelineWithIdentification)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 /// What a new lock costs once: building the lockstep model at the measured speed.
 void BM_LockstepModelBuild(benchmark::State& state) {
