@@ -13,6 +13,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/model/abeni_runout.hpp"
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
 #include "core/monitor/pipeline.hpp"
@@ -32,9 +33,15 @@ struct Window : monitor::PipelineSink {
   MeasuredRevolution measured;
   double rpm_sum = 0.0;
   int revolutions = 0;
+  double alpha_deg = 0.0;   // the monitor's α over its last window ([001] eq 36)
+  double delta_fy_N = 0.0;  // and ΔF_y,max
   void on_revolution(const monitor::RevolutionRecord& r) override {
     rpm_sum += r.spindle_rpm;
     ++revolutions;
+    if (r.window_revolutions > 0) {
+      alpha_deg = r.alpha_mean_deg;
+      delta_fy_N = r.delta_fy_mean_N;
+    }
   }
   void on_sync_average(const monitor::SyncAverage& s, const monitor::Lockstep*, std::int64_t,
                        std::int64_t) override {
@@ -63,6 +70,11 @@ struct Outcome {
   double rho_error_um = 0.0;
   double gamma_error_rad = 0.0;  // modulo the labelling
   double worst_coefficient = 0.0;
+  // Two flutes: r_CE1 − r_CE2 (µm) as it is, as the fit says and as [001] eq 29 says from the
+  // monitor's α and ΔF_y (K_ts the true K_tc, the commanded feed rate, the measured speed).
+  double truth_difference_um = 0.0;
+  double fit_difference_um = 0.0;
+  double abeni_difference_um = 0.0;
 };
 
 Outcome identify_case(const Case& k) {
@@ -141,6 +153,19 @@ Outcome identify_case(const Case& k) {
     }
   }
   o.radius_error_um = best;
+  if (k.flutes == 2) {
+    o.truth_difference_um = std::fabs(truth_pos[0].radius_um - truth_pos[1].radius_um);
+    o.fit_difference_um = -o.fit.radius_from_ce1_um[1].value;
+    model::AbeniInputs in;
+    in.diameter_mm = k.diameter_mm;
+    in.alpha_rad = w.alpha_deg * kPi / 180.0;
+    in.delta_fy_max_N = w.delta_fy_N;
+    in.k_ts_N_per_mm2 = m.material.linear_edge.k_tc_N_per_mm2;
+    in.axial_depth_mm = m.process.axial_depth_mm;
+    in.feed_mm_per_min = 1e-3 * k.feed_um * 2 * m.process.spindle_rpm;
+    in.spindle_speed_rad_per_s = w.measured.spindle_rpm * 2.0 * kPi / 60.0;
+    o.abeni_difference_um = 1e3 * model::abeni_radius_difference_mm(in);
+  }
   o.rho_error_um = std::fabs(o.fit.rho_um.value - k.rho_um);
   o.gamma_error_rad = std::fabs(
       wrap_pi(o.fit.gamma_rad.value - (k.gamma_rad + pitch[static_cast<std::size_t>(shift)])));
@@ -196,6 +221,16 @@ TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {
         o.fit.measured_rms_N[1], o.fit.harmonics, o.fit.iterations, o.fit.evaluations);
     for (const auto& e : o.fit.coefficients) {
       std::printf("    %s %.2f ± %.2f\n", e.name.c_str(), e.value, e.sigma);
+    }
+    if (k.flutes == 2) {
+      // The fit reads the radius difference from the whole waveform; [001]'s two features of it
+      // (α, ΔF_y) through eq 29 miss it by tenths of a micrometre or more.
+      EXPECT_LT(std::fabs(o.fit_difference_um - o.truth_difference_um),
+                0.25 * std::fabs(o.abeni_difference_um - o.truth_difference_um))
+          << k.name;
+      std::printf("    r_CE1 - r_CE2: truth %.3f um, fit %.3f ± %.3f um, [001] eq 29 %.3f um\n",
+                  o.truth_difference_um, o.fit_difference_um, o.fit.radius_from_ce1_um[1].sigma,
+                  o.abeni_difference_um);
     }
     for (const auto& c : o.fit.correlated) {
       std::printf("    correlated: %s, %s\n", c.first.c_str(), c.second.c_str());
