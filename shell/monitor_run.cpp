@@ -29,6 +29,13 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.idle_revolutions += s.idle_revolutions;
 }
 
+identify::FitOptions fit_options(const monitor::MonitorConfig& c) {
+  identify::FitOptions o;
+  o.extra_parameters = c.identification.extra_parameters;
+  o.runout_prior_um = c.identification.runout_prior_um;
+  return o;
+}
+
 }  // namespace
 
 MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
@@ -42,7 +49,7 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
         std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);
   }
   pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
-  if (options_.identify) {
+  if (options_.identify && config.identification.enabled) {
     start_identifier(config);
   }
 }
@@ -55,10 +62,11 @@ void MonitorRun::start_identifier(const monitor::MonitorConfig& config) {
     return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
   };
   if (identifier_) {
-    identifier_->restart(config.model, std::move(response));  // does not wait for a fit
+    identifier_->restart(config.model, std::move(response),
+                         fit_options(config));  // does not wait for a fit
   } else {
     identifier_ = std::make_unique<identify::Identifier>(
-        config.model, std::move(response), identify::FitOptions{},
+        config.model, std::move(response), fit_options(config),
         [this](const identify::IdentifiedWindow& w) { on_identified(w); }, options_.hand_over);
   }
   pipeline_->attach_identifier(identifier_.get());
@@ -110,10 +118,10 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   pipeline_->finish();  // samples held for zero-phase filtering are measured first
   carry(carried_, pipeline_->status());
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
-  if (options_.identify) {
-    old->attach_identifier(nullptr);
+  old->attach_identifier(nullptr);
+  if (options_.identify && pipeline_->config().identification.enabled) {
     start_identifier(pipeline_->config());  // the new configuration's model
-  }
+  }  // else the identifier stays idle: no pipeline hands it windows
   return old;
 }
 

@@ -107,14 +107,15 @@ std::optional<IdentifiedWindow> Identifier::take_due(std::int64_t revolution) {
   return out;
 }
 
-void Identifier::restart(const model::ModelConfig& model, FilterResponse filter) {
+void Identifier::restart(const model::ModelConfig& model, FilterResponse filter,
+                         FitOptions options) {
   {
     const std::lock_guard lock(mutex_);
     queue_.remove_if([](const Entry& e) { return !e.fitting; });
     for (Entry& e : queue_) {
       e.stale = true;  // the one being fitted: removed when it ends
     }
-    next_model_.emplace(model, std::move(filter));
+    next_model_ = NextModel{model, std::move(filter), std::move(options)};
   }
   wake_.notify_one();
 }
@@ -167,11 +168,12 @@ void Identifier::run() {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stop_ || next() != nullptr || next_model_.has_value(); });
       if (next_model_) {
-        auto [model, filter] = std::move(*next_model_);
+        NextModel next_model = std::move(*next_model_);
         next_model_.reset();
+        options_ = next_model.options;
         lock.unlock();
-        fitter_ = WindowFitter(model, filter, options_);
-        quick_fitter_ = WindowFitter(model, std::move(filter), quick(options_));
+        fitter_ = WindowFitter(next_model.model, next_model.filter, options_);
+        quick_fitter_ = WindowFitter(next_model.model, next_model.filter, quick(options_));
         previous.reset();
         systematic_.reset();
         continue;

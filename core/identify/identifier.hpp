@@ -68,7 +68,7 @@ class Identifier {
   std::optional<IdentifiedWindow> take_due(std::int64_t revolution);
   /// A new model (a reconfiguration): windows still waiting are dropped, the fit in progress is
   /// discarded, and the worker fits later windows with the new model. Does not wait.
-  void restart(const model::ModelConfig& model, FilterResponse filter);
+  void restart(const model::ModelConfig& model, FilterResponse filter, FitOptions options);
   /// Fits what is waiting and stops the worker; later submits are ignored.
   void finish();
 
@@ -105,7 +105,12 @@ class Identifier {
   WindowFitter quick_fitter_;            // the same without the systematic variants
   std::optional<FitResult> systematic_;  // the last fit with them
   int since_systematic_ = 0;
-  std::optional<std::pair<model::ModelConfig, FilterResponse>> next_model_;  // restart()
+  struct NextModel {
+    model::ModelConfig model;
+    FilterResponse filter;
+    FitOptions options;
+  };
+  std::optional<NextModel> next_model_;  // restart()
   Callback on_result_;
   HandOver hand_over_;
   mutable std::mutex mutex_;

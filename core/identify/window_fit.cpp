@@ -827,6 +827,16 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     sys2[0] += floor_um * floor_um;
     sys2[1] += floor_um * floor_um;
   }
+  // The same floor for the other chip-thickness parameters (h_min, a wear land): the measured
+  // chip's errors move them on the same scale (h_min by 0.35 % of f_t on a simulated cut).
+  for (int i = 0; i < extra_map.size(); ++i) {
+    const auto id = extra_map.parameters[static_cast<std::size_t>(i)].id;
+    if (id == model::ParameterId::kHmin || id == model::ParameterId::kWear ||
+        id == model::ParameterId::kWearFlute) {
+      const double floor_um = 0.005 * commanded.process.feed_per_tooth_um;
+      sys2[2 + i] += floor_um * floor_um;
+    }
+  }
 
   // Reported parameters: ρ, γ from (u, v) by the delta method.
   const double u = theta[0], v = theta[1];

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/config/json_reader.hpp"
+#include "core/model/parameter_map.hpp"
 #include "core/monitor/revolution_record.hpp"
 
 namespace millwatch::monitor {
@@ -63,6 +64,41 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     c.lockstep = l.boolean("enabled", c.lockstep);
     c.residual_sectors = l.integer("sectors", c.residual_sectors, 1, kMaxSectors);
     l.finish();
+  }
+  {
+    auto id = r.object("identification");
+    auto& o = c.identification;
+    o.enabled = id.boolean("enabled", o.enabled);
+    const nlohmann::json& extra = id.raw("extra_parameters");
+    const std::string field = join(path, "identification.extra_parameters");
+    if (!extra.is_null()) {
+      if (!extra.is_array()) {
+        config::fail(field,
+                     "expected an array of parameter names, got " + config::describe_json(extra));
+      }
+      for (const auto& e : extra) {
+        if (!e.is_string()) {
+          config::fail(field, "expected parameter names, got " + config::describe_json(e));
+        }
+        o.extra_parameters.push_back(e.get<std::string>());
+      }
+    }
+    o.max_unexplained = id.number("max_unexplained", o.max_unexplained, config::positive(1.0));
+    o.runout_prior_um =
+        id.number("runout_prior_um", o.runout_prior_um, config::non_negative(1000.0, "um"));
+    id.finish();
+    model::ParameterMap map;
+    try {
+      map = model::make_parameter_map(c.model, o.extra_parameters);
+    } catch (const std::invalid_argument& e) {
+      config::fail(field, e.what());
+    }
+    for (const auto& p : map.parameters) {
+      if (p.effect != "force_law" && !model::effect_enabled(c.model, p.effect)) {
+        config::fail(field, p.name + " belongs to effects." + p.effect +
+                                ", which is off in the model: nothing to fit");
+      }
+    }
   }
   c.alerts = alert_config_from_json(r.raw("alerts"), join(path, "alerts"));
   r.finish();
@@ -139,6 +175,11 @@ nlohmann::json to_json(const MonitorConfig& c) {
             {"window_revolutions", c.sync_window_revolutions},
             {"template_revolutions", c.template_revolutions}}},
           {"lockstep", {{"enabled", c.lockstep}, {"sectors", c.residual_sectors}}},
+          {"identification",
+           {{"enabled", c.identification.enabled},
+            {"extra_parameters", c.identification.extra_parameters},
+            {"max_unexplained", c.identification.max_unexplained},
+            {"runout_prior_um", c.identification.runout_prior_um}}},
           {"alerts", to_json(c.alerts)}};
 }
 

@@ -13,12 +13,15 @@
 //     "tooth_periods": {"window_revolutions": 30, "search_fraction_of_pitch": 0.3},
 //     "sync_average": {"bins": 256, "window_revolutions": 30, "template_revolutions": 10},
 //     "lockstep": {"enabled": true, "sectors": 12},
+//     "identification": {"enabled": true, "extra_parameters": ["h_min_um"],
+//                        "max_unexplained": 0.2, "runout_prior_um": 5},
 //     "alerts": { AlertConfig } }
 
 #include <array>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/model/model_config.hpp"
 #include "core/monitor/alert_engine.hpp"
@@ -48,6 +51,17 @@ struct MonitorConfig {
   int template_revolutions = 10;  ///< revolutions averaged before the valleys are located
   bool lockstep = true;
   int residual_sectors = 12;
+  /// Identification of runout and coefficients on every sync-average window (core/identify).
+  struct Identification {
+    bool enabled = true;
+    /// Further nonlinear parameters fitted (model::parameter_map names, e.g. "h_min_um",
+    /// "stiffness_N_per_um"); each must exist for the configured model's effects and law.
+    std::vector<std::string> extra_parameters;
+    /// The model in lockstep takes a fit that leaves at most this fraction of the window's
+    /// variance unexplained.
+    double max_unexplained = 0.2;
+    double runout_prior_um = 5.0;  ///< identify::FitOptions::runout_prior_um
+  } identification;
   AlertConfig alerts;
 };
 

@@ -420,7 +420,7 @@ void Pipeline::take_identification() {
     measured2 += fit.measured_rms_N[a] * fit.measured_rms_N[a];
   }
   const double unexplained = measured2 > 0.0 ? residual2 / measured2 : 1.0;
-  if (!config_.lockstep || !fit.ok || !(unexplained <= kAcceptedUnexplained)) {
+  if (!config_.lockstep || !fit.ok || !(unexplained <= config_.identification.max_unexplained)) {
     ++identifications_rejected_;
     return;
   }

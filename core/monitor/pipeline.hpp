@@ -121,7 +121,8 @@ class Pipeline {
   /// Identification (not owned; null: none). Every synchronous-average window goes to it, due
   /// back a window of revolutions after its end (when the next window ends); at that revolution
   /// the model in lockstep takes the identified parameters (runout, force-law coefficients,
-  /// alignment) when the fit explains the window (at most 20 % of its variance unexplained),
+  /// alignment) when the fit explains the window (at most identification.max_unexplained of its
+  /// variance unexplained, 20 % by default),
   /// else keeps its own. Revolution-counted, so a replay hands over exactly where the live run
   /// did when no result came late (identify::Identifier).
   void attach_identifier(identify::Identifier* identifier) { identifier_ = identifier; }

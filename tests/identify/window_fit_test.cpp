@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "core/model/abeni_runout.hpp"
@@ -308,6 +309,73 @@ TEST(WindowFit, FitsTheSteadyStateOfAFinerModel) {
       EXPECT_LT(radius_error, 0.05);
       EXPECT_LT(std::fabs(f.rho_um.value - 1.2), 2.0 * f.rho_um.sigma);
     }
+  }
+}
+
+}  // namespace
+}  // namespace millwatch::identify
+
+namespace millwatch::identify {
+namespace {
+
+// Optional nonlinear parameters (FitOptions::extra_parameters): the minimum chip thickness and
+// the tool's stiffness, each fitted beside the runout and the coefficients on the exact
+// revolution of a finer truth ([000]'s power law with its ploughing regime; 20 discs against
+// the fitter's 5), from a start 2× off.
+TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
+  struct Extra {
+    const char* name;
+    double truth;
+  };
+  for (const Extra x : {Extra{"h_min_um", 0.6}, Extra{"stiffness_N_per_um", 0.5}}) {
+    model::ModelConfig m = model::without_effects(model::ModelConfig{});  // [000]'s cp-Ti law
+    m.process.feed_per_tooth_um = 2.0;
+    model::set_effect(m, "runout", true);
+    m.effects.runout.offset_um = 0.4;
+    m.effects.runout.angle_rad = 0.5;
+    model::set_effect(m, "helix_lag", true);
+    const bool h_min = std::string(x.name) == "h_min_um";
+    model::set_effect(m, h_min ? "min_chip" : "deflection", true);
+    if (h_min) {
+      m.effects.min_chip.h_min_um = x.truth;
+    } else {
+      m.effects.deflection.stiffness_N_per_um = x.truth;
+    }
+    model::ModelConfig truth = m;
+    truth.effects.helix_lag.discs = 20;
+    model::SteadyStateWorkspace ws;
+    const auto& ss = model::evaluate_steady_state(truth, m.process.spindle_rpm, 1440, ws);
+    MeasuredRevolution measured;
+    measured.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
+    measured.spindle_rpm = m.process.spindle_rpm;
+    measured.revolutions = 30;
+    measured.shared_bins = false;
+    model::ModelConfig start = m;
+    start.effects.runout.offset_um = 0.0;
+    if (h_min) {
+      start.effects.min_chip.h_min_um = 2.0 * x.truth;
+    } else {
+      start.effects.deflection.stiffness_N_per_um = 2.0 * x.truth;
+    }
+    FitOptions options;
+    options.extra_parameters = {x.name};
+    WindowFitter fitter(
+        start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); },
+        options);
+    const FitResult f = fitter.fit(measured);
+    ASSERT_TRUE(f.ok) << x.name << ": " << f.message;
+    ASSERT_EQ(f.extra.size(), 1u);
+    const Estimate& e = f.extra[0];
+    std::printf(
+        "%s: %.3f ± %.3f (truth %.3f); rho %.3f ± %.3f; residual %.4f of %.3f N; %ld "
+        "evaluations\n",
+        x.name, e.value, e.sigma, x.truth, f.rho_um.value, f.rho_um.sigma, f.residual_rms_N[1],
+        f.measured_rms_N[1], f.evaluations);
+    EXPECT_EQ(e.name, x.name);
+    EXPECT_GT(e.sigma, 0.0);
+    EXPECT_NEAR(e.value, x.truth, std::max(2.0 * e.sigma, 0.0));
+    EXPECT_NEAR(e.value, x.truth, 0.1 * x.truth);
+    EXPECT_LT(f.residual_rms_N[1], 0.01 * f.measured_rms_N[1]);
   }
 }
 
