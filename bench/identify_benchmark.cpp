@@ -44,13 +44,16 @@ MeasuredRevolution measured_from(const model::ModelConfig& truth) {
   return m;
 }
 
-void fit(benchmark::State& state, int flutes, model::Operation op, bool from_previous) {
+void fit(benchmark::State& state, int flutes, model::Operation op, bool from_previous,
+         bool systematic = true) {
   const model::ModelConfig truth = cut(flutes, op);
   const MeasuredRevolution measured = measured_from(truth);
   model::ModelConfig start = truth;
   start.effects.runout.offset_um = 0.0;
-  WindowFitter fitter(start,
-                      [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); });
+  millwatch::identify::FitOptions options;
+  options.systematic = systematic;
+  WindowFitter fitter(
+      start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); }, options);
   const FitResult first = fitter.fit(measured);
   long evaluations = 0;
   for (auto _ : state) {
@@ -71,7 +74,17 @@ void BM_FitFourFluteDown(benchmark::State& s) {
 void BM_FitTwoFluteSlotFromPrevious(benchmark::State& s) {
   fit(s, 2, model::Operation::kSlot, true);
 }
+// Without the systematic variants: the continuous identifier's windows between two refits of
+// the variants (identify::Identifier, every 10th window or on a change).
+void BM_FitTwoFluteSlotWithoutVariants(benchmark::State& s) {
+  fit(s, 2, model::Operation::kSlot, false, false);
+}
+void BM_FitTwoFluteSlotFromPreviousWithoutVariants(benchmark::State& s) {
+  fit(s, 2, model::Operation::kSlot, true, false);
+}
 BENCHMARK(BM_FitTwoFluteSlot)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FitTwoFluteSlotWithoutVariants)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FitTwoFluteSlotFromPreviousWithoutVariants)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitFourFluteDown)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotFromPrevious)->Unit(benchmark::kMillisecond);
 

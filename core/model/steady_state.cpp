@@ -1386,16 +1386,21 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
         const double ct = cos_theta[el];
         const double st = sin_theta[el];
         const auto uj = static_cast<std::size_t>(j);
+        const double weight = 1.0 / evaluations;
         for (int e = 0; e < evaluations; ++e) {
           const int c = area_law ? positive_mod(e - phase[us], p) : e;
           element(rec[static_cast<std::size_t>(c) * n + uj], j, area_of(us, uj, e));
           for (std::size_t col = 0; col < ncol; ++col) {
-            const double t = tna[col][0];
-            const double nn = tna[col][1];
+            const double t = tna[col][0] * weight;
+            const double nn = tna[col][1] * weight;
+            const double a = tna[col][2] * weight;
+            if (t == 0.0 && nn == 0.0 && a == 0.0) {
+              continue;  // most columns see one axis of one regime
+            }
             const std::size_t at = (col * n + uj) * s + static_cast<std::size_t>(b);
-            basis_flute[0][at] += (-t * ct - nn * st) / evaluations;
-            basis_flute[1][at] += (t * st - nn * ct) / evaluations;
-            basis_flute[2][at] += tna[col][2] / evaluations;
+            basis_flute[0][at] += -t * ct - nn * st;
+            basis_flute[1][at] += t * st - nn * ct;
+            basis_flute[2][at] += a;
           }
         }
       }
