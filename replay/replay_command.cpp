@@ -427,6 +427,9 @@ int replay_many(const ReplayOptions& o) {
       if (o.zero_phase) {
         args.push_back("--zero-phase");
       }
+      if (!o.identify) {
+        args.push_back("--no-identify");
+      }
       running[spawn(args)] = k;
     }
     if (running.empty()) {

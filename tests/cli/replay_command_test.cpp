@@ -44,10 +44,12 @@ struct ReplayRun {
   nlohmann::json summary;
 };
 
-ReplayRun replay(const std::string& args, const fs::path& summary) {
-  const auto r =
-      test::run_command("(" + test::millwatch_cli() + " replay " + args + " --summary " +
-                        summary.string() + " 2>" + (summary.string() + ".log") + " >/dev/null)");
+/// `millwatch replay ARGS`; without identification unless asked (the tests that do not look at
+/// it run faster; identification has its own tests and SummarisesASimulatedCut runs it).
+ReplayRun replay(const std::string& args, const fs::path& summary, bool identify = false) {
+  const auto r = test::run_command(
+      "(" + test::millwatch_cli() + " replay " + args + (identify ? "" : " --no-identify") +
+      " --summary " + summary.string() + " 2>" + (summary.string() + ".log") + " >/dev/null)");
   ReplayRun out{r.exit_code, "", nullptr};
   std::stringstream log;
   log << std::ifstream(summary.string() + ".log").rdbuf();
@@ -61,7 +63,7 @@ ReplayRun replay(const std::string& args, const fs::path& summary) {
 TEST(ReplayCommand, SummarisesASimulatedCutWithTheIssuesKeys) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulate(dir, "cut", base_scenario());
-  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  const ReplayRun r = replay(csv.string(), dir / "summary.json", true);
   ASSERT_EQ(r.exit_code, 0) << r.log;
   const auto& j = r.summary;
   for (const char* key :

@@ -74,12 +74,14 @@ std::string without_log(const std::string& command) {
   return s;
 }
 
-/// Runs `millwatch replay ARGS --summary DIR/NAME.json`; the summary (null if none).
+/// Runs `millwatch replay ARGS --no-identify --summary DIR/NAME.json`; the summary (null if
+/// none). The formats must agree on what the monitor measures; identification (which only
+/// follows from it) has its own tests.
 nlohmann::json replay(const std::string& args, const fs::path& dir, const std::string& name,
                       test::CommandResult* result = nullptr) {
   const fs::path summary = dir / (name + ".json");
-  const auto r = test::run_command(test::millwatch_cli() + " replay " + args + " --summary " +
-                                   summary.string() + " 2>&1");
+  const auto r = test::run_command(test::millwatch_cli() + " replay " + args +
+                                   " --no-identify --summary " + summary.string() + " 2>&1");
   if (result != nullptr) {
     *result = r;
   }
@@ -352,7 +354,8 @@ TEST(ReplayFormats, ProgressLineOnlyOnATerminal) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulated_cut(dir);
   // 0.5 s of recording at a quarter of real time: 2 s, then the progress line appears.
-  const std::string cmd = test::millwatch_cli() + " replay " + csv.string() + " --speed 0.2";
+  const std::string cmd =
+      test::millwatch_cli() + " replay " + csv.string() + " --speed 0.2 --no-identify";
   const auto tty = test::run_command("script -qec '" + cmd + " >/dev/null' /dev/null");
   ASSERT_EQ(tty.exit_code, 0) << tty.output;
   EXPECT_NE(tty.output.find("% "), std::string::npos) << tty.output;
@@ -442,8 +445,8 @@ TEST(ReplayFormats, ACampaignReportsAFailedCutAndExitsNonZero) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulated_cut(dir);
   std::ofstream(dir / "broken.csv") << "what,is,this\n1,2,3\n";
-  const auto r = test::run_command(test::millwatch_cli() + " replay " + csv.string() + " " +
-                                   (dir / "broken.csv").string() + " --sidecar " +
+  const auto r = test::run_command(test::millwatch_cli() + " replay --no-identify " + csv.string() +
+                                   " " + (dir / "broken.csv").string() + " --sidecar " +
                                    (dir / "cut.json").string() + " --table " +
                                    (dir / "t.csv").string() + " 2>&1");
   EXPECT_EQ(r.exit_code, 1) << r.output;
