@@ -118,6 +118,33 @@ struct FitResult {
       "flute 0 = CE1, the flute with the largest cut (no once-per-revolution reference)";
 };
 
+/// One cut of a joint fit (fit_cuts): the cut as commanded (its own feed per tooth, speed and
+/// engagement; the tool, the force law and the effects shared with the other cuts), the filter
+/// its measurement went through, and its revolution-synchronous average.
+struct FitCut {
+  std::string name;  ///< for messages (e.g. the recording's file name)
+  model::ModelConfig model;
+  FilterResponse filter;
+  MeasuredRevolution measured;
+};
+
+/// What a joint fit says about one of its cuts.
+struct CutFitQuality {
+  Estimate alignment_rad;                  ///< this cut's model angle minus tracker angle
+  std::array<double, 3> residual_rms_N{};  ///< per axis, over the harmonics compared
+  std::array<double, 3> measured_rms_N{};  ///< the measurement's, same harmonics
+  int harmonics = 0;                       ///< K of this cut
+  int effective_samples = 0;               ///< real harmonic values compared
+};
+
+struct JointFitResult {
+  /// The shared estimates: runout, radii, coefficients, correlations (the alignments named
+  /// "alignment_rad[i]"), iterations; `config` is the first cut's with the fitted values,
+  /// `alignment_rad` the first cut's, residual and measured RMS over all cuts together.
+  FitResult fit;
+  std::vector<CutFitQuality> cuts;  ///< per cut, in the order given
+};
+
 class WindowFitter {
  public:
   /// @param model the cut as commanded (process.spindle_rpm is the commanded speed); its effects
@@ -135,10 +162,23 @@ class WindowFitter {
 
   [[nodiscard]] const FitOptions& options() const;
 
+  struct Impl;  ///< the fitting machinery; fit_cuts uses it with several cuts
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Joint fit over several cuts with the same tool and clamping ([000] Sect. 5, [001] Table 4: a
+/// feed sweep): one set of force-law coefficients and one runout (u, v) for all cuts, one
+/// alignment δ per cut (each cut has its own tracker zero). Each cut is fitted in its own
+/// spindle harmonics through its own filter, at its own speed and feed; the coefficients are
+/// solved by linear least squares over the stacked harmonics of every cut. The same starts,
+/// σ treatment (statistical with the effective number of harmonic values, systematic spread over
+/// the model variants, the floor), correlation flags and CE1 relabelling as WindowFitter, which
+/// is this fit with one cut.
+/// @throws std::invalid_argument naming the cut when there is none, or when a cut's tool, force
+///         law or effects differ from the first cut's (one tool, one clamping)
+JointFitResult fit_cuts(const std::vector<FitCut>& cuts, const FitOptions& options = {});
 
 /// The spindle harmonics k = 1..count of a revolution on a uniform grid: X[k] = (2/B)·Σ_b x[b]·
 /// e^{−2πikb/B} (amplitude convention: x ≈ mean + Σ Re(X[k]·e^{ikφ})).
