@@ -1000,6 +1000,20 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     sys2[0] += floor_um * floor_um;
     sys2[1] += floor_um * floor_um;
   }
+  if (options.coefficient_floor > 0.0) {
+    const int ne = extra_map.size();
+    for (int i = 0; i < (separable ? 0 : coefficient_map.size()); ++i) {
+      const double f = options.coefficient_floor * theta[2 + ne + i];
+      sys2[2 + ne + i] += f * f;
+    }
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (cov(nt + c, nt + c) > 0.0) {
+        const double f = options.coefficient_floor * coefficients[c];
+        sys2[nt + c] += f * f;
+      }
+    }
+  }
+
   // Reported parameters: ρ, γ from (u, v) by the delta method.
   const double u = theta[0], v = theta[1];
   const double rho = std::hypot(u, v);
