@@ -29,10 +29,16 @@
 // at two or more feeds.
 //
 // What it cannot know. The mean force is where the charge amplifiers' offset and drift live:
-// the method needs channels tared just before each cut. Runout moves chip between flutes but
-// not the mean (Σ_j (r_j − r_{j−1}) = 0) as long as every flute cuts; the trochoidal path, a
-// flute that stops cutting, a minimum chip thickness and deflection bend the lines, which the
-// model fit (window_fit.hpp, fit_cuts) accounts for and this method does not.
+// the method needs channels tared just before each cut. Runout moves chip between the flutes,
+// which leaves the mean alone only where every flute cuts (Σ_j (r_j − r_{j−1}) = 0): near a
+// slot's walls, and over much of a down-milling arc, f_t·sin θ falls below the radius
+// differences, the short flute cuts nothing there while the long one still cuts its excess, and
+// the mean grows faster than linearly as f_t falls. The lines bend, and the coefficients come
+// out biased far beyond their σ (which is the scatter about the lines only): on simulated
+// sweeps with ρ = 1.2–1.5 µm K_nc came out 1.7–2.2 times the truth (tests/identify/
+// calibration_test.cpp; the README's Calibration table). The trochoidal path, a minimum chip
+// thickness and deflection bend them too. The model fit (window_fit.hpp, fit_cuts) accounts for
+// all of these; this method is printed beside it as the reference practice, not as a check.
 
 #include <array>
 #include <string>
@@ -68,7 +74,8 @@ struct AverageForceRegression {
   int cuts = 0;
   std::string note =
       "from the mean force: valid only with channels tared before each cut (no amplifier "
-      "offset or drift); circular chip path, no runout, every flute cutting";
+      "offset or drift); assumes a circular chip path and every flute cutting its share "
+      "(runout biases it)";
 };
 
 /// Immersion [θ_s, θ_e] of a cut (model_config.hpp convention, [000] eq 28).
