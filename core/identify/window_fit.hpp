@@ -39,6 +39,10 @@
 // fewer harmonics, the in-plane axes alone — and the spread of the estimates over these variants is
 // added in quadrature. Parameters whose correlation exceeds 0.9 in magnitude are flagged.
 //
+// Several cuts at once (fit_cuts, the calibration's fit): the same machinery with the rows of every
+// cut stacked, each cut at its own speed, feed, engagement and filter with its own alignment δ_i,
+// one runout and one set of coefficients for all of them (one tool, one clamping).
+//
 // Runs in a worker thread (allocates; not for the sample path). One fitter per thread.
 
 #include <array>
