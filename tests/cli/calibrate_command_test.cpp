@@ -78,32 +78,30 @@ constexpr const char* kCalibrationConfig = R"({"model": {
   "effects": {"helix_lag": {"discs": 5}, "runout": {"offset_um": 0.0}},
   "material": {"linear_edge": {"k_tc_N_per_mm2": 800.0, "k_ne_N_per_mm": 20.0}}}})";
 
+/// A feed sweep of four cuts (0.4 s each) and the fitter's configuration, in the calling test's
+/// own folder (tests run in parallel processes).
 class CalibrateCommand : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new fs::path(test::fresh_temp_dir());
+  void SetUp() override {
+    dir_ = test::fresh_temp_dir();
     for (const double f : {3.0, 4.0, 5.0, 6.0}) {
-      cuts_.push_back(
-          simulate(*dir_, std::string("cut") + std::to_string(static_cast<int>(f)), f, 0.4));
+      cuts_.push_back(simulate(dir_, "cut" + std::to_string(static_cast<int>(f)), f, 0.4));
     }
-    write_file(*dir_ / "calibration.json", kCalibrationConfig);
+    write_file(dir_ / "calibration.json", kCalibrationConfig);
   }
-  static void TearDownTestSuite() { delete dir_; }
-  static std::string cut_list() {
+  [[nodiscard]] std::string cut_list() const {
     std::string s;
     for (const auto& c : cuts_) {
       s += std::string(" ") + c.string();
     }
     return s;
   }
-  static fs::path* dir_;
-  static std::vector<fs::path> cuts_;
+  fs::path dir_;
+  std::vector<fs::path> cuts_;
 };
-fs::path* CalibrateCommand::dir_ = nullptr;
-std::vector<fs::path> CalibrateCommand::cuts_;
 
 TEST_F(CalibrateCommand, WritesAPresetTheReplayAndTheDaemonUse) {
-  const fs::path& dir = *dir_;
+  const fs::path& dir = dir_;
   const fs::path preset = dir / "presets" / "material.json";
   fs::create_directories(preset.parent_path());
   // (stdout only: the log goes to stderr)
@@ -202,7 +200,7 @@ TEST_F(CalibrateCommand, WritesAPresetTheReplayAndTheDaemonUse) {
 }
 
 TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
-  const fs::path& dir = *dir_;
+  const fs::path& dir = dir_;
   const std::string config = std::string(" --config ") + (dir / "calibration.json").string();
   const std::string cli = test::millwatch_cli() + " calibrate ";
   struct Case {
