@@ -1,12 +1,21 @@
 // Cost of one identification: a 30-revolution window's synchronous average (a 2-flute slot with
 // runout, 4 flutes down-milling), fitted from scratch and from the previous window's result.
+// Cost of one calibration (`millwatch calibrate`): five 1 s cuts of a feed sweep at 50 kHz
+// through the monitor, their windows averaged, the joint fit and the classic regression (the
+// recordings simulated beforehand, in memory: reading CSV files is not in the figure).
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <complex>
+#include <span>
+#include <vector>
 
+#include "core/identify/calibration.hpp"
 #include "core/identify/window_fit.hpp"
 #include "core/model/steady_state.hpp"
+#include "core/monitor/pipeline.hpp"
+#include "core/sim/cut_simulator.hpp"
 
 namespace {
 
@@ -82,11 +91,81 @@ void BM_FitTwoFluteSlotWithoutVariants(benchmark::State& s) {
 void BM_FitTwoFluteSlotFromPreviousWithoutVariants(benchmark::State& s) {
   fit(s, 2, model::Operation::kSlot, true, false);
 }
+/// A recorded cut in memory: what the dynamometer read.
+struct Recorded {
+  millwatch::monitor::MonitorConfig config;  // as commanded (the fitter's view)
+  std::vector<double> fx, fy, fz;
+};
+
+Recorded record(double feed_um) {
+  millwatch::sim::Scenario s;
+  s.sample_rate_hz = 50000.0;
+  s.duration_s = 1.0;
+  s.seed = static_cast<std::uint64_t>(10 * feed_um);
+  s.model = cut(2, model::Operation::kSlot);
+  s.model.tool.diameter_mm = 0.4;
+  s.model.process.radial_depth_mm = 0.4;
+  s.model.process.feed_per_tooth_um = feed_um;
+  model::set_effect(s.model, "dynamometer", true);
+  s.model.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
+  s.spindle.actual_rpm = 0.99 * s.model.process.spindle_rpm;
+  s.noise.enabled = true;
+  s.noise.sigma_N = {0.015, 0.015, 0.015};
+  Recorded r;
+  r.config.model = s.model;
+  r.config.sample_rate_hz = s.sample_rate_hz;
+  r.config.lockstep = false;
+  r.config.model.effects.runout.offset_um = 0.0;
+  s.model.effects.helix_lag.discs = 20;
+  s.model.resolution.steps_per_rev = 1440;
+  millwatch::sim::CutSimulator simulator(s);
+  const auto n = static_cast<std::size_t>(simulator.total_samples());
+  std::vector<double> t(n);
+  r.fx.resize(n);
+  r.fy.resize(n);
+  r.fz.resize(n);
+  simulator.next_block(t, r.fx, r.fy, r.fz);
+  return r;
+}
+
+void BM_CalibrateFiveOneSecondCuts(benchmark::State& state) {
+  std::vector<Recorded> cuts;
+  for (const double f : {3.0, 4.0, 5.0, 6.0, 8.0}) {
+    cuts.push_back(record(f));
+  }
+  for (auto _ : state) {
+    std::vector<millwatch::identify::CalibrationCut> input;
+    for (const Recorded& r : cuts) {
+      millwatch::identify::CutWindows windows;
+      millwatch::monitor::Pipeline p(r.config, windows);
+      constexpr std::size_t kBlock = 1000;
+      for (std::size_t i = 0, seq = 0; i < r.fx.size(); i += kBlock, ++seq) {
+        const std::size_t n = std::min(kBlock, r.fx.size() - i);
+        p.process({static_cast<std::int64_t>(1e6 * static_cast<double>(i) / 50000.0),
+                   static_cast<std::int64_t>(seq), 50000.0, std::span(r.fx).subspan(i, n),
+                   std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
+      }
+      p.finish();
+      const auto filter = p.filter();
+      input.push_back({"cut", r.config.model, [filter](double hz) { return filter.response(hz); },
+                       windows.windows()});
+    }
+    const millwatch::identify::CalibrationResult result = millwatch::identify::calibrate(input);
+    if (!result.ok) {
+      state.SkipWithError(result.message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(result.joint.fit.coefficients.front().value);
+    state.counters["evaluations"] = static_cast<double>(result.joint.fit.evaluations);
+  }
+}
+
 BENCHMARK(BM_FitTwoFluteSlot)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotWithoutVariants)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotFromPreviousWithoutVariants)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitFourFluteDown)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotFromPrevious)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CalibrateFiveOneSecondCuts)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 

@@ -32,6 +32,7 @@
 #include "daemon/lcm_source.hpp"
 #include "daemon/service_notifier.hpp"
 #include "shell/json_file.hpp"
+#include "shell/material_preset.hpp"
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
 
@@ -41,7 +42,9 @@ using namespace millwatch;
 
 daemon::DaemonConfig load(const std::string& path, const std::string& url_override) {
   try {
-    daemon::DaemonConfig c = daemon::daemon_config_from_json(shell::read_json_file(path));
+    nlohmann::json j = shell::read_json_file(path);
+    shell::resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
+    daemon::DaemonConfig c = daemon::daemon_config_from_json(j);
     if (!url_override.empty()) {
       c.lcm_url = url_override;
     }

@@ -31,6 +31,7 @@
 #include "shell/column_map.hpp"
 #include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
+#include "shell/material_preset.hpp"
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
 #include "shell/recording_source.hpp"
@@ -84,6 +85,7 @@ ConfigFile read_config(const std::string& path) {
     return c;
   }
   nlohmann::json j = read_json_file(path);
+  resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
   auto take_columns = [&](nlohmann::json& object, const std::string& where) {
     if (object.is_object() && object.contains("columns")) {
       try {

@@ -3,9 +3,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <unsupported/Eigen/FFT>
 
 #include "core/model/dynamometer.hpp"
@@ -26,10 +29,10 @@ double wrap_pi(double a) {
 /// The model's settings a fit runs with: the variants of the systematic estimate change these.
 struct Setting {
   int steps = 720;
-  int harmonics = 0;           // K
-  bool mean = false;           // the mean force (k = 0) compared too
-  std::array<bool, 3> axes{};  // compared
-  int discs = 0;               // helix discs (0: as configured)
+  int fewer_harmonics = 0;  // harmonics left out at the top of each cut's K
+  bool mean = false;        // the mean force (k = 0) compared too
+  bool in_plane = false;    // fx and fy only, even where fz was measured
+  int discs = 0;            // helix discs (0: as configured)
 };
 
 /// Step of the central differences, in units of each parameter's scale (0.01 µm of runout,
@@ -105,23 +108,76 @@ std::vector<std::complex<double>> revolution_harmonics(const std::vector<double>
   return out;
 }
 
+namespace {
+
+/// The first field (JSON path) where two configurations differ, or "" when they do not.
+std::string first_difference(const nlohmann::json& a, const nlohmann::json& b,
+                             const std::string& path) {
+  if (a.is_object() && b.is_object()) {
+    for (const auto& [key, value] : a.items()) {
+      const std::string where = path.empty() ? key : path + "." + key;
+      if (!b.contains(key)) {
+        return where;
+      }
+      std::string d = first_difference(value, b[key], where);
+      if (!d.empty()) {
+        return d;
+      }
+    }
+    for (const auto& [key, value] : b.items()) {
+      if (!a.contains(key)) {
+        return path.empty() ? key : path + "." + key;
+      }
+    }
+    return "";
+  }
+  return a == b ? "" : path;
+}
+
+/// What several cuts of one joint fit must share: the tool, the force law (its coefficients are
+/// the starting values, the exponents are the model) and the effects (the runout's values are
+/// fitted).
+nlohmann::json shared_part(const model::ModelConfig& c) {
+  nlohmann::json j = model::to_json(c);
+  nlohmann::json out = {
+      {"tool", j["tool"]}, {"material", j["material"]}, {"effects", j["effects"]}};
+  out["material"].erase("name");
+  out["effects"]["runout"].erase("offset_um");
+  out["effects"]["runout"].erase("angle_rad");
+  return out;
+}
+
+}  // namespace
+
 struct WindowFitter::Impl {
-  model::ModelConfig commanded;
-  FilterResponse filter;
+  std::vector<model::ModelConfig> models;  // per cut, as commanded
+  std::vector<FilterResponse> filters;     // per cut
+  std::vector<std::string> cut_names;      // per cut, for messages
+  model::ModelConfig commanded;            // the first cut's: the shared tool, law and effects
   FitOptions options;
   bool separable = true;
   std::vector<std::string> coefficient_names;  // in θ when not separable
   model::ParameterMap extra_map;
   model::ParameterMap coefficient_map;
 
-  // One problem: a setting, the measured harmonics and the model's columns.
-  struct Problem {
+  [[nodiscard]] int cuts() const { return static_cast<int>(models.size()); }
+  /// θ = (u, v, extra..., [coefficients...], δ_0 … δ_{cuts−1}): the parameters before the
+  /// alignments, shared by every cut.
+  [[nodiscard]] int shared_size() const {
+    return 2 + extra_map.size() + (separable ? 0 : coefficient_map.size());
+  }
+
+  // One cut's part of a problem: its measured harmonics and the model's columns.
+  struct Part {
     Impl* owner = nullptr;
+    int cut = 0;
     Setting setting;
+    int harmonics = 0;           // K of this cut
+    std::array<bool, 3> axes{};  // compared
     double rpm = 0.0;
     model::ModelConfig config;  // at the actual speed, with the trial's values
     model::SteadyStateWorkspace workspace;
-    std::vector<std::array<std::vector<std::complex<double>>, 3>> measured;  // [1] axes × K
+    std::array<std::vector<std::complex<double>>, 3> measured;  // per axis, per entry
     // Columns: harmonics of each basis column (and the offset, last) per axis, filtered.
     std::vector<std::array<std::vector<std::complex<double>>, 3>> columns;
     std::vector<std::string> column_names;
@@ -131,28 +187,34 @@ struct WindowFitter::Impl {
     std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
     Eigen::VectorXd cached_key;
     bool have_cache = false;
-    double prior_weight = 0.0;          // rows (u, v)·prior_weight appended when > 0
-    long evaluations = 0;               // model evaluations (for the cost figures)
-    Eigen::VectorXd last_coefficients;  // the linear solve's result at the last residual
+    long evaluations = 0;  // model evaluations (for the cost figures)
 
     void prepare(const MeasuredRevolution& m) {
+      const int bins = static_cast<int>(m.force_N[0].size());
+      harmonics =
+          std::max(1, owner->harmonics_for(cut, m.spindle_rpm, bins) - setting.fewer_harmonics);
+      axes = m.use_axis;
+      if (setting.in_plane) {
+        axes[2] = false;
+      }
       order.clear();
       if (setting.mean) {
         order.push_back(0);
       }
-      for (int k = 1; k <= setting.harmonics; ++k) {
+      for (int k = 1; k <= harmonics; ++k) {
         order.push_back(k);
       }
       rpm = m.spindle_rpm;
-      config = model::at_actual_speed(owner->commanded, rpm);
+      config = model::at_actual_speed(owner->models[static_cast<std::size_t>(cut)], rpm);
       // The dynamometer's resonance is linear: it joins the filter's gains per axis instead of
       // filtering every basis column in time.
       const auto& dyn = config.effects.dynamometer;
+      const FilterResponse& filter = owner->filters[static_cast<std::size_t>(cut)];
       for (std::size_t a = 0; a < 3; ++a) {
         gains[a].resize(order.size());
         for (std::size_t e = 0; e < order.size(); ++e) {
           const double hz = order[e] * rpm / 60.0;
-          std::complex<double> g = owner->filter(hz);
+          std::complex<double> g = filter(hz);
           if (dyn.enabled) {
             g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
           }
@@ -160,22 +222,21 @@ struct WindowFitter::Impl {
         }
       }
       config.effects.dynamometer.enabled = false;
-      measured.assign(1, {});
       for (std::size_t a = 0; a < 3; ++a) {
-        if (!setting.axes[a]) {
+        auto& out = measured[a];
+        out.clear();
+        if (!axes[a]) {
           continue;
         }
-        auto h = revolution_harmonics(m.force_N[a], setting.harmonics);
+        auto h = revolution_harmonics(m.force_N[a], harmonics);
         if (m.shared_bins) {
-          const auto bins = static_cast<double>(m.force_N[a].size());
-          for (int k = 1; k <= setting.harmonics; ++k) {
-            const double x = kPi * k / bins;
+          const auto b = static_cast<double>(m.force_N[a].size());
+          for (int k = 1; k <= harmonics; ++k) {
+            const double x = kPi * k / b;
             const double sinc = std::sin(x) / x;
             h[static_cast<std::size_t>(k - 1)] /= sinc * sinc;
           }
         }
-        auto& out = measured[0][a];
-        out.clear();
         if (setting.mean) {
           double sum = 0.0;
           for (const double x : m.force_N[a]) {
@@ -206,7 +267,7 @@ struct WindowFitter::Impl {
       }
     }
 
-    /// The model's columns for the nonlinear values other than the alignment.
+    /// The model's columns for the shared nonlinear values (θ without the alignments).
     void evaluate(const Eigen::VectorXd& key) {
       if (have_cache && key.size() == cached_key.size() && key == cached_key) {
         return;
@@ -230,10 +291,10 @@ struct WindowFitter::Impl {
         for (int c = 0; c <= basis.columns; ++c) {
           const model::ForceWaveform& w =
               c < basis.columns ? basis.unit[static_cast<std::size_t>(c)] : basis.offset;
-          const std::array<const std::vector<double>*, 3> axes = {&w.fx_N, &w.fy_N, &w.fz_N};
+          const std::array<const std::vector<double>*, 3> waves = {&w.fx_N, &w.fy_N, &w.fz_N};
           for (std::size_t a = 0; a < 3; ++a) {
-            if (setting.axes[a]) {
-              harmonics_of(*axes[a], a, columns[static_cast<std::size_t>(c)][a]);
+            if (axes[a]) {
+              harmonics_of(*waves[a], a, columns[static_cast<std::size_t>(c)][a]);
             }
           }
         }
@@ -242,11 +303,11 @@ struct WindowFitter::Impl {
             config, rpm, s, workspace, model::SteadyStateOutput::kMean);
         columns.resize(1);
         column_names.clear();
-        const std::array<const std::vector<double>*, 3> axes = {&st.mean.fx_N, &st.mean.fy_N,
-                                                                &st.mean.fz_N};
+        const std::array<const std::vector<double>*, 3> waves = {&st.mean.fx_N, &st.mean.fy_N,
+                                                                 &st.mean.fz_N};
         for (std::size_t a = 0; a < 3; ++a) {
-          if (setting.axes[a]) {
-            harmonics_of(*axes[a], a, columns[0][a]);
+          if (axes[a]) {
+            harmonics_of(*waves[a], a, columns[0][a]);
           }
         }
       }
@@ -255,59 +316,28 @@ struct WindowFitter::Impl {
       ++evaluations;
     }
 
-    [[nodiscard]] int data_size() const { return residual_size() - (prior_weight > 0.0 ? 2 : 0); }
-
-    /// The residual's rows after the data: the runout prior, (u, v)·weight.
-    void append_prior(const Eigen::VectorXd& theta, Eigen::VectorXd& r) const {
-      if (prior_weight > 0.0) {
-        r.conservativeResize(r.size() + 2);
-        r[r.size() - 2] = prior_weight * theta[0];
-        r[r.size() - 1] = prior_weight * theta[1];
+    /// Real values compared: 2 per entry and axis.
+    [[nodiscard]] int rows() const {
+      int n = 0;
+      for (bool a : axes) {
+        n += a ? 1 : 0;
       }
+      return 2 * static_cast<int>(order.size()) * n;
     }
 
-    [[nodiscard]] int residual_size() const {
-      int axes = 0;
-      for (bool a : setting.axes) {
-        axes += a ? 1 : 0;
-      }
-      return 2 * static_cast<int>(order.size()) * axes + (prior_weight > 0.0 ? 2 : 0);
-    }
-
-    /// Whether θ is inside the configuration's bounds (the runout below a fifth of the tool
-    /// radius, every extra parameter and coefficient within its limits).
-    [[nodiscard]] bool admissible(const Eigen::VectorXd& theta) const {
-      if (std::hypot(theta[0], theta[1]) >= 0.19 * model::tool_radius_um(config)) {
-        return false;
-      }
-      const int ne = owner->extra_map.size();
-      if (ne > 0 && !model::within_bounds(owner->extra_map, theta.segment(2, ne))) {
-        return false;
-      }
-      const int nc = owner->separable ? 0 : owner->coefficient_map.size();
-      return nc == 0 || model::within_bounds(owner->coefficient_map, theta.segment(2 + ne, nc));
-    }
-
-    /// The measured harmonics y, the offset column b0 and the linear columns A at θ (the
-    /// model's columns shifted by the alignment δ = θ's last element).
-    void assemble(const Eigen::VectorXd& theta, Eigen::VectorXd& y, Eigen::VectorXd& b0,
-                  Eigen::MatrixXd& a) {
-      const Eigen::Index nk = theta.size() - 1;
-      evaluate(theta.head(nk));
-      const double delta = theta[nk];
-      const int m = data_size();
+    /// This cut's rows from `row` on: the measured harmonics y, the offset column b0 and the
+    /// linear columns A at the shared values `key`, the model shifted by the alignment δ.
+    void assemble(const Eigen::VectorXd& key, double delta, Eigen::VectorXd& y, Eigen::VectorXd& b0,
+                  Eigen::MatrixXd& a, int row) {
+      evaluate(key);
       const auto ncol = static_cast<Eigen::Index>(columns.size()) - 1;
-      y.resize(m);
-      b0.resize(m);
-      a.resize(m, ncol);
-      int row = 0;
       for (std::size_t ax = 0; ax < 3; ++ax) {
-        if (!setting.axes[ax]) {
+        if (!axes[ax]) {
           continue;
         }
         for (std::size_t uk = 0; uk < order.size(); ++uk) {
           const std::complex<double> shift = std::polar(1.0, order[uk] * delta);
-          const std::complex<double> meas = measured[0][ax][uk];
+          const std::complex<double> meas = measured[ax][uk];
           const std::complex<double> off = columns.back()[ax][uk] * shift;
           y[row] = meas.real();
           y[row + 1] = meas.imag();
@@ -323,8 +353,154 @@ struct WindowFitter::Impl {
       }
     }
 
-    /// θ = (u, v, extra..., [coefficients...], δ): the residual, the force-law coefficients
-    /// solved by linear least squares (last_coefficients).
+    /// The best alignment of this cut alone (its own coefficients) on a grid of `steps` values
+    /// for the shared values `key`: a rotation of the model by δ is a rotation of the
+    /// measurement by −δ, so the model's columns are factored once and each δ costs one
+    /// projection.
+    std::pair<double, double> scan_alignment(const Eigen::VectorXd& key, int steps) {
+      evaluate(key);
+      const int m = rows();
+      const auto ncol = static_cast<Eigen::Index>(columns.size()) - 1;
+      Eigen::VectorXd y0(m), b0(m);
+      Eigen::MatrixXd a(m, ncol);
+      assemble(key, 0.0, y0, b0, a, 0);
+      std::vector<Eigen::Index> used;
+      const double biggest = a.cols() > 0 ? a.colwise().norm().maxCoeff() : 0.0;
+      for (Eigen::Index c = 0; c < a.cols(); ++c) {
+        if (a.col(c).norm() > 1e-9 * biggest) {
+          used.push_back(c);
+        }
+      }
+      Eigen::MatrixXd q(m, static_cast<Eigen::Index>(used.size()));
+      if (!used.empty()) {
+        Eigen::MatrixXd au(m, static_cast<Eigen::Index>(used.size()));
+        for (std::size_t i = 0; i < used.size(); ++i) {
+          au.col(static_cast<Eigen::Index>(i)) = a.col(used[i]);
+        }
+        const Eigen::HouseholderQR<Eigen::MatrixXd> qr(au);
+        q = qr.householderQ() * Eigen::MatrixXd::Identity(m, au.cols());
+      }
+      double best = 1e300, best_delta = 0.0;
+      Eigen::VectorXd z(m);
+      for (int i = 0; i < steps; ++i) {
+        const double delta = kTwoPi * i / steps;
+        int row = 0;
+        for (std::size_t ax = 0; ax < 3; ++ax) {
+          if (!axes[ax]) {
+            continue;
+          }
+          for (std::size_t e = 0; e < order.size(); ++e) {
+            const std::complex<double> v =
+                std::complex<double>(y0[row], y0[row + 1]) * std::polar(1.0, -order[e] * delta);
+            z[row] = v.real() - b0[row];
+            z[row + 1] = v.imag() - b0[row + 1];
+            row += 2;
+          }
+        }
+        double cost = z.squaredNorm();
+        if (q.cols() > 0) {
+          cost -= (q.transpose() * z).squaredNorm();
+        }
+        if (cost < best) {
+          best = cost;
+          best_delta = delta;
+        }
+      }
+      return {best_delta, best};
+    }
+  };
+
+  // One problem: a setting and every cut's part.
+  struct Problem {
+    Impl* owner = nullptr;
+    Setting setting;
+    std::vector<std::unique_ptr<Part>> parts;
+    double prior_weight = 0.0;          // rows (u, v)·prior_weight appended when > 0
+    Eigen::VectorXd last_coefficients;  // the linear solve's result at the last residual
+
+    void prepare(const std::vector<const MeasuredRevolution*>& m) {
+      parts.clear();
+      for (int i = 0; i < owner->cuts(); ++i) {
+        auto part = std::make_unique<Part>();
+        part->owner = owner;
+        part->cut = i;
+        part->setting = setting;
+        part->prepare(*m[static_cast<std::size_t>(i)]);
+        parts.push_back(std::move(part));
+      }
+    }
+
+    /// The first cut's configuration (the tool every cut shares).
+    [[nodiscard]] const model::ModelConfig& config() const { return parts.front()->config; }
+
+    [[nodiscard]] long evaluations() const {
+      long n = 0;
+      for (const auto& part : parts) {
+        n += part->evaluations;
+      }
+      return n;
+    }
+
+    [[nodiscard]] int data_size() const {
+      int n = 0;
+      for (const auto& part : parts) {
+        n += part->rows();
+      }
+      return n;
+    }
+
+    /// The residual's rows after the data: the runout prior, (u, v)·weight.
+    void append_prior(const Eigen::VectorXd& theta, Eigen::VectorXd& r) const {
+      if (prior_weight > 0.0) {
+        r.conservativeResize(r.size() + 2);
+        r[r.size() - 2] = prior_weight * theta[0];
+        r[r.size() - 1] = prior_weight * theta[1];
+      }
+    }
+
+    [[nodiscard]] int residual_size() const { return data_size() + (prior_weight > 0.0 ? 2 : 0); }
+
+    /// Whether θ is inside the configuration's bounds (the runout below a fifth of the tool
+    /// radius, every extra parameter and coefficient within its limits).
+    [[nodiscard]] bool admissible(const Eigen::VectorXd& theta) const {
+      if (std::hypot(theta[0], theta[1]) >= 0.19 * model::tool_radius_um(config())) {
+        return false;
+      }
+      const int ne = owner->extra_map.size();
+      if (ne > 0 && !model::within_bounds(owner->extra_map, theta.segment(2, ne))) {
+        return false;
+      }
+      const int nc = owner->separable ? 0 : owner->coefficient_map.size();
+      return nc == 0 || model::within_bounds(owner->coefficient_map, theta.segment(2 + ne, nc));
+    }
+
+    /// The measured harmonics y, the offset column b0 and the linear columns A at θ, every
+    /// cut's rows stacked (the coefficients are shared: one set of columns).
+    void assemble(const Eigen::VectorXd& theta, Eigen::VectorXd& y, Eigen::VectorXd& b0,
+                  Eigen::MatrixXd& a) {
+      const int ns = owner->shared_size();
+      const Eigen::VectorXd key = theta.head(ns);
+      for (const auto& part : parts) {
+        part->evaluate(key);
+      }
+      const int m = data_size();
+      const auto ncol = static_cast<Eigen::Index>(parts.front()->columns.size()) - 1;
+      y.resize(m);
+      b0.resize(m);
+      a.resize(m, ncol);
+      int row = 0;
+      for (std::size_t i = 0; i < parts.size(); ++i) {
+        Part& part = *parts[i];
+        if (static_cast<Eigen::Index>(part.columns.size()) - 1 != ncol) {
+          throw std::logic_error("the cuts' force bases differ");  // fit_cuts checks the law
+        }
+        part.assemble(key, theta[ns + static_cast<Eigen::Index>(i)], y, b0, a, row);
+        row += part.rows();
+      }
+    }
+
+    /// θ: the residual, the force-law coefficients solved by linear least squares
+    /// (last_coefficients).
     Eigen::VectorXd residual(const Eigen::VectorXd& theta) {
       if (!admissible(theta)) {
         return Eigen::VectorXd::Constant(residual_size(), 1e6);  // a step the fit must refuse
@@ -359,61 +535,6 @@ struct WindowFitter::Impl {
       return r;
     }
 
-    /// The best alignment on a grid of `steps` values for the nonlinear values `key` (θ without
-    /// δ): a rotation of the model by δ is a rotation of the measurement by −δ, so the model's
-    /// columns are factored once and each δ costs one projection.
-    std::pair<double, double> scan_alignment(const Eigen::VectorXd& key, int steps) {
-      Eigen::VectorXd theta(key.size() + 1);
-      theta << key, 0.0;
-      Eigen::VectorXd y0, b0;
-      Eigen::MatrixXd a;
-      assemble(theta, y0, b0, a);
-      const Eigen::Index m = y0.size();
-      std::vector<Eigen::Index> used;
-      const double biggest = a.cols() > 0 ? a.colwise().norm().maxCoeff() : 0.0;
-      for (Eigen::Index c = 0; c < a.cols(); ++c) {
-        if (a.col(c).norm() > 1e-9 * biggest) {
-          used.push_back(c);
-        }
-      }
-      Eigen::MatrixXd q(m, static_cast<Eigen::Index>(used.size()));
-      if (!used.empty()) {
-        Eigen::MatrixXd au(m, static_cast<Eigen::Index>(used.size()));
-        for (std::size_t i = 0; i < used.size(); ++i) {
-          au.col(static_cast<Eigen::Index>(i)) = a.col(used[i]);
-        }
-        const Eigen::HouseholderQR<Eigen::MatrixXd> qr(au);
-        q = qr.householderQ() * Eigen::MatrixXd::Identity(m, au.cols());
-      }
-      double best = 1e300, best_delta = 0.0;
-      Eigen::VectorXd z(m);
-      for (int i = 0; i < steps; ++i) {
-        const double delta = kTwoPi * i / steps;
-        int row = 0;
-        for (std::size_t ax = 0; ax < 3; ++ax) {
-          if (!setting.axes[ax]) {
-            continue;
-          }
-          for (std::size_t e = 0; e < order.size(); ++e) {
-            const std::complex<double> v =
-                std::complex<double>(y0[row], y0[row + 1]) * std::polar(1.0, -order[e] * delta);
-            z[row] = v.real() - b0[row];
-            z[row + 1] = v.imag() - b0[row + 1];
-            row += 2;
-          }
-        }
-        double cost = z.squaredNorm();
-        if (q.cols() > 0) {
-          cost -= (q.transpose() * z).squaredNorm();
-        }
-        if (cost < best) {
-          best = cost;
-          best_delta = delta;
-        }
-      }
-      return {best_delta, best};
-    }
-
     /// The residual at θ with the coefficients held at c: y − b0(θ) − A(θ)·c.
     Eigen::VectorXd residual_at(const Eigen::VectorXd& theta, const Eigen::VectorXd& c) {
       Eigen::VectorXd y, b0;
@@ -435,9 +556,29 @@ struct WindowFitter::Impl {
     }
   };
 
-  Impl(const model::ModelConfig& model, FilterResponse response, FitOptions o)
-      : commanded(model), filter(std::move(response)), options(std::move(o)) {
-    model::validate(commanded);
+  Impl(std::vector<model::ModelConfig> cut_models, std::vector<FilterResponse> responses,
+       std::vector<std::string> names, FitOptions o)
+      : models(std::move(cut_models)),
+        filters(std::move(responses)),
+        cut_names(std::move(names)),
+        options(std::move(o)) {
+    if (models.empty()) {
+      throw std::invalid_argument("a fit needs at least one cut");
+    }
+    for (const auto& m : models) {
+      model::validate(m);
+    }
+    commanded = models.front();
+    const nlohmann::json shared = shared_part(commanded);
+    for (std::size_t i = 1; i < models.size(); ++i) {
+      const std::string d = first_difference(shared, shared_part(models[i]), "");
+      if (!d.empty()) {
+        throw std::invalid_argument(
+            "cut " + cut_names[i] + ": " + d + " differs from cut " + cut_names[0] +
+            "'s: a joint fit needs one tool, one clamping and one force law (only the process, " +
+            "i.e. feed, speed and engagement, may differ)");
+      }
+    }
     separable = !commanded.effects.deflection.enabled;
     if (!options.extra_parameters.empty()) {
       extra_map = model::make_parameter_map(commanded, options.extra_parameters);
@@ -452,9 +593,10 @@ struct WindowFitter::Impl {
     }
   }
 
-  /// Harmonics the filter passes at the window's speed.
-  [[nodiscard]] int harmonics_for(double rpm, int bins) const {
+  /// Harmonics the cut's filter passes at its speed.
+  [[nodiscard]] int harmonics_for(int cut, double rpm, int bins) const {
     const double f = rpm / 60.0;
+    const FilterResponse& filter = filters[static_cast<std::size_t>(cut)];
     int k = 1;
     while (k < bins / 2 - 1 && std::abs(filter((k + 1) * f)) >= options.passband_gain) {
       ++k;
@@ -462,11 +604,12 @@ struct WindowFitter::Impl {
     return k;
   }
 
-  /// The nonlinear vector θ and its scales for a problem.
+  /// The nonlinear vector θ's scales for a problem.
   [[nodiscard]] Eigen::VectorXd scales(const model::ModelConfig& c) const {
     const int ne = extra_map.size();
     const int nc = separable ? 0 : coefficient_map.size();
-    Eigen::VectorXd s(3 + ne + nc);
+    const int ns = shared_size();
+    Eigen::VectorXd s(ns + cuts());
     s[0] = s[1] = 1.0;  // µm
     if (ne > 0) {
       s.segment(2, ne) = model::parameter_scales(extra_map);
@@ -476,8 +619,7 @@ struct WindowFitter::Impl {
       model::get_parameters(coefficient_map, c, values);
       s.segment(2 + ne, nc) = values.cwiseAbs().cwiseMax(model::parameter_scales(coefficient_map));
     }
-    s[s.size() - 1] = 0.1;  // rad
-    (void)c;
+    s.tail(cuts()).setConstant(0.1);  // rad
     return s;
   }
 
@@ -485,7 +627,7 @@ struct WindowFitter::Impl {
                                               double delta) const {
     const int ne = extra_map.size();
     const int nc = separable ? 0 : coefficient_map.size();
-    Eigen::VectorXd t(3 + ne + nc);
+    Eigen::VectorXd t(shared_size() + cuts());
     t[0] = u;
     t[1] = v;
     if (ne > 0) {
@@ -498,12 +640,12 @@ struct WindowFitter::Impl {
       model::get_parameters(coefficient_map, c, e);
       t.segment(2 + ne, nc) = e;
     }
-    t[t.size() - 1] = delta;
+    t.tail(cuts()).setConstant(delta);
     return t;
   }
 
   /// Relabels the flutes so that flute 0 has the largest cut (uniform pitch): γ' = γ + ψ_j*,
-  /// δ' = δ − ψ_j*. The force is unchanged.
+  /// every δ' = δ − ψ_j*. The force is unchanged.
   void relabel(Eigen::VectorXd& theta) const {
     if (!commanded.tool.pitch_deg.empty()) {
       return;  // a non-uniform pitch has labelled flutes
@@ -530,27 +672,38 @@ struct WindowFitter::Impl {
     const double g = wrap_pi(gamma + psi);
     theta[0] = rho * std::cos(g);
     theta[1] = rho * std::sin(g);
-    theta[theta.size() - 1] = wrap_pi(theta[theta.size() - 1] - psi);
+    for (Eigen::Index i = shared_size(); i < theta.size(); ++i) {
+      theta[i] = wrap_pi(theta[i] - psi);
+    }
   }
 
-  /// Best start: runout on a grid, alignment on a fine grid; then the best few refined.
-  /// `grid`: the problem the starts are ranked on (a coarser angle grid: only their order
-  /// matters), or null to refine the seed alone.
+  /// Best start: runout on a grid, each cut's alignment on a fine grid; then the best few
+  /// refined. `grid`: the problem the starts are ranked on (a coarser angle grid: only their
+  /// order matters), or null to refine the seed alone.
   Eigen::VectorXd solve(Problem& p, Problem* grid, const Eigen::VectorXd* seed, double* cost,
                         int* iterations) {
-    const Eigen::VectorXd scale = scales(p.config);
+    const Eigen::VectorXd scale = scales(p.config());
+    const int ns = shared_size();
     std::vector<std::pair<double, Eigen::VectorXd>> starts;
     auto consider = [&](double u, double v) {
-      Eigen::VectorXd t = initial_theta(p.config, u, v, 0.0);
+      Eigen::VectorXd t = initial_theta(p.config(), u, v, 0.0);
       if (!p.admissible(t)) {
         return;
       }
-      // The alignment on a grid of 2.5° (Levenberg–Marquardt refines it).
-      const auto [delta, c] = grid->scan_alignment(t.head(t.size() - 1), 144);
-      t[t.size() - 1] = delta;
+      // Each cut's alignment on a grid of 2.5° (Levenberg–Marquardt refines them).
+      const Eigen::VectorXd key = t.head(ns);
+      double c = 0.0;
+      for (std::size_t i = 0; i < grid->parts.size(); ++i) {
+        const auto [delta, ci] = grid->parts[i]->scan_alignment(key, 144);
+        t[ns + static_cast<Eigen::Index>(i)] = delta;
+        c += ci;
+      }
+      if (grid->parts.size() > 1) {
+        c = grid->residual(t).squaredNorm();  // with the coefficients shared
+      }
       starts.emplace_back(c, t);
     };
-    const double ft = p.config.process.feed_per_tooth_um;
+    const double ft = p.config().process.feed_per_tooth_um;
     if (grid == nullptr) {
       // Seed only.
     } else if (options.fit_runout) {
@@ -558,7 +711,7 @@ struct WindowFitter::Impl {
       // Relabelling the flutes turns (u, v) by a pitch and leaves the force: directions over
       // one pitch cover every runout. The basin is narrow (about half a micrometre at a few
       // micrometres of feed), hence rings a fifth of the feed apart.
-      const double sector = kTwoPi / std::max(1, p.config.tool.flutes);
+      const double sector = kTwoPi / std::max(1, p.config().tool.flutes);
       for (int ring = 1; ring <= 5; ++ring) {
         const double rho = 0.2 * ring * ft;
         for (int g = 0; g < 8; ++g) {
@@ -622,8 +775,8 @@ struct WindowFitter::Impl {
   }
 
   /// Refits from `theta` with another setting (a variant of the model's approximations).
-  Eigen::VectorXd refit(const MeasuredRevolution& m, const Setting& s, const Eigen::VectorXd& theta,
-                        double prior_weight) {
+  Eigen::VectorXd refit(const std::vector<const MeasuredRevolution*>& m, const Setting& s,
+                        const Eigen::VectorXd& theta, double prior_weight) {
     Problem p;
     p.owner = this;
     p.setting = s;
@@ -639,7 +792,7 @@ struct WindowFitter::Impl {
           }
           return p.residual(y);
         },
-        t, scales(p.config), 2, &c);  // the optimum's shift: a step or two
+        t, scales(p.config()), 2, &c);  // the optimum's shift: a step or two
     relabel(t);
     p.residual(t);
     Eigen::VectorXd out(t.size() + p.last_coefficients.size());
@@ -647,26 +800,34 @@ struct WindowFitter::Impl {
     return out;
   }
 
-  FitResult fit(const MeasuredRevolution& m, const FitResult* previous);
+  JointFitResult fit(const std::vector<const MeasuredRevolution*>& m, const FitResult* previous);
 };
 
-FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* previous) {
-  FitResult out;
+JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolution*>& ms,
+                                       const FitResult* previous) {
+  JointFitResult joint;
+  FitResult& out = joint.fit;
   out.config = commanded;
-  const int bins = static_cast<int>(m.force_N[0].size());
-  if (bins < 16 || !(m.spindle_rpm > 0.0)) {
-    out.message = "no revolution average to fit";
-    return out;
+  if (ms.size() != models.size()) {
+    throw std::invalid_argument("a joint fit needs one measurement per cut");
   }
+  for (std::size_t i = 0; i < ms.size(); ++i) {
+    const int bins = static_cast<int>(ms[i]->force_N[0].size());
+    if (bins < 16 || !(ms[i]->spindle_rpm > 0.0)) {
+      out.message = ms.size() == 1 ? "no revolution average to fit"
+                                   : "cut " + cut_names[i] + ": no revolution average to fit";
+      return joint;
+    }
+  }
+  const int ns = shared_size();
+  const int ncut = cuts();
   Setting base;
   base.steps = options.steps_per_rev;
-  base.harmonics = harmonics_for(m.spindle_rpm, bins);
-  base.axes = m.use_axis;
   base.mean = options.use_mean;
   Problem p;
   p.owner = this;
   p.setting = base;
-  p.prepare(m);
+  p.prepare(ms);
 
   Eigen::VectorXd seed;
   const Eigen::VectorXd* seed_ptr = nullptr;
@@ -697,9 +858,9 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     Problem grid;
     grid.owner = this;
     grid.setting = coarse;
-    grid.prepare(m);
+    grid.prepare(ms);
     theta = solve(p, &grid, nullptr, &cost, &full_iterations);
-    out.evaluations += grid.evaluations;
+    out.evaluations += grid.evaluations();
   }
   out.iterations += full_iterations;
   // The weak runout prior, at the noise level the data-only fit leaves.
@@ -708,7 +869,7 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     p.prior_weight = std::sqrt(cost / dof0) / options.runout_prior_um;
     double c = 0.0;
     out.iterations += levenberg_marquardt([&](const Eigen::VectorXd& x) { return p.residual(x); },
-                                          theta, scales(p.config), options.max_iterations, &c);
+                                          theta, scales(p.config()), options.max_iterations, &c);
     relabel(theta);
     cost = c;
   }
@@ -721,7 +882,7 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
   // Statistical covariance of all parameters from the full Jacobian at the solution.
   Eigen::MatrixXd j(mres, nt + nc);
   {
-    const Eigen::VectorXd scale = scales(p.config);
+    const Eigen::VectorXd scale = scales(p.config());
     for (Eigen::Index i = 0; i < nt; ++i) {
       Eigen::VectorXd tp = theta;
       const double h = kDifferenceStep * scale[i];
@@ -787,6 +948,12 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
   if (options.systematic) {
     // Each variant changes one of the model's approximations by a factor of two (coarser, so
     // that the variants cost less than the fit), or what is compared.
+    int fewest_harmonics = p.parts.front()->harmonics;
+    bool axial = false;
+    for (const auto& part : p.parts) {
+      fewest_harmonics = std::min(fewest_harmonics, part->harmonics);
+      axial = axial || part->axes[2];
+    }
     std::vector<Setting> variants;
     Setting coarser = base;
     coarser.steps = base.steps / 2;
@@ -796,20 +963,22 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
       discs.discs = commanded.effects.helix_lag.discs / 2;
       variants.push_back(discs);
     }
-    if (base.harmonics >= 5) {
+    if (fewest_harmonics >= 5) {
       Setting fewer = base;
-      fewer.harmonics = base.harmonics - 2;
+      fewer.fewer_harmonics = 2;
       variants.push_back(fewer);
     }
-    if (base.axes[2]) {
+    if (axial) {
       Setting plane = base;
-      plane.axes[2] = false;
+      plane.in_plane = true;
       variants.push_back(plane);
     }
     for (const Setting& v : variants) {
-      const Eigen::VectorXd alt = refit(m, v, theta, p.prior_weight);
+      const Eigen::VectorXd alt = refit(ms, v, theta, p.prior_weight);
       Eigen::VectorXd d = alt - full;
-      d[nt - 1] = wrap_pi(d[nt - 1]);
+      for (Eigen::Index i = ns; i < nt; ++i) {
+        d[i] = wrap_pi(d[i]);
+      }
       for (Eigen::Index i = 0; i < nt + nc; ++i) {
         if (cov(i, i) == 0.0 && i >= nt) {
           d[i] = 0.0;  // not fitted in the base: nothing to compare
@@ -822,8 +991,12 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     // What no variant shows: the measurement's own systematic errors (the angle map's jitter
     // through the synchronous average, the filter's response as modelled). On simulated cuts
     // with known truth they move (u, v) by up to about 0.2 % of the feed per tooth; half a
-    // percent is the floor of their σ.
-    const double floor_um = 0.005 * commanded.process.feed_per_tooth_um;
+    // percent (of the cuts' mean feed) is the floor of their σ.
+    double feed_um = 0.0;
+    for (const auto& m : models) {
+      feed_um += m.process.feed_per_tooth_um / static_cast<double>(ncut);
+    }
+    const double floor_um = 0.005 * feed_um;
     sys2[0] += floor_um * floor_um;
     sys2[1] += floor_um * floor_um;
   }
@@ -833,8 +1006,25 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     const auto id = extra_map.parameters[static_cast<std::size_t>(i)].id;
     if (id == model::ParameterId::kHmin || id == model::ParameterId::kWear ||
         id == model::ParameterId::kWearFlute) {
-      const double floor_um = 0.005 * commanded.process.feed_per_tooth_um;
+      double feed_um = 0.0;
+      for (const auto& m : models) {
+        feed_um += m.process.feed_per_tooth_um / static_cast<double>(ncut);
+      }
+      const double floor_um = 0.005 * feed_um;
       sys2[2 + i] += floor_um * floor_um;
+    }
+  }
+  if (options.coefficient_floor > 0.0) {
+    const int ne = extra_map.size();
+    for (int i = 0; i < (separable ? 0 : coefficient_map.size()); ++i) {
+      const double f = options.coefficient_floor * theta[2 + ne + i];
+      sys2[2 + ne + i] += f * f;
+    }
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      if (cov(nt + c, nt + c) > 0.0) {
+        const double f = options.coefficient_floor * coefficients[c];
+        sys2[nt + c] += f * f;
+      }
     }
   }
 
@@ -895,7 +1085,7 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
         std::sqrt(std::max(0.0, out.gamma_rad.sigma * out.gamma_rad.sigma -
                                     out.gamma_rad.sigma_stat * out.gamma_rad.sigma_stat));
   }
-  out.alignment_rad = estimate("alignment_rad", nt - 1, theta[nt - 1]);
+  out.alignment_rad = estimate("alignment_rad", ns, theta[ns]);
   const int ne = extra_map.size();
   for (int i = 0; i < ne; ++i) {
     out.extra.push_back(
@@ -904,7 +1094,10 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
   std::vector<std::string> names(static_cast<std::size_t>(nt + nc));
   names[0] = "rho_um";
   names[1] = "gamma_rad";
-  names[static_cast<std::size_t>(nt - 1)] = "alignment_rad";
+  for (int i = 0; i < ncut; ++i) {
+    names[static_cast<std::size_t>(ns + i)] =
+        ncut == 1 ? "alignment_rad" : "alignment_rad[" + std::to_string(i) + "]";
+  }
   for (int i = 0; i < ne; ++i) {
     names[static_cast<std::size_t>(2 + i)] = extra_map.parameters[static_cast<std::size_t>(i)].name;
   }
@@ -916,7 +1109,7 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     }
   }
   for (Eigen::Index c = 0; c < nc; ++c) {
-    const std::string& n = p.column_names[static_cast<std::size_t>(c)];
+    const std::string& n = p.parts.front()->column_names[static_cast<std::size_t>(c)];
     names[static_cast<std::size_t>(nt + c)] = n;
     if (cov(nt + c, nt + c) > 0.0) {
       out.coefficients.push_back(estimate(n, nt + c, coefficients[c]));
@@ -948,7 +1141,7 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     std::vector<double> values;
     for (Eigen::Index c = 0; c < nc; ++c) {
       if (cov(nt + c, nt + c) > 0.0) {
-        fitted.push_back(p.column_names[static_cast<std::size_t>(c)]);
+        fitted.push_back(p.parts.front()->column_names[static_cast<std::size_t>(c)]);
         values.push_back(coefficients[c]);
       }
     }
@@ -996,44 +1189,79 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     out.radius_from_ce1_um.push_back(d);
   }
 
-  // Residual and measured RMS per axis over the harmonics compared: √(Σ|X_k|²/2).
+  // Residual and measured RMS per axis over the harmonics compared: √(Σ|X_k|²/2), per cut and
+  // (the mean square over the cuts) for all of them.
   int row = 0;
-  for (std::size_t a = 0; a < 3; ++a) {
-    if (!base.axes[a]) {
-      continue;
-    }
-    double rr = 0.0, mm = 0.0;
-    for (std::size_t e = 0; e < p.order.size(); ++e) {
-      if (p.order[e] > 0) {  // about the mean: the harmonics' share of the RMS
-        rr += r[row] * r[row] + r[row + 1] * r[row + 1];
-        mm += std::norm(p.measured[0][a][e]);
+  std::array<double, 3> rr_all{}, mm_all{};
+  for (std::size_t i = 0; i < p.parts.size(); ++i) {
+    const Part& part = *p.parts[i];
+    CutFitQuality q;
+    q.alignment_rad =
+        estimate(names[static_cast<std::size_t>(ns) + i], ns + static_cast<Eigen::Index>(i),
+                 theta[ns + static_cast<Eigen::Index>(i)]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (!part.axes[a]) {
+        continue;
       }
-      row += 2;
+      double rr = 0.0, mm = 0.0;
+      for (std::size_t e = 0; e < part.order.size(); ++e) {
+        if (part.order[e] > 0) {  // about the mean: the harmonics' share of the RMS
+          rr += r[row] * r[row] + r[row + 1] * r[row + 1];
+          mm += std::norm(part.measured[a][e]);
+        }
+        row += 2;
+      }
+      q.residual_rms_N[a] = std::sqrt(rr / 2.0);
+      q.measured_rms_N[a] = std::sqrt(mm / 2.0);
+      rr_all[a] += rr / 2.0 / ncut;
+      mm_all[a] += mm / 2.0 / ncut;
     }
-    out.residual_rms_N[a] = std::sqrt(rr / 2.0);
-    out.measured_rms_N[a] = std::sqrt(mm / 2.0);
+    q.harmonics = part.harmonics;
+    q.effective_samples = part.rows();
+    joint.cuts.push_back(q);
   }
-  out.harmonics = base.harmonics;
+  for (std::size_t a = 0; a < 3; ++a) {
+    out.residual_rms_N[a] = std::sqrt(rr_all[a]);
+    out.measured_rms_N[a] = std::sqrt(mm_all[a]);
+  }
+  out.harmonics = p.parts.front()->harmonics;
   out.effective_samples = p.data_size();
-  out.evaluations += p.evaluations;
+  out.evaluations += p.evaluations();
   out.ok = std::isfinite(cost);
   out.message = out.ok ? "converged" : "the fit did not converge";
-  return out;
+  return joint;
 }
 
 WindowFitter::WindowFitter(const model::ModelConfig& model, FilterResponse filter,
                            FitOptions options)
-    : impl_(std::make_unique<Impl>(model, std::move(filter), std::move(options))) {}
+    : impl_(std::make_unique<Impl>(std::vector<model::ModelConfig>{model},
+                                   std::vector<FilterResponse>{std::move(filter)},
+                                   std::vector<std::string>{"0"}, std::move(options))) {}
 WindowFitter::~WindowFitter() = default;
 WindowFitter::WindowFitter(WindowFitter&&) noexcept = default;
 WindowFitter& WindowFitter::operator=(WindowFitter&&) noexcept = default;
 
 FitResult WindowFitter::fit(const MeasuredRevolution& measured, const FitResult* previous) {
-  return impl_->fit(measured, previous);
+  return impl_->fit({&measured}, previous).fit;
 }
 
 const FitOptions& WindowFitter::options() const {
   return impl_->options;
+}
+
+JointFitResult fit_cuts(const std::vector<FitCut>& cuts, const FitOptions& options) {
+  std::vector<model::ModelConfig> models;
+  std::vector<FilterResponse> filters;
+  std::vector<std::string> names;
+  std::vector<const MeasuredRevolution*> measured;
+  for (std::size_t i = 0; i < cuts.size(); ++i) {
+    models.push_back(cuts[i].model);
+    filters.push_back(cuts[i].filter);
+    names.push_back(cuts[i].name.empty() ? std::to_string(i + 1) : cuts[i].name);
+    measured.push_back(&cuts[i].measured);
+  }
+  WindowFitter::Impl impl(std::move(models), std::move(filters), std::move(names), options);
+  return impl.fit(measured, nullptr);
 }
 
 }  // namespace millwatch::identify

@@ -39,6 +39,10 @@
 // fewer harmonics, the in-plane axes alone — and the spread of the estimates over these variants is
 // added in quadrature. Parameters whose correlation exceeds 0.9 in magnitude are flagged.
 //
+// Several cuts at once (fit_cuts, the calibration's fit): the same machinery with the rows of every
+// cut stacked, each cut at its own speed, feed, engagement and filter with its own alignment δ_i,
+// one runout and one set of coefficients for all of them (one tool, one clamping).
+//
 // Runs in a worker thread (allocates; not for the sample path). One fitter per thread.
 
 #include <array>
@@ -84,6 +88,13 @@ struct FitOptions {
   /// σ of a weak prior on ρ·cos γ and ρ·sin γ around 0 (µm; 0: none): what the data do not pin
   /// (ρ·sin γ, weakly) stays near 0 with this σ instead of wandering along a flat valley.
   double runout_prior_um = 5.0;
+  /// Floor of each coefficient's systematic σ as a fraction of its value (0: none). What no
+  /// model variant shows: the measurement's own systematic errors (the angle map's jitter
+  /// through the synchronous average, the filter as modelled) move the coefficients by up to
+  /// about 0.7 % on simulated cuts with known truth. A calibration, whose values are absolute,
+  /// sets 0.005 (identify::calibrate); a window fit, watched for changes between windows of one
+  /// cut, leaves it at 0.
+  double coefficient_floor = 0.0;
 };
 
 /// One estimated parameter.
@@ -118,6 +129,33 @@ struct FitResult {
       "flute 0 = CE1, the flute with the largest cut (no once-per-revolution reference)";
 };
 
+/// One cut of a joint fit (fit_cuts): the cut as commanded (its own feed per tooth, speed and
+/// engagement; the tool, the force law and the effects shared with the other cuts), the filter
+/// its measurement went through, and its revolution-synchronous average.
+struct FitCut {
+  std::string name;  ///< for messages (e.g. the recording's file name)
+  model::ModelConfig model;
+  FilterResponse filter;
+  MeasuredRevolution measured;
+};
+
+/// What a joint fit says about one of its cuts.
+struct CutFitQuality {
+  Estimate alignment_rad;                  ///< this cut's model angle minus tracker angle
+  std::array<double, 3> residual_rms_N{};  ///< per axis, over the harmonics compared
+  std::array<double, 3> measured_rms_N{};  ///< the measurement's, same harmonics
+  int harmonics = 0;                       ///< K of this cut
+  int effective_samples = 0;               ///< real harmonic values compared
+};
+
+struct JointFitResult {
+  /// The shared estimates: runout, radii, coefficients, correlations (the alignments named
+  /// "alignment_rad[i]"), iterations; `config` is the first cut's with the fitted values,
+  /// `alignment_rad` the first cut's, residual and measured RMS over all cuts together.
+  FitResult fit;
+  std::vector<CutFitQuality> cuts;  ///< per cut, in the order given
+};
+
 class WindowFitter {
  public:
   /// @param model the cut as commanded (process.spindle_rpm is the commanded speed); its effects
@@ -135,10 +173,23 @@ class WindowFitter {
 
   [[nodiscard]] const FitOptions& options() const;
 
+  struct Impl;  ///< the fitting machinery; fit_cuts uses it with several cuts
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Joint fit over several cuts with the same tool and clamping ([000] Sect. 5, [001] Table 4: a
+/// feed sweep): one set of force-law coefficients and one runout (u, v) for all cuts, one
+/// alignment δ per cut (each cut has its own tracker zero). Each cut is fitted in its own
+/// spindle harmonics through its own filter, at its own speed and feed; the coefficients are
+/// solved by linear least squares over the stacked harmonics of every cut. The same starts,
+/// σ treatment (statistical with the effective number of harmonic values, systematic spread over
+/// the model variants, the floor), correlation flags and CE1 relabelling as WindowFitter, which
+/// is this fit with one cut.
+/// @throws std::invalid_argument naming the cut when there is none, or when a cut's tool, force
+///         law or effects differ from the first cut's (one tool, one clamping)
+JointFitResult fit_cuts(const std::vector<FitCut>& cuts, const FitOptions& options = {});
 
 /// The spindle harmonics k = 1..count of a revolution on a uniform grid: X[k] = (2/B)·Σ_b x[b]·
 /// e^{−2πikb/B} (amplitude convention: x ≈ mean + Σ Re(X[k]·e^{ikφ})).

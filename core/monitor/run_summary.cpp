@@ -238,7 +238,8 @@ nlohmann::json RunSummary::to_json() const {
              {"builds", status_.model_builds},
              // Identified parameters the model in lockstep took (and fits it did not take).
              {"identified_parameters_taken", status_.identifications_taken},
-             {"identified_parameters_rejected", status_.identifications_rejected}}},
+             {"identified_parameters_rejected", status_.identifications_rejected},
+             {"material", config_.model.material.name}}},
            {"alerts", alerts_},
            {"dropped_samples", in.samples_dropped},
            {"warnings", warnings},

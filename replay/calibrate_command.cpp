@@ -1,0 +1,391 @@
+#include "replay/calibrate_command.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <ctime>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/config/json_reader.hpp"
+#include "core/identify/calibration.hpp"
+#include "core/monitor/monitor_config.hpp"
+#include "core/monitor/pipeline.hpp"
+#include "core/monitor/run_summary.hpp"
+#include "replay/command_exit.hpp"
+#include "shell/column_map.hpp"
+#include "shell/json_file.hpp"
+#include "shell/material_preset.hpp"
+#include "shell/output_file.hpp"
+#include "shell/recording_source.hpp"
+#include "shell/shell_sink.hpp"
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CalibrateOptions {
+  std::vector<std::string> inputs;
+  std::string config;
+  std::vector<double> feeds_um;
+  std::string output;
+  std::string columns;
+  std::string name;
+  bool tared = false;
+  bool json = false;
+};
+
+/// --config's monitor configuration (a daemon configuration's "monitor"), presets resolved, and
+/// its column map.
+struct ConfigFile {
+  nlohmann::json monitor = nlohmann::json::object();
+  std::optional<ColumnMap> columns;
+};
+
+ConfigFile read_config(const std::string& path) {
+  ConfigFile c;
+  if (path.empty()) {
+    return c;
+  }
+  if (!fs::exists(path)) {
+    throw std::runtime_error(path + ": configuration not found (--config)");
+  }
+  nlohmann::json j = read_json_file(path);
+  resolve_material_presets(j, path);
+  if (j.is_object() && j.contains("monitor")) {
+    j = j["monitor"];
+  }
+  if (j.is_object() && j.contains("columns")) {
+    try {
+      c.columns = column_map_from_json(j["columns"], "columns");
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(path + ": " + e.what());
+    }
+    j.erase("columns");
+  }
+  c.monitor = j;
+  return c;
+}
+
+/// The shell's log of a cut (lock, bad input) without its alerts: a calibration is not
+/// monitoring, and a feed sweep with runout raises the flute-imbalance alert on every cut.
+class CalibrationSink : public monitor::PipelineSink {
+ public:
+  explicit CalibrationSink(ShellSink& log) : log_(log) {}
+  void on_revolution(const monitor::RevolutionRecord& r) override { log_.on_revolution(r); }
+  void on_sync_average(const monitor::SyncAverage& measured, const monitor::Lockstep* model,
+                       std::int64_t revolution, std::int64_t utime_us) override {
+    log_.on_sync_average(measured, model, revolution, utime_us);
+  }
+  void on_spindle(const monitor::SpindleUpdate& u) override { log_.on_spindle(u); }
+  void on_event(const monitor::PipelineEvent& e) override { log_.on_event(e); }
+
+ private:
+  ShellSink& log_;
+};
+
+/// One cut read and monitored.
+struct MonitoredCut {
+  identify::CalibrationCut cut;
+  std::int64_t revolutions = 0;
+};
+
+MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_file,
+                         std::size_t index) {
+  const fs::path input = o.inputs[index];
+  const std::string where = fmt::format("cut {} of {}", index + 1, o.inputs.size());
+  if (!fs::exists(input)) {
+    throw std::runtime_error(input.string() + ": recording not found (" + where + ")");
+  }
+  const RecordingFormat format = detect_recording_format(input);
+  ColumnMap columns = config_file.columns.value_or(ColumnMap{});
+  if (!o.columns.empty()) {
+    try {
+      columns = parse_column_map(o.columns);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--") + e.what());
+    }
+  }
+  // The cut: its sidecar under --config's overrides (as the replay does), or --config alone.
+  fs::path sidecar;
+  if (format != RecordingFormat::kLcmLog) {
+    sidecar = input;
+    sidecar.replace_extension(".json");
+    if (!fs::exists(sidecar)) {
+      sidecar.clear();
+    }
+  }
+  if (sidecar.empty() && o.config.empty()) {
+    throw std::runtime_error(input.string() + ": no sidecar beside it (" + where +
+                             "): describe the cut with --config");
+  }
+  nlohmann::json base = config_file.monitor;
+  std::optional<double> sidecar_feed_um;
+  std::string config_name = o.config;
+  if (!sidecar.empty()) {
+    const nlohmann::json side = read_json_file(sidecar);
+    try {
+      base = monitor::monitor_json_from_sidecar(side, config_file.monitor);
+      const nlohmann::json own = monitor::monitor_json_from_sidecar(side);
+      const auto& p = own["model"].value("process", nlohmann::json::object());
+      if (p.contains("feed_per_tooth_um") && p["feed_per_tooth_um"].is_number()) {
+        sidecar_feed_um = p["feed_per_tooth_um"].get<double>();
+      }
+    } catch (const config::ConfigError& e) {
+      throw std::runtime_error(sidecar.string() + ": " + e.what());
+    }
+    config_name = sidecar.string() + (o.config.empty() ? "" : " + " + o.config);
+  }
+  // The cut's feed per tooth: --feeds-um, else its sidecar; both given must agree.
+  double feed_um = 0.0;
+  if (!o.feeds_um.empty()) {
+    feed_um = o.feeds_um[index];
+    if (sidecar_feed_um && std::fabs(*sidecar_feed_um - feed_um) > 1e-6 * feed_um) {
+      throw std::runtime_error(
+          fmt::format("{}: --feeds-um gives {:g} um per tooth ({}), its sidecar {} says {:g} um",
+                      input.string(), feed_um, where, sidecar.string(), *sidecar_feed_um));
+    }
+  } else if (sidecar_feed_um) {
+    feed_um = *sidecar_feed_um;
+  } else {
+    throw std::runtime_error(input.string() + ": no feed per tooth (" + where +
+                             "): no sidecar states it; give --feeds-um, one per cut");
+  }
+  if (!(feed_um > 0.0)) {
+    throw std::runtime_error(fmt::format("{}: feed per tooth {:g} um ({}): must be > 0",
+                                         input.string(), feed_um, where));
+  }
+  base["model"]["process"]["feed_per_tooth_um"] = feed_um;
+  const double config_rate_hz =
+      base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
+          ? base["sample_rate_hz"].get<double>()
+          : 0.0;
+
+  std::int64_t bad = 0;
+  RecordingOptions ro;
+  ro.columns = columns;
+  ro.config_rate_hz = config_rate_hz;
+  ro.on_bad = [&](std::int64_t at, const std::string& problem) {
+    if (++bad <= 5) {
+      spdlog::warn("{}:{}: {}; skipped", input.string(), at, problem);
+    }
+  };
+  std::unique_ptr<RecordingSource> source = open_recording(input, ro);
+  if (source->sample_rate_hz() > 0.0 && (config_rate_hz <= 0.0 || source->rate_stated())) {
+    base["sample_rate_hz"] = source->sample_rate_hz();
+  }
+  monitor::MonitorConfig config;
+  try {
+    config = monitor::monitor_config_from_json(base);
+  } catch (const config::ConfigError& e) {
+    throw std::runtime_error(config_name + ": " + e.what());
+  }
+  config.lockstep = false;  // the model is fitted afterwards; no comparison needed meanwhile
+
+  monitor::RunSummary summary(config);
+  ShellSink log(summary, input.string());
+  identify::CutWindows windows;
+  log.set_observer(&windows);
+  CalibrationSink sink(log);
+  monitor::Pipeline pipeline(config, sink);
+  while (const std::optional<monitor::SampleBlock> block = source->next(4096)) {
+    pipeline.process(*block);
+  }
+  pipeline.finish();
+  if (windows.windows().empty()) {
+    throw std::runtime_error(fmt::format(
+        "{}: too short to calibrate on ({}): {} revolution(s) measured, one window needs {} "
+        "(sync_average.window_revolutions)",
+        input.string(), where, windows.revolutions(), config.sync_window_revolutions));
+  }
+  MonitoredCut out;
+  out.revolutions = windows.revolutions();
+  out.cut.name = input.string();
+  out.cut.model = config.model;
+  const signal::ButterworthDesign filter = pipeline.filter();
+  out.cut.filter = [filter, zero_phase = config.filter_zero_phase](double hz) {
+    const std::complex<double> h = filter.response(hz);
+    return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
+  };
+  out.cut.windows = windows.windows();
+  spdlog::info("{}: {} at {:g} um per tooth: {} windows of {} revolutions", input.string(),
+               source->description(), feed_um, out.cut.windows.size(),
+               config.sync_window_revolutions);
+  return out;
+}
+
+std::string num(const nlohmann::json& v, const char* format) {
+  return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : "—";
+}
+
+/// The readable report.
+std::string report_text(const nlohmann::json& j, const identify::CalibrationResult& r) {
+  std::string s;
+  const auto& tool = r.joint.fit.config.tool;
+  s += fmt::format("calibration over {} cuts: one tool ({:g} mm, {} flutes), {} law, {}\n",
+                   r.cuts.size(), tool.diameter_mm, tool.flutes,
+                   model::to_string(r.joint.fit.config.material.law),
+                   r.tared ? "mean force fitted (channels tared)"
+                           : "mean force left out (channels not said to be tared: --tared)");
+  s += "  cut                                 f_t um  chip um      rpm  revs  fit residual "
+       "fx, fy N   unexplained\n";
+  for (const auto& c : j["cuts"]) {
+    std::string name = c["name"].get<std::string>();
+    if (name.size() > 34) {
+      name = "…" + name.substr(name.size() - 33);
+    }
+    s += fmt::format("  {:<34} {:>7} {:>8} {:>8} {:>5}  {:>9} {:>9}   {:>8}\n", name,
+                     num(c["feed_per_tooth_um"], "{:.3f}"), num(c["chip_load_um"], "{:.3f}"),
+                     num(c["spindle_rpm"], "{:.0f}"), c["revolutions"].get<int>(),
+                     num(c["residual_rms_N"][0], "{:.4f}"), num(c["residual_rms_N"][1], "{:.4f}"),
+                     c["unexplained_fraction"].is_number()
+                         ? fmt::format("{:.2f} %", 100.0 * c["unexplained_fraction"].get<double>())
+                         : "—");
+  }
+  s += "\n  coefficient           joint model fit          classic regression (mean force)\n";
+  for (const identify::Estimate& e : r.joint.fit.coefficients) {  // in the law's order
+    if (j.contains("coefficients") && j["coefficients"].contains(e.name)) {
+      const std::string& name = e.name;
+      const nlohmann::json& v = j["coefficients"][name];
+      s += fmt::format("  {:<20} {:>10} ± {:<9} {:>10} {}\n", name, num(v["value"], "{:.3f}"),
+                       num(v["std"], "{:.3f}"), num(v["classic"], "{:.3f}"),
+                       v["classic_std"].is_number() ? "± " + num(v["classic_std"], "{:.3f}") : "");
+    }
+  }
+  if (j.contains("runout")) {
+    const auto& ro = j["runout"];
+    s += fmt::format("\n  runout (one for all cuts, at the tool tip)\n");
+    s += fmt::format("    rho                {} ± {} um\n", num(ro["rho_um"], "{:.3f}"),
+                     num(ro["rho_std_um"], "{:.3f}"));
+    s += fmt::format("    gamma              {} ± {} deg (from CE1)\n",
+                     num(ro["gamma_deg"], "{:.1f}"), num(ro["gamma_std_deg"], "{:.1f}"));
+    for (std::size_t f = 1; f < ro["r_minus_r_ce1_um"].size(); ++f) {
+      s += fmt::format("    r_ce{} - r_ce1        {} ± {} um\n", f + 1,
+                       num(ro["r_minus_r_ce1_um"][f], "{:.3f}"),
+                       num(ro["r_minus_r_ce1_std_um"][f], "{:.3f}"));
+    }
+    s += fmt::format("  flute labelling: {}\n", ro["flute_labelling"].get<std::string>());
+  }
+  if (j.contains("fit")) {
+    const auto& f = j["fit"];
+    std::string pairs;
+    for (const auto& p : f.value("correlated", nlohmann::json::array())) {
+      pairs +=
+          (pairs.empty() ? "" : ", ") + p[0].get<std::string>() + "/" + p[1].get<std::string>();
+    }
+    s += fmt::format(
+        "  fit: {} of the measured force unexplained, {} iterations; correlated "
+        "(|r| > 0.9): {}\n",
+        f["unexplained_fraction"].is_number()
+            ? fmt::format("{:.2f} %", 100.0 * f["unexplained_fraction"].get<double>())
+            : "—",
+        f.value("iterations", 0), pairs.empty() ? "none" : pairs);
+  }
+  const auto& classic = j["classic"];
+  s += fmt::format("  classic regression: {}\n",
+                   classic["ok"].get<bool>() ? classic["note"].get<std::string>()
+                                             : "none: " + classic["reason"].get<std::string>());
+  return s;
+}
+
+std::string utc_now() {
+  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
+
+int run_calibrate(const CalibrateOptions& o) {
+  if (!o.feeds_um.empty() && o.feeds_um.size() != o.inputs.size()) {
+    throw std::runtime_error(
+        fmt::format("--feeds-um gives {} feed(s) for {} cut(s): one per cut, "
+                    "in the order of the cuts",
+                    o.feeds_um.size(), o.inputs.size()));
+  }
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {  // before any cut is read
+    if (!fs::exists(o.inputs[i])) {
+      throw std::runtime_error(fmt::format("{}: recording not found (cut {} of {})", o.inputs[i],
+                                           i + 1, o.inputs.size()));
+    }
+  }
+  const ConfigFile config_file = read_config(o.config);
+  std::vector<identify::CalibrationCut> cuts;
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    cuts.push_back(monitor_cut(o, config_file, i).cut);
+  }
+  identify::CalibrationOptions options;
+  options.tared = o.tared;
+  identify::CalibrationResult r;
+  try {
+    r = identify::calibrate(cuts, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  if (!r.ok) {
+    throw std::runtime_error("calibration failed: " + r.message);
+  }
+  const nlohmann::json j = identify::to_json(r);
+  if (!o.output.empty()) {
+    nlohmann::json provenance = {
+        {"date", utc_now()},
+        {"config", o.config.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.config)},
+        {"tool", model::to_json(r.joint.fit.config)["tool"]}};
+    const std::string name =
+        !o.name.empty() ? o.name
+                        : fmt::format("calibrated on {} cuts ({})", cuts.size(), utc_now());
+    write_text_file(o.output, identify::material_preset(r, name, provenance).dump(2) + "\n");
+  }
+  if (o.json) {
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s", report_text(j, r).c_str());
+    if (!o.output.empty()) {
+      std::printf(
+          "  material preset written to %s (\"model\": {\"material\": \"%s\"} in a "
+          "configuration)\n",
+          o.output.c_str(), fs::path(o.output).filename().c_str());
+    }
+  }
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace
+
+void add_calibrate_command(CLI::App& app) {
+  auto o = std::make_shared<CalibrateOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "calibrate",
+      "Fit one set of force-law coefficients and one runout across recorded cuts of a feed "
+      "sweep (one tool, one clamping); write a material preset");
+  cmd->add_option("cuts", o->inputs,
+                  "Recorded cuts (any format the replay reads; a CUT.json sidecar beside a file "
+                  "describes its cut)")
+      ->required();
+  cmd->add_option("--config", o->config,
+                  "Monitor configuration JSON (or a daemon configuration), merged over each "
+                  "cut's sidecar");
+  cmd->add_option("--feeds-um", o->feeds_um,
+                  "Feed per tooth of each cut (um), in the order of the cuts (default: each "
+                  "cut's sidecar)")
+      ->delimiter(',');
+  cmd->add_option("-o,--output", o->output, "Write the material preset to this JSON file");
+  cmd->add_option("--name", o->name, "The preset's material name");
+  cmd->add_flag("--tared", o->tared,
+                "The channels were tared before each cut: fit the mean force too");
+  cmd->add_option("--columns", o->columns,
+                  "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
+  cmd->add_flag("--json", o->json, "Print the calibration as JSON");
+  cmd->callback([o] { run_subcommand([&o] { return run_calibrate(*o); }); });
+}
+
+}  // namespace millwatch::shell
