@@ -205,8 +205,9 @@ TEST(AlertEstimates, RunoutStepIsRaisedWithinThreeRevolutionsAndStatedInMicromet
 }
 
 // A step too small for single revolutions (ρ 0.5 → 0.7 µm: r_CE1 − r_CE2 0.54 → 0.76 µm, the
-// long flute's share up by 3.5 % of the mean flute force, under the per-revolution 5 %) is still raised — by the block CUSUM of the shares or
-// by the estimates' step test, whichever first — and stated in micrometres.
+// long flute's share up by 3.5 % of the mean flute force, under the per-revolution 5 %) is still
+// raised — by the block CUSUM of the shares or by the estimates' step test, whichever first — and
+// stated in micrometres.
 TEST(AlertEstimates, SmallRunoutStepIsRaisedAndStatedInMicrometres) {
   sim::Scenario s = fine_cut(2.2, 2, 0.4, 3.0, 0.5, 1.0);
   s.runout_change.enabled = true;
