@@ -4,9 +4,13 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
+#include <limits>
+#include <numbers>
 #include <span>
 
 #include "core/config/json_reader.hpp"
+#include "core/identify/identifier.hpp"
 #include "core/monitor/input_check.hpp"
 #include "core/monitor/revolution_record.hpp"
 
@@ -14,6 +18,8 @@ namespace millwatch::monitor {
 namespace {
 
 constexpr auto kFlutes = static_cast<std::size_t>(kMaxFlutes);
+constexpr int kStepRevolutionsMax = 32;  // AlertEngine::kStepRevolutions
+constexpr int kBaselineWindowsMax = 64;  // AlertEngine::kRecentWindows
 
 std::size_t at(int i) {
   return static_cast<std::size_t>(i);
@@ -26,12 +32,57 @@ __attribute__((format(printf, 2, 3))) void write_message(Alert* alert, const cha
   }
   std::va_list args;
   va_start(args, format);
-  std::vsnprintf(alert->message.data(), alert->message.size(), format, args);
+  const int length = std::vsnprintf(alert->message.data(), alert->message.size(), format, args);
   va_end(args);
+  if (length >= static_cast<int>(alert->message.size())) {
+    // Truncated: drop a multi-byte character cut in half (UTF-8 continuation bytes 10xxxxxx).
+    std::size_t end = alert->message.size() - 1;
+    while (end > 0 && (static_cast<unsigned char>(alert->message[end - 1]) & 0xC0) == 0x80) {
+      --end;
+    }
+    if (end > 0 && (static_cast<unsigned char>(alert->message[end - 1]) & 0x80) != 0) {
+      --end;  // the lead byte of the cut character
+    }
+    alert->message[end] = '\0';
+  }
 }
 
 double percent(double fraction) {
   return 100.0 * fraction;
+}
+
+double degrees(double rad) {
+  return rad * 180.0 / std::numbers::pi;
+}
+
+/// A parameter name with its unit for the operator: "k_tc_N_per_mm2" → "k_tc" and "N/mm²",
+/// "k_tc_Nmm" (power law) → "k_tc" and "N/mm^(1+a)".
+void split_unit(const char* name, char (&symbol)[32], char (&unit)[32]) {
+  const char* u = std::strstr(name, "_N");
+  const std::size_t length = u != nullptr ? static_cast<std::size_t>(u - name) : std::strlen(name);
+  std::snprintf(symbol, sizeof symbol, "%.*s", static_cast<int>(length), name);
+  unit[0] = '\0';
+  if (u == nullptr) {
+    return;
+  }
+  const char* rest = u + 1;
+  struct Known {
+    const char* name;
+    const char* text;
+  };
+  for (const Known& k : {Known{"N_per_mm3", "N/mm³"}, Known{"N_per_mm2", "N/mm²"},
+                         Known{"N_per_mm", "N/mm"}, Known{"Nmm", "N/mm^(1+a)"}}) {
+    if (std::strcmp(rest, k.name) == 0) {
+      std::snprintf(unit, sizeof unit, "%s", k.text);
+      return;
+    }
+  }
+  std::snprintf(unit, sizeof unit, "%s", rest);
+}
+
+/// z with P(|Z| > z) = p for both sides together (p clamped to a meaningful range).
+double two_sided_quantile(double p) {
+  return normal_upper_quantile(std::clamp(0.5 * p, 1e-300, 0.25));
 }
 
 }  // namespace
@@ -67,11 +118,26 @@ AlertConfig alert_config_from_json(const nlohmann::json& j, const std::string& p
   c.sigma_floor = r.number("sigma_floor", c.sigma_floor, config::positive(1.0));
   c.runout_change_min =
       r.number("runout_change_min", c.runout_change_min, config::non_negative(2.0));
+  c.runout_step_min = r.number("runout_step_min", c.runout_step_min, config::positive(2.0));
+  c.runout_step_revolutions =
+      r.integer("runout_step_revolutions", c.runout_step_revolutions, 1, kStepRevolutionsMax);
   c.wear_increase = r.number("wear_increase", c.wear_increase, config::positive(10.0));
   c.breakage_fraction =
       r.number("breakage_fraction", c.breakage_fraction, {0.0, 1.0, true, true, ""});
   c.sensor_bad_fraction =
       r.number("sensor_bad_fraction", c.sensor_bad_fraction, config::positive(1.0));
+  c.runout_feed_fraction =
+      r.number("runout_feed_fraction", c.runout_feed_fraction, config::positive(2.0));
+  c.estimate_sigmas = r.number("estimate_sigmas", c.estimate_sigmas, config::non_negative(10.0));
+  c.estimate_windows = r.integer("estimate_windows", c.estimate_windows, 1, 100);
+  c.estimate_baseline_windows =
+      r.integer("estimate_baseline_windows", c.estimate_baseline_windows, 3, kBaselineWindowsMax);
+  c.runout_change_min_um =
+      r.number("runout_change_min_um", c.runout_change_min_um, config::non_negative(100.0, "um"));
+  c.coefficient_increase =
+      r.number("coefficient_increase", c.coefficient_increase, config::positive(10.0));
+  c.conditions_tolerance =
+      r.number("conditions_tolerance", c.conditions_tolerance, config::positive(1.0));
   r.finish();
   return c;
 }
@@ -87,9 +153,18 @@ nlohmann::json to_json(const AlertConfig& c) {
           {"baseline_margin", c.baseline_margin},
           {"sigma_floor", c.sigma_floor},
           {"runout_change_min", c.runout_change_min},
+          {"runout_step_min", c.runout_step_min},
+          {"runout_step_revolutions", c.runout_step_revolutions},
           {"wear_increase", c.wear_increase},
           {"breakage_fraction", c.breakage_fraction},
-          {"sensor_bad_fraction", c.sensor_bad_fraction}};
+          {"sensor_bad_fraction", c.sensor_bad_fraction},
+          {"runout_feed_fraction", c.runout_feed_fraction},
+          {"estimate_sigmas", c.estimate_sigmas},
+          {"estimate_windows", c.estimate_windows},
+          {"estimate_baseline_windows", c.estimate_baseline_windows},
+          {"runout_change_min_um", c.runout_change_min_um},
+          {"coefficient_increase", c.coefficient_increase},
+          {"conditions_tolerance", c.conditions_tolerance}};
 }
 
 AlertEngine::AlertEngine(const AlertConfig& config) : config_(config) {
@@ -100,6 +175,8 @@ AlertEngine::AlertEngine(const AlertConfig& config) : config_(config) {
   scratch_.assign(revolutions, 0.0);
   block_medians_.assign(static_cast<std::size_t>(std::max(config_.baseline_blocks, 1)), 0.0);
   block_values_.assign((kFlutes + 1) * block, 0.0);
+  static_assert(kStepRevolutionsMax == kStepRevolutions && kBaselineWindowsMax == kRecentWindows);
+  recent_rpm_revolution_.fill(-1);
 }
 
 void AlertEngine::rebaseline() {
@@ -117,6 +194,9 @@ void AlertEngine::rebaseline() {
   wear_raise_.reset();
   wear_clear_.reset();
   breakage_.streak = 0;
+  step_streak_.fill(0);
+  change_identify_ = false;
+  restart_estimate_baseline();
   rebaselined_ = true;
 }
 
@@ -141,6 +221,13 @@ Alert* AlertEngine::emit(AlertKind kind, AlertSeverity severity, bool active,
 
 void AlertEngine::examine(const RevolutionRecord& r) {
   const RevolutionMeasurement& m = r.measured;
+  last_revolution_ = std::max(last_revolution_, r.revolution);
+  last_utime_us_ = std::max(last_utime_us_, r.utime_us);
+  if (r.spindle_rpm > 0.0 && std::isfinite(r.spindle_rpm) && r.revolution >= 0) {
+    const auto slot = static_cast<std::size_t>(r.revolution % kRecentRevolutions);
+    recent_rpm_[slot] = r.spindle_rpm;
+    recent_rpm_revolution_[slot] = r.revolution;
+  }
   // A bounded revolution has each flute's force even when a flute left no event (a broken one).
   if (!m.bounded || m.flutes < 2 || m.flutes > kMaxFlutes) {
     return;
@@ -161,6 +248,9 @@ void AlertEngine::examine(const RevolutionRecord& r) {
     return;
   }
   f.imbalance = (hi - lo) / f.mean_N;
+  for (int j = 0; j < f.count; ++j) {
+    f.share[at(j)] = f.force_N[at(j)] / f.mean_N - 1.0;
+  }
   const std::int64_t rev = r.revolution;
   const std::int64_t t = r.utime_us;
 
@@ -171,12 +261,15 @@ void AlertEngine::examine(const RevolutionRecord& r) {
     rebaseline();  // another tool
     clear_after_rebaseline(rev, t);
   }
-  check_runout(f, rev, t);
+  if (!follow_estimates()) {
+    check_runout(f, rev, t);
+  }
   if (!baseline_.ready) {
     add_to_baseline(f);
     return;
   }
-  check_breakage(f, rev, t);
+  const bool collapsing = check_breakage(f, rev, t);
+  check_runout_step(f, collapsing, rev, t);
   add_to_block(f, rev, t);
 }
 
@@ -269,6 +362,7 @@ void AlertEngine::finish_baseline() {
   const double margin = config_.baseline_margin / std::sqrt(static_cast<double>(blocks));
   const int detectors = flutes == 2 ? 1 : flutes;
   breakage_z_ = normal_upper_quantile(1.0 / (config_.false_alarm_revolutions * flutes));
+  step_z_ = two_sided_quantile(1.0 / (config_.false_alarm_revolutions * detectors));
   for (int j = 0; j < flutes; ++j) {
     for (int i = 0; i < n; ++i) {
       series[at(i)] = force(i, j) / mean_force(i) - 1.0;
@@ -280,6 +374,8 @@ void AlertEngine::finish_baseline() {
         std::max(config_.cusum_k, 0.5 * config_.runout_change_min / base.share_sigma[at(j)]);
     base.change_allowance[at(j)] = k_relevant + margin;
     base.change_threshold[at(j)] = cusum_threshold_for(k_relevant, 2.0 * arl_blocks * detectors);
+    base.step_limit[at(j)] =
+        std::max(step_z_ * std::max(share.sigma, config_.sigma_floor), config_.runout_step_min);
     change_up_[at(j)] = Cusum(base.change_allowance[at(j)], base.change_threshold[at(j)]);
     change_down_[at(j)] = change_up_[at(j)];
 
@@ -298,6 +394,7 @@ void AlertEngine::finish_baseline() {
   block_count_ = 0;
   recent_count_ = 0;
   recent_next_ = 0;
+  step_streak_.fill(0);
   base.ready = true;
 }
 
@@ -305,7 +402,7 @@ void AlertEngine::add_to_block(const Flutes& f, std::int64_t rev, std::int64_t t
   const auto block = at(config_.block_revolutions);
   const auto i = at(block_count_);
   for (int j = 0; j < f.count; ++j) {
-    block_values_[at(j) * block + i] = f.force_N[at(j)] / f.mean_N - 1.0;
+    block_values_[at(j) * block + i] = f.share[at(j)];
   }
   block_values_[kFlutes * block + i] = f.mean_N;
   if (++block_count_ < config_.block_revolutions) {
@@ -322,7 +419,10 @@ void AlertEngine::add_to_block(const Flutes& f, std::int64_t rev, std::int64_t t
   recent_next_ = (recent_next_ + 1) % kRecentBlocks;
   recent_count_ = std::min(recent_count_ + 1, kRecentBlocks);
   check_runout_change(b, rev, t);
-  check_wear(b, rev, t);
+  // With estimates the coefficients tell wear; the flute forces only clear what they raised.
+  if (!follow_estimates() || (wear_active_ && !wear_from_estimates_)) {
+    check_wear(b, rev, t);
+  }
 }
 
 AlertEngine::Block AlertEngine::recent_mean(int blocks) const {
@@ -349,16 +449,24 @@ void AlertEngine::check_runout_change(const Block& b, std::int64_t rev, std::int
   const int block = config_.block_revolutions;
 
   if (change_active_) {
+    if (change_source_ == ChangeSource::kEstimate) {
+      return;  // cleared by the estimates
+    }
+    if (rev - block + 1 <= change_onset_) {
+      return;  // a block that began before the change (raised per revolution) is not "after"
+    }
     const auto j = at(change_flute_);
     const double sigma = base.share_sigma[j];
     const double deviation = change_side_ * (b.share[j] - base.share[j]);
     const double inside = config_.hysteresis * base.change_allowance[j] * sigma;
     if (change_clear_.update((inside - deviation) / sigma)) {
       change_active_ = false;
+      change_identify_ = false;
       for (int q = 0; q < kMaxFlutes; ++q) {
         change_up_[at(q)].reset();
         change_down_[at(q)].reset();
       }
+      step_streak_.fill(0);
       const Block now = recent_mean(change_clear_.run());
       write_message(
           emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, false, rev, t, imbalance(now.share),
@@ -367,6 +475,9 @@ void AlertEngine::check_runout_change(const Block& b, std::int64_t rev, std::int
           percent(imbalance(now.share)), percent(before), change_clear_.run() * block);
     }
     return;
+  }
+  if (breakage_.active) {
+    return;  // a broken flute changes the shares: breakage says it
   }
   const int detectors = flutes_ == 2 ? 1 : flutes_;
   for (int q = 0; q < detectors; ++q) {
@@ -388,9 +499,7 @@ void AlertEngine::check_runout_change(const Block& b, std::int64_t rev, std::int
     if (side * (now.share[j] - base.share[j]) <= base.change_allowance[j] * base.share_sigma[j]) {
       continue;
     }
-    change_active_ = true;
-    change_flute_ = q;
-    change_side_ = side;
+    start_change(ChangeSource::kBlock, q, side, rev - static_cast<std::int64_t>(run) * block + 1);
     const double after = imbalance(now.share);
     write_message(emit(AlertKind::kRunoutChange, AlertSeverity::kWarning, true, rev, t, after,
                        before, "flute_imbalance"),
@@ -400,8 +509,88 @@ void AlertEngine::check_runout_change(const Block& b, std::int64_t rev, std::int
                   percent(2.0 * base.share_sigma[j]), q, percent(base.share[j]),
                   percent(now.share[j]), blocks_after * block);
   }
+}
+
+void AlertEngine::start_change(ChangeSource source, int flute, int side, std::int64_t onset) {
+  change_active_ = true;
+  change_source_ = source;
+  change_flute_ = flute;
+  change_side_ = side;
+  change_onset_ = onset;
+  change_clear_ = Cusum(config_.cusum_k, baseline_.change_threshold[at(flute)]);
+  for (int q = 0; q < kMaxFlutes; ++q) {
+    change_up_[at(q)].reset();
+    change_down_[at(q)].reset();
+  }
+  step_streak_.fill(0);
+  window_streak_.fill(0);
+  // The estimates say what changed once a window wholly after the onset is fitted. A baseline of
+  // them still gathering would mix both states: it starts again.
+  change_identify_ = true;
+  if (!estimate_base_.ready) {
+    restart_estimate_baseline();
+  }
+}
+
+void AlertEngine::check_runout_step(const Flutes& f, bool collapsing, std::int64_t rev,
+                                    std::int64_t t) {
+  step_shares_[at(step_next_)] = f.share;
+  step_next_ = (step_next_ + 1) % kStepRevolutions;
   if (change_active_) {
-    change_clear_ = Cusum(config_.cusum_k, base.change_threshold[at(change_flute_)]);
+    return;
+  }
+  const Baseline& base = baseline_;
+  const int detectors = flutes_ == 2 ? 1 : flutes_;
+  const int persist = config_.runout_step_revolutions;
+  for (int q = 0; q < detectors; ++q) {
+    const auto j = at(q);
+    const double deviation = f.share[j] - base.share[j];
+    const int side = deviation > base.step_limit[j] ? 1 : deviation < -base.step_limit[j] ? -1 : 0;
+    if (side == 0 || side != step_side_[j]) {
+      step_side_[j] = side;
+      step_streak_[j] = side != 0 ? 1 : 0;
+    } else {
+      ++step_streak_[j];
+    }
+    // A flute collapsing is breakage, not runout: it waits for the breakage detector.
+    if (step_streak_[j] < persist || collapsing || breakage_.active) {
+      continue;
+    }
+    // The revolutions of the run: their mean shares are the "after".
+    std::array<double, kMaxFlutes> after{};
+    for (int b = 0; b < persist; ++b) {
+      const auto& shares =
+          step_shares_[at((step_next_ - 1 - b + 2 * kStepRevolutions) % kStepRevolutions)];
+      for (int k = 0; k < flutes_; ++k) {
+        after[at(k)] += shares[at(k)] / persist;
+      }
+    }
+    auto imbalance = [&](const std::array<double, kMaxFlutes>& share) {
+      const auto first = share.begin();
+      const auto last = first + flutes_;
+      return *std::max_element(first, last) - *std::min_element(first, last);
+    };
+    const double before = imbalance(base.share);
+    const double now = imbalance(after);
+    start_change(ChangeSource::kRevolution, q, side, rev - persist + 1);
+    Alert* a = emit(AlertKind::kRunoutChange, AlertSeverity::kWarning, true, rev, t, now, before,
+                    "flute_imbalance");
+    if (estimate_base_.ready) {
+      write_message(a,
+                    "runout change: flute imbalance %.2f %% → %.2f %% (flute %d %+.2f %% → %+.2f "
+                    "%% of the mean flute force, limit ± %.2f %%; %d revolutions); identified "
+                    "before: r_CE1 − r_CE2 %.3f ± %.3f µm",
+                    percent(before), percent(now), q, percent(base.share[j]), percent(after[j]),
+                    percent(base.step_limit[j]), persist, -estimate_base_.radius_difference_um[1],
+                    estimate_base_.radius_total_sigma_um[1]);
+    } else {
+      write_message(a,
+                    "runout change: flute imbalance %.2f %% → %.2f %% (flute %d %+.2f %% → %+.2f "
+                    "%% of the mean flute force, limit ± %.2f %%; %d revolutions)",
+                    percent(before), percent(now), q, percent(base.share[j]), percent(after[j]),
+                    percent(base.step_limit[j]), persist);
+    }
+    return;
   }
 }
 
@@ -422,6 +611,7 @@ void AlertEngine::check_wear(const Block& b, std::int64_t rev, std::int64_t t) {
       return;
     }
     wear_active_ = true;
+    wear_from_estimates_ = false;
     wear_clear_.reset();
     write_message(emit(AlertKind::kWearDrift, AlertSeverity::kWarning, true, rev, t, now_rise,
                        limit, "flute_force_rise"),
@@ -446,7 +636,7 @@ void AlertEngine::check_wear(const Block& b, std::int64_t rev, std::int64_t t) {
   }
 }
 
-void AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t t) {
+bool AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t t) {
   const Baseline& base = baseline_;
   double strongest = 0.0;
   for (int j = 0; j < f.count; ++j) {
@@ -483,7 +673,7 @@ void AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
           weakest, percent(f.force_N[w] / strongest), percent(base.strength[w]), percent(q[w]),
           percent(base.breakage_limit[w]), persist);
     }
-    return;
+    return weakest_margin < 0.0;
   }
   breakage_.streak = healed ? breakage_.streak + 1 : 0;
   if (breakage_.streak >= persist) {
@@ -497,12 +687,14 @@ void AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
                   breakage_flute_, percent(q[b]),
                   percent(base.breakage_limit[b] / config_.hysteresis), persist);
   }
+  return weakest_margin < 0.0;
 }
 
 void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t) {
   rebaselined_ = false;
   if (change_active_) {
     change_active_ = false;
+    change_identify_ = false;
     write_message(emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, false, rev, t, 0.0, 0.0,
                        "flute_imbalance"),
                   "runout change cleared: new baseline");
@@ -510,7 +702,8 @@ void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t) {
   if (wear_active_) {
     wear_active_ = false;
     write_message(emit(AlertKind::kWearDrift, AlertSeverity::kInfo, false, rev, t, 0.0,
-                       config_.wear_increase, "flute_force_rise"),
+                       wear_from_estimates_ ? config_.coefficient_increase : config_.wear_increase,
+                       wear_from_estimates_ ? "coefficient_rise" : "flute_force_rise"),
                   "wear drift cleared: new baseline");
   }
   if (breakage_.active) {
@@ -519,6 +712,486 @@ void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t) {
     write_message(emit(AlertKind::kBreakage, AlertSeverity::kInfo, false, rev, t, 0.0, 0.0,
                        "flute_strength_fraction_of_baseline"),
                   "breakage cleared: new baseline");
+  }
+}
+
+// ---- Estimates -------------------------------------------------------------------------------
+
+bool AlertEngine::read_window(const identify::IdentifiedWindow& w, WindowEstimate& e) const {
+  const identify::FitResult& fit = w.fit;
+  const int flutes = fit.config.tool.flutes;
+  if (!fit.ok || flutes < 2 || flutes > kMaxFlutes ||
+      static_cast<int>(fit.radius_from_ce1_um.size()) != flutes || fit.coefficients.empty()) {
+    return false;
+  }
+  e = WindowEstimate{};
+  e.flutes = flutes;
+  e.last_revolution = w.revolution;
+  e.first_revolution = w.revolution - std::max(w.window_revolutions, 1) + 1;
+  // The window's mean actual speed from its revolutions (the fit keeps the commanded one).
+  double sum = 0.0;
+  int n = 0;
+  const std::int64_t from =
+      std::max({e.first_revolution, e.last_revolution - kRecentRevolutions + 1, std::int64_t{0}});
+  for (std::int64_t r = from; r <= e.last_revolution; ++r) {
+    const auto slot = static_cast<std::size_t>(r % kRecentRevolutions);
+    if (recent_rpm_revolution_[slot] == r) {
+      sum += recent_rpm_[slot];
+      ++n;
+    }
+  }
+  const double commanded_rpm = fit.config.process.spindle_rpm;
+  e.spindle_rpm = n > 0 ? sum / n : commanded_rpm;
+  if (!(e.spindle_rpm > 0.0) || !(commanded_rpm > 0.0)) {
+    return false;
+  }
+  e.feed_per_tooth_um = fit.config.process.feed_per_tooth_um * commanded_rpm / e.spindle_rpm;
+  for (int j = 0; j < flutes; ++j) {
+    const identify::Estimate& d = fit.radius_from_ce1_um[at(j)];
+    e.radius_difference_um[at(j)] = d.value;
+    e.radius_sigma_um[at(j)] = d.sigma;
+    e.radius_sigma_stat_um[at(j)] = d.sigma_stat;
+  }
+  e.rho_um = fit.rho_um.value;
+  e.rho_sigma_um = fit.rho_um.sigma;
+  e.gamma_rad = fit.gamma_rad.value;
+  e.gamma_sigma_rad = fit.gamma_rad.sigma;
+  e.coefficients = std::min(static_cast<int>(fit.coefficients.size()), kMaxCoefficients);
+  for (int c = 0; c < e.coefficients; ++c) {
+    e.coefficient[at(c)] = fit.coefficients[at(c)].value;
+    e.coefficient_sigma_stat[at(c)] = fit.coefficients[at(c)].sigma_stat;
+  }
+  for (double v : {e.feed_per_tooth_um, e.rho_um, e.rho_sigma_um, e.gamma_rad, e.gamma_sigma_rad}) {
+    if (!std::isfinite(v)) {
+      return false;
+    }
+  }
+  for (int j = 0; j < flutes; ++j) {
+    if (!std::isfinite(e.radius_difference_um[at(j)]) || !std::isfinite(e.radius_sigma_um[at(j)])) {
+      return false;
+    }
+  }
+  for (int c = 0; c < e.coefficients; ++c) {
+    if (!std::isfinite(e.coefficient[at(c)]) || !std::isfinite(e.coefficient_sigma_stat[at(c)])) {
+      return false;
+    }
+  }
+  return true;
+}
+
+const AlertEngine::WindowEstimate& AlertEngine::recent_window(int back) const {
+  return windows_[at((windows_next_ - 1 - back + 2 * kRecentWindows) % kRecentWindows)];
+}
+
+void AlertEngine::examine(const identify::IdentifiedWindow& w) {
+  if (w.revolution <= last_window_) {
+    return;  // out of order
+  }
+  WindowEstimate e;
+  if (!read_window(w, e)) {
+    return;
+  }
+  last_window_ = w.revolution;
+  const int flutes = w.fit.config.tool.flutes;
+  const std::int64_t rev = std::max(last_revolution_, w.revolution);
+  const std::int64_t t = std::max(last_utime_us_, w.utime_us);
+  if (!estimates_) {
+    estimates_ = true;
+    runout_.streak = 0;  // counted in windows from now on
+  }
+  windows_[at(windows_next_)] = e;
+  windows_next_ = (windows_next_ + 1) % kRecentWindows;
+  windows_count_ = std::min(windows_count_ + 1, kRecentWindows);
+
+  check_runout_high(e, rev, t);
+
+  // The estimates' baseline holds at one speed and feed, one tool, one set of coefficients.
+  EstimateBaseline& base = estimate_base_;
+  if (estimate_base_count_ > 0) {
+    const double tolerance = config_.conditions_tolerance;
+    bool same = base.flutes == flutes && base.coefficients == e.coefficients &&
+                std::fabs(e.spindle_rpm / base.spindle_rpm - 1.0) <= tolerance &&
+                std::fabs(e.feed_per_tooth_um / base.feed_per_tooth_um - 1.0) <= tolerance;
+    for (int c = 0; same && c < e.coefficients; ++c) {
+      same = w.fit.coefficients[at(c)].name == base.coefficient_name[at(c)].data();
+    }
+    if (!same) {
+      restart_estimate_baseline();
+    }
+  }
+  if (estimate_base_count_ == 0) {
+    base = EstimateBaseline{};
+    base.flutes = flutes;
+    base.spindle_rpm = e.spindle_rpm;
+    base.feed_per_tooth_um = e.feed_per_tooth_um;
+    base.coefficients = e.coefficients;
+    for (int c = 0; c < e.coefficients; ++c) {
+      const std::string& name = w.fit.coefficients[at(c)].name;
+      auto& out = base.coefficient_name[at(c)];
+      const std::size_t n = std::min(name.size(), out.size() - 1);
+      std::memcpy(out.data(), name.data(), n);
+      out[n] = '\0';
+    }
+  }
+  if (!base.ready) {
+    // A window straddling a change the flute forces raised belongs to neither state.
+    if (change_active_ && e.first_revolution <= change_onset_) {
+      return;
+    }
+    add_to_estimate_baseline();
+  }
+  if (change_active_ && change_identify_ && e.first_revolution > change_onset_) {
+    state_change_identified(e, rev, t);
+  }
+  if (!base.ready) {
+    return;
+  }
+  check_estimate_change(e, rev, t);
+  check_coefficient_wear(e, rev, t);
+}
+
+void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, std::int64_t t) {
+  // u = max over flutes j and passes back n of (r_{j−n} − r_j)/n over f_t (header comment).
+  const int n_z = e.flutes;
+  auto d = [&](int j) { return j == 0 ? 0.0 : e.radius_difference_um[at(j)]; };
+  auto sd = [&](int j) { return j == 0 ? 0.0 : e.radius_sigma_um[at(j)]; };
+  double deficit = -std::numeric_limits<double>::infinity(), sigma = 0.0;
+  int longer = 0, shorter = 1, passes = 1;
+  for (int j = 0; j < n_z; ++j) {
+    for (int n = 1; n < n_z; ++n) {
+      const int a = (j - n + n_z) % n_z;
+      const double value = (d(a) - d(j)) / n;
+      if (value > deficit) {
+        deficit = value;
+        sigma = (sd(a) + sd(j)) / n;  // through CE1 one of the two is 0
+        longer = a;
+        shorter = j;
+        passes = n;
+      }
+    }
+  }
+  const double ft = e.feed_per_tooth_um;
+  const double u = deficit / ft;
+  const double sigma_u = sigma / ft;
+  if (!runout_first_known_) {
+    runout_first_known_ = true;
+    runout_first_ratio_ = u;
+  }
+  const double limit = config_.runout_feed_fraction;
+  const double z = config_.estimate_sigmas;
+  const int persist = config_.estimate_windows;
+  char pair[64];
+  if (passes == 1) {
+    std::snprintf(pair, sizeof pair, "r_CE%d − r_CE%d", longer + 1, shorter + 1);
+  } else {
+    std::snprintf(pair, sizeof pair, "(r_CE%d − r_CE%d)/%d", longer + 1, shorter + 1, passes);
+  }
+  if (!runout_.active) {
+    runout_.streak = u - z * sigma_u > limit ? runout_.streak + 1 : 0;
+    if (runout_.streak >= persist) {
+      runout_.active = true;
+      runout_.streak = 0;
+      write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t, u, limit,
+                         "radius_deficit_per_feed"),
+                    "runout high: %s %.3f ± %.3f µm = %.1f ± %.1f %% of f_t %.2f µm (first "
+                    "window %.1f %% → %.1f %%; limit %.0f %%, at 100 %% flute %d stops cutting); "
+                    "ρ %.2f ± %.2f µm at γ %.1f ± %.1f°",
+                    pair, deficit, sigma, percent(u), percent(sigma_u), ft,
+                    percent(runout_first_ratio_), percent(u), percent(limit), shorter + 1, e.rho_um,
+                    e.rho_sigma_um, degrees(e.gamma_rad), degrees(e.gamma_sigma_rad));
+    }
+    return;
+  }
+  const double clear_below = config_.hysteresis * limit;
+  runout_.streak = u + z * sigma_u < clear_below ? runout_.streak + 1 : 0;
+  if (runout_.streak >= persist) {
+    runout_.active = false;
+    runout_.streak = 0;
+    write_message(emit(AlertKind::kRunout, AlertSeverity::kInfo, false, rev, t, u, limit,
+                       "radius_deficit_per_feed"),
+                  "runout cleared: %s %.3f ± %.3f µm = %.1f ± %.1f %% of f_t %.2f µm (below "
+                  "%.0f %% for %d windows)",
+                  pair, deficit, sigma, percent(u), percent(sigma_u), ft, percent(clear_below),
+                  persist);
+  }
+}
+
+void AlertEngine::restart_estimate_baseline() {
+  estimate_base_.ready = false;
+  estimate_base_count_ = 0;
+  window_streak_.fill(0);
+  window_clear_streak_ = 0;
+  for (auto& c : coefficient_raise_) {
+    c.reset();
+  }
+  coefficient_clear_.reset();
+}
+
+void AlertEngine::add_to_estimate_baseline() {
+  ++estimate_base_count_;
+  if (estimate_base_count_ >= config_.estimate_baseline_windows) {
+    finish_estimate_baseline();
+  }
+}
+
+void AlertEngine::finish_estimate_baseline() {
+  EstimateBaseline& base = estimate_base_;
+  const int n = estimate_base_count_;  // the newest n recent windows
+  const std::span<double> series = std::span(estimate_series_).first(at(n));
+  const std::span<double> scratch(estimate_scratch_);
+  const double inflate = std::sqrt(1.0 + 1.0 / n);
+  // σ of one window about the baseline: the spread of successive windows' differences / √2
+  // (blind to a slow trend within the baseline), or their median statistical σ, whichever is
+  // larger, and a floor.
+  auto spread = [&](auto value, auto sigma_stat, double floor, double& median_out) {
+    for (int i = 0; i < n; ++i) {
+      series[at(i)] = value(recent_window(i));
+    }
+    median_out = median_in_place(series);
+    for (int i = 0; i + 1 < n; ++i) {
+      series[at(i)] = value(recent_window(i)) - value(recent_window(i + 1));
+    }
+    const double scatter =
+        robust_summary(series.first(at(n - 1)), scratch).sigma / std::numbers::sqrt2;
+    for (int i = 0; i < n; ++i) {
+      series[at(i)] = sigma_stat(recent_window(i));
+    }
+    const double stat = median_in_place(series);
+    return inflate * std::max({scatter, stat, floor});
+  };
+  auto median_of = [&](auto value) {
+    for (int i = 0; i < n; ++i) {
+      series[at(i)] = value(recent_window(i));
+    }
+    return median_in_place(series);
+  };
+  const double ft = base.feed_per_tooth_um;
+  const double arl_windows =
+      config_.false_alarm_revolutions /
+      std::max<double>(1.0, static_cast<double>(recent_window(0).last_revolution -
+                                                recent_window(0).first_revolution + 1));
+  window_z_ = two_sided_quantile(1.0 / (arl_windows * (base.flutes - 1)));
+  for (int j = 1; j < base.flutes; ++j) {
+    base.radius_sigma_um[at(j)] =
+        spread([j](const WindowEstimate& w) { return w.radius_difference_um[at(j)]; },
+               [j](const WindowEstimate& w) { return w.radius_sigma_stat_um[at(j)]; },
+               config_.sigma_floor * ft, base.radius_difference_um[at(j)]);
+    base.radius_limit_um[at(j)] =
+        std::max(window_z_ * base.radius_sigma_um[at(j)], config_.runout_change_min_um);
+    base.radius_total_sigma_um[at(j)] =
+        median_of([j](const WindowEstimate& w) { return w.radius_sigma_um[at(j)]; });
+  }
+  base.rho_um = median_of([](const WindowEstimate& w) { return w.rho_um; });
+  base.rho_sigma_um = median_of([](const WindowEstimate& w) { return w.rho_sigma_um; });
+  double c = 0.0, s = 0.0;
+  for (int i = 0; i < n; ++i) {
+    c += std::cos(recent_window(i).gamma_rad);
+    s += std::sin(recent_window(i).gamma_rad);
+  }
+  base.gamma_rad = std::atan2(s, c);
+  base.gamma_sigma_rad = median_of([](const WindowEstimate& w) { return w.gamma_sigma_rad; });
+  for (int k = 0; k < base.coefficients; ++k) {
+    const double median = median_of([k](const WindowEstimate& w) { return w.coefficient[at(k)]; });
+    base.coefficient[at(k)] = median;
+    double ignored = 0.0;
+    const double scale = median != 0.0 ? 1.0 / std::fabs(median) : 1.0;
+    base.coefficient_sigma[at(k)] = spread(
+        [k, scale](const WindowEstimate& w) { return w.coefficient[at(k)] * scale; },
+        [k, scale](const WindowEstimate& w) { return w.coefficient_sigma_stat[at(k)] * scale; },
+        config_.sigma_floor, ignored);
+  }
+  base.wear_allowance =
+      config_.cusum_k + config_.baseline_margin / std::sqrt(static_cast<double>(n));
+  base.wear_threshold = cusum_threshold_for(config_.cusum_k, arl_windows * base.coefficients);
+  for (int k = 0; k < kMaxCoefficients; ++k) {
+    coefficient_raise_[at(k)] = Cusum(base.wear_allowance, base.wear_threshold);
+  }
+  coefficient_clear_ = Cusum(config_.cusum_k, base.wear_threshold);
+  base.windows = n;
+  base.ready = true;
+}
+
+void AlertEngine::state_change_identified(const WindowEstimate& e, std::int64_t rev,
+                                          std::int64_t t) {
+  change_identify_ = false;
+  const EstimateBaseline& base = estimate_base_;
+  // Before: the baseline if it holds the state before the change, else the newest window that
+  // ended before the onset.
+  const WindowEstimate* before_window = nullptr;
+  for (int i = 1; i < windows_count_; ++i) {
+    if (recent_window(i).last_revolution < change_onset_) {
+      before_window = &recent_window(i);
+      break;
+    }
+  }
+  const bool from_baseline = base.ready;
+  if (!from_baseline && before_window == nullptr) {
+    return;  // nothing fitted before the change
+  }
+  auto before_d = [&](int j) {
+    return from_baseline ? base.radius_difference_um[at(j)]
+                         : before_window->radius_difference_um[at(j)];
+  };
+  auto before_sd = [&](int j) {
+    return from_baseline ? base.radius_total_sigma_um[at(j)]
+                         : before_window->radius_sigma_um[at(j)];
+  };
+  const int flutes = base.flutes;
+  int flute = 1;
+  double largest = -1.0;
+  for (int j = 1; j < flutes; ++j) {
+    const double step = std::fabs(e.radius_difference_um[at(j)] - before_d(j));
+    if (step > largest) {
+      largest = step;
+      flute = j;
+    }
+  }
+  const double rho = from_baseline ? base.rho_um : before_window->rho_um;
+  const double rho_sd = from_baseline ? base.rho_sigma_um : before_window->rho_sigma_um;
+  const double gamma = from_baseline ? base.gamma_rad : before_window->gamma_rad;
+  const double gamma_sd = from_baseline ? base.gamma_sigma_rad : before_window->gamma_sigma_rad;
+  const double was = -before_d(flute), now = -e.radius_difference_um[at(flute)];
+  write_message(emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, true, rev, t, now, was,
+                     "radius_difference_um"),
+                "runout change identified: r_CE1 − r_CE%d %.3f ± %.3f µm → %.3f ± %.3f µm; ρ %.2f "
+                "± %.2f µm at γ %.1f ± %.1f° → %.2f ± %.2f µm at %.1f ± %.1f° (revolutions "
+                "%lld–%lld)",
+                flute + 1, was, before_sd(flute), now, e.radius_sigma_um[at(flute)], rho, rho_sd,
+                degrees(gamma), degrees(gamma_sd), e.rho_um, e.rho_sigma_um, degrees(e.gamma_rad),
+                degrees(e.gamma_sigma_rad), static_cast<long long>(e.first_revolution),
+                static_cast<long long>(e.last_revolution));
+}
+
+void AlertEngine::check_estimate_change(const WindowEstimate& e, std::int64_t rev, std::int64_t t) {
+  const EstimateBaseline& base = estimate_base_;
+  const int persist = config_.estimate_windows;
+  if (change_active_) {
+    if (change_source_ != ChangeSource::kEstimate) {
+      return;  // the flute forces clear what they raised
+    }
+    bool inside = true;
+    for (int j = 1; j < base.flutes; ++j) {
+      inside =
+          inside && std::fabs(e.radius_difference_um[at(j)] - base.radius_difference_um[at(j)]) <
+                        config_.hysteresis * base.radius_limit_um[at(j)];
+    }
+    window_clear_streak_ = inside ? window_clear_streak_ + 1 : 0;
+    if (window_clear_streak_ >= persist) {
+      change_active_ = false;
+      window_clear_streak_ = 0;
+      window_streak_.fill(0);
+      const auto j = at(change_flute_);
+      write_message(
+          emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, false, rev, t,
+               -e.radius_difference_um[j], -base.radius_difference_um[j], "radius_difference_um"),
+          "runout change cleared: r_CE1 − r_CE%d %.3f ± %.3f µm (baseline %.3f µm, "
+          "within %.3f µm for %d windows)",
+          change_flute_ + 1, -e.radius_difference_um[j], e.radius_sigma_um[j],
+          -base.radius_difference_um[j], config_.hysteresis * base.radius_limit_um[j], persist);
+    }
+    return;
+  }
+  for (int j = 1; j < base.flutes; ++j) {
+    const auto q = at(j);
+    const double deviation = e.radius_difference_um[q] - base.radius_difference_um[q];
+    const double limit = base.radius_limit_um[q];
+    const int side = deviation > limit ? 1 : deviation < -limit ? -1 : 0;
+    if (side == 0 || side != window_side_[q]) {
+      window_side_[q] = side;
+      window_streak_[q] = side != 0 ? 1 : 0;
+      continue;
+    }
+    if (++window_streak_[q] < persist) {
+      continue;
+    }
+    change_active_ = true;
+    change_source_ = ChangeSource::kEstimate;
+    change_flute_ = j;
+    change_side_ = side;
+    change_onset_ = recent_window(persist - 1).first_revolution;
+    change_identify_ = false;
+    window_clear_streak_ = 0;
+    step_streak_.fill(0);
+    write_message(
+        emit(AlertKind::kRunoutChange, AlertSeverity::kWarning, true, rev, t,
+             -e.radius_difference_um[q], -base.radius_difference_um[q], "radius_difference_um"),
+        "runout change: r_CE1 − r_CE%d %.3f ± %.3f µm → %.3f ± %.3f µm (limit ± %.3f "
+        "µm, %d windows); ρ %.2f ± %.2f µm at γ %.1f ± %.1f° → %.2f ± %.2f µm at %.1f "
+        "± %.1f°",
+        j + 1, -base.radius_difference_um[q], base.radius_total_sigma_um[q],
+        -e.radius_difference_um[q], e.radius_sigma_um[q], limit, persist, base.rho_um,
+        base.rho_sigma_um, degrees(base.gamma_rad), degrees(base.gamma_sigma_rad), e.rho_um,
+        e.rho_sigma_um, degrees(e.gamma_rad), degrees(e.gamma_sigma_rad));
+    return;
+  }
+}
+
+void AlertEngine::check_coefficient_wear(const WindowEstimate& e, std::int64_t rev,
+                                         std::int64_t t) {
+  const EstimateBaseline& base = estimate_base_;
+  const double limit = config_.coefficient_increase;
+  auto rise = [&](const WindowEstimate& w, int k) {
+    return w.coefficient[at(k)] / base.coefficient[at(k)] - 1.0;
+  };
+  const int window_revolutions = static_cast<int>(e.last_revolution - e.first_revolution + 1);
+  if (!wear_active_) {
+    for (int k = 0; k < base.coefficients; ++k) {
+      const double sigma = base.coefficient_sigma[at(k)];
+      Cusum& raise = coefficient_raise_[at(k)];
+      if (base.coefficient[at(k)] == 0.0 || !raise.update((rise(e, k) - limit) / sigma) ||
+          raise.run() < 2 || wear_active_) {
+        continue;
+      }
+      // Confirmed on the excursion's windows after its first.
+      const int after = std::min({raise.run() - 1, windows_count_, kRecentWindows});
+      double mean = 0.0;
+      for (int i = 0; i < after; ++i) {
+        mean += recent_window(i).coefficient[at(k)] / after;
+      }
+      const double now_rise = mean / base.coefficient[at(k)] - 1.0;
+      if (now_rise <= limit) {
+        continue;
+      }
+      wear_active_ = true;
+      wear_from_estimates_ = true;
+      wear_coefficient_ = k;
+      coefficient_clear_.reset();
+      char symbol[32], unit[32];
+      split_unit(base.coefficient_name[at(k)].data(), symbol, unit);
+      write_message(emit(AlertKind::kWearDrift, AlertSeverity::kWarning, true, rev, t, now_rise,
+                         limit, "coefficient_rise"),
+                    "wear drift: %s %.4g %s → %.4g %s (%+.1f %%, limit %+.1f %%; baseline ± %.2f "
+                    "%%, over %d windows, %d revolutions)",
+                    symbol, base.coefficient[at(k)], unit, mean, unit, percent(now_rise),
+                    percent(limit), percent(sigma), after, after * window_revolutions);
+    }
+    return;
+  }
+  if (!wear_from_estimates_) {
+    return;  // the flute forces clear what they raised
+  }
+  const int k = wear_coefficient_;
+  const double sigma = base.coefficient_sigma[at(k)];
+  const double clear_below = config_.hysteresis * limit;
+  if (coefficient_clear_.update((clear_below - rise(e, k)) / sigma)) {
+    wear_active_ = false;
+    for (auto& c : coefficient_raise_) {
+      c.reset();
+    }
+    const int run = std::min({coefficient_clear_.run(), windows_count_, kRecentWindows});
+    double mean = 0.0;
+    for (int i = 0; i < run; ++i) {
+      mean += recent_window(i).coefficient[at(k)] / run;
+    }
+    const double now_rise = mean / base.coefficient[at(k)] - 1.0;
+    char symbol[32], unit[32];
+    split_unit(base.coefficient_name[at(k)].data(), symbol, unit);
+    write_message(emit(AlertKind::kWearDrift, AlertSeverity::kInfo, false, rev, t, now_rise, limit,
+                       "coefficient_rise"),
+                  "wear drift cleared: %s %.4g %s (%+.1f %% over the baseline %.4g %s, below "
+                  "%+.1f %%)",
+                  symbol, mean, unit, percent(now_rise), base.coefficient[at(k)], unit,
+                  percent(clear_below));
   }
 }
 

@@ -18,6 +18,35 @@ model::ModelConfig initial_config(const Scenario& s) {
   return c;
 }
 
+/// `to`'s force coefficients (the law's K's, the flank-wear rubbing ones) = `from`'s × factor.
+void scale_coefficients(const model::ModelConfig& from, double factor, model::ModelConfig& to) {
+  const auto& pl = from.material.power_law;
+  auto& p = to.material.power_law;
+  p.k_tc_Nmm = factor * pl.k_tc_Nmm;
+  p.k_nc_Nmm = factor * pl.k_nc_Nmm;
+  p.k_tp_Nmm = factor * pl.k_tp_Nmm;
+  p.k_np_Nmm = factor * pl.k_np_Nmm;
+  p.k_ac_Nmm = factor * pl.k_ac_Nmm;
+  p.k_ap_Nmm = factor * pl.k_ap_Nmm;
+  const auto& le = from.material.linear_edge;
+  auto& l = to.material.linear_edge;
+  l.k_tc_N_per_mm2 = factor * le.k_tc_N_per_mm2;
+  l.k_nc_N_per_mm2 = factor * le.k_nc_N_per_mm2;
+  l.k_ac_N_per_mm2 = factor * le.k_ac_N_per_mm2;
+  l.k_te_N_per_mm = factor * le.k_te_N_per_mm;
+  l.k_ne_N_per_mm = factor * le.k_ne_N_per_mm;
+  l.k_ae_N_per_mm = factor * le.k_ae_N_per_mm;
+  l.k_tp_N_per_mm3 = factor * le.k_tp_N_per_mm3;
+  l.k_np_N_per_mm3 = factor * le.k_np_N_per_mm3;
+  l.k_ap_N_per_mm3 = factor * le.k_ap_N_per_mm3;
+  l.a_t_Nmm = factor * le.a_t_Nmm;
+  l.a_n_Nmm = factor * le.a_n_Nmm;
+  l.a_a_Nmm = factor * le.a_a_Nmm;
+  to.material.kronenberg.k_s0_N_per_mm2 = factor * from.material.kronenberg.k_s0_N_per_mm2;
+  to.effects.flank_wear.k_wt_N_per_mm2 = factor * from.effects.flank_wear.k_wt_N_per_mm2;
+  to.effects.flank_wear.k_wn_N_per_mm2 = factor * from.effects.flank_wear.k_wn_N_per_mm2;
+}
+
 }  // namespace
 
 CutSimulator::CutSimulator(const Scenario& scenario)
@@ -27,6 +56,7 @@ CutSimulator::CutSimulator(const Scenario& scenario)
       workspace_(config_, config_.resolution.steps_per_rev),
       evaluated_(config_),
       rng_(scenario.seed) {
+  scale_result_ = !config_.effects.deflection.enabled;
   feed_rate_um_per_min_ = scenario_.model.process.feed_per_tooth_um * scenario_.model.tool.flutes *
                           scenario_.model.process.spindle_rpm;
   total_samples_ = std::llround(scenario_.duration_s * scenario_.sample_rate_hz);
@@ -73,6 +103,14 @@ RevolutionTruth CutSimulator::configure_revolution(double start_s) {
                 progress * (scenario_.wear.end_um[j] - scenario_.wear.start_um[j]);
     }
   }
+  if (scenario_.coefficient_drift.enabled) {
+    const double progress = std::clamp(start_s / scenario_.duration_s, 0.0, 1.0);
+    factor_ = 1.0 + progress * (scenario_.coefficient_drift.end_factor - 1.0);
+    if (!scale_result_) {
+      scale_coefficients(scenario_.model, factor_, config_);
+    }
+  }
+  t.coefficient_factor = factor_;
   t.feed_per_tooth_um = process.feed_per_tooth_um;
   t.runout_offset_um = runout.enabled ? runout.offset_um : 0.0;
   t.runout_angle_rad = runout.enabled ? runout.angle_rad : 0.0;
@@ -89,7 +127,8 @@ bool CutSimulator::conditions_changed() const {
          a.effects.runout.enabled != b.effects.runout.enabled ||
          a.effects.runout.offset_um != b.effects.runout.offset_um ||
          a.effects.runout.angle_rad != b.effects.runout.angle_rad ||
-         a.effects.flank_wear.wear_um != b.effects.flank_wear.wear_um;
+         a.effects.flank_wear.wear_um != b.effects.flank_wear.wear_um ||
+         (!scale_result_ && factor_ != evaluated_factor_);
 }
 
 void CutSimulator::advance_revolution(double start_s) {
@@ -108,15 +147,18 @@ void CutSimulator::advance_revolution(double start_s) {
     evaluated_.process = config_.process;
     evaluated_.effects.runout = config_.effects.runout;
     evaluated_.effects.flank_wear.wear_um = config_.effects.flank_wear.wear_um;  // same size
+    evaluated_factor_ = scale_result_ ? 1.0 : factor_;
     has_result_ = true;
   }
   // Revolution n of the record plays revolution n mod L of the cycle.
   const model::SteadyState& state = workspace_.result();
   const auto n = static_cast<long>(truth_.size()) - 1;
   const int m = static_cast<int>(n % state.cycle_revolutions);
+  const double scale = factor_ / evaluated_factor_;
   for (int a = 0; a < 3; ++a) {
     const auto revolution = state.revolution(m, a);
-    std::copy(revolution.begin(), revolution.end(), next_[static_cast<std::size_t>(a)].begin());
+    std::transform(revolution.begin(), revolution.end(), next_[static_cast<std::size_t>(a)].begin(),
+                   [scale](double f) { return scale * f; });
   }
 }
 

@@ -2,12 +2,12 @@
 // Simulates a dynamometer recording of a cut with known truth.
 //
 // Per spindle revolution the model's periodic steady state at that revolution's conditions
-// (speed, feed, runout, flank wear; model/steady_state.hpp, dynamometer resonance included) gives
-// the force on the tool over the spindle angle. When accumulation makes the force repeat only
-// every L revolutions, revolution n plays revolution n mod L of that cycle (so skipped passes and
-// their sub-harmonics are in the record); the model is evaluated again only when the conditions
-// change. Each sample takes the force at the spindle angle of its time (SpindleProfile) and
-// passes it through the measurement chain:
+// (speed, feed, runout, flank wear, coefficient drift; model/steady_state.hpp, dynamometer
+// resonance included) gives the force on the tool over the spindle angle. When accumulation makes
+// the force repeat only every L revolutions, revolution n plays revolution n mod L of that cycle
+// (so skipped passes and their sub-harmonics are in the record); the model is evaluated again only
+// when the conditions change. Each sample takes the force at the spindle angle of its time
+// (SpindleProfile) and passes it through the measurement chain:
 //   axis map to the dynamometer's reading (a dynamometer under the workpiece reads −F),
 //   + charge-amplifier drift + mains hum + white noise, then ADC clipping and quantisation.
 // The feed rate is fixed by the commanded speed (f_t·N_z·n_cmd, as model::at_actual_speed), so a
@@ -39,7 +39,8 @@ struct RevolutionTruth {
   double feed_per_tooth_um = 0.0;  ///< actual chip load from the fixed feed rate
   double runout_offset_um = 0.0;
   double runout_angle_rad = 0.0;
-  std::vector<double> wear_um;  ///< per flute
+  std::vector<double> wear_um;      ///< per flute
+  double coefficient_factor = 1.0;  ///< every force coefficient × this (coefficient drift)
   bool cutting = true;
 };
 
@@ -65,7 +66,7 @@ class CutSimulator {
   [[nodiscard]] const ChannelStats& clean_stats() const { return clean_stats_; }
 
  private:
-  /// Sets the configuration to the conditions at start_s (speed, feed, runout, wear).
+  /// Sets the configuration to the conditions at start_s (speed, feed, runout, wear, drift).
   RevolutionTruth configure_revolution(double start_s);
   /// Whether the conditions differ from those of the last evaluation.
   [[nodiscard]] bool conditions_changed() const;
@@ -78,6 +79,13 @@ class CutSimulator {
   model::ModelConfig config_;  // the current revolution's conditions
   model::SteadyStateWorkspace workspace_;
   model::ModelConfig evaluated_;  // the conditions of the workspace's result
+  // Coefficient drift: the current factor, and the one the workspace's result holds. Without
+  // deflection the force is linear in the coefficients (the chips, the min-chip regime and the
+  // accumulation depend on h alone; the dynamometer is linear): the result at factor 1 is scaled.
+  // With deflection (which depends on the force) the coefficients are scaled and re-evaluated.
+  double factor_ = 1.0;
+  double evaluated_factor_ = 1.0;
+  bool scale_result_ = true;
   bool has_result_ = false;
   double feed_rate_um_per_min_ = 0.0;  // f_t·N_z·n_cmd
   std::int64_t total_samples_ = 0;

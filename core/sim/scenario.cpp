@@ -129,6 +129,13 @@ Scenario scenario_from_json(const nlohmann::json& j) {
         c.number("angle_rad", s.runout_change.angle_rad, closed(-6.2832, 6.2832, "rad"));
     c.finish();
   }
+  {
+    auto d = r.object("coefficient_drift");
+    s.coefficient_drift.enabled = d.boolean("enabled", s.coefficient_drift.enabled);
+    s.coefficient_drift.end_factor =
+        d.number("end_factor", s.coefficient_drift.end_factor, positive(10.0));
+    d.finish();
+  }
   s.axis_map = signal::axis_map_from_json(r.raw("axis_map"), "axis_map");
   r.finish();
 
@@ -188,6 +195,8 @@ nlohmann::json to_json(const Scenario& s) {
         {"time_s", s.runout_change.time_s},
         {"offset_um", s.runout_change.offset_um},
         {"angle_rad", s.runout_change.angle_rad}}},
+      {"coefficient_drift",
+       {{"enabled", s.coefficient_drift.enabled}, {"end_factor", s.coefficient_drift.end_factor}}},
       {"axis_map", signal::to_json(s.axis_map)}};
 }
 

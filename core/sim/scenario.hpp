@@ -15,6 +15,7 @@
 //     "hum": { "enabled", "frequency_hz", "amplitude_N": [x, y, z] },
 //     "wear": { "enabled", "start_um": [...], "end_um": [...] },
 //     "runout_change": { "enabled", "time_s", "offset_um", "angle_rad" },
+//     "coefficient_drift": { "enabled", "end_factor" },
 //     "axis_map": { "x": "-fx", "y": "-fy", "z": "-fz" } }
 // The model's own dynamometer effect is the dynamometer resonance of the chain.
 
@@ -88,6 +89,13 @@ struct Scenario {
     double offset_um = 3.0;
     double angle_rad = 1.0;
   } runout_change;
+  /// Every force coefficient — the force law's K's (cutting, edge, ploughing; not the exponents)
+  /// and the flank-wear rubbing ones — scaled by a factor growing linearly over the record from 1
+  /// at the start to end_factor at the end (an edge wearing, a harder material).
+  struct CoefficientDrift {
+    bool enabled = false;
+    double end_factor = 1.2;
+  } coefficient_drift;
 
   signal::AxisMap axis_map;  ///< how the simulated dynamometer is mounted
 };

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/config/json_reader.hpp"
+#include "core/identify/identifier.hpp"
 #include "core/monitor/input_check.hpp"
 #include "core/monitor/revolution_record.hpp"
 #include "tests/support/allocation_counter.hpp"
@@ -125,6 +126,22 @@ TEST(AlertConfig, JsonRoundTripAndFieldNamedErrors) {
             std::string::npos);
   // The CUSUM's threshold is no longer a setting: it follows from the false-alarm rate.
   EXPECT_NE(error_of({{"cusum_threshold_sigma", 8.0}}).find("unknown key"), std::string::npos);
+  // The limits on the estimates.
+  AlertConfig e;
+  e.runout_feed_fraction = 0.7;
+  e.estimate_windows = 3;
+  e.coefficient_increase = 0.2;
+  e.runout_step_revolutions = 4;
+  EXPECT_EQ(to_json(alert_config_from_json(to_json(e), "alerts")), to_json(e));
+  EXPECT_NE(error_of({{"runout_feed_fraction", 0.0}}).find("alerts.runout_feed_fraction: value 0"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"estimate_windows", 0}}).find("alerts.estimate_windows"), std::string::npos);
+  EXPECT_NE(error_of({{"estimate_baseline_windows", 65}}).find("alerts.estimate_baseline_windows"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"runout_step_revolutions", 33}}).find("alerts.runout_step_revolutions"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"runout_change_min_um", -0.1}}).find("alerts.runout_change_min_um"),
+            std::string::npos);
 }
 
 // The design on noise alone: 2 flutes at 6 % imbalance with 2 % noise per flute and revolution,
@@ -176,6 +193,40 @@ TEST(AlertEngine, EmpiricalFalseAlarmRateMatchesTheDesign) {
   }
 }
 
+// The per-revolution runout-change detector at its design point: persistence 1, no least
+// change, ARL₀ 20,000 revolutions (z = 4.06 on a single revolution's share): 1.2·10⁶ monitored
+// revolutions of independent noise give about 60 raises. (By default, with 2 revolutions in a
+// row, the rate is the square of the single revolution's for independent noise: the Gaussian
+// bound per revolution that the header documents is far on the safe side.)
+TEST(AlertEngine, PerRevolutionStepDetectorFalseAlarmRateMatchesTheDesign) {
+  AlertConfig c;
+  c.false_alarm_revolutions = 2e4;
+  c.runout_step_min = 1e-9;
+  c.runout_step_revolutions = 1;
+  c.runout_change_min = 1.0;  // keeps the block detector out of the count
+  int raised = 0, by_block = 0;
+  std::int64_t monitored = 0;
+  for (int engine = 0; engine < 8; ++engine) {
+    Feed run(c, 200 + static_cast<std::uint64_t>(engine));
+    run.noisy(baseline_revolutions(c) + 150000, 2, {1.03, 0.97}, 0.02);
+    for (const Alert& a : run.alerts) {
+      if (a.kind == AlertKind::kRunoutChange && a.active) {
+        const bool per_revolution =
+            std::string(a.message.data()).find("1 revolutions)") != std::string::npos;
+        raised += per_revolution ? 1 : 0;
+        by_block += per_revolution ? 0 : 1;
+      }
+    }
+    monitored += 150000;
+  }
+  const double expected = static_cast<double>(monitored) / c.false_alarm_revolutions;  // 60
+  std::printf("%d per-revolution runout-change false alarms in %lld revolutions (design %.0f)\n",
+              raised, static_cast<long long>(monitored), expected);
+  EXPECT_EQ(by_block, 0);
+  EXPECT_LE(raised, 1.5 * expected);
+  EXPECT_GE(raised, 0.5 * expected);
+}
+
 // A step of the flute imbalance from 6 % to 12 % (each share by 3 % of the mean flute force,
 // 1.5 times the least relevant change) trips the CUSUM in the block it falls in, and the alert
 // is confirmed on the next, the first wholly after the step: within 2 blocks = 50 revolutions.
@@ -203,6 +254,33 @@ TEST(AlertEngine, StepInImbalanceIsDetectedWithinTwoBlocks) {
   small.noisy(3000, 2, {1.03, 0.97}, 0.01);
   small.noisy(50000, 2, {1.035, 0.965}, 0.01);
   EXPECT_EQ(small.change_alarms(), 0);
+}
+
+// A large step of the shares (flute 0 from +3 % to +20 % of the mean flute force, 2 % noise)
+// is raised per revolution: at the step's second revolution (runout_step_revolutions = 2), with
+// the imbalance before and after; a step below runout_step_min (+3 % → +7 %) is not raised per
+// revolution but by the block CUSUM, blocks later.
+TEST(AlertEngine, LargeStepIsRaisedWithinRevolutions) {
+  Feed run({}, 25);
+  run.noisy(600, 2, {1.03, 0.97}, 0.02);
+  run.noisy(100, 2, {1.20, 0.80}, 0.02);
+  ASSERT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+  const Alert& a = *run.first(AlertKind::kRunoutChange);
+  std::printf("%s\n", a.message.data());
+  EXPECT_EQ(a.revolution, 601);
+  const auto [before, after] = before_after(a, "flute imbalance %lf %% → %lf %%");
+  EXPECT_NEAR(before, 6.0, 0.5);
+  EXPECT_NEAR(after, 40.0, 4.0);  // two revolutions' mean
+  EXPECT_NE(std::string(a.message.data()).find("2 revolutions)"), std::string::npos);
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, false), 0);  // the step stays
+
+  Feed small({}, 26);
+  small.noisy(600, 2, {1.03, 0.97}, 0.01);
+  small.noisy(300, 2, {1.07, 0.93}, 0.01);
+  ASSERT_EQ(small.count(AlertKind::kRunoutChange, true), 1);
+  EXPECT_GE(small.first(AlertKind::kRunoutChange)->revolution, 600 + 25);
+  EXPECT_NE(std::string(small.first(AlertKind::kRunoutChange)->message.data()).find("over 25"),
+            std::string::npos);
 }
 
 // Without a least relevant change the detector is the CUSUM alone: for a shift of 1.5 σ (of a
@@ -292,6 +370,8 @@ TEST(AlertEngine, CollapsingFluteRaisesBreakageWithinItsPersistence) {
   EXPECT_EQ(flute, 1);
   EXPECT_NEAR(now, 4.5, 0.5);
   EXPECT_NEAR(before, 90.0, 0.5);
+  // A collapse is breakage: the per-revolution runout-change detector waits for it.
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 0);
   run.noisy(100, 3, {1.0, 0.9, 0.8}, 0.02);
   EXPECT_EQ(run.count(AlertKind::kBreakage, false), 1);
   EXPECT_EQ(run.count(AlertKind::kBreakage, true), 1);
@@ -425,6 +505,207 @@ TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
             std::string::npos)
       << alerts[0].message.data();
   EXPECT_FALSE(alerts[1].active);
+}
+
+/// An identified window of a 2-flute cut (commanded 25,000 rpm, f_t as given): the radius
+/// difference d = r_CE2 − r_CE1 and two coefficients, with total σ's (statistical: a fifth).
+identify::IdentifiedWindow fitted(std::int64_t last_revolution, double d_um, double d_sigma_um,
+                                  double k_tc, double k_te, double k_sigma_rel,
+                                  double feed_um = 3.0) {
+  identify::IdentifiedWindow w;
+  w.revolution = last_revolution;
+  w.utime_us = last_revolution * kRevolution_us;
+  w.window_revolutions = 30;
+  identify::FitResult& f = w.fit;
+  f.ok = true;
+  f.config.process.feed_per_tooth_um = feed_um;
+  f.rho_um = {"rho_um", -0.5 * d_um, 0.5 * d_sigma_um, 0.1 * d_sigma_um, 0.5 * d_sigma_um};
+  f.gamma_rad = {"gamma_rad", 0.0, 0.1, 0.05, 0.1};
+  f.radius_from_ce1_um = {{"r_ce1_minus_r_ce1_um", 0.0, 0.0, 0.0, 0.0},
+                          {"r_ce2_minus_r_ce1_um", d_um, d_sigma_um, 0.2 * d_sigma_um, 0.0}};
+  f.coefficients = {{"k_tc_N_per_mm2", k_tc, k_sigma_rel * k_tc, 0.2 * k_sigma_rel * k_tc, 0.0},
+                    {"k_te_N_per_mm", k_te, k_sigma_rel * k_te, 0.2 * k_sigma_rel * k_te, 0.0}};
+  return w;
+}
+
+/// Feeds identified windows (no revolutions) and keeps the alerts.
+struct Windows {
+  explicit Windows(const AlertConfig& c = {}, std::uint64_t seed = 1) : engine(c), rng(seed) {}
+  AlertEngine engine;
+  std::vector<Alert> alerts;
+  std::int64_t next = 29;
+  std::mt19937_64 rng;
+  std::normal_distribution<double> normal{0.0, 1.0};
+  /// `count` windows of d (µm) and coefficients × factor, with Gaussian scatter of σ_stat.
+  void feed(int count, double d_um, double d_sigma_um, double factor = 1.0, double feed_um = 3.0) {
+    for (int i = 0; i < count; ++i) {
+      const double k_noise = 0.01 * 0.2;  // k σ 1 % total, 0.2 % statistical
+      const auto w = fitted(next, d_um + 0.2 * d_sigma_um * normal(rng), d_sigma_um,
+                            1100.0 * factor * (1.0 + k_noise * normal(rng)),
+                            8.0 * factor * (1.0 + k_noise * normal(rng)), 0.01, feed_um);
+      engine.on_identification(w, [&](const Alert& a) { alerts.push_back(a); });
+      next += 30;
+    }
+  }
+  [[nodiscard]] int count(AlertKind kind, bool active) const {
+    return static_cast<int>(std::count_if(alerts.begin(), alerts.end(), [&](const Alert& a) {
+      return a.kind == kind && a.active == active;
+    }));
+  }
+  [[nodiscard]] const Alert* first(AlertKind kind, bool active = true) const {
+    for (const auto& a : alerts) {
+      if (a.kind == kind && a.active == active) {
+        return &a;
+      }
+    }
+    return nullptr;
+  }
+};
+
+// Runout from the estimates, on u = (r_CE1 − r_CE2)/f_t against 50 %: raised after 2 windows
+// whose u − 3σ_u is above the limit, once although u hovers about it; cleared after 2 windows
+// with u + 3σ_u below 40 %. An estimate above the limit by less than its 3σ raises nothing.
+TEST(AlertEngine, RunoutHighFollowsTheEstimateWithItsSigmaAndHysteresis) {
+  Windows w;
+  w.feed(3, -0.9, 0.03);   // 30 % of f_t = 3 µm
+  w.feed(2, -1.95, 0.03);  // 65 % ± 1 %
+  ASSERT_EQ(w.count(AlertKind::kRunout, true), 1);
+  const Alert& raised = *w.first(AlertKind::kRunout);
+  std::printf("%s\n", raised.message.data());
+  EXPECT_EQ(raised.revolution, 29 + 4 * 30);
+  EXPECT_NEAR(raised.value, 0.65, 0.01);
+  EXPECT_EQ(raised.threshold, 0.5);
+  double deficit = NAN, sigma = NAN, first = NAN, now = NAN;
+  ASSERT_EQ(std::sscanf(raised.message.data(),
+                        "runout high: r_CE1 − r_CE2 %lf ± %lf µm = %*f ± %*f %% of f_t 3.00 µm "
+                        "(first window %lf %% → %lf %%",
+                        &deficit, &sigma, &first, &now),
+            4)
+      << raised.message.data();
+  EXPECT_NEAR(deficit, 1.95, 0.03);
+  EXPECT_EQ(sigma, 0.03);
+  EXPECT_NEAR(first, 30.0, 1.0);
+  EXPECT_NEAR(now, 65.0, 1.0);
+  w.feed(4, -1.5, 0.03);   // 50 %: inside the hysteresis band
+  w.feed(4, -1.65, 0.03);  // 55 %
+  EXPECT_EQ(w.count(AlertKind::kRunout, true), 1);
+  EXPECT_EQ(w.count(AlertKind::kRunout, false), 0);
+  w.feed(1, -1.0, 0.03);  // 33 % + 3 %: below 40 %, once
+  w.feed(1, -1.5, 0.03);
+  w.feed(2, -1.0, 0.03);
+  ASSERT_EQ(w.count(AlertKind::kRunout, false), 1);
+  EXPECT_EQ(w.first(AlertKind::kRunout, false)->severity, AlertSeverity::kInfo);
+
+  Windows unsure;
+  unsure.feed(10, -1.8, 0.15);  // 60 % ± 5 %: 3σ reaches below the limit
+  EXPECT_EQ(unsure.count(AlertKind::kRunout, true), 0);
+}
+
+// Runout change from the estimates: a step of r_CE1 − r_CE2 by 0.3 µm (above the least relevant
+// 0.2 µm and far above the windows' scatter) is raised on its second window, with before → after
+// in µm; back at the baseline it clears after two windows. A step of 0.15 µm raises nothing.
+TEST(AlertEngine, RadiusDifferenceStepFromTheEstimates) {
+  Windows w;
+  w.feed(12, -0.9, 0.03);
+  ASSERT_TRUE(w.engine.estimate_baseline().ready);
+  EXPECT_NEAR(w.engine.estimate_baseline().radius_difference_um[1], -0.9, 0.01);
+  EXPECT_EQ(w.engine.estimate_baseline().radius_limit_um[1], 0.2);
+  w.feed(3, -1.2, 0.03);
+  ASSERT_EQ(w.count(AlertKind::kRunoutChange, true), 1);
+  const Alert& a = *w.first(AlertKind::kRunoutChange);
+  std::printf("%s\n", a.message.data());
+  EXPECT_EQ(a.revolution, 29 + 13 * 30);
+  EXPECT_EQ(a.severity, AlertSeverity::kWarning);
+  const auto [before, after] = before_after(a, "r_CE1 − r_CE2 %lf ± %*f µm → %lf");
+  EXPECT_NEAR(before, 0.9, 0.01);
+  EXPECT_NEAR(after, 1.2, 0.02);
+  EXPECT_EQ(a.quantity, "radius_difference_um");
+  w.feed(3, -0.9, 0.03);
+  EXPECT_EQ(w.count(AlertKind::kRunoutChange, false), 1);
+
+  Windows small;
+  small.feed(12, -0.9, 0.03);
+  small.feed(20, -1.05, 0.03);
+  EXPECT_EQ(small.count(AlertKind::kRunoutChange, true), 0);
+}
+
+// Wear drift from the estimates: the coefficients ramping to +20 % over 40 windows after a
+// 10-window baseline raise it once their rise passes +10 % (the first coefficient to be sure
+// names itself, with before → after and units); +8 % for ever raises nothing; back at the
+// baseline it clears.
+TEST(AlertEngine, CoefficientRiseRaisesWearDrift) {
+  Windows w;
+  w.feed(10, -0.9, 0.03);
+  for (int i = 1; i <= 40; ++i) {
+    w.feed(1, -0.9, 0.03, 1.0 + 0.2 * i / 40.0);
+  }
+  ASSERT_EQ(w.count(AlertKind::kWearDrift, true), 1);
+  const Alert& a = *w.first(AlertKind::kWearDrift);
+  std::printf("%s\n", a.message.data());
+  EXPECT_GT(a.value, 0.10);
+  EXPECT_EQ(a.quantity, "coefficient_rise");
+  // +10 % is reached at window 20 of the ramp (revolution 29 + 29·30 = 899).
+  EXPECT_GT(a.revolution, 899);
+  EXPECT_LT(a.revolution, 899 + 8 * 30);
+  EXPECT_NE(std::string(a.message.data()).find("limit +10.0 %"), std::string::npos);
+  const bool named = std::string(a.message.data()).find("k_tc ") != std::string::npos ||
+                     std::string(a.message.data()).find("k_te ") != std::string::npos;
+  EXPECT_TRUE(named) << a.message.data();
+  EXPECT_NE(std::string(a.message.data()).find(" N/mm"), std::string::npos);
+  w.feed(10, -0.9, 0.03, 1.0);
+  EXPECT_EQ(w.count(AlertKind::kWearDrift, false), 1);
+  EXPECT_EQ(w.count(AlertKind::kRunoutChange, true), 0);
+
+  Windows eight;
+  eight.feed(10, -0.9, 0.03);
+  eight.feed(300, -0.9, 0.03, 1.08);
+  EXPECT_EQ(eight.count(AlertKind::kWearDrift, true), 0);
+}
+
+// The coefficients are compared at constant conditions: a feed 5 % higher starts a new baseline
+// (no alert although the coefficients and radii come out different there).
+TEST(AlertEngine, OtherConditionsStartANewEstimateBaseline) {
+  Windows w;
+  w.feed(12, -0.9, 0.03);
+  ASSERT_TRUE(w.engine.estimate_baseline().ready);
+  EXPECT_NEAR(w.engine.estimate_baseline().feed_per_tooth_um, 3.0, 1e-9);
+  w.feed(3, -1.3, 0.03, 1.25, 3.15);
+  EXPECT_FALSE(w.engine.estimate_baseline().ready);
+  w.feed(20, -1.3, 0.03, 1.25, 3.15);
+  EXPECT_TRUE(w.engine.estimate_baseline().ready);
+  EXPECT_NEAR(w.engine.estimate_baseline().feed_per_tooth_um, 3.15, 1e-9);
+  EXPECT_EQ(w.count(AlertKind::kRunoutChange, true), 0);
+  EXPECT_EQ(w.count(AlertKind::kWearDrift, true), 0);
+}
+
+// With identification expected the flute forces' runout and wear detectors stay quiet: the 114 %
+// imbalance of the runout test below raises nothing until the estimates speak.
+TEST(AlertEngine, ExpectedEstimatesSilenceTheImbalanceRunout) {
+  Feed run({}, 62);
+  run.engine.expect_estimates();
+  run.noisy(2000, 2, {1.5, 0.5}, 0.01);
+  EXPECT_EQ(run.count(AlertKind::kRunout, true), 0);
+  Feed without({}, 62);
+  without.noisy(2000, 2, {1.5, 0.5}, 0.01);
+  EXPECT_EQ(without.count(AlertKind::kRunout, true), 1);
+}
+
+// Steady state: nothing is allocated per identified window either.
+TEST(AlertEngine, ExaminingAWindowAllocatesNothing) {
+  std::vector<identify::IdentifiedWindow> windows;
+  for (int i = 0; i < 60; ++i) {
+    const double d = i < 30 ? -0.9 : -1.9;  // a runout change, then runout high
+    windows.push_back(fitted(29 + 30 * i, d, 0.03, 1100.0 * (1.0 + 0.005 * i), 8.0, 0.01));
+  }
+  AlertEngine engine;
+  int alerts = 0;
+  auto sink = [&](const Alert&) { ++alerts; };
+  const test::AllocationCounter counter;
+  for (const auto& w : windows) {
+    engine.on_identification(w, sink);
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+  EXPECT_GE(alerts, 3);  // runout change, runout high, wear drift
 }
 
 // Steady state: nothing is allocated per revolution, including the revolution that completes the

@@ -370,6 +370,66 @@ TEST(CutSimulator, EachRevolutionIsTheSteadyStateOfItsConditions) {
   EXPECT_GT(compared, 1000);
 }
 
+// Coefficient drift: revolution n is the steady state with every force coefficient times the
+// factor of its start, 1 + (t/T)·(end − 1). Without deflection the simulator scales the force of
+// the undrifted model; with deflection (not linear in the coefficients: the tool bends by more
+// under a larger force) it evaluates the drifted model. Both are compared with the evaluator run
+// on independently scaled coefficients.
+TEST(CutSimulator, CoefficientDriftScalesEveryCoefficientOverTheRecord) {
+  for (const bool deflection : {false, true}) {
+    SCOPED_TRACE(deflection ? "deflection on" : "deflection off");
+    Scenario s = quiet_scenario();
+    s.duration_s = 0.05;
+    s.spindle.actual_rpm = 24000.0;  // 125 samples per revolution at 50 kHz, 20 revolutions
+    s.model.effects.accumulation.enabled = false;  // one-revolution steady states
+    s.model.effects.min_chip.enabled = false;
+    s.model.effects.deflection.enabled = deflection;
+    s.coefficient_drift.enabled = true;
+    s.coefficient_drift.end_factor = 1.5;
+    CutSimulator sim(s);
+    std::vector<double> t(1), fx(1), fy(1), fz(1);
+    model::SteadyStateWorkspace ws;
+    const int steps = s.model.resolution.steps_per_rev;
+    long evaluated = -1;
+    std::vector<double> ex, ey;
+    int compared = 0;
+    double largest_change = 0.0;
+    while (sim.next_block(t, fx, fy, fz) == 1) {
+      const double revs = t[0] * 24000.0 / 60.0;
+      const auto n = static_cast<long>(std::floor(revs + 1e-9));
+      if (n != 4 && n != 17) {
+        continue;
+      }
+      if (n != evaluated) {
+        const RevolutionTruth& truth = sim.truth()[static_cast<std::size_t>(n)];
+        const double factor = 1.0 + 0.5 * std::clamp(truth.start_s / s.duration_s, 0.0, 1.0);
+        EXPECT_NEAR(truth.coefficient_factor, factor, 0.5 * 0.0025 / s.duration_s + 1e-12);
+        model::ModelConfig drifted = model::at_actual_speed(s.model, 24000.0);
+        auto& k = drifted.material.power_law;
+        for (double* c :
+             {&k.k_tc_Nmm, &k.k_nc_Nmm, &k.k_tp_Nmm, &k.k_np_Nmm, &k.k_ac_Nmm, &k.k_ap_Nmm}) {
+          *c *= truth.coefficient_factor;
+        }
+        const model::SteadyState& e = model::evaluate_steady_state(drifted, 24000.0, steps, ws);
+        ASSERT_EQ(e.cycle_revolutions, 1);
+        ex = e.mean.fx_N;
+        ey = e.mean.fy_N;
+        evaluated = n;
+        largest_change = std::max(largest_change, truth.coefficient_factor - 1.0);
+      }
+      const double pos = (revs - std::floor(revs + 1e-9)) * steps;
+      const auto k0 = std::min(static_cast<std::size_t>(pos), static_cast<std::size_t>(steps - 1));
+      const std::size_t k1 = (k0 + 1) % static_cast<std::size_t>(steps);
+      const double w = pos - static_cast<double>(k0);
+      ASSERT_NEAR(sim.last_clean_force_N()[0], ex[k0] + w * (ex[k1] - ex[k0]), 1e-9) << n;
+      ASSERT_NEAR(sim.last_clean_force_N()[1], ey[k0] + w * (ey[k1] - ey[k0]), 1e-9) << n;
+      ++compared;
+    }
+    EXPECT_GT(compared, 200);
+    EXPECT_GT(largest_change, 0.4);  // revolution 17 of 20: the factor near its end value
+  }
+}
+
 // Accumulation that skips passes makes a force that repeats only every L revolutions; the
 // record plays the cycle's revolutions in turn, so revolution n + L repeats revolution n while
 // neighbouring revolutions differ.
@@ -432,6 +492,8 @@ TEST(Scenario, JsonRoundTrip) {
   s.spindle.ramp_end_s = 0.2;
   s.spindle.ramp_end_rpm = 24000.0;
   s.axis_map.sign = {1.0, -1.0, 1.0};
+  s.coefficient_drift.enabled = true;
+  s.coefficient_drift.end_factor = 1.25;
   const auto j = to_json(s);
   EXPECT_EQ(to_json(scenario_from_json(j)), j);
 }
