@@ -10,11 +10,11 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr int kRingChannels = 4;  // fx, fy, fz, Fx² + Fy²
 constexpr int kDetectChannel = 3;
-constexpr double kMaxBridgedGap_s = 0.05;     // shorter gaps keep the lock
-constexpr double kSlowestFraction = 0.4;      // of the commanded speed: longest revolution analysed
-constexpr double kModelSpeedChange = 0.002;   // relative: the lockstep model follows the speed
-constexpr int kIdleToStop = 3;                // idle revolutions in a row: cutting has stopped
-constexpr double kAcceptedUnexplained = 0.2;  // the model takes fits that explain more
+constexpr double kMaxBridgedGap_s = 0.05;    // shorter gaps keep the lock
+constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest revolution analysed
+constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
+constexpr int kIdleToStop = 3;               // idle revolutions in a row: cutting has stopped
+constexpr int kWindowsWithoutEstimate = 3;   // then the alerts follow the flute forces
 
 InputCheckConfig input_config(const MonitorConfig& c) {
   InputCheckConfig i;
@@ -401,6 +401,11 @@ void Pipeline::submit_window() {
   window_rpm_sum_ = 0.0;
   window_rpm_count_ = 0;
   // Due when the next window ends: the fit has a window's time to finish.
+  // While no estimate comes (fits rejected, or live, a worker that cannot keep up), the alerts
+  // follow the flute forces; the next accepted estimate takes over again.
+  if (++windows_without_estimate_ >= kWindowsWithoutEstimate) {
+    alerts_.expect_estimates(false);
+  }
   identifier_->submit(window_, revolutions_ - 1, input_.utime_of(ring_.newest()),
                       revolutions_ + config_.sync_window_revolutions);
 }
@@ -420,8 +425,13 @@ void Pipeline::take_identification() {
     measured2 += fit.measured_rms_N[a] * fit.measured_rms_N[a];
   }
   const double unexplained = measured2 > 0.0 ? residual2 / measured2 : 1.0;
-  if (!config_.lockstep || !fit.ok || !(unexplained <= config_.identification.max_unexplained)) {
+  if (!fit.ok || !(unexplained <= config_.identification.max_unexplained)) {
     ++identifications_rejected_;
+    return;  // a model that does not fit the cut says nothing reliable about it
+  }
+  windows_without_estimate_ = 0;
+  alerts_.on_identification(*w, [this](const Alert& a) { sink_.on_alert(a); });
+  if (!config_.lockstep) {
     return;
   }
   // The window's alignment holds while the tracker's angle zero is the one it was measured in.

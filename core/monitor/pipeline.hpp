@@ -125,7 +125,13 @@ class Pipeline {
   /// variance unexplained, 20 % by default),
   /// else keeps its own. Revolution-counted, so a replay hands over exactly where the live run
   /// did when no result came late (identify::Identifier).
-  void attach_identifier(identify::Identifier* identifier) { identifier_ = identifier; }
+  /// The alert engine follows the estimates it takes (runout high, runout change, wear drift);
+  /// after three windows without an accepted one (fits rejected, or a live worker that cannot
+  /// keep up) it follows the flute forces until the next.
+  void attach_identifier(identify::Identifier* identifier) {
+    identifier_ = identifier;
+    alerts_.expect_estimates(identifier != nullptr);
+  }
 
   [[nodiscard]] PipelineStatus status() const;
   [[nodiscard]] const MonitorConfig& config() const { return config_; }
@@ -201,6 +207,7 @@ class Pipeline {
   std::int64_t lock_revolution_ = 0;  // first revolution of the current lock
   std::int64_t identifications_taken_ = 0;
   std::int64_t identifications_rejected_ = 0;
+  int windows_without_estimate_ = 0;  // submitted since the last accepted estimate
   std::vector<double> template_average_;
 };
 
