@@ -1138,8 +1138,10 @@ void AlertEngine::check_coefficient_wear(const WindowEstimate& e, std::int64_t r
     for (int k = 0; k < base.coefficients; ++k) {
       const double sigma = base.coefficient_sigma[at(k)];
       Cusum& raise = coefficient_raise_[at(k)];
-      if (base.coefficient[at(k)] == 0.0 || !raise.update((rise(e, k) - limit) / sigma) ||
-          raise.run() < 2 || wear_active_) {
+      // A coefficient the windows do not pin (a relative σ above a third of the limit: e.g.
+      // K_ac with no axial force measured) tells nothing about wear.
+      if (base.coefficient[at(k)] == 0.0 || sigma > limit / 3.0 ||
+          !raise.update((rise(e, k) - limit) / sigma) || raise.run() < 2 || wear_active_) {
         continue;
       }
       // Confirmed on the excursion's windows after its first.

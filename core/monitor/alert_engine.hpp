@@ -82,7 +82,9 @@
 //  wear drift     From the estimates: per fitted coefficient c (up to kMaxCoefficients) the rise
 //                 x = c/c̄ − 1 over its baseline: a one-sided CUSUM of (x − coefficient_increase)/σ
 //                 with allowance cusum_k + baseline_margin/√n and h for ARL₀/W windows shared by
-//                 the coefficients, while the true rise is at most the limit; confirmed on the
+//                 the coefficients, while the true rise is at most the limit (a coefficient whose
+//                 baseline σ exceeds a third of the limit is not pinned and not followed, e.g.
+//                 K_ac without a measured Fz); confirmed on the
 //                 excursion's windows after its first (their mean rise must exceed the limit);
 //                 cleared by the mirror CUSUM of (hysteresis·limit − x)/σ.
 //                 Without estimates: per block the rise r = M̃/μ_M − 1 of the block-median mean
