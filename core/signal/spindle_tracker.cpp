@@ -160,6 +160,8 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
 
 void SpindleTracker::restart(std::int64_t next_sample) {
   next_sample_ = next_sample;
+  slot_ =
+      window_ > 0 ? static_cast<std::size_t>(next_sample % static_cast<std::int64_t>(window_)) : 0;
   stream_start_ = next_sample;
   since_hop_ = 0;
   locked_ = false;
@@ -192,7 +194,8 @@ const SpindleTracker::Past* SpindleTracker::window_ago(std::int64_t center) cons
 int SpindleTracker::process(std::span<const double> samples) {
   int updates = 0;
   for (double x : samples) {
-    ring_[static_cast<std::size_t>(next_sample_ % static_cast<std::int64_t>(window_))] = x;
+    ring_[slot_] = x;
+    slot_ = slot_ + 1 == window_ ? 0 : slot_ + 1;
     ++next_sample_;
     ++since_hop_;
     if (since_hop_ >= hop_ && next_sample_ - stream_start_ >= static_cast<std::int64_t>(window_)) {
@@ -226,15 +229,22 @@ void SpindleTracker::update() {
   // The window, oldest sample first, without its mean, Hann-weighted, zero-padded.
   const auto w = static_cast<std::int64_t>(window_);
   const std::int64_t first = next_sample_ - w;
+  // The ring from the oldest sample's slot to its end, then from its start: two runs.
+  const auto split = static_cast<std::size_t>(first % w);
+  const std::size_t tail = window_ - split;
   double mean = 0.0;
-  for (std::int64_t n = first; n < next_sample_; ++n) {
-    mean += ring_[static_cast<std::size_t>(n % w)];
+  for (std::size_t i = split; i < window_; ++i) {
+    mean += ring_[i];
+  }
+  for (std::size_t i = 0; i < split; ++i) {
+    mean += ring_[i];
   }
   mean /= static_cast<double>(window_);
-  for (std::size_t i = 0; i < window_; ++i) {
-    fft_in_[i] =
-        (ring_[static_cast<std::size_t>((first + static_cast<std::int64_t>(i)) % w)] - mean) *
-        hann_[i];
+  for (std::size_t i = 0; i < tail; ++i) {
+    fft_in_[i] = (ring_[split + i] - mean) * hann_[i];
+  }
+  for (std::size_t i = tail; i < window_; ++i) {
+    fft_in_[i] = (ring_[i - tail] - mean) * hann_[i];
   }
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
@@ -286,7 +296,9 @@ void SpindleTracker::update() {
     const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
     for (std::size_t c = from; c <= to; ++c) {
       const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
-      if (std::fabs(x - std::round(x)) * harmonic_bins > lobe) {
+      // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
+      const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
+      if (std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe) {
         scratch_.push_back(magnitude_[c]);
       }
     }

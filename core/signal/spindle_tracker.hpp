@@ -150,6 +150,7 @@ class SpindleTracker {
   fftw_plan plan_ = nullptr;
 
   std::int64_t next_sample_ = 0;
+  std::size_t slot_ = 0;           // ring_ slot of the next sample: next_sample_ mod window_
   std::int64_t stream_start_ = 0;  // first sample since the last restart
   std::size_t since_hop_ = 0;
   SpindleEstimate estimate_;
