@@ -147,6 +147,7 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
     hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
   }
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
+  floor_bin_.assign(fft_size_ / 2 + 1, 0);
   past_.assign(window_ / hop_ + 2, Past{});
   scratch_.reserve(fft_size_ / 2 + 1);
   fft_in_ = fftw_alloc_real(fft_size_);
@@ -278,6 +279,17 @@ void SpindleTracker::update() {
   const double lobe = 2.0 * static_cast<double>(fft_size_) / static_cast<double>(window_) + 1.0;
   const double harmonic_bins = best_f / bin_hz;
   const auto reach = static_cast<std::size_t>(2.0 * harmonic_bins);
+  // Which bins lie outside every harmonic's lobe, once for all harmonics (their neighbourhoods
+  // overlap).
+  const std::size_t last_bin =
+      std::min(magnitude_.size() - 1,
+               static_cast<std::size_t>(std::lround(harmonics_ * harmonic_bins)) + reach + 1);
+  for (std::size_t c = 1; c <= last_bin; ++c) {
+    const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
+    // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
+    const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
+    floor_bin_[c] = std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe ? 1 : 0;
+  }
   double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, sum_peak = 0.0, sum_floor = 0.0;
   int used = 0;
   for (int h = 1; h <= harmonics_; ++h) {
@@ -294,11 +306,8 @@ void SpindleTracker::update() {
     scratch_.clear();
     const std::size_t from = center > reach + 1 ? center - reach : 1;
     const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
-    for (std::size_t c = from; c <= to; ++c) {
-      const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
-      // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
-      const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
-      if (std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe) {
+    for (std::size_t c = from; c <= std::min(to, last_bin); ++c) {
+      if (floor_bin_[c] != 0) {
         scratch_.push_back(magnitude_[c]);
       }
     }

@@ -144,7 +144,8 @@ class SpindleTracker {
   std::vector<double> ring_;  // the last window_ samples
   std::vector<double> hann_;
   std::vector<double> magnitude_;
-  std::vector<double> scratch_;  // for the median
+  std::vector<double> scratch_;          // for the median
+  std::vector<std::uint8_t> floor_bin_;  // per bin: outside every harmonic's lobe (update())
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
   fftw_plan plan_ = nullptr;
