@@ -20,19 +20,38 @@ double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
 
-/// DTFT of x at `cycles_per_sample`, evaluated at the block's first sample (phasor recursion).
-std::complex<double> dtft(std::span<const double> x, double cycles_per_sample) {
-  const std::complex<double> step = std::polar(1.0, -kTwoPi * cycles_per_sample);
-  std::complex<double> rot = 1.0;
-  std::complex<double> sum = 0.0;
+/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample
+/// (phasor recursions, run side by side: two independent chains in flight). The complex products
+/// are written out as std::complex computes them for finite values.
+std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycles_a,
+                                          double cycles_b) {
+  const std::complex<double> step_a = std::polar(1.0, -kTwoPi * cycles_a);
+  const std::complex<double> step_b = std::polar(1.0, -kTwoPi * cycles_b);
+  const double sar = step_a.real(), sai = step_a.imag(), sbr = step_b.real(), sbi = step_b.imag();
+  double ar = 1.0, ai = 0.0, br = 1.0, bi = 0.0;  // the phasors
+  double sum_ar = 0.0, sum_ai = 0.0, sum_br = 0.0, sum_bi = 0.0;
   for (std::size_t n = 0; n < x.size(); ++n) {
-    sum += x[n] * rot;
-    rot *= step;
-    if ((n & 1023) == 1023) {
-      rot /= std::abs(rot);  // keep the phasor on the unit circle
+    sum_ar += x[n] * ar;
+    sum_ai += x[n] * ai;
+    sum_br += x[n] * br;
+    sum_bi += x[n] * bi;
+    const double ar2 = ar * sar - ai * sai;
+    const double ai2 = ar * sai + ai * sar;
+    const double br2 = br * sbr - bi * sbi;
+    const double bi2 = br * sbi + bi * sbr;
+    ar = ar2;
+    ai = ai2;
+    br = br2;
+    bi = bi2;
+    if ((n & 1023) == 1023) {  // keep the phasors on the unit circle
+      const double na = std::hypot(ar, ai), nb = std::hypot(br, bi);
+      ar /= na;
+      ai /= na;
+      br /= nb;
+      bi /= nb;
     }
   }
-  return sum;
+  return {std::complex<double>(sum_ar, sum_ai), std::complex<double>(sum_br, sum_bi)};
 }
 
 }  // namespace
@@ -365,9 +384,8 @@ void SpindleTracker::update() {
   // windowed block; the Hann window is symmetric, so it adds no phase at the centre).
   const std::span<const double> block(fft_in_, window_);
   const double centre = static_cast<double>(w / 2);
-  const std::complex<double> c1 = dtft(block, f / config_.sample_rate_hz);
   const int z = config_.flutes;
-  const std::complex<double> cz = dtft(block, z * f / config_.sample_rate_hz);
+  const auto [c1, cz] = dtft2(block, f / config_.sample_rate_hz, z * f / config_.sample_rate_hz);
   const double phi1 = std::arg(c1) + kTwoPi * f * centre / config_.sample_rate_hz;
   const double phiz = std::arg(cz) + kTwoPi * z * f * centre / config_.sample_rate_hz;
   double angle = phi1;
