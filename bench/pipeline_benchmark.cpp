@@ -59,6 +59,7 @@ void BM_Pipeline(benchmark::State& state) {
   const Recording r = make_recording(fs, 2.5);
   monitor::MonitorConfig c;
   c.sample_rate_hz = fs;
+  c.lockstep = state.range(2) != 0;
   double processed_s = 0.0;
   std::vector<double> latencies_s;
   latencies_s.reserve(1 << 20);
@@ -97,8 +98,14 @@ void BM_Pipeline(benchmark::State& state) {
   state.counters["latency_worst_us"] = n > 0 ? 1e6 * latencies_s.back() : 0.0;
   state.SetItemsProcessed(static_cast<std::int64_t>(r.t.size() - start) * state.iterations());
 }
-// Blocks of 1 ms at each rate (a DAQ bridge's typical message).
-BENCHMARK(BM_Pipeline)->Args({50000, 50})->Args({333300, 333})->Unit(benchmark::kMillisecond);
+// Blocks of 1 ms at each rate (a DAQ bridge's typical message); lockstep model on (1) or off (0:
+// the steps bench/reference_pipeline.py does, and the synchronous average and alerts).
+BENCHMARK(BM_Pipeline)
+    ->Args({50000, 50, 1})
+    ->Args({333300, 333, 1})
+    ->Args({50000, 50, 0})
+    ->Args({333300, 333, 0})
+    ->Unit(benchmark::kMillisecond);
 
 /// The daemon's sample thread at 333.3 kHz while identification runs in its worker thread (live
 /// hand-over: never waits): throughput of the sample thread with a fit in progress most of the

@@ -15,6 +15,13 @@ Only the processing is timed (not reading the CSV), in CPU time like Google Benc
 counters; the figure is signal duration / processing time, best of --repeats. Human text goes to
 stderr, one JSON line per recording to stdout.
 
+Whole process (--whole-s, default 10 s, when no CSV is given): on one simulated recording at
+50 kHz, the wall-clock time of this script run on it (interpreter, imports, np.loadtxt and the
+processing once) against `millwatch replay --no-identify` of the same file (start, CSV parse, the
+whole pipeline with the lockstep model, summary). --no-identify: replay otherwise identifies
+runout and coefficients on every 30-revolution window and waits for the fits, work the reference
+does not do at all. Best of --whole-repeats; one JSON line {"bench": "whole_process", ...}.
+
   /usr/bin/python3 bench/reference_pipeline.py [--millwatch build/release/replay/millwatch]
   /usr/bin/python3 bench/reference_pipeline.py CUT.csv ...   # recordings with their sidecars
 """
@@ -135,16 +142,40 @@ def process(forces, fs, rpm_cmd, flutes, signs):
     return f_spindle * 60.0, period, alpha
 
 
-def simulate(millwatch, scenario, rate_hz, duration_s, workdir):
+def simulate(millwatch, scenario, rate_hz, duration_s, workdir, tag="reference"):
     s = json.loads(Path(scenario).read_text() if scenario else json.dumps(BENCH_SCENARIO))
     s["recording"]["sample_rate_hz"] = rate_hz
     workdir.mkdir(parents=True, exist_ok=True)
-    scen = workdir / f"reference_{rate_hz:.0f}hz.scenario.json"
+    scen = workdir / f"{tag}_{rate_hz:.0f}hz.scenario.json"
     scen.write_text(json.dumps(s, indent=1))
-    csv = workdir / f"reference_{rate_hz:.0f}hz.csv"
+    csv = workdir / f"{tag}_{rate_hz:.0f}hz.csv"
     subprocess.run([millwatch, "simulate", str(scen), "-o", str(csv),
                     "--duration", str(duration_s)], check=True, stdout=subprocess.DEVNULL)
     return csv
+
+
+def whole_process(millwatch, scenario, duration_s, workdir, repeats):
+    """Wall-clock time of the whole reference script and of millwatch replay on one CSV."""
+    csv = simulate(millwatch, scenario, 50000.0, duration_s, workdir, "whole")
+    runs = {"reference": [sys.executable, __file__, str(csv), "--repeats", "1"],
+            "millwatch": [millwatch, "replay", "--no-identify", "--no-progress", str(csv)]}
+    best = {}
+    for name, command in runs.items():
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            subprocess.run(command, check=True, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
+            times.append(time.perf_counter() - t0)
+        best[name] = min(times)
+    result = {"bench": "whole_process", "csv": str(csv), "sample_rate_hz": 50000.0,
+              "duration_s": duration_s, "rows": round(duration_s * 50000.0),
+              "reference_s": best["reference"], "millwatch_s": best["millwatch"],
+              "ratio": best["reference"] / best["millwatch"], "repeats": repeats}
+    print(f"  whole process, {duration_s:g} s at 50 kHz ({result['rows']} rows): reference script "
+          f"{best['reference']:.3f} s, millwatch replay --no-identify {best['millwatch']:.3f} s "
+          f"({result['ratio']:.1f}x)", file=sys.stderr)
+    print(json.dumps(result), flush=True)
 
 
 def main():
@@ -156,6 +187,9 @@ def main():
     p.add_argument("--duration", type=float, default=2.5, help="seconds simulated (as in C++)")
     p.add_argument("--workdir", type=Path, default=Path("build/bench"))
     p.add_argument("--repeats", type=int, default=10)
+    p.add_argument("--whole-s", type=float, default=10.0,
+                   help="seconds of the whole-process comparison (0: none; not with CSVs given)")
+    p.add_argument("--whole-repeats", type=int, default=3)
     a = p.parse_args()
     csvs = a.csv or [simulate(a.millwatch, a.scenario, r, a.duration, a.workdir) for r in a.rates]
     versions = {"python": platform.python_version(), "numpy": np.__version__,
@@ -187,6 +221,8 @@ def main():
               f"truth {truth} rpm; {len(period)} revolutions, "
               f"alpha {np.median(alpha):.2f} deg (median; std {alpha.std():.2f})", file=sys.stderr)
         print(json.dumps(result), flush=True)
+    if not a.csv and a.whole_s > 0:
+        whole_process(a.millwatch, a.scenario, a.whole_s, a.workdir, a.whole_repeats)
 
 
 if __name__ == "__main__":

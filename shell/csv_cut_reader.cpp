@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/monitor/input_check.hpp"
+#include "shell/decimal_number.hpp"
 #include "shell/out_of_range_number.hpp"
 
 namespace millwatch::shell {
@@ -25,7 +26,7 @@ const char* parse_row(const std::string& s, double* v) {
     while (p < end && *p == ' ') {
       ++p;
     }
-    const auto r = std::from_chars(p, end, v[i]);
+    const auto r = read_decimal(p, end, v[i]);
     if (r.ec == std::errc::result_out_of_range) {
       v[i] = out_of_range_value(p, r.ptr);  // from_chars leaves v[i] as it was
     } else if (r.ec != std::errc()) {
@@ -114,9 +115,32 @@ void CsvCutReader::read_header(const std::string& name) {
 }
 
 bool CsvCutReader::read_line() {
+  // Lines come out of a large buffer refilled by whole reads (std::getline costs more than
+  // parsing the numbers).
   text_.clear();
-  if (!std::getline(*in_, text_)) {
-    return false;  // nothing left (a last line without its end-of-line is still read)
+  while (true) {
+    const char* from = buffer_.data() + buffer_begin_;
+    const std::size_t available = buffer_end_ - buffer_begin_;
+    if (const auto* eol = static_cast<const char*>(std::memchr(from, '\n', available));
+        eol != nullptr) {
+      text_.append(from, eol);
+      buffer_begin_ += static_cast<std::size_t>(eol - from) + 1;
+      break;
+    }
+    text_.append(from, available);  // a line longer than the buffer's rest: keep reading
+    buffer_begin_ = buffer_end_ = 0;
+    if (at_end_) {
+      if (text_.empty()) {
+        return false;  // nothing left (a last line without its end-of-line is still read)
+      }
+      break;
+    }
+    if (buffer_.empty()) {
+      buffer_.resize(kBufferBytes);
+    }
+    in_->read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+    buffer_end_ = static_cast<std::size_t>(in_->gcount());
+    at_end_ = buffer_end_ < buffer_.size();
   }
   if (!text_.empty() && text_.back() == '\r') {
     text_.pop_back();

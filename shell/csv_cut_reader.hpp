@@ -92,6 +92,12 @@ class CsvCutReader {
   Row pending_row_;
   std::vector<double> fx_, fy_, fz_;
   std::string text_;
+  // read_line()'s buffer: bytes [buffer_begin_, buffer_end_) are read and not yet taken.
+  static constexpr std::size_t kBufferBytes = std::size_t{1} << 18;
+  std::vector<char> buffer_;
+  std::size_t buffer_begin_ = 0;
+  std::size_t buffer_end_ = 0;
+  bool at_end_ = false;  // the input has nothing more to read
 };
 
 }  // namespace millwatch::shell

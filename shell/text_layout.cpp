@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "shell/decimal_number.hpp"
 #include "shell/out_of_range_number.hpp"
 
 namespace millwatch::shell {
@@ -325,7 +326,7 @@ bool parse_number(std::string_view field, bool decimal_comma, double& value) {
   if (first == last) {
     return false;
   }
-  const auto r = std::from_chars(first, last, value);
+  const auto r = read_decimal(first, last, value);
   if (r.ec == std::errc::result_out_of_range) {
     value = out_of_range_value(first, r.ptr);
   } else if (r.ec != std::errc()) {

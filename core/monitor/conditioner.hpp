@@ -60,6 +60,50 @@ class Conditioner {
     emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
   }
 
+  /// A block of checked samples (instrument channels, N) from absolute sample index `first`:
+  /// the same output as push() sample by sample. The causal filters run over chunks of the
+  /// block channel-wise (signal::LowPassFilter::process_three), then the tare and `out` per
+  /// sample.
+  template <typename Out>
+  void push_block(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
+                  std::span<const double> fz, Out&& out) {
+    const std::size_t count = fx.size();
+    if (zero_phase_on_) {
+      for (std::size_t i = 0; i < count; ++i) {
+        push(first + static_cast<std::int64_t>(i), {fx[i], fy[i], fz[i]}, out);
+      }
+      return;
+    }
+    const std::array<const double*, 3> in = {fx.data(), fy.data(), fz.data()};
+    const std::array<const double*, 3> source = {in[static_cast<std::size_t>(axis_map_.source[0])],
+                                                 in[static_cast<std::size_t>(axis_map_.source[1])],
+                                                 in[static_cast<std::size_t>(axis_map_.source[2])]};
+    for (std::size_t from = 0; from < count; from += kChunk) {
+      const std::size_t n = std::min(kChunk, count - from);
+      for (std::size_t a = 0; a < 3; ++a) {
+        const double sign = axis_map_.sign[a];
+        const double* src = source[a] + from;
+        double* dst = chunk_[a].data();
+        for (std::size_t i = 0; i < n; ++i) {
+          dst[i] = sign * src[i];
+        }
+      }
+      if (fresh_) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          lowpass_[a].reset();
+          lowpass_[a].settle(chunk_[a][0]);
+        }
+        fresh_ = false;
+      }
+      signal::LowPassFilter::process_three(
+          lowpass_, {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
+      for (std::size_t i = 0; i < n; ++i) {
+        emit(first + static_cast<std::int64_t>(from + i), chunk_[0][i], chunk_[1][i], chunk_[2][i],
+             out);
+      }
+    }
+  }
+
   /// Zero-phase mode: every held sample comes out (the end of a stretch or of the record).
   template <typename Out>
   void flush(Out&& out) {
@@ -101,9 +145,11 @@ class Conditioner {
   }
 
   static constexpr double kIdleFraction = 0.2;  // of the usual peak: a quiet envelope
+  static constexpr std::size_t kChunk = 256;    // samples filtered at a time by push_block()
 
   signal::AxisMap axis_map_;
   std::array<signal::LowPassFilter, 3> lowpass_;
+  std::array<std::array<double, kChunk>, 3> chunk_{};  // push_block()'s channels in the model frame
   signal::ZeroPhaseFilter zero_phase_;
   bool zero_phase_on_ = false;
   std::int64_t zero_phase_next_ = 0;  // sample number of its next output

@@ -1,6 +1,8 @@
 #include "core/monitor/input_check.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace millwatch::monitor {
 
@@ -99,6 +101,34 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   }
 
   const std::array<std::span<const double>, 3> in = {block.fx_N, block.fy_N, block.fz_N};
+  // The usual block: every sample plausible and below saturation (a NaN fails both tests). It
+  // is handed on as it is, without copies.
+  const double plausible = std::min(config_.plausible_N, std::numeric_limits<double>::max());
+  bool clean = true;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double limit = std::min(plausible, std::nextafter(config_.saturation_N[a], 0.0));
+    const double* v = in[a].data();
+    bool ok = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      ok &= std::fabs(v[i]) <= limit;
+    }
+    clean = clean && ok;
+  }
+  if (clean) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      last_good_[a] = in[a][n - 1];
+    }
+    counters_.samples_accepted += static_cast<std::int64_t>(n);
+    out.verdict = BlockVerdict::kAccepted;
+    out.first_sample = next_sample_;
+    out.fx_N = block.fx_N;
+    out.fy_N = block.fy_N;
+    out.fz_N = block.fz_N;
+    std::fill(flags_.begin(), flags_.begin() + static_cast<std::ptrdiff_t>(n), std::uint8_t{0});
+    out.flags = {flags_.data(), n};
+    next_sample_ += static_cast<std::int64_t>(n);
+    return out;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     std::uint8_t flag = 0;
     for (std::size_t a = 0; a < 3; ++a) {
@@ -117,10 +147,13 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     flags_[i] = flag;
     if (flag != 0) {
       ++counters_.samples_flagged;
-      counters_.nonfinite_samples += (flag & kFlagNonFinite) != 0 ? 1 : 0;
-      counters_.saturated_samples += (flag & kFlagSaturated) != 0 ? 1 : 0;
+      out.nonfinite_samples += (flag & kFlagNonFinite) != 0 ? 1 : 0;
+      out.saturated_samples += (flag & kFlagSaturated) != 0 ? 1 : 0;
     }
   }
+  counters_.nonfinite_samples += out.nonfinite_samples;
+  counters_.saturated_samples += out.saturated_samples;
+
   counters_.samples_accepted += static_cast<std::int64_t>(n);
   out.verdict = BlockVerdict::kAccepted;
   out.first_sample = next_sample_;

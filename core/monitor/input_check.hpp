@@ -67,14 +67,17 @@ struct CheckedBlock {
   std::int64_t gap_samples = 0;   ///< samples missing just before this block
   std::span<const double> fx_N, fy_N, fz_N;
   std::span<const std::uint8_t> flags;
-  std::string_view problem;  ///< why a block was rejected or what was wrong (static text)
+  std::int64_t nonfinite_samples = 0;  ///< samples flagged kFlagNonFinite in this block
+  std::int64_t saturated_samples = 0;  ///< samples flagged kFlagSaturated in this block
+  std::string_view problem;            ///< why a block was rejected or what was wrong (static text)
 };
 
 class InputCheck {
  public:
   explicit InputCheck(const InputCheckConfig& config);
 
-  /// Checks a block; the returned spans point into this stage's buffers until the next call.
+  /// Checks a block; the returned spans point into this stage's buffers until the next call, or,
+  /// when no sample needed replacing, into the block itself (valid as long as the block).
   CheckedBlock check(const SampleBlock& block);
 
   [[nodiscard]] const InputCounters& counters() const { return counters_; }

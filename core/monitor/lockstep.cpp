@@ -168,4 +168,43 @@ std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
           filtered_[2][k0] + f * (filtered_[2][k1] - filtered_[2][k0])};
 }
 
+void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t count,
+                              const std::array<double*, 3>& out, double* squared) const {
+  const std::size_t n = filtered_[0].size();
+  const auto grid = static_cast<double>(n);
+  if (!(step_rad >= 0.0 && step_rad < kTwoPi)) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto f = force_at(angle0_rad + step_rad * static_cast<double>(i));
+      out[0][i] = f[0];
+      out[1][i] = f[1];
+      out[2][i] = f[2];
+      squared[i] = f[0] * f[0] + f[1] * f[1];
+    }
+    return;
+  }
+  const double turns = (angle0_rad + offset_rad_) / kTwoPi;
+  const double start = (turns - std::floor(turns)) * grid;  // [0, n]
+  const double step = step_rad / kTwoPi * grid;             // grid points per sample, < n
+  const double* wx = filtered_[0].data();
+  const double* wy = filtered_[1].data();
+  const double* wz = filtered_[2].data();
+  double wrapped = 0.0;  // whole turns of the grid passed, in grid points
+  for (std::size_t i = 0; i < count; ++i) {
+    double pos = start + step * static_cast<double>(i) - wrapped;
+    if (pos >= grid) {
+      wrapped += grid;
+      pos -= grid;
+    }
+    const auto k0 = std::min(static_cast<std::size_t>(pos), n - 1);
+    const std::size_t k1 = k0 + 1 == n ? 0 : k0 + 1;
+    const double f = pos - static_cast<double>(k0);
+    const double fx = wx[k0] + f * (wx[k1] - wx[k0]);
+    const double fy = wy[k0] + f * (wy[k1] - wy[k0]);
+    out[0][i] = fx;
+    out[1][i] = fy;
+    out[2][i] = wz[k0] + f * (wz[k1] - wz[k0]);
+    squared[i] = fx * fx + fy * fy;
+  }
+}
+
 }  // namespace millwatch::monitor

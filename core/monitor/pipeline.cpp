@@ -183,11 +183,8 @@ void Pipeline::process(const SampleBlock& block) {
   } else if (c.first_sample == 0 || last_sample_ < 0) {
     restart_stream(c.first_sample);
   }
-  std::int64_t nonfinite = 0, saturated = 0;
-  for (const std::uint8_t f : c.flags) {
-    nonfinite += (f & kFlagNonFinite) != 0 ? 1 : 0;
-    saturated += (f & kFlagSaturated) != 0 ? 1 : 0;
-  }
+  const std::int64_t nonfinite = c.nonfinite_samples;
+  const std::int64_t saturated = c.saturated_samples;
   if (nonfinite > 0) {
     event(PipelineEventKind::kNonFinite, c.first_sample, nonfinite, 0.0,
           "replaced by the channel's last good value", block.seq);
@@ -201,10 +198,7 @@ void Pipeline::process(const SampleBlock& block) {
     downstream(n, fx, fy, fz);
   };
   const std::size_t count = c.fx_N.size();
-  for (std::size_t i = 0; i < count; ++i) {
-    conditioner_.push(c.first_sample + static_cast<std::int64_t>(i),
-                      {c.fx_N[i], c.fy_N[i], c.fz_N[i]}, out);
-  }
+  conditioner_.push_block(c.first_sample, c.fx_N, c.fy_N, c.fz_N, out);
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
 
   if (sync_revolutions_since_report_ >= config_.sync_window_revolutions) {

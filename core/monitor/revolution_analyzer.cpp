@@ -80,7 +80,7 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   m.boundary_sample = events.boundary_sample;
   m.valid = events.valid;
   m.bounded = events.bounded;
-  measure_revolution([&](int c, std::int64_t s) { return ring.at(c, s); }, sample_rate_hz_, m);
+  measure_revolution([&](int c, std::int64_t s) { return ring.row(s)[c]; }, sample_rate_hz_, m);
   out.spindle_rpm = events.period_samples > 0.0 ? 60.0 * sample_rate_hz_ / events.period_samples
                                                 : 60.0 / m.period_s;
 
@@ -102,12 +102,23 @@ void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
                       std::ceil(events.event_sample[static_cast<std::size_t>(events.flutes)])) -
                   1;
   const double turn_rad = kTwoPi * static_cast<double>(events.turn);
-  for (std::int64_t s = std::max(from, ring.oldest()); s <= std::min(to, ring.newest()); ++s) {
-    double a = map.at(static_cast<double>(s)) - turn_rad;
-    a -= kTwoPi * std::floor(a / kTwoPi);
-    const double fx = ring.at(0, s);
-    const double fy = ring.at(1, s);
-    sync.add(a, {fx, fy, ring.at(2, s), std::sqrt(ring.at(3, s))});
+  const std::int64_t first = std::max(from, ring.oldest());
+  const std::int64_t last = std::min(to, ring.newest());
+  if (last >= first) {
+    sync.add_run(
+        static_cast<std::size_t>(last - first + 1),
+        [&](std::size_t i) {
+          const double a = map.at(static_cast<double>(first + static_cast<std::int64_t>(i))) -
+                           turn_rad;  // within a revolution of [0, 2π)
+          if (a >= 0.0 && a < kTwoPi) {
+            return a;
+          }
+          return a >= kTwoPi && a < 2.0 * kTwoPi ? a - kTwoPi : a - kTwoPi * std::floor(a / kTwoPi);
+        },
+        [&](std::size_t i) {
+          const double* v = ring.row(first + static_cast<std::int64_t>(i));
+          return std::array<double, SyncAverage::kChannels>{v[0], v[1], v[2], std::sqrt(v[3])};
+        });
   }
   sync.end_revolution();
 }
@@ -129,14 +140,10 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
   if (last - first_ + 1 > static_cast<std::int64_t>(scratch_[0].size()) || !(span > 0.0)) {
     return false;
   }
-  for (std::int64_t s = first_; s <= last; ++s) {
-    const auto f = model.force_at(map.at(static_cast<double>(s)));
-    const auto i = static_cast<std::size_t>(s - first_);
-    scratch_[0][i] = f[0];
-    scratch_[1][i] = f[1];
-    scratch_[2][i] = f[2];
-    scratch_[3][i] = f[0] * f[0] + f[1] * f[1];
-  }
+  model.forces_on_line(map.at(static_cast<double>(first_)), map.slope_rad_per_sample,
+                       static_cast<std::size_t>(last - first_ + 1),
+                       {scratch_[0].data(), scratch_[1].data(), scratch_[2].data()},
+                       scratch_[3].data());
   const auto channel = [&](int c, std::int64_t s) {
     return scratch_[static_cast<std::size_t>(c)][static_cast<std::size_t>(s - first_)];
   };
@@ -183,22 +190,30 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   std::array<int, kMaxSectors> sector_n{};
   std::size_t flute = 0;
   const double sectors_per_rad = sectors_ / kTwoPi;
+  // The angle within the turn, [0, 2π), from the first sample's on: the map is a line.
+  double start_rad = map.at(static_cast<double>(from));
+  start_rad -= kTwoPi * std::floor(start_rad / kTwoPi);
+  double turns_rad = 0.0;  // whole turns passed since `from`
   for (std::int64_t s = from; s <= to; ++s) {
     const auto i = static_cast<std::size_t>(s - first_);
+    const double* v = ring.row(s);
     std::array<double, 3> d{};
     for (std::size_t a = 0; a < 3; ++a) {
-      d[a] = ring.at(static_cast<int>(a), s) - scratch_[a][i];
+      d[a] = v[a] - scratch_[a][i];
       sum[a] += d[a] * d[a];
     }
-    measured_sum += ring.at(3, s);  // Fx² + Fy²
+    measured_sum += v[3];  // Fx² + Fy²
     const double d_xy2 = d[0] * d[0] + d[1] * d[1];
     while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
       ++flute;
     }
     flute_sum[flute] += d_xy2;
     ++flute_n[flute];
-    double a = map.at(static_cast<double>(s));
-    a -= kTwoPi * std::floor(a / kTwoPi);
+    double a = start_rad + map.slope_rad_per_sample * static_cast<double>(s - from) - turns_rad;
+    if (a >= kTwoPi) {
+      turns_rad += kTwoPi;
+      a -= kTwoPi;
+    }
     const auto sector = static_cast<std::size_t>(
         std::clamp(static_cast<int>(a * sectors_per_rad), 0, sectors_ - 1));
     sector_sum[sector] += d_xy2;

@@ -49,9 +49,11 @@ struct RevolutionMeasurement {
   bool bounded = false;
 };
 
-/// Measures one revolution. `channel(c, n)` returns channel c (0 fx, 1 fy, 2 fz) at absolute
-/// sample n for every n in [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the
-/// events, the boundaries and validity already; the periods and forces are filled in.
+/// Measures one revolution. `channel(c, n)` returns channel c (0 fx, 1 fy, 2 fz, 3 the squared
+/// in-plane force fx² + fy², as the pipeline's ring holds it) at absolute sample n for every n in
+/// [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the events, the boundaries and
+/// validity already; the periods and forces are filled in. One pass over each flute's window
+/// finds every channel's extremes.
 template <typename Channel>
 void measure_revolution(const Channel& channel, double sample_rate_hz, RevolutionMeasurement& m) {
   const int flutes = m.flutes;
@@ -63,24 +65,36 @@ void measure_revolution(const Channel& channel, double sample_rate_hz, Revolutio
     m.flute_period_s[uj] = (m.event_sample[uj + 1] - m.event_sample[uj]) * dt;
     const auto from = static_cast<std::int64_t>(std::ceil(m.boundary_sample[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(m.boundary_sample[uj + 1]));
-    // fx, fy, fz: the sample of largest magnitude and the range, in one pass per channel.
-    for (int c = 0; c < 3; ++c) {
-      auto value = [&](std::int64_t n) { return channel(c, n); };
-      std::int64_t best = from;
-      double lowest = value(from), highest = lowest;
-      std::int64_t at_low = from, at_high = from;
-      for (std::int64_t n = from + 1; n <= to; ++n) {
-        const double v = value(n);
-        if (v < lowest) {
-          lowest = v;
-          at_low = n;
+    // fx, fy, fz: the sample of largest magnitude and the range; the resultant's largest square.
+    std::array<double, 3> lowest{}, highest{};
+    std::array<std::int64_t, 3> at_low{from, from, from}, at_high{from, from, from};
+    for (std::size_t c = 0; c < 3; ++c) {
+      lowest[c] = highest[c] = channel(static_cast<int>(c), from);
+    }
+    std::int64_t best_squared = from;
+    double largest_squared = channel(3, from);
+    for (std::int64_t n = from + 1; n <= to; ++n) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        const double v = channel(static_cast<int>(c), n);
+        if (v < lowest[c]) {
+          lowest[c] = v;
+          at_low[c] = n;
         }
-        if (v > highest) {
-          highest = v;
-          at_high = n;
+        if (v > highest[c]) {
+          highest[c] = v;
+          at_high[c] = n;
         }
       }
-      best = std::fabs(lowest) > std::fabs(highest) ? at_low : at_high;
+      const double q = channel(3, n);
+      if (q > largest_squared) {
+        largest_squared = q;
+        best_squared = n;
+      }
+    }
+    for (std::size_t c = 0; c < 3; ++c) {
+      auto value = [&](std::int64_t n) { return channel(static_cast<int>(c), n); };
+      const std::int64_t best =
+          std::fabs(lowest[c]) > std::fabs(highest[c]) ? at_low[c] : at_high[c];
       double peak = value(best);
       if (best > from && best < to) {
         const Extremum e = refine_extremum(value, best, 1, peak < 0.0);
@@ -88,25 +102,14 @@ void measure_revolution(const Channel& channel, double sample_rate_hz, Revolutio
           peak = e.value;
         }
       }
-      m.peak_N[uj][static_cast<std::size_t>(c)] = peak;
-      m.range_N[uj][static_cast<std::size_t>(c)] = highest - lowest;
+      m.peak_N[uj][c] = peak;
+      m.range_N[uj][c] = highest[c] - lowest[c];
     }
     // The in-plane resultant √(fx² + fy²), searched on its square.
-    auto squared = [&](std::int64_t n) {
-      const double x = channel(0, n);
-      const double y = channel(1, n);
-      return x * x + y * y;
-    };
-    std::int64_t best = from;
-    for (std::int64_t n = from + 1; n <= to; ++n) {
-      if (squared(n) > squared(best)) {
-        best = n;
-      }
-    }
-    double peak = std::sqrt(squared(best));
-    if (best > from && best < to) {
-      const Extremum e =
-          refine_extremum([&](std::int64_t n) { return std::sqrt(squared(n)); }, best, 1, false);
+    double peak = std::sqrt(largest_squared);
+    if (best_squared > from && best_squared < to) {
+      const Extremum e = refine_extremum([&](std::int64_t n) { return std::sqrt(channel(3, n)); },
+                                         best_squared, 1, false);
       if (e.valid) {
         peak = e.value;
       }

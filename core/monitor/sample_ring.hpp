@@ -1,6 +1,8 @@
 #pragma once
 // A ring buffer of several channels addressed by absolute sample index: the pipeline's recent
-// history, from which revolutions are measured once their samples have arrived.
+// history, from which revolutions are measured once their samples have arrived. The channels of
+// one sample sit side by side (one push writes one short run, a revolution's scan reads memory
+// in order).
 
 #include <cstdint>
 #include <vector>
@@ -14,11 +16,33 @@ class SampleRing {
   SampleRing(int channels, std::size_t min_capacity);
 
   /// Appends one sample of every channel at index `sample` (must be newest() + 1 unless empty).
-  void push(std::int64_t sample, const double* values);
+  void push(std::int64_t sample, const double* values) {
+    if (sample != newest_ + 1 || empty()) {
+      oldest_ = sample;  // a new stretch (or the first sample)
+    }
+    newest_ = sample;
+    if (newest_ - oldest_ >= static_cast<std::int64_t>(capacity_)) {
+      oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
+    }
+    double* slot = row(sample);
+    if (channels_ == 4) {  // the pipeline's: four stores, not a call to memcpy
+      slot[0] = values[0];
+      slot[1] = values[1];
+      slot[2] = values[2];
+      slot[3] = values[3];
+      return;
+    }
+    for (std::size_t c = 0; c < channels_; ++c) {
+      slot[c] = values[c];
+    }
+  }
   /// Value of channel c at absolute index n (oldest() ≤ n ≤ newest()).
   [[nodiscard]] double at(int channel, std::int64_t n) const {
-    return data_[static_cast<std::size_t>(channel) * capacity_ +
-                 (static_cast<std::size_t>(n) & mask_)];
+    return row(n)[static_cast<std::size_t>(channel)];
+  }
+  /// Every channel of sample n, side by side (oldest() ≤ n ≤ newest()).
+  [[nodiscard]] const double* row(std::int64_t n) const {
+    return &data_[(static_cast<std::size_t>(n) & mask_) * channels_];
   }
   [[nodiscard]] bool empty() const { return newest_ < oldest_; }
   [[nodiscard]] std::int64_t oldest() const { return oldest_; }
@@ -28,10 +52,14 @@ class SampleRing {
   void clear();
 
  private:
-  int channels_ = 0;
+  [[nodiscard]] double* row(std::int64_t n) {
+    return &data_[(static_cast<std::size_t>(n) & mask_) * channels_];
+  }
+
+  std::size_t channels_ = 0;
   std::size_t capacity_ = 0;
   std::size_t mask_ = 0;
-  std::vector<double> data_;
+  std::vector<double> data_;  // [sample slot][channel]
   std::int64_t oldest_ = 0;
   std::int64_t newest_ = -1;
 };

@@ -5,6 +5,7 @@
 // samples of one revolution still fills in over several revolutions.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -19,6 +20,39 @@ class SyncAverage {
 
   /// Adds one sample at spindle angle `angle_rad` ∈ [0, 2π) to the current revolution.
   void add(double angle_rad, const std::array<double, kChannels>& values);
+  /// Adds `count` samples to the current revolution, sample i at angle_rad(i) ∈ [0, 2π) with
+  /// values(i) (std::array<double, kChannels>): the same sums as add() sample by sample, with
+  /// the two bins a run of samples shares held in registers until the run moves on (the bins of
+  /// neighbouring samples are the same, and adding to memory one sample after the other would
+  /// wait on each store).
+  template <typename Angle, typename Values>
+  void add_run(std::size_t count, const Angle& angle_rad, const Values& values) {
+    int k0 = -1;
+    std::array<double, kChannels + 1> lo{}, hi{};
+    for (std::size_t i = 0; i < count; ++i) {
+      const double pos = angle_rad(i) * bins_per_rad_;
+      const double whole =
+          pos >= 0.0 ? static_cast<double>(static_cast<int>(pos)) : std::floor(pos);
+      const double w = pos - whole;
+      int k = static_cast<int>(whole);
+      if (k >= bins_ || k < 0) {
+        k %= bins_;
+        k += k < 0 ? bins_ : 0;
+      }
+      if (k != k0) {
+        flush_run(k0, lo, hi);
+        k0 = k;
+      }
+      const std::array<double, kChannels> v = values(i);
+      for (std::size_t c = 0; c < static_cast<std::size_t>(kChannels); ++c) {
+        lo[c] += (1.0 - w) * v[c];
+        hi[c] += w * v[c];
+      }
+      lo[kChannels] += 1.0 - w;
+      hi[kChannels] += w;
+    }
+    flush_run(k0, lo, hi);
+  }
   /// Closes the current revolution: it joins the window, the oldest leaves it.
   void end_revolution();
   /// Average of channel c at bin k over the window (revolutions closed so far).
@@ -32,6 +66,21 @@ class SyncAverage {
 
  private:
   [[nodiscard]] double total(int channel, int bin) const;
+  /// Adds a run's sums to bin k and the next one (nothing for k < 0), and zeroes them.
+  void flush_run(int k, std::array<double, kChannels + 1>& lo,
+                 std::array<double, kChannels + 1>& hi) {
+    if (k < 0) {
+      return;
+    }
+    double* a = &sums_[index(slot_, 0, k)];
+    double* b = &sums_[index(slot_, 0, k + 1 == bins_ ? 0 : k + 1)];
+    for (std::size_t c = 0; c <= static_cast<std::size_t>(kChannels); ++c) {
+      a[c] += lo[c];
+      b[c] += hi[c];
+      lo[c] = 0.0;
+      hi[c] = 0.0;
+    }
+  }
   // Layout [slot][bin][channel]: a sample's two bins are two short contiguous runs.
   [[nodiscard]] std::size_t index(int slot, int channel, int bin) const {
     return (static_cast<std::size_t>(slot) * static_cast<std::size_t>(bins_) +

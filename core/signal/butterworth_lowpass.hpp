@@ -138,9 +138,88 @@ class LowPassFilter {
   /// @throws std::invalid_argument if the sizes differ (a programming error).
   void process(std::span<const double> in, std::span<double> out);
 
+  /// Filters three channels of `count` samples in place, each with its own filter (all three
+  /// of the same design), exactly as step() would sample by sample: section by section over the
+  /// block with the states in registers, the three channels in step (three independent
+  /// recursions in flight instead of one).
+  static void process_three(std::array<LowPassFilter, 3>& filters,
+                            const std::array<double*, 3>& data, std::size_t count) {
+    const ButterworthDesign& d = filters[0].design_;
+    if (d.sections == 2) {  // the monitor's order 4: both sections in one pass (six chains)
+      process_three_two_sections(filters, data, count);
+      return;
+    }
+    for (int s = 0; s < d.sections; ++s) {
+      const auto us = static_cast<std::size_t>(s);
+      const Biquad c = d.sos[us];
+      auto& za = filters[0].state_.z[us];
+      auto& zb = filters[1].state_.z[us];
+      auto& zc = filters[2].state_.z[us];
+      double a0 = za[0], a1 = za[1], b0 = zb[0], b1 = zb[1], c0 = zc[0], c1 = zc[1];
+      double* xa = data[0];
+      double* xb = data[1];
+      double* xc = data[2];
+      for (std::size_t i = 0; i < count; ++i) {
+        const double ia = xa[i], ib = xb[i], ic = xc[i];
+        const double ya = c.b0 * ia + a0;
+        const double yb = c.b0 * ib + b0;
+        const double yc = c.b0 * ic + c0;
+        a0 = c.b1 * ia - c.a1 * ya + a1;
+        b0 = c.b1 * ib - c.a1 * yb + b1;
+        c0 = c.b1 * ic - c.a1 * yc + c1;
+        a1 = c.b2 * ia - c.a2 * ya;
+        b1 = c.b2 * ib - c.a2 * yb;
+        c1 = c.b2 * ic - c.a2 * yc;
+        xa[i] = ya;
+        xb[i] = yb;
+        xc[i] = yc;
+      }
+      za = {a0, a1};
+      zb = {b0, b1};
+      zc = {c0, c1};
+    }
+  }
+
   /// Zero state: the filter starts from rest.
   void reset() { state_ = {}; }
 
+ private:
+  /// process_three() for two sections, sample by sample with every state in a local: the two
+  /// sections' recursions of the three channels overlap (each waits only on its own last step).
+  static void process_three_two_sections(std::array<LowPassFilter, 3>& filters,
+                                         const std::array<double*, 3>& data, std::size_t count) {
+    const Biquad p = filters[0].design_.sos[0];
+    const Biquad q = filters[0].design_.sos[1];
+    std::array<std::array<double, 4>, 3> z{};  // per channel: section 1's z0, z1, section 2's
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto& s = filters[a].state_.z;
+      z[a] = {s[0][0], s[0][1], s[1][0], s[1][1]};
+    }
+    double* xa = data[0];
+    double* xb = data[1];
+    double* xc = data[2];
+    const auto step = [&p, &q](double in, std::array<double, 4>& s) {
+      const double y = p.b0 * in + s[0];
+      s[0] = p.b1 * in - p.a1 * y + s[1];
+      s[1] = p.b2 * in - p.a2 * y;
+      const double out = q.b0 * y + s[2];
+      s[2] = q.b1 * y - q.a1 * out + s[3];
+      s[3] = q.b2 * y - q.a2 * out;
+      return out;
+    };
+    for (std::size_t i = 0; i < count; ++i) {
+      xa[i] = step(xa[i], z[0]);
+      xb[i] = step(xb[i], z[1]);
+      xc[i] = step(xc[i], z[2]);
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      auto& s = filters[a].state_.z;
+      s[0] = {z[a][0], z[a][1]};
+      s[1] = {z[a][2], z[a][3]};
+    }
+  }
+
+ public:
   /// The state after a constant input `x` for ever: step(x) then returns x (DC gain 1), so a
   /// stream that starts at a level other than zero (mid-cut) has no start-up transient.
   /// Per section, like scipy.signal.sosfilt_zi(sos)·x.

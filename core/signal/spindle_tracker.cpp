@@ -20,19 +20,38 @@ double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
 
-/// DTFT of x at `cycles_per_sample`, evaluated at the block's first sample (phasor recursion).
-std::complex<double> dtft(std::span<const double> x, double cycles_per_sample) {
-  const std::complex<double> step = std::polar(1.0, -kTwoPi * cycles_per_sample);
-  std::complex<double> rot = 1.0;
-  std::complex<double> sum = 0.0;
+/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample
+/// (phasor recursions, run side by side: two independent chains in flight). The complex products
+/// are written out as std::complex computes them for finite values.
+std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycles_a,
+                                          double cycles_b) {
+  const std::complex<double> step_a = std::polar(1.0, -kTwoPi * cycles_a);
+  const std::complex<double> step_b = std::polar(1.0, -kTwoPi * cycles_b);
+  const double sar = step_a.real(), sai = step_a.imag(), sbr = step_b.real(), sbi = step_b.imag();
+  double ar = 1.0, ai = 0.0, br = 1.0, bi = 0.0;  // the phasors
+  double sum_ar = 0.0, sum_ai = 0.0, sum_br = 0.0, sum_bi = 0.0;
   for (std::size_t n = 0; n < x.size(); ++n) {
-    sum += x[n] * rot;
-    rot *= step;
-    if ((n & 1023) == 1023) {
-      rot /= std::abs(rot);  // keep the phasor on the unit circle
+    sum_ar += x[n] * ar;
+    sum_ai += x[n] * ai;
+    sum_br += x[n] * br;
+    sum_bi += x[n] * bi;
+    const double ar2 = ar * sar - ai * sai;
+    const double ai2 = ar * sai + ai * sar;
+    const double br2 = br * sbr - bi * sbi;
+    const double bi2 = br * sbi + bi * sbr;
+    ar = ar2;
+    ai = ai2;
+    br = br2;
+    bi = bi2;
+    if ((n & 1023) == 1023) {  // keep the phasors on the unit circle
+      const double na = std::hypot(ar, ai), nb = std::hypot(br, bi);
+      ar /= na;
+      ai /= na;
+      br /= nb;
+      bi /= nb;
     }
   }
-  return sum;
+  return {std::complex<double>(sum_ar, sum_ai), std::complex<double>(sum_br, sum_bi)};
 }
 
 }  // namespace
@@ -147,6 +166,7 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
     hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
   }
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
+  floor_bin_.assign(fft_size_ / 2 + 1, 0);
   past_.assign(window_ / hop_ + 2, Past{});
   scratch_.reserve(fft_size_ / 2 + 1);
   fft_in_ = fftw_alloc_real(fft_size_);
@@ -160,6 +180,8 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
 
 void SpindleTracker::restart(std::int64_t next_sample) {
   next_sample_ = next_sample;
+  slot_ =
+      window_ > 0 ? static_cast<std::size_t>(next_sample % static_cast<std::int64_t>(window_)) : 0;
   stream_start_ = next_sample;
   since_hop_ = 0;
   locked_ = false;
@@ -192,7 +214,8 @@ const SpindleTracker::Past* SpindleTracker::window_ago(std::int64_t center) cons
 int SpindleTracker::process(std::span<const double> samples) {
   int updates = 0;
   for (double x : samples) {
-    ring_[static_cast<std::size_t>(next_sample_ % static_cast<std::int64_t>(window_))] = x;
+    ring_[slot_] = x;
+    slot_ = slot_ + 1 == window_ ? 0 : slot_ + 1;
     ++next_sample_;
     ++since_hop_;
     if (since_hop_ >= hop_ && next_sample_ - stream_start_ >= static_cast<std::int64_t>(window_)) {
@@ -226,15 +249,22 @@ void SpindleTracker::update() {
   // The window, oldest sample first, without its mean, Hann-weighted, zero-padded.
   const auto w = static_cast<std::int64_t>(window_);
   const std::int64_t first = next_sample_ - w;
+  // The ring from the oldest sample's slot to its end, then from its start: two runs.
+  const auto split = static_cast<std::size_t>(first % w);
+  const std::size_t tail = window_ - split;
   double mean = 0.0;
-  for (std::int64_t n = first; n < next_sample_; ++n) {
-    mean += ring_[static_cast<std::size_t>(n % w)];
+  for (std::size_t i = split; i < window_; ++i) {
+    mean += ring_[i];
+  }
+  for (std::size_t i = 0; i < split; ++i) {
+    mean += ring_[i];
   }
   mean /= static_cast<double>(window_);
-  for (std::size_t i = 0; i < window_; ++i) {
-    fft_in_[i] =
-        (ring_[static_cast<std::size_t>((first + static_cast<std::int64_t>(i)) % w)] - mean) *
-        hann_[i];
+  for (std::size_t i = 0; i < tail; ++i) {
+    fft_in_[i] = (ring_[split + i] - mean) * hann_[i];
+  }
+  for (std::size_t i = tail; i < window_; ++i) {
+    fft_in_[i] = (ring_[i - tail] - mean) * hann_[i];
   }
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
@@ -268,6 +298,17 @@ void SpindleTracker::update() {
   const double lobe = 2.0 * static_cast<double>(fft_size_) / static_cast<double>(window_) + 1.0;
   const double harmonic_bins = best_f / bin_hz;
   const auto reach = static_cast<std::size_t>(2.0 * harmonic_bins);
+  // Which bins lie outside every harmonic's lobe, once for all harmonics (their neighbourhoods
+  // overlap).
+  const std::size_t last_bin =
+      std::min(magnitude_.size() - 1,
+               static_cast<std::size_t>(std::lround(harmonics_ * harmonic_bins)) + reach + 1);
+  for (std::size_t c = 1; c <= last_bin; ++c) {
+    const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
+    // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
+    const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
+    floor_bin_[c] = std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe ? 1 : 0;
+  }
   double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, sum_peak = 0.0, sum_floor = 0.0;
   int used = 0;
   for (int h = 1; h <= harmonics_; ++h) {
@@ -284,9 +325,8 @@ void SpindleTracker::update() {
     scratch_.clear();
     const std::size_t from = center > reach + 1 ? center - reach : 1;
     const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
-    for (std::size_t c = from; c <= to; ++c) {
-      const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
-      if (std::fabs(x - std::round(x)) * harmonic_bins > lobe) {
+    for (std::size_t c = from; c <= std::min(to, last_bin); ++c) {
+      if (floor_bin_[c] != 0) {
         scratch_.push_back(magnitude_[c]);
       }
     }
@@ -344,9 +384,8 @@ void SpindleTracker::update() {
   // windowed block; the Hann window is symmetric, so it adds no phase at the centre).
   const std::span<const double> block(fft_in_, window_);
   const double centre = static_cast<double>(w / 2);
-  const std::complex<double> c1 = dtft(block, f / config_.sample_rate_hz);
   const int z = config_.flutes;
-  const std::complex<double> cz = dtft(block, z * f / config_.sample_rate_hz);
+  const auto [c1, cz] = dtft2(block, f / config_.sample_rate_hz, z * f / config_.sample_rate_hz);
   const double phi1 = std::arg(c1) + kTwoPi * f * centre / config_.sample_rate_hz;
   const double phiz = std::arg(cz) + kTwoPi * z * f * centre / config_.sample_rate_hz;
   double angle = phi1;

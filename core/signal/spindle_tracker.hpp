@@ -144,12 +144,14 @@ class SpindleTracker {
   std::vector<double> ring_;  // the last window_ samples
   std::vector<double> hann_;
   std::vector<double> magnitude_;
-  std::vector<double> scratch_;  // for the median
+  std::vector<double> scratch_;          // for the median
+  std::vector<std::uint8_t> floor_bin_;  // per bin: outside every harmonic's lobe (update())
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
   fftw_plan plan_ = nullptr;
 
   std::int64_t next_sample_ = 0;
+  std::size_t slot_ = 0;           // ring_ slot of the next sample: next_sample_ mod window_
   std::int64_t stream_start_ = 0;  // first sample since the last restart
   std::size_t since_hop_ = 0;
   SpindleEstimate estimate_;
