@@ -112,6 +112,7 @@ struct WindowFitter::Impl {
   bool separable = true;
   std::vector<std::string> coefficient_names;  // in θ when not separable
   model::ParameterMap extra_map;
+  bool extra_moves_resonance = false;  // a dynamometer parameter among the extra ones
   model::ParameterMap coefficient_map;
 
   // One problem: a setting, the measured harmonics and the model's columns.
@@ -128,6 +129,7 @@ struct WindowFitter::Impl {
     Eigen::FFT<double> fft;
     std::vector<std::complex<double>> spectrum;
     std::array<std::vector<std::complex<double>>, 3> gains;  // filter (× resonance) at k·f
+    bool resonance = false;  // the dynamometer's resonance is in the gains
     std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
     Eigen::VectorXd cached_key;
     bool have_cache = false;
@@ -147,18 +149,8 @@ struct WindowFitter::Impl {
       config = model::at_actual_speed(owner->commanded, rpm);
       // The dynamometer's resonance is linear: it joins the filter's gains per axis instead of
       // filtering every basis column in time.
-      const auto& dyn = config.effects.dynamometer;
-      for (std::size_t a = 0; a < 3; ++a) {
-        gains[a].resize(order.size());
-        for (std::size_t e = 0; e < order.size(); ++e) {
-          const double hz = order[e] * rpm / 60.0;
-          std::complex<double> g = owner->filter(hz);
-          if (dyn.enabled) {
-            g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
-          }
-          gains[a][e] = g;
-        }
-      }
+      resonance = config.effects.dynamometer.enabled;
+      compute_gains();
       config.effects.dynamometer.enabled = false;
       measured.assign(1, {});
       for (std::size_t a = 0; a < 3; ++a) {
@@ -193,6 +185,22 @@ struct WindowFitter::Impl {
       have_cache = false;
     }
 
+    /// The filter's response (times the dynamometer's resonance when on) at each entry.
+    void compute_gains() {
+      const auto& dyn = config.effects.dynamometer;
+      for (std::size_t a = 0; a < 3; ++a) {
+        gains[a].resize(order.size());
+        for (std::size_t e = 0; e < order.size(); ++e) {
+          const double hz = order[e] * rpm / 60.0;
+          std::complex<double> g = owner->filter(hz);
+          if (resonance) {
+            g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
+          }
+          gains[a][e] = g;
+        }
+      }
+    }
+
     /// The entries (harmonics k = 1..K, and the mean) of a waveform on the model grid, times
     /// the filter's response.
     void harmonics_of(const std::vector<double>& w, std::size_t axis,
@@ -217,6 +225,9 @@ struct WindowFitter::Impl {
       const int n_extra = owner->extra_map.size();
       if (n_extra > 0) {
         model::set_parameters(owner->extra_map, key.segment(2, n_extra), config);
+        if (owner->extra_moves_resonance && resonance) {
+          compute_gains();  // a fitted natural frequency or damping ratio
+        }
       }
       if (!owner->separable) {
         model::set_parameters(owner->coefficient_map,
@@ -441,6 +452,9 @@ struct WindowFitter::Impl {
     separable = !commanded.effects.deflection.enabled;
     if (!options.extra_parameters.empty()) {
       extra_map = model::make_parameter_map(commanded, options.extra_parameters);
+      for (const auto& info : extra_map.parameters) {
+        extra_moves_resonance = extra_moves_resonance || info.effect == "dynamometer";
+      }
     }
     if (!separable) {
       for (const auto& p : model::parameters_of_effect(commanded, "force_law")) {
