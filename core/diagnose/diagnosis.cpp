@@ -48,6 +48,7 @@ struct Evaluation {
   std::string message;
   identify::FitResult fit;
   int cycle_revolutions = 1;
+  double alignment_rad = 0.0;  // the model's angle minus the time base's (a cycle may turn it)
   std::array<std::vector<double>, 2> model_N, chain_N;
   std::array<Eigen::VectorXd, 2> chain_coefficients;
   std::array<Eigen::VectorXd, 2> chain_sigma;
@@ -300,8 +301,10 @@ class Engine {
       }
     }
     const double step = kTwoPi * f / fs_;  // spindle angle per sample
-    // The cycle's phase: revolution m0 of the cycle at the record's revolution 0, the one whose
-    // sub-harmonics correlate best with the record.
+    // The cycle's phase: revolution m0 of the cycle at the record's revolution 0, and which
+    // flute is flute 0 (the mean revolution the fitter aligned may be nearly the same turned by
+    // a pitch, the cycle is not): the shift whose model correlates best with the record
+    // (RSS = Σy² − 2·Σy·p + Σp², Σp² the same for every shift).
     int m0 = 0;
     if (cycle > 1) {
       std::vector<std::complex<double>> d(static_cast<std::size_t>(q_max + 1));
@@ -317,25 +320,31 @@ class Engine {
         }
         d_[a] = d;
       }
+      const bool uniform = fitted.tool.pitch_deg.empty();
+      const int shifts = uniform ? fitted.tool.flutes : 1;
       double best = -1e300;
-      for (int m = 0; m < cycle; ++m) {
-        double score = 0.0;
-        for (std::size_t a = 0; a < 2; ++a) {
-          for (int q = 1; q <= q_max; ++q) {
-            if (q % cycle == 0) {
-              continue;
+      double best_delta = delta;
+      for (int j = 0; j < shifts; ++j) {
+        const double dj = delta + kTwoPi * j / shifts;
+        for (int m = 0; m < cycle; ++m) {
+          double score = 0.0;
+          for (std::size_t a = 0; a < 2; ++a) {
+            for (int q = 1; q <= q_max; ++q) {
+              const auto qq = static_cast<std::size_t>(q);
+              score += std::real(coeff[a][qq] * std::polar(1.0, q * (dj + kTwoPi * m) / cycle) *
+                                 std::conj(d_[a][qq]));
             }
-            const auto qq = static_cast<std::size_t>(q);
-            score += std::real(coeff[a][qq] * std::polar(1.0, q * (delta + kTwoPi * m) / cycle) *
-                               std::conj(d_[a][qq]));
+          }
+          if (score > best) {
+            best = score;
+            m0 = m;
+            best_delta = dj;
           }
         }
-        if (score > best) {
-          best = score;
-          m0 = m;
-        }
       }
+      delta = best_delta;
     }
+    ev.alignment_rad = delta;
     for (std::size_t a = 0; a < 2; ++a) {
       ev.model_N[a].assign(n_, 0.0);
       for (std::size_t i = 0; i < n_; ++i) {
@@ -562,6 +571,10 @@ class Diagnoser {
   /// The criterion on a geometric grid of h_min over (0.05, 1.5)·f_t·…, then a golden section
   /// on the best interval; σ from the profile's curvature (Δ(−2 ln L) = 1).
   Evaluation profile_h_min(State& s, const Evaluation& current);
+  /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
+  /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
+  /// where the deflection hardly changes the force.
+  Evaluation profile_stiffness(State& s, const Evaluation& current);
   Localisation localise(const State& s, const Evaluation& ev, ModelView& view);
 
   const CutRecord& rec_;
@@ -653,13 +666,13 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
 Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current) {
   const double ft = s.config.process.feed_per_tooth_um;
   std::vector<double> grid;
-  for (double h = 0.05 * ft; h <= 1.6 * ft; h *= 1.35) {
+  for (double h = 0.05 * ft; h <= 1.6 * ft; h *= 1.25) {
     grid.push_back(h);
   }
   auto at = [&](double h) {
     State t = s;
     t.config.effects.min_chip.h_min_um = h;
-    return engine_.evaluate(t, &current, false, &current);
+    return engine_.evaluate(t, &current, false, nullptr);
   };
   std::vector<double> crit(grid.size(), 1e300);
   std::size_t best = 0;
@@ -725,13 +738,36 @@ Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current) {
   return best_ev;
 }
 
+Evaluation Diagnoser::profile_stiffness(State& s, const Evaluation& current) {
+  State fixed = s;
+  fixed.extra.erase(std::remove(fixed.extra.begin(), fixed.extra.end(), "stiffness_N_per_um"),
+                    fixed.extra.end());
+  Evaluation best;
+  double best_k = s.config.effects.deflection.stiffness_N_per_um;
+  for (double k = 0.05; k <= 3.3; k *= 2.0) {
+    fixed.config.effects.deflection.stiffness_N_per_um = k;
+    Evaluation ev = engine_.evaluate(fixed, &current, false, &current);
+    if (ev.ok && (!best.ok || ev.criterion < best.criterion)) {
+      best = std::move(ev);
+      best_k = k;
+    }
+  }
+  s.config.effects.deflection.stiffness_N_per_um = best_k;
+  if (best.ok) {
+    s.config = best.fit.config;
+    s.config.effects.deflection.stiffness_N_per_um = best_k;
+  }
+  Evaluation ev = engine_.evaluate(s, &current, false, best.ok ? &best : nullptr);
+  return ev.ok || !best.ok ? ev : best;
+}
+
 Localisation Diagnoser::localise(const State& s, const Evaluation& ev, ModelView& view) {
   Localisation loc;
   const double fs = rec_.sample_rate_hz;
   const std::size_t n = rec_.force_N[0].size();
   const double f = s.rpm / 60.0;
   const int k_max = engine_.harmonics(s.rpm);
-  const double delta = ev.fit.alignment_rad.value;
+  const double delta = ev.alignment_rad;
   const model::ModelConfig& c = ev.fit.config;
   const int flutes = c.tool.flutes;
   const std::vector<double> psi = model::flute_pitch_angles_rad(c.tool);
@@ -1070,10 +1106,16 @@ Diagnosis Diagnoser::run() {
       if (!apply(name, s, current, why)) {
         continue;  // in the model already
       }
-      const bool reseed = name == "runout" || name == "spindle_speed_error";
+      // The fitter searches afresh (its starts and alignment scan) for every effect of the
+      // model: a new effect may move the alignment by a pitch (the flute labelling) or the
+      // runout to another basin, where a refinement from the current fit would stay stuck.
+      // The chain's terms hardly move the model: those refine the current fit.
+      const bool chain = name == "amplifier_drift" || name == "mains_hum";
       Evaluation ev = (name == "min_chip_thickness" || name == "chip_accumulation")
                           ? profile_h_min(s, current)
-                          : engine_.evaluate(s, &current, false, reseed ? nullptr : &current);
+                      : name == "tool_deflection"
+                          ? profile_stiffness(s, current)
+                          : engine_.evaluate(s, &current, false, chain ? &current : nullptr);
       if (name == "mains_hum" && ev.ok) {
         State s60 = s;
         s60.hum_hz = 60.0;

@@ -49,7 +49,10 @@ class HiddenEffect : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(HiddenEffect, IsNamedAddedAndClosesTheGap) {
   const std::string effect = GetParam();
-  const auto cut = test::hidden_effect_cut({effect});
+  // Deflection leaves no trace in a symmetric cut (each steady chip is the feed per tooth
+  // whatever the stiffness): it is hidden behind a runout the starting model knows.
+  const auto cut = effect == "tool_deflection" ? test::hidden_effect_cut({effect}, {"runout"})
+                                               : test::hidden_effect_cut({effect});
   const Diagnosis d = diagnose(cut.record, cut.start);
   std::printf("%s hidden\n", effect.c_str());
   print(d);

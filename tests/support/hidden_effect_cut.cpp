@@ -155,10 +155,13 @@ diagnose::CutRecord record_in_model_frame(const sim::Scenario& s) {
   return r;
 }
 
-HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden, double duration_s,
+HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
+                                  const std::vector<std::string>& known, double duration_s,
                                   double sample_rate_hz, unsigned seed) {
   HiddenEffectCut c;
-  c.scenario = hidden_effect_scenario(hidden, duration_s, sample_rate_hz, seed);
+  std::vector<std::string> all = hidden;
+  all.insert(all.end(), known.begin(), known.end());
+  c.scenario = hidden_effect_scenario(all, duration_s, sample_rate_hz, seed);
   c.record = record_in_model_frame(c.scenario);
   // What the diagnosis knows: the plain model of the cut as commanded, at the fitter's
   // resolution, the coefficients off by tens of percent (they are fitted).
@@ -171,6 +174,16 @@ HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden, double
   m.effects.deflection.stiffness_N_per_um = 0.47;
   m.material.power_law.k_tc_Nmm *= 0.8;
   m.material.power_law.k_nc_Nmm *= 1.3;
+  // The known effects are in the starting model (their parameters are fitted from there).
+  for (const auto& k : known) {
+    if (k == "runout") {
+      model::set_effect(m, "runout", true);
+      m.effects.runout.offset_um = 0.5;
+      m.effects.runout.angle_rad = 0.0;
+    } else {
+      throw std::invalid_argument("hidden_effect_cut: no starting recipe for known '" + k + "'");
+    }
+  }
   c.start = m;
   return c;
 }

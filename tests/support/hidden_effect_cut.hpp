@@ -20,9 +20,13 @@ struct HiddenEffectCut {
 };
 
 /// The base cut ([000]'s cp-Ti case, power law, 2 flutes, 25,000 rpm, f_t 4 µm) with the named
-/// effects switched on in the simulator, simulated for duration_s at sample_rate_hz.
-HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden, double duration_s = 0.4,
-                                  double sample_rate_hz = 20000.0, unsigned seed = 7);
+/// effects switched on in the simulator, simulated for duration_s at sample_rate_hz. `known`
+/// effects are on in the simulator and in the starting model (e.g. runout, without which tool
+/// deflection leaves no trace: a symmetric cut's steady chips do not depend on it).
+HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
+                                  const std::vector<std::string>& known = {},
+                                  double duration_s = 0.4, double sample_rate_hz = 20000.0,
+                                  unsigned seed = 7);
 
 /// Only simulates: the scenario as hidden_effect_cut builds it, before recording.
 sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, double duration_s,
