@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "replay/diagnose_command.hpp"
 #include "replay/publish_command.hpp"
 #include "replay/replay_command.hpp"
 #include "replay/simulate_command.hpp"
@@ -18,6 +19,7 @@ int main(int argc, char** argv) {
   millwatch::shell::add_simulate_command(app);
   millwatch::shell::add_replay_command(app);
   millwatch::shell::add_publish_command(app);
+  millwatch::shell::add_diagnose_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
