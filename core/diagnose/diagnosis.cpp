@@ -79,6 +79,24 @@ class Engine {
   [[nodiscard]] std::size_t last() const { return last_; }
   [[nodiscard]] int effective() const { return 2 * static_cast<int>(last_); }
   [[nodiscard]] const std::array<double, 2>& floor() const { return floor_; }
+
+  /// The noise floor again from a model's residual: where the record is dense with lines (an
+  /// accumulation cycle's sub-harmonics every few bins) the measurement's median is above the
+  /// noise; once a model explains them its residual's median is the noise. The floor is the
+  /// lowest estimate so far.
+  void refine_floor(const Evaluation& ev) {
+    const std::size_t first = std::max<std::size_t>(1, last_band_bin(n_fft_, fs_, 20.0));
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<double> r(n_fft_);
+      for (std::size_t i = 0; i < n_fft_; ++i) {
+        r[i] = rec_.force_N[a][i] - ev.model_N[a][i] - ev.chain_N[a][i];
+      }
+      const double f = noise_floor_rms(r, first, last_);
+      if (f > 0.0 && f < floor_[a]) {
+        floor_[a] = f;
+      }
+    }
+  }
   [[nodiscard]] const std::array<double, 2>& measured_rms() const { return measured_rms_; }
   [[nodiscard]] double duration() const { return static_cast<double>(n_) / fs_; }
 
@@ -1050,7 +1068,6 @@ Diagnosis Diagnoser::run() {
   out.duration_s = engine_.duration();
   out.commanded_rpm = start_.process.spindle_rpm;
   out.measured_rms_N = engine_.measured_rms();
-  out.noise_floor_N = engine_.floor();
 
   std::vector<std::string> names;
   if (opt_.candidates.empty()) {
@@ -1087,6 +1104,7 @@ Diagnosis Diagnoser::run() {
     return out;
   }
   state.config = current.fit.config;
+  engine_.refine_floor(current);
   out.initial = stage_of("", state, current);
   auto at_floor = [&](const Evaluation& ev) {
     for (std::size_t a = 0; a < 2; ++a) {
@@ -1202,11 +1220,13 @@ Diagnosis Diagnoser::run() {
     out.named_effects.push_back(win.name);
     state = next;
     current = std::move(final_ev);
+    engine_.refine_floor(current);
   }
   if (out.stop_reason.empty()) {
     out.stop_reason =
         at_floor(current) ? "the residual is at the noise floor" : "the step limit was reached";
   }
+  out.noise_floor_N = engine_.floor();
   out.final_model = current.fit.config;
   out.final_model.effects.runout.enabled = state.fit_runout;
   out.spindle_rpm = state.rpm;

@@ -39,6 +39,16 @@ sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, dou
     } else if (h == "min_chip_thickness") {
       model::set_effect(m, "min_chip", true);
       m.effects.min_chip.h_min_um = 1.0;
+    } else if (h == "accumulation_like_runout") {
+      // Chips between h_min/2 and h_min over most of the engagement: every other pass removes
+      // nothing and its chip goes to the next, so one flute cuts double and the other ploughs — a
+      // once-per-revolution pattern like runout's; the thin chips near entry and exit skip
+      // passes in longer cycles (sub-harmonics of the tooth-passing frequency).
+      model::set_effect(m, "min_chip", true);
+      model::set_effect(m, "accumulation", true);
+      model::set_effect(m, "multi_pass", true);
+      m.effects.min_chip.h_min_um = 1.3;
+      m.process.feed_per_tooth_um = 1.0;
     } else if (h == "chip_accumulation") {
       model::set_effect(m, "min_chip", true);
       model::set_effect(m, "accumulation", true);
