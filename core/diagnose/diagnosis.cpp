@@ -218,13 +218,13 @@ class Engine {
     return ev;
   }
 
-  /// The synchronous harmonic power of y − chain at a trial speed (what a correct time base
-  /// maximises: the synchronous average is not smeared).
-  double sync_power(double rpm, const std::array<std::vector<double>, 2>& y) {
+  /// The synchronous harmonic power (harmonics 1..k_max) of y − chain at a trial speed: what a
+  /// correct time base maximises (the synchronous average is not smeared).
+  double sync_power(double rpm, const std::array<std::vector<double>, 2>& y, int k_max) {
     double p = 0.0;
     std::vector<std::complex<double>> x;
     for (std::size_t a = 0; a < 2; ++a) {
-      synchronous_harmonics(y[a], fs_, rpm / 60.0, harmonics(rpm), x);
+      synchronous_harmonics(y[a], fs_, rpm / 60.0, std::min(k_max, harmonics(rpm)), x);
       for (std::size_t k = 1; k < x.size(); ++k) {
         p += std::norm(x[k]);
       }
@@ -233,8 +233,11 @@ class Engine {
   }
 
   /// The actual speed: the synchronous power's maximum within ±2.5 % of the commanded speed,
-  /// with σ from its curvature.
-  std::pair<double, double> find_speed(double commanded_rpm, const Evaluation& current) {
+  /// with σ from its curvature. Coarse to fine: harmonic k's peak is 1/(k·revolutions) wide, so
+  /// the search runs on the tooth-passing fundamental first (a grid of a quarter of its width),
+  /// then on 4× more harmonics around the best, then on all of them, then a golden section.
+  std::pair<double, double> find_speed(double commanded_rpm, const Evaluation& current,
+                                       int flutes) {
     std::array<std::vector<double>, 2> y;
     for (std::size_t a = 0; a < 2; ++a) {
       y[a].resize(n_);
@@ -243,42 +246,56 @@ class Engine {
       }
     }
     const double revs = duration() * commanded_rpm / 60.0;
-    const int k = harmonics(commanded_rpm);
-    const double step = 0.25 / (k * revs);  // a quarter of the highest harmonic's lobe
-    double best = commanded_rpm, best_p = -1.0;
-    for (double rel = -0.025; rel <= 0.025; rel += step) {
-      const double rpm = commanded_rpm * (1.0 + rel);
-      const double p = sync_power(rpm, y);
-      if (p > best_p) {
-        best_p = p;
-        best = rpm;
+    const int k_all = harmonics(commanded_rpm);
+    double best = commanded_rpm;
+    double lo_rel = -0.025, hi_rel = 0.025;
+    int k = std::min(k_all, std::max(1, flutes));
+    double step = 0.0;
+    while (true) {
+      step = 0.25 / (k * revs);
+      double best_p = -1.0;
+      const double centre = best;
+      for (double rel = lo_rel; rel <= hi_rel + 1e-12; rel += step) {
+        const double rpm = centre * (1.0 + rel);
+        const double p = sync_power(rpm, y, k);
+        if (p > best_p) {
+          best_p = p;
+          best = rpm;
+        }
       }
+      if (k >= k_all) {
+        break;
+      }
+      lo_rel = -1.5 * step;
+      hi_rel = 1.5 * step;
+      k = std::min(k_all, 4 * k);
     }
     // Golden section on ±one step.
-    double lo = best - step * commanded_rpm, hi = best + step * commanded_rpm;
+    double lo = best * (1.0 - step), hi = best * (1.0 + step);
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-    double p1 = sync_power(x1, y), p2 = sync_power(x2, y);
+    double p1 = sync_power(x1, y, k_all), p2 = sync_power(x2, y, k_all);
     for (int it = 0; it < 40 && hi - lo > 1e-7 * commanded_rpm; ++it) {
       if (p1 > p2) {
         hi = x2;
         x2 = x1;
         p2 = p1;
         x1 = hi - g * (hi - lo);
-        p1 = sync_power(x1, y);
+        p1 = sync_power(x1, y, k_all);
       } else {
         lo = x1;
         x1 = x2;
         p1 = p2;
         x2 = lo + g * (hi - lo);
-        p2 = sync_power(x2, y);
+        p2 = sync_power(x2, y, k_all);
       }
     }
     const double rpm = 0.5 * (lo + hi);
     // RSS(n) = Σy² − (n_used/2)·P(n): σ_n² = 2σ²/RSS''(n), σ² the per-sample noise variance.
     const double h = 0.05 * step * commanded_rpm;
-    const double d2 =
-        (sync_power(rpm + h, y) - 2.0 * sync_power(rpm, y) + sync_power(rpm - h, y)) / (h * h);
+    const double d2 = (sync_power(rpm + h, y, k_all) - 2.0 * sync_power(rpm, y, k_all) +
+                       sync_power(rpm - h, y, k_all)) /
+                      (h * h);
     const double var = 0.5 * (floor_[0] * floor_[0] + floor_[1] * floor_[1]) *
                        static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
     const double curvature = 0.5 * static_cast<double>(n_) * std::fabs(d2);
@@ -298,83 +315,98 @@ class Engine {
       ev.message = e.what();
       return false;
     }
+    const int steps = st->steps_per_rev;
     const int cycle = st->cycle_revolutions > 1 && !st->cycle.fx_N.empty()
-                          ? static_cast<int>(st->cycle.fx_N.size()) / st->steps_per_rev
+                          ? static_cast<int>(st->cycle.fx_N.size()) / steps
                           : 1;
     ev.cycle_revolutions = cycle;
     const double f = rpm / 60.0;
-    const int length = cycle * st->steps_per_rev;
+    const int length = cycle * steps;  // the cycle's grid
     const int q_max =
         std::min(static_cast<int>(std::floor(band_ * cycle / f + 1e-9)), length / 2 - 1);
-    std::array<std::vector<std::complex<double>>, 2> coeff;
+    // The band-limited cycle on a grid 4× finer than the model's (linear interpolation between
+    // its points then errs by ~(πΔ/λ)²/2 of the shortest wave in the band: 0.03 % at the band's
+    // edge with 720 steps), from the model's spectrum zero-padded.
+    constexpr int kUp = 4;
+    const int fine = kUp * length;
+    std::array<std::vector<double>, 2> wave;
     Eigen::FFT<double> fft;
     for (std::size_t a = 0; a < 2; ++a) {
       const model::ForceWaveform& w = cycle > 1 ? st->cycle : st->mean;
       const std::vector<double>& v = a == 0 ? w.fx_N : w.fy_N;
       std::vector<std::complex<double>> spec;
       fft.fwd(spec, v);
-      coeff[a].resize(static_cast<std::size_t>(q_max + 1));
+      std::vector<std::complex<double>> padded(static_cast<std::size_t>(fine), {0.0, 0.0});
       for (int q = 1; q <= q_max; ++q) {
-        coeff[a][static_cast<std::size_t>(q)] = 2.0 / length * spec[static_cast<std::size_t>(q)];
+        // inv() divides by the length: kUp·X_q keeps the amplitude 2|X_q|/length.
+        padded[static_cast<std::size_t>(q)] =
+            static_cast<double>(kUp) * spec[static_cast<std::size_t>(q)];
+        padded[static_cast<std::size_t>(fine - q)] = std::conj(padded[static_cast<std::size_t>(q)]);
       }
+      std::vector<std::complex<double>> out;
+      fft.inv(out, padded);
+      wave[a].resize(static_cast<std::size_t>(fine) + 1);
+      for (int g = 0; g < fine; ++g) {
+        wave[a][static_cast<std::size_t>(g)] = out[static_cast<std::size_t>(g)].real();
+      }
+      wave[a][static_cast<std::size_t>(fine)] = wave[a][0];  // wraps for the interpolation
     }
     const double step = kTwoPi * f / fs_;  // spindle angle per sample
+    // Grid position (fine points) of sample i with the model angle δ, in [0, fine).
+    auto position = [&](std::size_t i, double d) {
+      double u = (step * static_cast<double>(i) + d) / (kTwoPi * cycle) * fine;
+      u = std::fmod(u, static_cast<double>(fine));
+      return u < 0.0 ? u + fine : u;
+    };
     // The cycle's phase: revolution m0 of the cycle at the record's revolution 0, and which
     // flute is flute 0 (the mean revolution the fitter aligned may be nearly the same turned by
     // a pitch, the cycle is not): the shift whose model correlates best with the record
-    // (RSS = Σy² − 2·Σy·p + Σp², Σp² the same for every shift).
+    // (RSS = Σy² − 2·Σy·p + Σp², Σp² the same for every shift). The record is binned on the
+    // cycle's grid once; each shift is then a sum over the grid.
     int m0 = 0;
     if (cycle > 1) {
-      std::vector<std::complex<double>> d(static_cast<std::size_t>(q_max + 1));
+      std::array<std::vector<double>, 2> binned;
       for (std::size_t a = 0; a < 2; ++a) {
-        std::fill(d.begin(), d.end(), std::complex<double>(0.0, 0.0));
+        binned[a].assign(static_cast<std::size_t>(length), 0.0);
         for (std::size_t i = 0; i < n_; ++i) {
-          const std::complex<double> e = std::polar(1.0, -step * static_cast<double>(i) / cycle);
-          std::complex<double> p = rec_.force_N[a][i];
-          for (int q = 1; q <= q_max; ++q) {
-            p *= e;
-            d[static_cast<std::size_t>(q)] += p;
-          }
+          const auto b = static_cast<std::size_t>(std::lround(position(i, delta) / kUp)) %
+                         static_cast<std::size_t>(length);
+          binned[a][b] += rec_.force_N[a][i];
         }
-        d_[a] = d;
       }
       const bool uniform = fitted.tool.pitch_deg.empty();
       const int shifts = uniform ? fitted.tool.flutes : 1;
       double best = -1e300;
-      double best_delta = delta;
+      int best_j = 0;
       for (int j = 0; j < shifts; ++j) {
-        const double dj = delta + kTwoPi * j / shifts;
         for (int m = 0; m < cycle; ++m) {
+          const auto shift = static_cast<std::size_t>(m * steps + (j * steps) / shifts);
           double score = 0.0;
           for (std::size_t a = 0; a < 2; ++a) {
-            for (int q = 1; q <= q_max; ++q) {
-              const auto qq = static_cast<std::size_t>(q);
-              score += std::real(coeff[a][qq] * std::polar(1.0, q * (dj + kTwoPi * m) / cycle) *
-                                 std::conj(d_[a][qq]));
+            for (std::size_t b = 0; b < static_cast<std::size_t>(length); ++b) {
+              score +=
+                  binned[a][b] * wave[a][kUp * ((b + shift) % static_cast<std::size_t>(length))];
             }
           }
           if (score > best) {
             best = score;
             m0 = m;
-            best_delta = dj;
+            best_j = j;
           }
         }
       }
-      delta = best_delta;
+      delta += kTwoPi * best_j / shifts;
     }
     ev.alignment_rad = delta;
+    const double d0 = delta + kTwoPi * m0;
     for (std::size_t a = 0; a < 2; ++a) {
-      ev.model_N[a].assign(n_, 0.0);
+      ev.model_N[a].resize(n_);
       for (std::size_t i = 0; i < n_; ++i) {
-        const double psi = (step * static_cast<double>(i) + delta + kTwoPi * m0) / cycle;
-        const std::complex<double> e = std::polar(1.0, psi);
-        std::complex<double> p = 1.0;
-        double v = 0.0;
-        for (int q = 1; q <= q_max; ++q) {
-          p *= e;
-          v += std::real(coeff[a][static_cast<std::size_t>(q)] * p);
-        }
-        ev.model_N[a][i] = v;
+        const double u = position(i, d0);
+        const auto g = static_cast<std::size_t>(u);
+        const double t = u - static_cast<double>(g);
+        const std::size_t g0 = std::min(g, static_cast<std::size_t>(fine - 1));
+        ev.model_N[a][i] = (1.0 - t) * wave[a][g0] + t * wave[a][g0 + 1];
       }
     }
     return true;
@@ -458,7 +490,6 @@ class Engine {
   std::array<double, 2> floor_{};
   std::array<double, 2> measured_rms_{};
   model::SteadyStateWorkspace workspace_;
-  std::array<std::vector<std::complex<double>>, 2> d_;
 
   friend class Diagnoser;
 };
@@ -658,7 +689,8 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
       why = "already in the model";
       return false;
     }
-    const auto [rpm, sigma] = engine_.find_speed(s.config.process.spindle_rpm, current);
+    const auto [rpm, sigma] =
+        engine_.find_speed(s.config.process.spindle_rpm, current, s.config.tool.flutes);
     s.rpm = rpm;
     s.rpm_sigma = sigma;
     s.speed_fitted = true;
