@@ -5,7 +5,7 @@
 namespace millwatch::diagnose {
 namespace {
 
-constexpr std::array<CandidateInfo, 9> kCatalogue = {{
+constexpr std::array<CandidateInfo, 11> kCatalogue = {{
     {"runout", CandidateKind::kModelEffect,
      "once-per-revolution pattern: spindle-frequency harmonics that are not tooth-passing "
      "harmonics; one flute's peak above the other's",
@@ -46,6 +46,18 @@ constexpr std::array<CandidateInfo, 9> kCatalogue = {{
     {"mains_hum", CandidateKind::kMeasurementChain, "lines at 50 or 60 Hz and their odd harmonics",
      "sinusoids at the mains frequency and its 3rd and 5th harmonics per axis",
      "mains_hz, amplitude per harmonic and axis"},
+    {"tool_wear", CandidateKind::kTimeVarying,
+     "a trend over time: the residual grows through the record, most where the flutes rub "
+     "(the whole engagement)",
+     "effects.flank_wear: a rubbing force K_w·VB·dz while engaged, VB growing linearly over the "
+     "record",
+     "wear_mid_um (VB at mid-record), wear_growth_um (over the record)"},
+    {"runout_change", CandidateKind::kTimeVarying,
+     "a step in time: the once-per-revolution pattern differs before and after (a re-clamped or "
+     "chipped tool)",
+     "the record split where the synchronous pattern changes most; runout and coefficients fitted "
+     "on each side",
+     "change_time_s, rho/gamma before and after"},
 }};
 
 }  // namespace

@@ -15,6 +15,7 @@ enum class CandidateKind {
   kModelEffect,       ///< a ModelConfig effect, refitted on the synchronous average
   kMeasurementChain,  ///< a term added to the measured signal (drift, hum)
   kSpindle,           ///< the model's time base: the actual spindle speed
+  kTimeVarying,       ///< the model changes over the record (a trend, a step)
 };
 
 struct CandidateInfo {

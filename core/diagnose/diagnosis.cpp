@@ -40,6 +40,9 @@ struct State {
   int drift_degree = 0;         // polynomial terms beyond the constant
   double hum_hz = 0.0;          // 0: no hum
   double h_min_sigma_um = 0.0;  // h_min's σ from its profile (when profiled)
+  double change_s = 0.0;        // the runout changed at this time (0: it did not)
+  double change_sigma_s = 0.0;
+  bool wear_trend = false;  // flank wear's rubbing, growing linearly over the record
 };
 
 /// One fit of a state to the record.
@@ -56,6 +59,11 @@ struct Evaluation {
   std::array<double, 2> mean_square{};
   double criterion = 0.0;
   int free_parameters = 0;
+  identify::FitResult fit_before;  // the fit before a runout change (ok: there was one)
+  double alignment_before_rad = 0.0;
+  double wear_slope_um = 0.0;  // VB's change per unit of τ = 2t/T − 1
+  double wear_slope_sigma_um = 0.0;
+  double wear_normal = 1.0;
 };
 
 class Engine {
@@ -108,7 +116,6 @@ class Engine {
   Evaluation evaluate(const State& s, const Evaluation* previous, bool systematic,
                       const Evaluation* seed) {
     Evaluation ev;
-    const double f = s.rpm / 60.0;
     const int k_max = harmonics(s.rpm);
     // The chain first from what the previous model leaves, then the model on the rest.
     std::array<std::vector<double>, 2> target;
@@ -126,68 +133,82 @@ class Engine {
         target[a][i] = rec_.force_N[a][i] - c0[i];
       }
     }
-    identify::MeasuredRevolution m;
-    const int bins = std::max(64, 4 * (k_max + 2));
-    std::size_t used = 0;
-    for (std::size_t a = 0; a < 2; ++a) {
-      std::vector<std::complex<double>> x;
-      used = synchronous_harmonics(target[a], fs_, f, k_max, x);
-      m.force_N[a].assign(static_cast<std::size_t>(bins), x[0].real());
-      for (int b = 0; b < bins; ++b) {
-        double v = x[0].real();
-        for (int k = 1; k <= k_max; ++k) {
-          v += std::real(x[static_cast<std::size_t>(k)] *
-                         std::polar(1.0, kTwoPi * k * b / static_cast<double>(bins)));
-        }
-        m.force_N[a][static_cast<std::size_t>(b)] = v;
+    // The model part: one fit over the record, or one per segment when the runout changed.
+    const std::size_t split =
+        s.change_s > 0.0 ? std::min(n_, static_cast<std::size_t>(s.change_s * fs_)) : 0;
+    const std::vector<std::pair<std::size_t, std::size_t>> segments =
+        split > 0 ? std::vector<std::pair<std::size_t, std::size_t>>{{0, split}, {split, n_}}
+                  : std::vector<std::pair<std::size_t, std::size_t>>{{0, n_}};
+    ev.model_N[0].assign(n_, 0.0);
+    ev.model_N[1].assign(n_, 0.0);
+    for (std::size_t sg = 0; sg < segments.size(); ++sg) {
+      const auto [i0, i1] = segments[sg];
+      identify::FitResult fit;
+      const identify::FitResult* seed_fit = nullptr;
+      if (seed != nullptr && seed->ok) {
+        seed_fit =
+            sg == 0 && segments.size() > 1 && seed->fit_before.ok ? &seed->fit_before : &seed->fit;
+      }
+      if (!fit_segment(s, target, i0, i1, k_max, systematic, seed_fit, fit, ev.message)) {
+        return ev;
+      }
+      if (!synthesize(fit.config, s.rpm, fit.alignment_rad.value, ev, i0, i1)) {
+        return ev;
+      }
+      if (sg + 1 < segments.size()) {
+        ev.fit_before = fit;
+        ev.alignment_before_rad = ev.alignment_rad;
+      } else {
+        ev.fit = fit;
       }
     }
-    if (used == 0) {
-      ev.message = "the record is shorter than one revolution";
+    // The wear's rubbing force (flank_wear with 1 µm of wear, less none) at the final fit.
+    std::array<std::vector<double>, 2> rubbing;
+    if (s.wear_trend && !rubbing_series(ev.fit.config, s.rpm, ev.alignment_rad, rubbing)) {
+      ev.message = "the rubbing force of the wear could not be evaluated";
       return ev;
     }
-    m.force_N[2].assign(static_cast<std::size_t>(bins), 0.0);
-    m.use_axis = {true, true, false};
-    m.spindle_rpm = s.rpm;
-    m.revolutions = static_cast<int>(std::lround(static_cast<double>(used) * f / fs_));
-    m.shared_bins = false;
-    identify::FitOptions fo;
-    fo.steps_per_rev = opt_.steps_per_rev;
-    fo.fit_runout = s.fit_runout;
-    fo.extra_parameters = s.extra;
-    fo.systematic = systematic;
-    const double band = band_;
-    try {
-      identify::WindowFitter fitter(
-          s.config, [band](double hz) { return hz <= band * (1.0 + 1e-9) ? 1.0 : 0.0; }, fo);
-      ev.fit = fitter.fit(m, seed != nullptr && seed->ok ? &seed->fit : nullptr);
-    } catch (const std::exception& e) {
-      ev.message = e.what();
-      return ev;
-    }
-    if (!ev.fit.ok) {
-      ev.message = ev.fit.message;
-      return ev;
-    }
-    if (!synthesize(ev.fit.config, s.rpm, ev.fit.alignment_rad.value, ev)) {
-      return ev;
-    }
-    double sample_var = 0.0;
+    // The chain per axis, and the wear's rubbing (its mean and its trend over the record, one
+    // wear for both axes) by alternating linear least squares.
+    std::array<std::vector<double>, 2> rest;
     for (std::size_t a = 0; a < 2; ++a) {
-      std::vector<double> rest(n_);
+      rest[a].resize(n_);
       for (std::size_t i = 0; i < n_; ++i) {
-        rest[i] = rec_.force_N[a][i] - ev.model_N[a][i];
+        rest[a][i] = rec_.force_N[a][i] - ev.model_N[a][i];
       }
-      chain_fit(s, rest, ev.chain_N[a], ev.chain_coefficients[a]);
+    }
+    std::array<std::vector<double>, 2> wear_part;
+    wear_part[0].assign(n_, 0.0);
+    wear_part[1].assign(n_, 0.0);
+    for (int it = 0; it < (s.wear_trend ? 3 : 1); ++it) {
+      for (std::size_t a = 0; a < 2; ++a) {
+        std::vector<double> t(n_);
+        for (std::size_t i = 0; i < n_; ++i) {
+          t[i] = rest[a][i] - wear_part[a][i];
+        }
+        chain_fit(s, t, ev.chain_N[a], ev.chain_coefficients[a]);
+      }
+      if (s.wear_trend) {
+        fit_wear(rubbing, rest, ev.chain_N, wear_part, ev);
+      }
+    }
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        ev.model_N[a][i] += wear_part[a][i];
+      }
       std::vector<double> r(n_fft_);
       for (std::size_t i = 0; i < n_fft_; ++i) {
-        r[i] = rest[i] - ev.chain_N[a][i];
+        r[i] = rest[a][i] - wear_part[a][i] - ev.chain_N[a][i];
       }
       ev.residual_bins[a] = spectrum(r, last_ + 1);
       ev.mean_square[a] = band_mean_square(ev.residual_bins[a], n_fft_, last_);
-      sample_var += std::max(ev.mean_square[a], 1e-300);
     }
-    (void)sample_var;
+    if (s.wear_trend) {
+      // σ of (VB mean, VB slope): the residual's per-sample variance over (AᵀA)⁻¹.
+      const double var = 0.5 * (ev.mean_square[0] + ev.mean_square[1]) *
+                         static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
+      ev.wear_slope_sigma_um = std::sqrt(var / std::max(ev.wear_normal, 1e-300));
+    }
     // σ of the chain's coefficients: the residual's per-sample variance (full band, white).
     for (std::size_t a = 0; a < 2; ++a) {
       const double var = ev.mean_square[a] * static_cast<double>(n_fft_) / (2.0 * last_);
@@ -197,6 +218,11 @@ class Engine {
     p += static_cast<int>(ev.fit.coefficients.size());
     p += s.fit_runout ? 2 : 0;
     p += static_cast<int>(s.extra.size());
+    if (split > 0) {  // the segment before the change: its own fit, and the change's time
+      p += 2 + static_cast<int>(ev.fit_before.coefficients.size()) + (s.fit_runout ? 2 : 0) +
+           static_cast<int>(s.extra.size());
+    }
+    p += s.wear_trend ? 1 : 0;  // the growth (the mid-record wear is an extra parameter)
     p += s.speed_fitted ? 1 : 0;
     p += s.config.effects.min_chip.enabled ? 1 : 0;  // h_min, profiled
     p += 2 * static_cast<int>(ev.chain_coefficients[0].size());
@@ -216,6 +242,203 @@ class Engine {
                    p * std::log(2.0 * neff);
     ev.ok = true;
     return ev;
+  }
+
+  /// Fits the model part to the synchronous harmonics of target over samples [i0, i1).
+  bool fit_segment(const State& s, const std::array<std::vector<double>, 2>& target, std::size_t i0,
+                   std::size_t i1, int k_max, bool systematic, const identify::FitResult* seed,
+                   identify::FitResult& fit, std::string& message) {
+    const double f = s.rpm / 60.0;
+    identify::MeasuredRevolution m;
+    const int bins = std::max(64, 4 * (k_max + 2));
+    std::size_t used = 0;
+    const double phase0 = kTwoPi * f / fs_ * static_cast<double>(i0);
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<std::complex<double>> x;
+      used = synchronous_harmonics(std::span<const double>(target[a]).subspan(i0, i1 - i0), fs_, f,
+                                   k_max, x, phase0);
+      m.force_N[a].assign(static_cast<std::size_t>(bins), x[0].real());
+      for (int b = 0; b < bins; ++b) {
+        double v = x[0].real();
+        for (int k = 1; k <= k_max; ++k) {
+          v += std::real(x[static_cast<std::size_t>(k)] *
+                         std::polar(1.0, kTwoPi * k * b / static_cast<double>(bins)));
+        }
+        m.force_N[a][static_cast<std::size_t>(b)] = v;
+      }
+    }
+    if (used == 0) {
+      message = "the record (or a segment of it) is shorter than one revolution";
+      return false;
+    }
+    m.force_N[2].assign(static_cast<std::size_t>(bins), 0.0);
+    m.use_axis = {true, true, false};
+    m.spindle_rpm = s.rpm;
+    m.revolutions = static_cast<int>(std::lround(static_cast<double>(used) * f / fs_));
+    m.shared_bins = false;
+    identify::FitOptions fo;
+    fo.steps_per_rev = opt_.steps_per_rev;
+    fo.fit_runout = s.fit_runout;
+    fo.extra_parameters = s.extra;
+    fo.systematic = systematic;
+    const double band = band_;
+    try {
+      identify::WindowFitter fitter(
+          s.config, [band](double hz) { return hz <= band * (1.0 + 1e-9) ? 1.0 : 0.0; }, fo);
+      fit = fitter.fit(m, seed);
+    } catch (const std::exception& e) {
+      message = e.what();
+      return false;
+    }
+    if (!fit.ok) {
+      message = fit.message;
+      return false;
+    }
+    return true;
+  }
+
+  /// The rubbing force of 1 µm of flank wear on every flute at the fitted model (the force with
+  /// it less the force without), band-limited, at each sample's angle.
+  bool rubbing_series(const model::ModelConfig& fitted, double rpm, double delta,
+                      std::array<std::vector<double>, 2>& out) {
+    model::ModelConfig with = model::at_actual_speed(fitted, rpm);
+    with.effects.flank_wear.enabled = true;
+    with.effects.flank_wear.wear_um.assign(1, 1.0);
+    model::ModelConfig without = with;
+    without.effects.flank_wear.wear_um.assign(1, 0.0);
+    try {
+      const auto& a = model::evaluate_steady_state(with, rpm, opt_.steps_per_rev, workspace_,
+                                                   model::SteadyStateOutput::kMean);
+      const model::ForceWaveform w1 = a.mean;
+      const auto& b = model::evaluate_steady_state(without, rpm, opt_.steps_per_rev, workspace_,
+                                                   model::SteadyStateOutput::kMean);
+      std::array<std::vector<double>, 2> diff;
+      diff[0] = w1.fx_N;
+      diff[1] = w1.fy_N;
+      for (std::size_t i = 0; i < diff[0].size(); ++i) {
+        diff[0][i] -= b.mean.fx_N[i];
+        diff[1][i] -= b.mean.fy_N[i];
+      }
+      sample_revolution(diff, rpm, delta, out);
+    } catch (const std::exception&) {
+      return false;
+    }
+    return true;
+  }
+
+  /// A revolution's waveform (one axis per entry, on a uniform angle grid) band-limited and
+  /// read at each sample's model angle.
+  void sample_revolution(const std::array<std::vector<double>, 2>& w, double rpm, double delta,
+                         std::array<std::vector<double>, 2>& out) const {
+    const auto length = static_cast<int>(w[0].size());
+    const double f = rpm / 60.0;
+    const int q_max = std::min(static_cast<int>(std::floor(band_ / f + 1e-9)), length / 2 - 1);
+    constexpr int kUp = 4;
+    const int fine = kUp * length;
+    Eigen::FFT<double> fft;
+    const double step = kTwoPi * f / fs_;
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<std::complex<double>> spec;
+      fft.fwd(spec, w[a]);
+      std::vector<std::complex<double>> padded(static_cast<std::size_t>(fine), {0.0, 0.0});
+      padded[0] = static_cast<double>(kUp) * spec[0];  // the rubbing's mean is part of it
+      for (int q = 1; q <= q_max; ++q) {
+        padded[static_cast<std::size_t>(q)] =
+            static_cast<double>(kUp) * spec[static_cast<std::size_t>(q)];
+        padded[static_cast<std::size_t>(fine - q)] = std::conj(padded[static_cast<std::size_t>(q)]);
+      }
+      std::vector<std::complex<double>> inv;
+      fft.inv(inv, padded);
+      out[a].resize(n_);
+      for (std::size_t i = 0; i < n_; ++i) {
+        double u = std::fmod((step * static_cast<double>(i) + delta) / kTwoPi * fine,
+                             static_cast<double>(fine));
+        u = u < 0.0 ? u + fine : u;
+        const auto g = std::min(static_cast<std::size_t>(u), static_cast<std::size_t>(fine - 1));
+        const double t = u - static_cast<double>(g);
+        const std::size_t g1 = (g + 1) % static_cast<std::size_t>(fine);
+        out[a][i] = (1.0 - t) * inv[g].real() + t * inv[g1].real();
+      }
+    }
+  }
+
+  /// The wear's growth (VB's change per unit of τ = 2t/T − 1; its mid-record value is the
+  /// fitter's) by least squares on both axes of rest − chain, its rubbing force being
+  /// τ·ΔVB·rubbing(t).
+  void fit_wear(const std::array<std::vector<double>, 2>& rubbing,
+                const std::array<std::vector<double>, 2>& rest,
+                const std::array<std::vector<double>, 2>& chain,
+                std::array<std::vector<double>, 2>& wear_part, Evaluation& ev) const {
+    double ata = 0.0, atb = 0.0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        const double tau = 2.0 * static_cast<double>(i) / static_cast<double>(n_ - 1) - 1.0;
+        ata += tau * rubbing[a][i] * tau * rubbing[a][i];
+        atb += tau * rubbing[a][i] * (rest[a][i] - chain[a][i]);
+      }
+    }
+    ev.wear_normal = ata;
+    ev.wear_slope_um = ata > 0.0 ? atb / ata : 0.0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        const double tau = 2.0 * static_cast<double>(i) / static_cast<double>(n_ - 1) - 1.0;
+        wear_part[a][i] = tau * ev.wear_slope_um * rubbing[a][i];
+      }
+    }
+  }
+
+  /// When the synchronous pattern changed: the record cut into groups of revolutions, each
+  /// group's synchronous harmonics; the one boundary that splits them into two groups of least
+  /// scatter about their means. Returns the time and half a group (its resolution).
+  std::pair<double, double> find_change(const State& s, const Evaluation& current) const {
+    const double f = s.rpm / 60.0;
+    const double revs = duration() * f;
+    const int groups = std::max(8, std::min(48, static_cast<int>(revs / 3.0)));
+    const std::size_t per = n_ / static_cast<std::size_t>(groups);
+    const int k_max = std::min(harmonics(s.rpm), 4 * s.config.tool.flutes);
+    std::vector<Eigen::VectorXd> x(static_cast<std::size_t>(groups));
+    for (int g = 0; g < groups; ++g) {
+      const std::size_t i0 = static_cast<std::size_t>(g) * per;
+      Eigen::VectorXd v(4 * k_max);
+      for (std::size_t a = 0; a < 2; ++a) {
+        std::vector<double> y(per);
+        for (std::size_t i = 0; i < per; ++i) {
+          y[i] = rec_.force_N[a][i0 + i] - current.chain_N[a][i0 + i];
+        }
+        std::vector<std::complex<double>> h;
+        synchronous_harmonics(y, fs_, f, k_max, h, kTwoPi * f / fs_ * static_cast<double>(i0));
+        for (int k = 1; k <= k_max; ++k) {
+          v[static_cast<Eigen::Index>(a * 2 * k_max + 2 * (k - 1))] =
+              h[static_cast<std::size_t>(k)].real();
+          v[static_cast<Eigen::Index>(a * 2 * k_max + 2 * (k - 1) + 1)] =
+              h[static_cast<std::size_t>(k)].imag();
+        }
+      }
+      x[static_cast<std::size_t>(g)] = v;
+    }
+    auto scatter = [&](int from, int to) {
+      Eigen::VectorXd mean = Eigen::VectorXd::Zero(x[0].size());
+      for (int g = from; g < to; ++g) {
+        mean += x[static_cast<std::size_t>(g)];
+      }
+      mean /= std::max(1, to - from);
+      double sum = 0.0;
+      for (int g = from; g < to; ++g) {
+        sum += (x[static_cast<std::size_t>(g)] - mean).squaredNorm();
+      }
+      return sum;
+    };
+    int best = groups / 2;
+    double best_cost = 1e300;
+    for (int j = 2; j <= groups - 2; ++j) {
+      const double c = scatter(0, j) + scatter(j, groups);
+      if (c < best_cost) {
+        best_cost = c;
+        best = j;
+      }
+    }
+    const double group_s = static_cast<double>(per) / fs_;
+    return {best * group_s, 0.5 * group_s};
   }
 
   /// The synchronous harmonic power (harmonics 1..k_max) of y − chain at a trial speed: what a
@@ -305,7 +528,8 @@ class Engine {
 
   /// The model part's samples from a fitted configuration: the steady state at the time base's
   /// speed (its accumulation cycle, phased to the record), band-limited, aligned by δ.
-  bool synthesize(const model::ModelConfig& fitted, double rpm, double delta, Evaluation& ev) {
+  bool synthesize(const model::ModelConfig& fitted, double rpm, double delta, Evaluation& ev,
+                  std::size_t i0, std::size_t i1) {
     const model::ModelConfig c = model::at_actual_speed(fitted, rpm);
     const model::SteadyState* st = nullptr;
     try {
@@ -368,7 +592,7 @@ class Engine {
       std::array<std::vector<double>, 2> binned;
       for (std::size_t a = 0; a < 2; ++a) {
         binned[a].assign(static_cast<std::size_t>(length), 0.0);
-        for (std::size_t i = 0; i < n_; ++i) {
+        for (std::size_t i = i0; i < i1; ++i) {
           const auto b = static_cast<std::size_t>(std::lround(position(i, delta) / kUp)) %
                          static_cast<std::size_t>(length);
           binned[a][b] += rec_.force_N[a][i];
@@ -401,7 +625,7 @@ class Engine {
     const double d0 = delta + kTwoPi * m0;
     for (std::size_t a = 0; a < 2; ++a) {
       ev.model_N[a].resize(n_);
-      for (std::size_t i = 0; i < n_; ++i) {
+      for (std::size_t i = i0; i < i1; ++i) {
         const double u = position(i, d0);
         const auto g = static_cast<std::size_t>(u);
         const double t = u - static_cast<double>(g);
@@ -537,6 +761,29 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
     out.push_back({"spindle_rpm", s.rpm, s.rpm_sigma});
     const double cmd = s.config.process.spindle_rpm;
     out.push_back({"speed_error_percent", 100.0 * (s.rpm / cmd - 1.0), 100.0 * s.rpm_sigma / cmd});
+  } else if (name == "runout_change") {
+    out.push_back({"change_time_s", s.change_s, s.change_sigma_s});
+    const identify::FitResult* fits[2] = {&ev.fit_before, &fit};
+    const char* when[2] = {"before", "after"};
+    for (int w = 0; w < 2; ++w) {
+      const auto& f = *fits[w];
+      out.push_back({std::string("rho_") + when[w] + "_um", f.rho_um.value, f.rho_um.sigma});
+      out.push_back({std::string("gamma_") + when[w] + "_deg", f.gamma_rad.value * 180.0 / kPi,
+                     f.gamma_rad.sigma * 180.0 / kPi});
+      if (f.radius_from_ce1_um.size() > 1) {
+        out.push_back({std::string("r_ce2_minus_r_ce1_") + when[w] + "_um",
+                       f.radius_from_ce1_um[1].value, f.radius_from_ce1_um[1].sigma});
+      }
+    }
+  } else if (name == "tool_wear") {
+    for (const auto& e : fit.extra) {
+      if (e.name == "wear_um") {
+        out.push_back({"wear_mid_um", e.value, e.sigma});
+      }
+    }
+    out.push_back({"wear_growth_um", 2.0 * ev.wear_slope_um, 2.0 * ev.wear_slope_sigma_um});
+    out.push_back({"wear_rate_um_per_s", 2.0 * ev.wear_slope_um / duration_s,
+                   2.0 * ev.wear_slope_sigma_um / duration_s});
   } else if (name == "amplifier_drift") {
     const char* axis[2] = {"x", "y"};
     for (std::size_t a = 0; a < 2; ++a) {
@@ -624,6 +871,7 @@ class Diagnoser {
   /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
   /// where the deflection hardly changes the force.
   Evaluation profile_stiffness(State& s, const Evaluation& current);
+
   Localisation localise(const State& s, const Evaluation& ev, ModelView& view);
 
   const CutRecord& rec_;
@@ -694,6 +942,28 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
     s.rpm = rpm;
     s.rpm_sigma = sigma;
     s.speed_fitted = true;
+  } else if (name == "runout_change") {
+    if (s.change_s > 0.0) {
+      why = "already in the model";
+      return false;
+    }
+    const auto [t, sigma] = engine_.find_change(s, current);
+    s.change_s = t;
+    s.change_sigma_s = sigma;
+    s.fit_runout = true;
+    e.runout.enabled = true;
+  } else if (name == "tool_wear") {
+    if (s.wear_trend) {
+      why = "already in the model";
+      return false;
+    }
+    // The wear at mid-record is the fitter's (flank_wear's wear_um, fitted with the force
+    // coefficients on the synchronous average: the mean rubbing in its own shape); its growth
+    // over the record is a trend of that rubbing force, linear in time.
+    s.wear_trend = true;
+    e.flank_wear.enabled = true;
+    e.flank_wear.wear_um.assign(1, 2.0);
+    add_extra("wear_um");
   } else if (name == "amplifier_drift") {
     if (s.drift_degree > 0) {
       why = "already in the model";

@@ -51,8 +51,10 @@ TEST_P(HiddenEffect, IsNamedAddedAndClosesTheGap) {
   const std::string effect = GetParam();
   // Deflection leaves no trace in a symmetric cut (each steady chip is the feed per tooth
   // whatever the stiffness): it is hidden behind a runout the starting model knows.
-  const auto cut = effect == "tool_deflection" ? test::hidden_effect_cut({effect}, {"runout"})
-                                               : test::hidden_effect_cut({effect});
+  // A runout change is a change of a runout the starting model knows.
+  const bool behind_runout = effect == "tool_deflection" || effect == "runout_change";
+  const auto cut = behind_runout ? test::hidden_effect_cut({effect}, {"runout"})
+                                 : test::hidden_effect_cut({effect});
   const Diagnosis d = diagnose(cut.record, cut.start);
   std::printf("%s hidden\n", effect.c_str());
   print(d);
@@ -69,7 +71,8 @@ TEST_P(HiddenEffect, IsNamedAddedAndClosesTheGap) {
 INSTANTIATE_TEST_SUITE_P(Catalogue, HiddenEffect,
                          ::testing::Values("runout", "min_chip_thickness", "chip_accumulation",
                                            "tool_deflection", "helix_lag", "dynamometer_dynamics",
-                                           "spindle_speed_error", "amplifier_drift", "mains_hum"),
+                                           "spindle_speed_error", "amplifier_drift", "mains_hum",
+                                           "tool_wear", "runout_change"),
                          [](const auto& p) { return std::string(p.param); });
 
 TEST(Diagnose, NegativeControlAddsNothing) {

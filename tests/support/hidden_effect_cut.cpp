@@ -70,6 +70,17 @@ sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, dou
     } else if (h == "amplifier_drift") {
       s.drift.enabled = true;
       s.drift.rate_N_per_s = {0.06, -0.05, 0.0};
+    } else if (h == "runout_change") {
+      // The tool re-clamped half-way: the runout jumps (from whatever the cut had).
+      s.runout_change.enabled = true;
+      s.runout_change.time_s = 0.5 * duration_s;
+      s.runout_change.offset_um = 2.0;
+      s.runout_change.angle_rad = 1.2;
+      model::set_effect(m, "runout", true);
+    } else if (h == "tool_wear") {
+      s.wear.enabled = true;
+      s.wear.start_um = {1.0};
+      s.wear.end_um = {9.0};
     } else if (h == "mains_hum") {
       s.hum.enabled = true;
       s.hum.frequency_hz = 50.0;
