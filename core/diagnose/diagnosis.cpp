@@ -6,7 +6,6 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <stdexcept>
 #include <unsupported/Eigen/FFT>
@@ -228,15 +227,6 @@ class Engine {
     p += 2 * static_cast<int>(ev.chain_coefficients[0].size());
     ev.free_parameters = p;
     const double neff = effective();
-    if (std::getenv("MW_DIAG_DEBUG") != nullptr) {
-      std::fprintf(stderr,
-                   "  [fit] runout %d extra %zu rpm %.2f: fitter residual %.4f %.4f, time %.4f "
-                   "%.4f, rho %.3f gamma %.3f delta %.3f cycle %d\n",
-                   s.fit_runout ? 1 : 0, s.extra.size(), s.rpm, ev.fit.residual_rms_N[0],
-                   ev.fit.residual_rms_N[1], std::sqrt(ev.mean_square[0]),
-                   std::sqrt(ev.mean_square[1]), ev.fit.rho_um.value, ev.fit.gamma_rad.value,
-                   ev.fit.alignment_rad.value, ev.cycle_revolutions);
-    }
     ev.criterion = neff * (std::log(std::max(ev.mean_square[0], 1e-300)) +
                            std::log(std::max(ev.mean_square[1], 1e-300))) +
                    p * std::log(2.0 * neff);
@@ -1370,6 +1360,10 @@ Diagnosis Diagnoser::run() {
   out.duration_s = engine_.duration();
   out.commanded_rpm = start_.process.spindle_rpm;
   out.measured_rms_N = engine_.measured_rms();
+  if (!(out.measured_rms_N[0] > 0.0 || out.measured_rms_N[1] > 0.0)) {
+    out.message = "the record holds no force in the band compared (every sample the same)";
+    return out;
+  }
 
   std::vector<std::string> names;
   if (opt_.candidates.empty()) {

@@ -30,6 +30,10 @@
 // floor (within floor_tolerance on every axis), when no candidate gains enough, or after
 // max_steps. The winner's margin over the runner-up (ΔBIC) says how strongly the data prefer it.
 //
+// Time-varying candidates: tool_wear (the flank wear's rubbing force growing linearly over the
+// record) and runout_change (the record cut in two where the synchronous pattern changes most,
+// each side fitted on its own).
+//
 // Localisation (issue 8, item 1), per model along the way: by flute (the synchronous residual
 // over each flute's pitch sector), by angle (entry/exit against the middle of the engagement),
 // by frequency band (low frequency, mains, spindle harmonics, tooth-passing harmonics, the
