@@ -202,6 +202,10 @@ class Engine {
       ev.residual_bins[a] = spectrum(r, last_ + 1);
       ev.mean_square[a] = band_mean_square(ev.residual_bins[a], n_fft_, last_);
     }
+    if (!std::isfinite(ev.mean_square[0]) || !std::isfinite(ev.mean_square[1])) {
+      ev.message = "the model's force is not finite";
+      return ev;
+    }
     if (s.wear_trend) {
       // σ of (VB mean, VB slope): the residual's per-sample variance over (AᵀA)⁻¹.
       const double var = 0.5 * (ev.mean_square[0] + ev.mean_square[1]) *

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -627,6 +628,10 @@ struct WindowFitter::Impl {
         best = t;
       }
     }
+    if (best.size() == 0) {  // no start refined: none admissible, or no finite residual
+      *cost = std::numeric_limits<double>::infinity();
+      return starts.empty() ? initial_theta(p.config, 0.0, 0.0, 0.0) : starts.front().second;
+    }
     relabel(best);
     const double prior = p.prior_weight;
     p.prior_weight = 0.0;
@@ -716,6 +721,10 @@ FitResult WindowFitter::Impl::fit(const MeasuredRevolution& m, const FitResult* 
     out.evaluations += grid.evaluations;
   }
   out.iterations += full_iterations;
+  if (!std::isfinite(cost)) {
+    out.message = "the fit did not converge (no start gave a finite residual)";
+    return out;
+  }
   // The weak runout prior, at the noise level the data-only fit leaves.
   if (options.runout_prior_um > 0.0 && options.fit_runout) {
     const double dof0 = std::max(1.0, static_cast<double>(p.data_size() - theta.size()));
