@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "replay/calibrate_command.hpp"
+#include "replay/diagnose_command.hpp"
 #include "replay/publish_command.hpp"
 #include "replay/replay_command.hpp"
 #include "replay/simulate_command.hpp"
@@ -20,6 +21,7 @@ int main(int argc, char** argv) {
   millwatch::shell::add_replay_command(app);
   millwatch::shell::add_publish_command(app);
   millwatch::shell::add_calibrate_command(app);
+  millwatch::shell::add_diagnose_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

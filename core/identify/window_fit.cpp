@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -158,6 +159,7 @@ struct WindowFitter::Impl {
   bool separable = true;
   std::vector<std::string> coefficient_names;  // in θ when not separable
   model::ParameterMap extra_map;
+  bool extra_moves_resonance = false;  // a dynamometer parameter among the extra ones
   model::ParameterMap coefficient_map;
 
   [[nodiscard]] int cuts() const { return static_cast<int>(models.size()); }
@@ -184,6 +186,7 @@ struct WindowFitter::Impl {
     Eigen::FFT<double> fft;
     std::vector<std::complex<double>> spectrum;
     std::array<std::vector<std::complex<double>>, 3> gains;  // filter (× resonance) at k·f
+    bool resonance = false;  // the dynamometer's resonance is in the gains
     std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
     Eigen::VectorXd cached_key;
     bool have_cache = false;
@@ -208,19 +211,8 @@ struct WindowFitter::Impl {
       config = model::at_actual_speed(owner->models[static_cast<std::size_t>(cut)], rpm);
       // The dynamometer's resonance is linear: it joins the filter's gains per axis instead of
       // filtering every basis column in time.
-      const auto& dyn = config.effects.dynamometer;
-      const FilterResponse& filter = owner->filters[static_cast<std::size_t>(cut)];
-      for (std::size_t a = 0; a < 3; ++a) {
-        gains[a].resize(order.size());
-        for (std::size_t e = 0; e < order.size(); ++e) {
-          const double hz = order[e] * rpm / 60.0;
-          std::complex<double> g = filter(hz);
-          if (dyn.enabled) {
-            g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
-          }
-          gains[a][e] = g;
-        }
-      }
+      resonance = config.effects.dynamometer.enabled;
+      compute_gains();
       config.effects.dynamometer.enabled = false;
       for (std::size_t a = 0; a < 3; ++a) {
         auto& out = measured[a];
@@ -254,6 +246,22 @@ struct WindowFitter::Impl {
       have_cache = false;
     }
 
+    /// The filter's response (times the dynamometer's resonance when on) at each entry.
+    void compute_gains() {
+      const auto& dyn = config.effects.dynamometer;
+      for (std::size_t a = 0; a < 3; ++a) {
+        gains[a].resize(order.size());
+        for (std::size_t e = 0; e < order.size(); ++e) {
+          const double hz = order[e] * rpm / 60.0;
+          std::complex<double> g = owner->filters[static_cast<std::size_t>(cut)](hz);
+          if (resonance) {
+            g *= model::resonance_response(dyn.natural_hz[a], dyn.damping_ratio[a], hz);
+          }
+          gains[a][e] = g;
+        }
+      }
+    }
+
     /// The entries (harmonics k = 1..K, and the mean) of a waveform on the model grid, times
     /// the filter's response.
     void harmonics_of(const std::vector<double>& w, std::size_t axis,
@@ -278,6 +286,9 @@ struct WindowFitter::Impl {
       const int n_extra = owner->extra_map.size();
       if (n_extra > 0) {
         model::set_parameters(owner->extra_map, key.segment(2, n_extra), config);
+        if (owner->extra_moves_resonance && resonance) {
+          compute_gains();  // a fitted natural frequency or damping ratio
+        }
       }
       if (!owner->separable) {
         model::set_parameters(owner->coefficient_map,
@@ -582,6 +593,9 @@ struct WindowFitter::Impl {
     separable = !commanded.effects.deflection.enabled;
     if (!options.extra_parameters.empty()) {
       extra_map = model::make_parameter_map(commanded, options.extra_parameters);
+      for (const auto& info : extra_map.parameters) {
+        extra_moves_resonance = extra_moves_resonance || info.effect == "dynamometer";
+      }
     }
     if (!separable) {
       for (const auto& p : model::parameters_of_effect(commanded, "force_law")) {
@@ -766,6 +780,10 @@ struct WindowFitter::Impl {
         best = t;
       }
     }
+    if (best.size() == 0) {  // no start refined: none admissible, or no finite residual
+      *cost = std::numeric_limits<double>::infinity();
+      return starts.empty() ? initial_theta(p.config, 0.0, 0.0, 0.0) : starts.front().second;
+    }
     relabel(best);
     const double prior = p.prior_weight;
     p.prior_weight = 0.0;
@@ -863,6 +881,10 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     out.evaluations += grid.evaluations();
   }
   out.iterations += full_iterations;
+  if (!std::isfinite(cost)) {
+    out.message = "the fit did not converge (no start gave a finite residual)";
+    return out;
+  }
   // The weak runout prior, at the noise level the data-only fit leaves.
   if (options.runout_prior_um > 0.0 && options.fit_runout) {
     const double dof0 = std::max(1.0, static_cast<double>(p.data_size() - theta.size()));

@@ -1,0 +1,1626 @@
+#include "core/diagnose/diagnosis.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <numbers>
+#include <stdexcept>
+#include <unsupported/Eigen/FFT>
+
+#include "core/diagnose/catalogue.hpp"
+#include "core/diagnose/record_spectrum.hpp"
+#include "core/identify/window_fit.hpp"
+#include "core/model/steady_state.hpp"
+
+namespace millwatch::diagnose {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kTwoPi = 2.0 * kPi;
+constexpr std::array<double, 3> kHumHarmonics = {1.0, 3.0, 5.0};
+
+std::string format(const char* fmt, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c, d);
+  return buf;
+}
+
+/// The model the diagnosis fits: effects and their free parameters, the time base, the chain.
+struct State {
+  model::ModelConfig config;  // commanded speed; fitted values in place
+  bool fit_runout = false;
+  std::vector<std::string> extra;  // the fitter's extra nonlinear parameters
+  double rpm = 0.0;                // the time base's speed
+  double rpm_sigma = 0.0;
+  bool speed_fitted = false;
+  int drift_degree = 0;         // polynomial terms beyond the constant
+  double hum_hz = 0.0;          // 0: no hum
+  double h_min_sigma_um = 0.0;  // h_min's σ from its profile (when profiled)
+  double change_s = 0.0;        // the runout changed at this time (0: it did not)
+  double change_sigma_s = 0.0;
+  bool wear_trend = false;  // flank wear's rubbing, growing linearly over the record
+};
+
+/// One fit of a state to the record.
+struct Evaluation {
+  bool ok = false;
+  std::string message;
+  identify::FitResult fit;
+  int cycle_revolutions = 1;
+  double alignment_rad = 0.0;  // the model's angle minus the time base's (a cycle may turn it)
+  std::array<std::vector<double>, 2> model_N, chain_N;
+  std::array<Eigen::VectorXd, 2> chain_coefficients;
+  std::array<Eigen::VectorXd, 2> chain_sigma;
+  std::array<std::vector<std::complex<double>>, 2> residual_bins;  // 0..last
+  std::array<double, 2> mean_square{};
+  double criterion = 0.0;
+  int free_parameters = 0;
+  identify::FitResult fit_before;  // the fit before a runout change (ok: there was one)
+  double alignment_before_rad = 0.0;
+  double wear_slope_um = 0.0;  // VB's change per unit of τ = 2t/T − 1
+  double wear_slope_sigma_um = 0.0;
+  double wear_normal = 1.0;
+};
+
+class Engine {
+ public:
+  Engine(const CutRecord& record, const DiagnoseOptions& options)
+      : rec_(record), opt_(options), fs_(record.sample_rate_hz), n_(record.force_N[0].size()) {
+    n_fft_ = smooth_length(n_);
+    band_ = opt_.band_hz > 0.0 ? opt_.band_hz : std::min(0.4 * fs_, 10000.0);
+    last_ = last_band_bin(n_fft_, fs_, band_);
+    const std::size_t first = std::max<std::size_t>(
+        1, last_band_bin(n_fft_, fs_, 20.0));  // the median skips the drift's lowest bins
+    for (std::size_t a = 0; a < 2; ++a) {
+      const std::span<const double> y(rec_.force_N[a].data(), n_fft_);
+      floor_[a] = noise_floor_rms(y, first, last_);
+      const auto s = spectrum(y, last_ + 1);
+      measured_rms_[a] = std::sqrt(band_mean_square(s, n_fft_, last_));
+    }
+  }
+
+  [[nodiscard]] double band() const { return band_; }
+  [[nodiscard]] std::size_t last() const { return last_; }
+  [[nodiscard]] int effective() const { return 2 * static_cast<int>(last_); }
+  [[nodiscard]] const std::array<double, 2>& floor() const { return floor_; }
+
+  /// The noise floor again from a model's residual: where the record is dense with lines (an
+  /// accumulation cycle's sub-harmonics every few bins) the measurement's median is above the
+  /// noise; once a model explains them its residual's median is the noise. The floor is the
+  /// lowest estimate so far.
+  void refine_floor(const Evaluation& ev) {
+    const std::size_t first = std::max<std::size_t>(1, last_band_bin(n_fft_, fs_, 20.0));
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<double> r(n_fft_);
+      for (std::size_t i = 0; i < n_fft_; ++i) {
+        r[i] = rec_.force_N[a][i] - ev.model_N[a][i] - ev.chain_N[a][i];
+      }
+      const double f = noise_floor_rms(r, first, last_);
+      if (f > 0.0 && f < floor_[a]) {
+        floor_[a] = f;
+      }
+    }
+  }
+  [[nodiscard]] const std::array<double, 2>& measured_rms() const { return measured_rms_; }
+  [[nodiscard]] double duration() const { return static_cast<double>(n_) / fs_; }
+
+  [[nodiscard]] int harmonics(double rpm) const {
+    return std::max(1, static_cast<int>(std::floor(band_ / (rpm / 60.0) + 1e-9)));
+  }
+
+  /// Fits a state; `seed` (optional) starts the fitter from an earlier fit.
+  Evaluation evaluate(const State& s, const Evaluation* previous, bool systematic,
+                      const Evaluation* seed) {
+    Evaluation ev;
+    const int k_max = harmonics(s.rpm);
+    // The chain first from what the previous model leaves, then the model on the rest.
+    std::array<std::vector<double>, 2> target;
+    for (std::size_t a = 0; a < 2; ++a) {
+      target[a] = rec_.force_N[a];
+      if (previous != nullptr) {
+        for (std::size_t i = 0; i < n_; ++i) {
+          target[a][i] -= previous->model_N[a][i];
+        }
+      }
+      std::vector<double> c0;
+      Eigen::VectorXd sigma;
+      chain_fit(s, target[a], c0, sigma);
+      for (std::size_t i = 0; i < n_; ++i) {
+        target[a][i] = rec_.force_N[a][i] - c0[i];
+      }
+    }
+    // The model part: one fit over the record, or one per segment when the runout changed.
+    const std::size_t split =
+        s.change_s > 0.0 ? std::min(n_, static_cast<std::size_t>(s.change_s * fs_)) : 0;
+    const std::vector<std::pair<std::size_t, std::size_t>> segments =
+        split > 0 ? std::vector<std::pair<std::size_t, std::size_t>>{{0, split}, {split, n_}}
+                  : std::vector<std::pair<std::size_t, std::size_t>>{{0, n_}};
+    ev.model_N[0].assign(n_, 0.0);
+    ev.model_N[1].assign(n_, 0.0);
+    for (std::size_t sg = 0; sg < segments.size(); ++sg) {
+      const auto [i0, i1] = segments[sg];
+      identify::FitResult fit;
+      const identify::FitResult* seed_fit = nullptr;
+      if (seed != nullptr && seed->ok) {
+        seed_fit =
+            sg == 0 && segments.size() > 1 && seed->fit_before.ok ? &seed->fit_before : &seed->fit;
+      }
+      if (!fit_segment(s, target, i0, i1, k_max, systematic, seed_fit, fit, ev.message)) {
+        return ev;
+      }
+      if (!synthesize(fit.config, s.rpm, fit.alignment_rad.value, ev, i0, i1)) {
+        return ev;
+      }
+      if (sg + 1 < segments.size()) {
+        ev.fit_before = fit;
+        ev.alignment_before_rad = ev.alignment_rad;
+      } else {
+        ev.fit = fit;
+      }
+    }
+    // The wear's rubbing force (flank_wear with 1 µm of wear, less none) at the final fit.
+    std::array<std::vector<double>, 2> rubbing;
+    if (s.wear_trend && !rubbing_series(ev.fit.config, s.rpm, ev.alignment_rad, rubbing)) {
+      ev.message = "the rubbing force of the wear could not be evaluated";
+      return ev;
+    }
+    // The chain per axis, and the wear's rubbing (its mean and its trend over the record, one
+    // wear for both axes) by alternating linear least squares.
+    std::array<std::vector<double>, 2> rest;
+    for (std::size_t a = 0; a < 2; ++a) {
+      rest[a].resize(n_);
+      for (std::size_t i = 0; i < n_; ++i) {
+        rest[a][i] = rec_.force_N[a][i] - ev.model_N[a][i];
+      }
+    }
+    std::array<std::vector<double>, 2> wear_part;
+    wear_part[0].assign(n_, 0.0);
+    wear_part[1].assign(n_, 0.0);
+    for (int it = 0; it < (s.wear_trend ? 3 : 1); ++it) {
+      for (std::size_t a = 0; a < 2; ++a) {
+        std::vector<double> t(n_);
+        for (std::size_t i = 0; i < n_; ++i) {
+          t[i] = rest[a][i] - wear_part[a][i];
+        }
+        chain_fit(s, t, ev.chain_N[a], ev.chain_coefficients[a]);
+      }
+      if (s.wear_trend) {
+        fit_wear(rubbing, rest, ev.chain_N, wear_part, ev);
+      }
+    }
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        ev.model_N[a][i] += wear_part[a][i];
+      }
+      std::vector<double> r(n_fft_);
+      for (std::size_t i = 0; i < n_fft_; ++i) {
+        r[i] = rest[a][i] - wear_part[a][i] - ev.chain_N[a][i];
+      }
+      ev.residual_bins[a] = spectrum(r, last_ + 1);
+      ev.mean_square[a] = band_mean_square(ev.residual_bins[a], n_fft_, last_);
+    }
+    if (!std::isfinite(ev.mean_square[0]) || !std::isfinite(ev.mean_square[1])) {
+      ev.message = "the model's force is not finite";
+      return ev;
+    }
+    if (s.wear_trend) {
+      // σ of (VB mean, VB slope): the residual's per-sample variance over (AᵀA)⁻¹.
+      const double var = 0.5 * (ev.mean_square[0] + ev.mean_square[1]) *
+                         static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
+      ev.wear_slope_sigma_um = std::sqrt(var / std::max(ev.wear_normal, 1e-300));
+    }
+    // σ of the chain's coefficients: the residual's per-sample variance (full band, white).
+    for (std::size_t a = 0; a < 2; ++a) {
+      const double var = ev.mean_square[a] * static_cast<double>(n_fft_) / (2.0 * last_);
+      ev.chain_sigma[a] = chain_sigma(s, var);
+    }
+    int p = 1;  // alignment
+    p += static_cast<int>(ev.fit.coefficients.size());
+    p += s.fit_runout ? 2 : 0;
+    p += static_cast<int>(s.extra.size());
+    if (split > 0) {  // the segment before the change: its own fit, and the change's time
+      p += 2 + static_cast<int>(ev.fit_before.coefficients.size()) + (s.fit_runout ? 2 : 0) +
+           static_cast<int>(s.extra.size());
+    }
+    p += s.wear_trend ? 1 : 0;  // the growth (the mid-record wear is an extra parameter)
+    p += s.speed_fitted ? 1 : 0;
+    p += s.config.effects.min_chip.enabled ? 1 : 0;  // h_min, profiled
+    p += 2 * static_cast<int>(ev.chain_coefficients[0].size());
+    ev.free_parameters = p;
+    const double neff = effective();
+    ev.criterion = neff * (std::log(std::max(ev.mean_square[0], 1e-300)) +
+                           std::log(std::max(ev.mean_square[1], 1e-300))) +
+                   p * std::log(2.0 * neff);
+    ev.ok = true;
+    return ev;
+  }
+
+  /// Fits the model part to the synchronous harmonics of target over samples [i0, i1).
+  bool fit_segment(const State& s, const std::array<std::vector<double>, 2>& target, std::size_t i0,
+                   std::size_t i1, int k_max, bool systematic, const identify::FitResult* seed,
+                   identify::FitResult& fit, std::string& message) {
+    const double f = s.rpm / 60.0;
+    identify::MeasuredRevolution m;
+    const int bins = std::max(64, 4 * (k_max + 2));
+    std::size_t used = 0;
+    const double phase0 = kTwoPi * f / fs_ * static_cast<double>(i0);
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<std::complex<double>> x;
+      used = synchronous_harmonics(std::span<const double>(target[a]).subspan(i0, i1 - i0), fs_, f,
+                                   k_max, x, phase0);
+      m.force_N[a].assign(static_cast<std::size_t>(bins), x[0].real());
+      for (int b = 0; b < bins; ++b) {
+        double v = x[0].real();
+        for (int k = 1; k <= k_max; ++k) {
+          v += std::real(x[static_cast<std::size_t>(k)] *
+                         std::polar(1.0, kTwoPi * k * b / static_cast<double>(bins)));
+        }
+        m.force_N[a][static_cast<std::size_t>(b)] = v;
+      }
+    }
+    if (used == 0) {
+      message = "the record (or a segment of it) is shorter than one revolution";
+      return false;
+    }
+    m.force_N[2].assign(static_cast<std::size_t>(bins), 0.0);
+    m.use_axis = {true, true, false};
+    m.spindle_rpm = s.rpm;
+    m.revolutions = static_cast<int>(std::lround(static_cast<double>(used) * f / fs_));
+    m.shared_bins = false;
+    identify::FitOptions fo;
+    fo.steps_per_rev = opt_.steps_per_rev;
+    fo.fit_runout = s.fit_runout;
+    fo.extra_parameters = s.extra;
+    fo.systematic = systematic;
+    const double band = band_;
+    try {
+      identify::WindowFitter fitter(
+          s.config, [band](double hz) { return hz <= band * (1.0 + 1e-9) ? 1.0 : 0.0; }, fo);
+      fit = fitter.fit(m, seed);
+    } catch (const std::exception& e) {
+      message = e.what();
+      return false;
+    }
+    if (!fit.ok) {
+      message = fit.message;
+      return false;
+    }
+    return true;
+  }
+
+  /// The rubbing force of 1 µm of flank wear on every flute at the fitted model (the force with
+  /// it less the force without), band-limited, at each sample's angle.
+  bool rubbing_series(const model::ModelConfig& fitted, double rpm, double delta,
+                      std::array<std::vector<double>, 2>& out) {
+    model::ModelConfig with = model::at_actual_speed(fitted, rpm);
+    with.effects.flank_wear.enabled = true;
+    with.effects.flank_wear.wear_um.assign(1, 1.0);
+    model::ModelConfig without = with;
+    without.effects.flank_wear.wear_um.assign(1, 0.0);
+    try {
+      const auto& a = model::evaluate_steady_state(with, rpm, opt_.steps_per_rev, workspace_,
+                                                   model::SteadyStateOutput::kMean);
+      const model::ForceWaveform w1 = a.mean;
+      const auto& b = model::evaluate_steady_state(without, rpm, opt_.steps_per_rev, workspace_,
+                                                   model::SteadyStateOutput::kMean);
+      std::array<std::vector<double>, 2> diff;
+      diff[0] = w1.fx_N;
+      diff[1] = w1.fy_N;
+      for (std::size_t i = 0; i < diff[0].size(); ++i) {
+        diff[0][i] -= b.mean.fx_N[i];
+        diff[1][i] -= b.mean.fy_N[i];
+      }
+      sample_revolution(diff, rpm, delta, out);
+    } catch (const std::exception&) {
+      return false;
+    }
+    return true;
+  }
+
+  /// A revolution's waveform (one axis per entry, on a uniform angle grid) band-limited and
+  /// read at each sample's model angle.
+  void sample_revolution(const std::array<std::vector<double>, 2>& w, double rpm, double delta,
+                         std::array<std::vector<double>, 2>& out) const {
+    const auto length = static_cast<int>(w[0].size());
+    const double f = rpm / 60.0;
+    const int q_max = std::min(static_cast<int>(std::floor(band_ / f + 1e-9)), length / 2 - 1);
+    constexpr int kUp = 4;
+    const int fine = kUp * length;
+    Eigen::FFT<double> fft;
+    const double step = kTwoPi * f / fs_;
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<std::complex<double>> spec;
+      fft.fwd(spec, w[a]);
+      std::vector<std::complex<double>> padded(static_cast<std::size_t>(fine), {0.0, 0.0});
+      padded[0] = static_cast<double>(kUp) * spec[0];  // the rubbing's mean is part of it
+      for (int q = 1; q <= q_max; ++q) {
+        padded[static_cast<std::size_t>(q)] =
+            static_cast<double>(kUp) * spec[static_cast<std::size_t>(q)];
+        padded[static_cast<std::size_t>(fine - q)] = std::conj(padded[static_cast<std::size_t>(q)]);
+      }
+      std::vector<std::complex<double>> inv;
+      fft.inv(inv, padded);
+      out[a].resize(n_);
+      for (std::size_t i = 0; i < n_; ++i) {
+        double u = std::fmod((step * static_cast<double>(i) + delta) / kTwoPi * fine,
+                             static_cast<double>(fine));
+        u = u < 0.0 ? u + fine : u;
+        const auto g = std::min(static_cast<std::size_t>(u), static_cast<std::size_t>(fine - 1));
+        const double t = u - static_cast<double>(g);
+        const std::size_t g1 = (g + 1) % static_cast<std::size_t>(fine);
+        out[a][i] = (1.0 - t) * inv[g].real() + t * inv[g1].real();
+      }
+    }
+  }
+
+  /// The wear's growth (VB's change per unit of τ = 2t/T − 1; its mid-record value is the
+  /// fitter's) by least squares on both axes of rest − chain, its rubbing force being
+  /// τ·ΔVB·rubbing(t).
+  void fit_wear(const std::array<std::vector<double>, 2>& rubbing,
+                const std::array<std::vector<double>, 2>& rest,
+                const std::array<std::vector<double>, 2>& chain,
+                std::array<std::vector<double>, 2>& wear_part, Evaluation& ev) const {
+    double ata = 0.0, atb = 0.0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        const double tau = 2.0 * static_cast<double>(i) / static_cast<double>(n_ - 1) - 1.0;
+        ata += tau * rubbing[a][i] * tau * rubbing[a][i];
+        atb += tau * rubbing[a][i] * (rest[a][i] - chain[a][i]);
+      }
+    }
+    ev.wear_normal = ata;
+    ev.wear_slope_um = ata > 0.0 ? atb / ata : 0.0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      for (std::size_t i = 0; i < n_; ++i) {
+        const double tau = 2.0 * static_cast<double>(i) / static_cast<double>(n_ - 1) - 1.0;
+        wear_part[a][i] = tau * ev.wear_slope_um * rubbing[a][i];
+      }
+    }
+  }
+
+  /// When the synchronous pattern changed: the record cut into groups of revolutions, each
+  /// group's synchronous harmonics; the one boundary that splits them into two groups of least
+  /// scatter about their means. Returns the time and half a group (its resolution).
+  std::pair<double, double> find_change(const State& s, const Evaluation& current) const {
+    const double f = s.rpm / 60.0;
+    const double revs = duration() * f;
+    const int groups = std::max(8, std::min(48, static_cast<int>(revs / 3.0)));
+    const std::size_t per = n_ / static_cast<std::size_t>(groups);
+    const int k_max = std::min(harmonics(s.rpm), 4 * s.config.tool.flutes);
+    std::vector<Eigen::VectorXd> x(static_cast<std::size_t>(groups));
+    for (int g = 0; g < groups; ++g) {
+      const std::size_t i0 = static_cast<std::size_t>(g) * per;
+      Eigen::VectorXd v(4 * k_max);
+      for (std::size_t a = 0; a < 2; ++a) {
+        std::vector<double> y(per);
+        for (std::size_t i = 0; i < per; ++i) {
+          y[i] = rec_.force_N[a][i0 + i] - current.chain_N[a][i0 + i];
+        }
+        std::vector<std::complex<double>> h;
+        synchronous_harmonics(y, fs_, f, k_max, h, kTwoPi * f / fs_ * static_cast<double>(i0));
+        for (int k = 1; k <= k_max; ++k) {
+          v[static_cast<Eigen::Index>(a * 2 * k_max + 2 * (k - 1))] =
+              h[static_cast<std::size_t>(k)].real();
+          v[static_cast<Eigen::Index>(a * 2 * k_max + 2 * (k - 1) + 1)] =
+              h[static_cast<std::size_t>(k)].imag();
+        }
+      }
+      x[static_cast<std::size_t>(g)] = v;
+    }
+    auto scatter = [&](int from, int to) {
+      Eigen::VectorXd mean = Eigen::VectorXd::Zero(x[0].size());
+      for (int g = from; g < to; ++g) {
+        mean += x[static_cast<std::size_t>(g)];
+      }
+      mean /= std::max(1, to - from);
+      double sum = 0.0;
+      for (int g = from; g < to; ++g) {
+        sum += (x[static_cast<std::size_t>(g)] - mean).squaredNorm();
+      }
+      return sum;
+    };
+    int best = groups / 2;
+    double best_cost = 1e300;
+    for (int j = 2; j <= groups - 2; ++j) {
+      const double c = scatter(0, j) + scatter(j, groups);
+      if (c < best_cost) {
+        best_cost = c;
+        best = j;
+      }
+    }
+    const double group_s = static_cast<double>(per) / fs_;
+    return {best * group_s, 0.5 * group_s};
+  }
+
+  /// The synchronous harmonic power (harmonics 1..k_max) of y − chain at a trial speed: what a
+  /// correct time base maximises (the synchronous average is not smeared).
+  double sync_power(double rpm, const std::array<std::vector<double>, 2>& y, int k_max) {
+    double p = 0.0;
+    std::vector<std::complex<double>> x;
+    for (std::size_t a = 0; a < 2; ++a) {
+      synchronous_harmonics(y[a], fs_, rpm / 60.0, std::min(k_max, harmonics(rpm)), x);
+      for (std::size_t k = 1; k < x.size(); ++k) {
+        p += std::norm(x[k]);
+      }
+    }
+    return p;
+  }
+
+  /// The actual speed: the synchronous power's maximum within ±2.5 % of the commanded speed,
+  /// with σ from its curvature. Coarse to fine: harmonic k's peak is 1/(k·revolutions) wide, so
+  /// the search runs on the tooth-passing fundamental first (a grid of a quarter of its width),
+  /// then on 4× more harmonics around the best, then on all of them, then a golden section.
+  std::pair<double, double> find_speed(double commanded_rpm, const Evaluation& current,
+                                       int flutes) {
+    std::array<std::vector<double>, 2> y;
+    for (std::size_t a = 0; a < 2; ++a) {
+      y[a].resize(n_);
+      for (std::size_t i = 0; i < n_; ++i) {
+        y[a][i] = rec_.force_N[a][i] - current.chain_N[a][i];
+      }
+    }
+    const double revs = duration() * commanded_rpm / 60.0;
+    const int k_all = harmonics(commanded_rpm);
+    double best = commanded_rpm;
+    double lo_rel = -0.025, hi_rel = 0.025;
+    int k = std::min(k_all, std::max(1, flutes));
+    double step = 0.0;
+    while (true) {
+      step = 0.25 / (k * revs);
+      double best_p = -1.0;
+      const double centre = best;
+      for (double rel = lo_rel; rel <= hi_rel + 1e-12; rel += step) {
+        const double rpm = centre * (1.0 + rel);
+        const double p = sync_power(rpm, y, k);
+        if (p > best_p) {
+          best_p = p;
+          best = rpm;
+        }
+      }
+      if (k >= k_all) {
+        break;
+      }
+      lo_rel = -1.5 * step;
+      hi_rel = 1.5 * step;
+      k = std::min(k_all, 4 * k);
+    }
+    // Golden section on ±one step.
+    double lo = best * (1.0 - step), hi = best * (1.0 + step);
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double p1 = sync_power(x1, y, k_all), p2 = sync_power(x2, y, k_all);
+    for (int it = 0; it < 40 && hi - lo > 1e-7 * commanded_rpm; ++it) {
+      if (p1 > p2) {
+        hi = x2;
+        x2 = x1;
+        p2 = p1;
+        x1 = hi - g * (hi - lo);
+        p1 = sync_power(x1, y, k_all);
+      } else {
+        lo = x1;
+        x1 = x2;
+        p1 = p2;
+        x2 = lo + g * (hi - lo);
+        p2 = sync_power(x2, y, k_all);
+      }
+    }
+    const double rpm = 0.5 * (lo + hi);
+    // RSS(n) = Σy² − (n_used/2)·P(n): σ_n² = 2σ²/RSS''(n), σ² the per-sample noise variance.
+    const double h = 0.05 * step * commanded_rpm;
+    const double d2 = (sync_power(rpm + h, y, k_all) - 2.0 * sync_power(rpm, y, k_all) +
+                       sync_power(rpm - h, y, k_all)) /
+                      (h * h);
+    const double var = 0.5 * (floor_[0] * floor_[0] + floor_[1] * floor_[1]) *
+                       static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
+    const double curvature = 0.5 * static_cast<double>(n_) * std::fabs(d2);
+    const double sigma = curvature > 0.0 ? std::sqrt(2.0 * var / curvature) : rpm;
+    return {rpm, sigma};
+  }
+
+  /// The model part's samples from a fitted configuration: the steady state at the time base's
+  /// speed (its accumulation cycle, phased to the record), band-limited, aligned by δ.
+  bool synthesize(const model::ModelConfig& fitted, double rpm, double delta, Evaluation& ev,
+                  std::size_t i0, std::size_t i1) {
+    const model::ModelConfig c = model::at_actual_speed(fitted, rpm);
+    const model::SteadyState* st = nullptr;
+    try {
+      st = &model::evaluate_steady_state(c, rpm, opt_.steps_per_rev, workspace_,
+                                         model::SteadyStateOutput::kMeanAndCycle);
+    } catch (const std::exception& e) {
+      ev.message = e.what();
+      return false;
+    }
+    const int steps = st->steps_per_rev;
+    const int cycle = st->cycle_revolutions > 1 && !st->cycle.fx_N.empty()
+                          ? static_cast<int>(st->cycle.fx_N.size()) / steps
+                          : 1;
+    ev.cycle_revolutions = cycle;
+    const double f = rpm / 60.0;
+    const int length = cycle * steps;  // the cycle's grid
+    const int q_max =
+        std::min(static_cast<int>(std::floor(band_ * cycle / f + 1e-9)), length / 2 - 1);
+    // The band-limited cycle on a grid 4× finer than the model's (linear interpolation between
+    // its points then errs by ~(πΔ/λ)²/2 of the shortest wave in the band: 0.03 % at the band's
+    // edge with 720 steps), from the model's spectrum zero-padded.
+    constexpr int kUp = 4;
+    const int fine = kUp * length;
+    std::array<std::vector<double>, 2> wave;
+    Eigen::FFT<double> fft;
+    for (std::size_t a = 0; a < 2; ++a) {
+      const model::ForceWaveform& w = cycle > 1 ? st->cycle : st->mean;
+      const std::vector<double>& v = a == 0 ? w.fx_N : w.fy_N;
+      std::vector<std::complex<double>> spec;
+      fft.fwd(spec, v);
+      std::vector<std::complex<double>> padded(static_cast<std::size_t>(fine), {0.0, 0.0});
+      for (int q = 1; q <= q_max; ++q) {
+        // inv() divides by the length: kUp·X_q keeps the amplitude 2|X_q|/length.
+        padded[static_cast<std::size_t>(q)] =
+            static_cast<double>(kUp) * spec[static_cast<std::size_t>(q)];
+        padded[static_cast<std::size_t>(fine - q)] = std::conj(padded[static_cast<std::size_t>(q)]);
+      }
+      std::vector<std::complex<double>> out;
+      fft.inv(out, padded);
+      wave[a].resize(static_cast<std::size_t>(fine) + 1);
+      for (int g = 0; g < fine; ++g) {
+        wave[a][static_cast<std::size_t>(g)] = out[static_cast<std::size_t>(g)].real();
+      }
+      wave[a][static_cast<std::size_t>(fine)] = wave[a][0];  // wraps for the interpolation
+    }
+    const double step = kTwoPi * f / fs_;  // spindle angle per sample
+    // Grid position (fine points) of sample i with the model angle δ, in [0, fine).
+    auto position = [&](std::size_t i, double d) {
+      double u = (step * static_cast<double>(i) + d) / (kTwoPi * cycle) * fine;
+      u = std::fmod(u, static_cast<double>(fine));
+      return u < 0.0 ? u + fine : u;
+    };
+    // The cycle's phase: revolution m0 of the cycle at the record's revolution 0, and which
+    // flute is flute 0 (the mean revolution the fitter aligned may be nearly the same turned by
+    // a pitch, the cycle is not): the shift whose model correlates best with the record
+    // (RSS = Σy² − 2·Σy·p + Σp², Σp² the same for every shift). The record is binned on the
+    // cycle's grid once; each shift is then a sum over the grid.
+    int m0 = 0;
+    if (cycle > 1) {
+      std::array<std::vector<double>, 2> binned;
+      for (std::size_t a = 0; a < 2; ++a) {
+        binned[a].assign(static_cast<std::size_t>(length), 0.0);
+        for (std::size_t i = i0; i < i1; ++i) {
+          const auto b = static_cast<std::size_t>(std::lround(position(i, delta) / kUp)) %
+                         static_cast<std::size_t>(length);
+          binned[a][b] += rec_.force_N[a][i];
+        }
+      }
+      const bool uniform = fitted.tool.pitch_deg.empty();
+      const int shifts = uniform ? fitted.tool.flutes : 1;
+      double best = -1e300;
+      int best_j = 0;
+      for (int j = 0; j < shifts; ++j) {
+        for (int m = 0; m < cycle; ++m) {
+          const auto shift = static_cast<std::size_t>(m * steps + (j * steps) / shifts);
+          double score = 0.0;
+          for (std::size_t a = 0; a < 2; ++a) {
+            for (std::size_t b = 0; b < static_cast<std::size_t>(length); ++b) {
+              score +=
+                  binned[a][b] * wave[a][kUp * ((b + shift) % static_cast<std::size_t>(length))];
+            }
+          }
+          if (score > best) {
+            best = score;
+            m0 = m;
+            best_j = j;
+          }
+        }
+      }
+      delta += kTwoPi * best_j / shifts;
+    }
+    ev.alignment_rad = delta;
+    const double d0 = delta + kTwoPi * m0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      ev.model_N[a].resize(n_);
+      for (std::size_t i = i0; i < i1; ++i) {
+        const double u = position(i, d0);
+        const auto g = static_cast<std::size_t>(u);
+        const double t = u - static_cast<double>(g);
+        const std::size_t g0 = std::min(g, static_cast<std::size_t>(fine - 1));
+        ev.model_N[a][i] = (1.0 - t) * wave[a][g0] + t * wave[a][g0 + 1];
+      }
+    }
+    return true;
+  }
+
+  /// The chain's basis at sample i: 1, Legendre P1, P2 of the time (drift), the mains' odd
+  /// harmonics (hum) within the band.
+  void chain_row(const State& s, std::size_t i, Eigen::Ref<Eigen::RowVectorXd> row) const {
+    int c = 0;
+    row[c++] = 1.0;
+    const double tau =
+        n_ > 1 ? 2.0 * static_cast<double>(i) / static_cast<double>(n_ - 1) - 1.0 : 0.0;
+    if (s.drift_degree >= 1) {
+      row[c++] = tau;
+    }
+    if (s.drift_degree >= 2) {
+      row[c++] = 0.5 * (3.0 * tau * tau - 1.0);
+    }
+    if (s.hum_hz > 0.0) {
+      const double t = static_cast<double>(i) / fs_;
+      for (const double h : kHumHarmonics) {
+        if (h * s.hum_hz <= band_) {
+          row[c++] = std::cos(kTwoPi * h * s.hum_hz * t);
+          row[c++] = std::sin(kTwoPi * h * s.hum_hz * t);
+        }
+      }
+    }
+  }
+
+  [[nodiscard]] int chain_columns(const State& s) const {
+    int c = 1 + s.drift_degree;
+    if (s.hum_hz > 0.0) {
+      for (const double h : kHumHarmonics) {
+        c += h * s.hum_hz <= band_ ? 2 : 0;
+      }
+    }
+    return c;
+  }
+
+  Eigen::MatrixXd chain_normal(const State& s) const {
+    const int p = chain_columns(s);
+    Eigen::MatrixXd ata = Eigen::MatrixXd::Zero(p, p);
+    Eigen::RowVectorXd row(p);
+    for (std::size_t i = 0; i < n_; ++i) {
+      chain_row(s, i, row);
+      ata.noalias() += row.transpose() * row;
+    }
+    return ata;
+  }
+
+  void chain_fit(const State& s, const std::vector<double>& y, std::vector<double>& fitted,
+                 Eigen::VectorXd& coefficients) const {
+    const int p = chain_columns(s);
+    Eigen::VectorXd atb = Eigen::VectorXd::Zero(p);
+    Eigen::RowVectorXd row(p);
+    for (std::size_t i = 0; i < n_; ++i) {
+      chain_row(s, i, row);
+      atb += row.transpose() * y[i];
+    }
+    coefficients = chain_normal(s).ldlt().solve(atb);
+    fitted.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      chain_row(s, i, row);
+      fitted[i] = row.dot(coefficients);
+    }
+  }
+
+  Eigen::VectorXd chain_sigma(const State& s, double variance) const {
+    const Eigen::MatrixXd inv = chain_normal(s).inverse();
+    return (variance * inv.diagonal()).cwiseSqrt();
+  }
+
+ private:
+  const CutRecord& rec_;
+  const DiagnoseOptions& opt_;
+  double fs_ = 0.0;
+  std::size_t n_ = 0;
+  std::size_t n_fft_ = 0;
+  std::size_t last_ = 0;
+  double band_ = 0.0;
+  std::array<double, 2> floor_{};
+  std::array<double, 2> measured_rms_{};
+  model::SteadyStateWorkspace workspace_;
+
+  friend class Diagnoser;
+};
+
+/// The parameters a candidate added, from its evaluation.
+std::vector<Parameter> added_parameters(const std::string& name, const State& s,
+                                        const Evaluation& ev, double duration_s) {
+  std::vector<Parameter> out;
+  const auto& fit = ev.fit;
+  if (name == "runout") {
+    out.push_back({"rho_um", fit.rho_um.value, fit.rho_um.sigma});
+    out.push_back(
+        {"gamma_deg", fit.gamma_rad.value * 180.0 / kPi, fit.gamma_rad.sigma * 180.0 / kPi});
+    for (const auto& d : fit.radius_from_ce1_um) {
+      if (d.name != "r_ce1_minus_r_ce1_um") {
+        out.push_back({d.name, d.value, d.sigma});
+      }
+    }
+  } else if (name == "min_chip_thickness" || name == "chip_accumulation") {
+    out.push_back({"h_min_um", s.config.effects.min_chip.h_min_um, s.h_min_sigma_um});
+    for (const auto& c : fit.coefficients) {
+      if (c.name.find("p_") != std::string::npos) {  // the ploughing coefficients
+        out.push_back({c.name, c.value, c.sigma});
+      }
+    }
+    if (name == "chip_accumulation") {
+      out.push_back({"cycle_revolutions", static_cast<double>(ev.cycle_revolutions), 0.0});
+    }
+  } else if (name == "tool_deflection" || name == "dynamometer_dynamics") {
+    const auto wanted = [&](const std::string& n) {
+      if (name == "tool_deflection") {
+        return n == "stiffness_N_per_um";
+      }
+      if (name == "dynamometer_dynamics") {
+        return n.rfind("natural_hz", 0) == 0 || n.rfind("damping_ratio", 0) == 0;
+      }
+      return false;
+    };
+    for (const auto& e : fit.extra) {
+      if (wanted(e.name)) {
+        out.push_back({e.name, e.value, e.sigma});
+      }
+    }
+  } else if (name == "spindle_speed_error") {
+    out.push_back({"spindle_rpm", s.rpm, s.rpm_sigma});
+    const double cmd = s.config.process.spindle_rpm;
+    out.push_back({"speed_error_percent", 100.0 * (s.rpm / cmd - 1.0), 100.0 * s.rpm_sigma / cmd});
+  } else if (name == "runout_change") {
+    out.push_back({"change_time_s", s.change_s, s.change_sigma_s});
+    const identify::FitResult* fits[2] = {&ev.fit_before, &fit};
+    const char* when[2] = {"before", "after"};
+    for (int w = 0; w < 2; ++w) {
+      const auto& f = *fits[w];
+      out.push_back({std::string("rho_") + when[w] + "_um", f.rho_um.value, f.rho_um.sigma});
+      out.push_back({std::string("gamma_") + when[w] + "_deg", f.gamma_rad.value * 180.0 / kPi,
+                     f.gamma_rad.sigma * 180.0 / kPi});
+      if (f.radius_from_ce1_um.size() > 1) {
+        out.push_back({std::string("r_ce2_minus_r_ce1_") + when[w] + "_um",
+                       f.radius_from_ce1_um[1].value, f.radius_from_ce1_um[1].sigma});
+      }
+    }
+  } else if (name == "tool_wear") {
+    for (const auto& e : fit.extra) {
+      if (e.name == "wear_um") {
+        out.push_back({"wear_mid_um", e.value, e.sigma});
+      }
+    }
+    out.push_back({"wear_growth_um", 2.0 * ev.wear_slope_um, 2.0 * ev.wear_slope_sigma_um});
+    out.push_back({"wear_rate_um_per_s", 2.0 * ev.wear_slope_um / duration_s,
+                   2.0 * ev.wear_slope_sigma_um / duration_s});
+  } else if (name == "amplifier_drift") {
+    const char* axis[2] = {"x", "y"};
+    for (std::size_t a = 0; a < 2; ++a) {
+      // c1·τ with τ = 2t/T − 1: a slope of 2·c1/T.
+      out.push_back({std::string("drift_N_per_s_") + axis[a],
+                     2.0 * ev.chain_coefficients[a][1] / duration_s,
+                     2.0 * ev.chain_sigma[a][1] / duration_s});
+      out.push_back({std::string("curvature_N_") + axis[a], ev.chain_coefficients[a][2],
+                     ev.chain_sigma[a][2]});
+    }
+  } else if (name == "mains_hum") {
+    out.push_back({"mains_hz", s.hum_hz, 0.0});
+    const char* axis[2] = {"x", "y"};
+    const int first = 1 + s.drift_degree;
+    for (std::size_t a = 0; a < 2; ++a) {
+      int c = first;
+      for (const double h : kHumHarmonics) {
+        if (c + 1 >= ev.chain_coefficients[a].size()) {
+          break;
+        }
+        const double amp = std::hypot(ev.chain_coefficients[a][c], ev.chain_coefficients[a][c + 1]);
+        out.push_back(
+            {"amplitude_N_" + std::to_string(static_cast<int>(h * s.hum_hz)) + "hz_" + axis[a], amp,
+             ev.chain_sigma[a][c]});
+        c += 2;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<Parameter> coefficients_of(const Evaluation& ev) {
+  std::vector<Parameter> out;
+  for (const auto& e : ev.fit.coefficients) {
+    out.push_back({e.name, e.value, e.sigma});
+  }
+  return out;
+}
+
+/// Engagement angles [θ_st, θ_ex] of a flute (rad), model_config.hpp's convention.
+std::pair<double, double> engagement(const model::ModelConfig& c) {
+  const double r = model::tool_radius_um(c) / 1000.0;
+  const double ae = std::clamp(c.process.radial_depth_mm, 0.0, 2.0 * r);
+  const double width = std::acos(std::clamp(1.0 - ae / r, -1.0, 1.0));
+  switch (c.process.operation) {
+    case model::Operation::kSlot:
+      return {0.0, kPi};
+    case model::Operation::kUpMilling:
+      return {0.0, width};
+    case model::Operation::kDownMilling:
+      return {kPi - width, kPi};
+  }
+  return {0.0, kPi};
+}
+
+double wrap_2pi(double a) {
+  a = std::fmod(a, kTwoPi);
+  return a < 0.0 ? a + kTwoPi : a;
+}
+
+}  // namespace
+
+class Diagnoser {
+ public:
+  Diagnoser(const CutRecord& record, const model::ModelConfig& start, const DiagnoseOptions& o)
+      : rec_(record), start_(start), opt_(o), engine_(record, o) {}
+
+  Diagnosis run();
+
+ private:
+  void progress(const std::string& line) const {
+    if (opt_.progress) {
+      opt_.progress(line);
+    }
+  }
+  /// Adds a candidate to a state; false with `why` when it does not apply (already in).
+  bool apply(const std::string& name, State& s, const Evaluation& current, std::string& why);
+  Stage stage_of(const std::string& added, const State& s, const Evaluation& ev);
+  /// h_min by its profile: the chip regime switches on the model's angle grid, so the force is
+  /// piecewise constant in h_min on a fine scale and a derivative-based fit would not move it.
+  /// The criterion on a geometric grid of h_min over (0.05, 1.5)·f_t·…, then a golden section
+  /// on the best interval; σ from the profile's curvature (Δ(−2 ln L) = 1).
+  Evaluation profile_h_min(State& s, const Evaluation& current);
+  /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
+  /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
+  /// where the deflection hardly changes the force.
+  Evaluation profile_stiffness(State& s, const Evaluation& current);
+
+  Localisation localise(const State& s, const Evaluation& ev, ModelView& view);
+
+  const CutRecord& rec_;
+  model::ModelConfig start_;
+  const DiagnoseOptions& opt_;
+  Engine engine_;
+};
+
+bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& current,
+                      std::string& why) {
+  auto& e = s.config.effects;
+  auto add_extra = [&](const std::string& p) {
+    if (std::find(s.extra.begin(), s.extra.end(), p) == s.extra.end()) {
+      s.extra.push_back(p);
+    }
+  };
+  if (name == "runout") {
+    if (s.fit_runout) {
+      why = "already in the model";
+      return false;
+    }
+    s.fit_runout = true;
+    e.runout.enabled = true;
+  } else if (name == "min_chip_thickness") {
+    if (e.min_chip.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.min_chip.enabled = true;
+  } else if (name == "chip_accumulation") {
+    if (e.accumulation.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.min_chip.enabled = true;
+    e.accumulation.enabled = true;
+    e.multi_pass.enabled = true;
+  } else if (name == "tool_deflection") {
+    if (e.deflection.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.deflection.enabled = true;
+    add_extra("stiffness_N_per_um");
+  } else if (name == "helix_lag") {
+    if (e.helix_lag.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.helix_lag.enabled = true;
+    e.helix_lag.discs = opt_.helix_discs;
+  } else if (name == "dynamometer_dynamics") {
+    if (e.dynamometer.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.dynamometer.enabled = true;
+    for (const char* p : {"natural_hz_x", "natural_hz_y", "damping_ratio_x", "damping_ratio_y"}) {
+      add_extra(p);
+    }
+  } else if (name == "spindle_speed_error") {
+    if (s.speed_fitted) {
+      why = "already in the model";
+      return false;
+    }
+    const auto [rpm, sigma] =
+        engine_.find_speed(s.config.process.spindle_rpm, current, s.config.tool.flutes);
+    s.rpm = rpm;
+    s.rpm_sigma = sigma;
+    s.speed_fitted = true;
+  } else if (name == "runout_change") {
+    if (s.change_s > 0.0) {
+      why = "already in the model";
+      return false;
+    }
+    const auto [t, sigma] = engine_.find_change(s, current);
+    s.change_s = t;
+    s.change_sigma_s = sigma;
+    s.fit_runout = true;
+    e.runout.enabled = true;
+  } else if (name == "tool_wear") {
+    if (s.wear_trend) {
+      why = "already in the model";
+      return false;
+    }
+    // The wear at mid-record is the fitter's (flank_wear's wear_um, fitted with the force
+    // coefficients on the synchronous average: the mean rubbing in its own shape); its growth
+    // over the record is a trend of that rubbing force, linear in time.
+    s.wear_trend = true;
+    e.flank_wear.enabled = true;
+    e.flank_wear.wear_um.assign(1, 2.0);
+    add_extra("wear_um");
+  } else if (name == "amplifier_drift") {
+    if (s.drift_degree > 0) {
+      why = "already in the model";
+      return false;
+    }
+    s.drift_degree = 2;
+  } else if (name == "mains_hum") {
+    if (s.hum_hz > 0.0) {
+      why = "already in the model";
+      return false;
+    }
+    s.hum_hz = 50.0;  // run() tries 60 Hz as well
+  } else {
+    why = "not in the catalogue";
+    return false;
+  }
+  return true;
+}
+
+Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current) {
+  const double ft = s.config.process.feed_per_tooth_um;
+  std::vector<double> grid;
+  for (double h = 0.05 * ft; h <= 1.6 * ft; h *= 1.25) {
+    grid.push_back(h);
+  }
+  auto at = [&](double h) {
+    State t = s;
+    t.config.effects.min_chip.h_min_um = h;
+    return engine_.evaluate(t, &current, false, nullptr);
+  };
+  std::vector<double> crit(grid.size(), 1e300);
+  std::size_t best = 0;
+  Evaluation best_ev;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    Evaluation ev = at(grid[i]);
+    if (ev.ok) {
+      crit[i] = ev.criterion;
+      if (!best_ev.ok || ev.criterion < best_ev.criterion) {
+        best = i;
+        best_ev = std::move(ev);
+      }
+    }
+  }
+  if (!best_ev.ok) {
+    return best_ev;
+  }
+  // Golden section (in log h) between the best's neighbours.
+  double lo = std::log(grid[best > 0 ? best - 1 : 0]);
+  double hi = std::log(grid[std::min(best + 1, grid.size() - 1)]);
+  double best_h = grid[best];
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+  Evaluation e1 = at(std::exp(x1)), e2 = at(std::exp(x2));
+  for (int it = 0; it < 6; ++it) {
+    const double c1 = e1.ok ? e1.criterion : 1e300, c2 = e2.ok ? e2.criterion : 1e300;
+    if (c1 < best_ev.criterion) {
+      best_ev = e1;
+      best_h = std::exp(x1);
+    }
+    if (c2 < best_ev.criterion) {
+      best_ev = e2;
+      best_h = std::exp(x2);
+    }
+    if (c1 < c2) {
+      hi = x2;
+      x2 = x1;
+      e2 = std::move(e1);
+      x1 = hi - g * (hi - lo);
+      e1 = at(std::exp(x1));
+    } else {
+      lo = x1;
+      x1 = x2;
+      e1 = std::move(e2);
+      x2 = lo + g * (hi - lo);
+      e2 = at(std::exp(x2));
+    }
+  }
+  // σ: the criterion's (−2 ln L + const) curvature at the optimum, from ±5 %.
+  const double d = 0.05 * best_h;
+  const Evaluation ep = at(best_h + d), em = at(best_h - d);
+  double sigma = best_h;  // unpinned unless the profile says otherwise
+  if (ep.ok && em.ok) {
+    const double curvature = (ep.criterion - 2.0 * best_ev.criterion + em.criterion) / (d * d);
+    if (curvature > 0.0) {
+      sigma = std::min(best_h, std::sqrt(2.0 / curvature));
+    }
+  }
+  // Not below the grid's resolution of h (a step of the angle grid at the entry, f_t·Δφ).
+  sigma = std::max(sigma, ft * kTwoPi / opt_.steps_per_rev);
+  s.config.effects.min_chip.h_min_um = best_h;
+  s.h_min_sigma_um = sigma;
+  return best_ev;
+}
+
+Evaluation Diagnoser::profile_stiffness(State& s, const Evaluation& current) {
+  State fixed = s;
+  fixed.extra.erase(std::remove(fixed.extra.begin(), fixed.extra.end(), "stiffness_N_per_um"),
+                    fixed.extra.end());
+  Evaluation best;
+  double best_k = s.config.effects.deflection.stiffness_N_per_um;
+  for (double k = 0.05; k <= 3.3; k *= 2.0) {
+    fixed.config.effects.deflection.stiffness_N_per_um = k;
+    Evaluation ev = engine_.evaluate(fixed, &current, false, &current);
+    if (ev.ok && (!best.ok || ev.criterion < best.criterion)) {
+      best = std::move(ev);
+      best_k = k;
+    }
+  }
+  s.config.effects.deflection.stiffness_N_per_um = best_k;
+  if (best.ok) {
+    s.config = best.fit.config;
+    s.config.effects.deflection.stiffness_N_per_um = best_k;
+  }
+  Evaluation ev = engine_.evaluate(s, &current, false, best.ok ? &best : nullptr);
+  return ev.ok || !best.ok ? ev : best;
+}
+
+Localisation Diagnoser::localise(const State& s, const Evaluation& ev, ModelView& view) {
+  Localisation loc;
+  const double fs = rec_.sample_rate_hz;
+  const std::size_t n = rec_.force_N[0].size();
+  const double f = s.rpm / 60.0;
+  const int k_max = engine_.harmonics(s.rpm);
+  const double delta = ev.alignment_rad;
+  const model::ModelConfig& c = ev.fit.config;
+  const int flutes = c.tool.flutes;
+  const std::vector<double> psi = model::flute_pitch_angles_rad(c.tool);
+  const auto [th_st, th_ex] = engagement(c);
+  constexpr int kGrid = 360;
+
+  // Synchronous residual and measured/model averages over one revolution, in the model's frame.
+  std::array<std::vector<std::complex<double>>, 2> res, meas, mod;
+  for (std::size_t a = 0; a < 2; ++a) {
+    std::vector<double> y(n), r(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      y[i] = rec_.force_N[a][i] - ev.chain_N[a][i];
+      r[i] = y[i] - ev.model_N[a][i];
+    }
+    synchronous_harmonics(y, fs, f, k_max, meas[a]);
+    synchronous_harmonics(r, fs, f, k_max, res[a]);
+    synchronous_harmonics(ev.model_N[a], fs, f, k_max, mod[a]);
+  }
+  loc.flute_rms_N.assign(static_cast<std::size_t>(flutes), {0.0, 0.0});
+  std::vector<int> flute_count(static_cast<std::size_t>(flutes), 0);
+  int edge_count = 0, middle_count = 0;
+  view.angle_deg.resize(kGrid);
+  for (std::size_t a = 0; a < 2; ++a) {
+    view.measured_N[a].resize(kGrid);
+    view.model_N[a].resize(kGrid);
+  }
+  for (int g = 0; g < kGrid; ++g) {
+    const double alpha = kTwoPi * g / kGrid;  // model angle
+    const double phi = alpha - delta;         // tracker angle
+    view.angle_deg[static_cast<std::size_t>(g)] = alpha * 180.0 / kPi;
+    std::array<double, 2> r{};
+    for (std::size_t a = 0; a < 2; ++a) {
+      double rv = 0.0, mv = meas[a][0].real(), dv = meas[a][0].real();
+      for (int k = 1; k <= k_max; ++k) {
+        const std::complex<double> e = std::polar(1.0, k * phi);
+        const auto kk = static_cast<std::size_t>(k);
+        rv += std::real(res[a][kk] * e);
+        mv += std::real(meas[a][kk] * e);
+        dv += std::real(mod[a][kk] * e);
+      }
+      r[a] = rv;
+      view.measured_N[a][static_cast<std::size_t>(g)] = mv;
+      view.model_N[a][static_cast<std::size_t>(g)] = dv;
+      loc.synchronous_rms_N[a] += rv * rv;
+    }
+    for (int j = 0; j < flutes; ++j) {
+      const double theta = wrap_2pi(alpha - psi[static_cast<std::size_t>(j)]);
+      const double next = j + 1 < flutes ? psi[static_cast<std::size_t>(j + 1)] : kTwoPi;
+      const double pitch = next - psi[static_cast<std::size_t>(j)];
+      if (wrap_2pi(theta - th_st) < pitch) {
+        for (std::size_t a = 0; a < 2; ++a) {
+          loc.flute_rms_N[static_cast<std::size_t>(j)][a] += r[a] * r[a];
+        }
+        ++flute_count[static_cast<std::size_t>(j)];
+      }
+      if (theta >= th_st && theta <= th_ex) {
+        const double u = (theta - th_st) / std::max(th_ex - th_st, 1e-9);
+        if (u < 0.15 || u > 0.85) {
+          for (std::size_t a = 0; a < 2; ++a) {
+            loc.entry_exit_rms_N[a] += r[a] * r[a];
+          }
+          ++edge_count;
+        } else if (u > 0.3 && u < 0.7) {
+          for (std::size_t a = 0; a < 2; ++a) {
+            loc.middle_rms_N[a] += r[a] * r[a];
+          }
+          ++middle_count;
+        }
+      }
+    }
+  }
+  for (std::size_t a = 0; a < 2; ++a) {
+    loc.synchronous_rms_N[a] = std::sqrt(loc.synchronous_rms_N[a] / kGrid);
+    loc.entry_exit_rms_N[a] = std::sqrt(loc.entry_exit_rms_N[a] / std::max(1, edge_count));
+    loc.middle_rms_N[a] = std::sqrt(loc.middle_rms_N[a] / std::max(1, middle_count));
+    for (int j = 0; j < flutes; ++j) {
+      auto& v = loc.flute_rms_N[static_cast<std::size_t>(j)][a];
+      v = std::sqrt(v / std::max(1, flute_count[static_cast<std::size_t>(j)]));
+    }
+  }
+
+  // Frequency bands of the residual's spectrum.
+  const std::size_t nfft = smooth_length(n);
+  const std::size_t last = engine_.last();
+  const double df = fs / static_cast<double>(nfft);
+  const double tooth = flutes * f;
+  const auto& dyn = c.effects.dynamometer;
+  const double res_lo = 0.85 * std::min(dyn.natural_hz[0], dyn.natural_hz[1]);
+  const double res_hi = 1.15 * std::max(dyn.natural_hz[0], dyn.natural_hz[1]);
+  struct Acc {
+    const char* name;
+    const char* range;
+    std::array<double, 2> power{};
+    int bins = 0;
+  };
+  std::array<Acc, 7> acc = {{
+      {"low_frequency", "below half the spindle frequency: drift", {}, 0},
+      {"mains", "50/60 Hz and odd harmonics", {}, 0},
+      {"tooth_passing_harmonics", "multiples of the tooth-passing frequency", {}, 0},
+      {"spindle_harmonics", "spindle harmonics that are not tooth-passing ones: runout", {}, 0},
+      {"resonance_band", "within 15 % of the dynamometer's nominal resonance", {}, 0},
+      {"between_harmonics_lines", "lines between the spindle harmonics: sub-harmonics", {}, 0},
+      {"broadband", "the rest", {}, 0},
+  }};
+  // The residual's Hann-windowed spectrum: a strong line's leakage falls as 1/Δ³ instead of
+  // 1/Δ and stays in its own band. Power scaled so that a band's RMS is the unwindowed one's
+  // (Σw² = 3N/8). A bin is a line when it stands 10× above the noise's mean bin power.
+  std::array<std::vector<std::complex<double>>, 2> hann;
+  for (std::size_t a = 0; a < 2; ++a) {
+    std::vector<double> r(nfft);
+    for (std::size_t i = 0; i < nfft; ++i) {
+      r[i] = rec_.force_N[a][i] - ev.model_N[a][i] - ev.chain_N[a][i];
+    }
+    hann[a] = spectrum(r, last + 1, true);
+  }
+  const double window_power = 0.375 * static_cast<double>(nfft);
+  std::array<double, 2> noise_bin{};
+  for (std::size_t a = 0; a < 2; ++a) {
+    noise_bin[a] = engine_.floor()[a] * engine_.floor()[a] * static_cast<double>(nfft) *
+                   window_power / (2.0 * static_cast<double>(last));
+  }
+  const double tol = 2.5 * df + 0.5;
+  auto near_multiple = [&](double fr, double base) {
+    if (base <= 0.0) {
+      return false;
+    }
+    const double m = std::round(fr / base);
+    return m >= 1.0 && std::fabs(fr - m * base) <= tol;
+  };
+  for (std::size_t b = 1; b <= last; ++b) {
+    const double fr = static_cast<double>(b) * df;
+    int cls = 6;
+    bool mains = false;
+    for (const double base : {50.0, 60.0}) {
+      for (int h = 1; h <= 9; h += 2) {
+        mains = mains || std::fabs(fr - h * base) <= tol;
+      }
+    }
+    const bool line =
+        std::norm(hann[0][b]) > 10.0 * noise_bin[0] || std::norm(hann[1][b]) > 10.0 * noise_bin[1];
+    if (fr < 0.5 * f) {
+      cls = 0;
+    } else if (near_multiple(fr, tooth)) {
+      cls = 2;
+    } else if (near_multiple(fr, f)) {
+      cls = 3;
+    } else if (mains) {
+      cls = 1;
+    } else if (dyn.natural_hz[0] > 0.0 && fr >= res_lo && fr <= res_hi && !line) {
+      cls = 4;
+    } else if (line) {
+      cls = 5;
+    }
+    auto& x = acc[static_cast<std::size_t>(cls)];
+    ++x.bins;
+    for (std::size_t a = 0; a < 2; ++a) {
+      x.power[a] += std::norm(hann[a][b]);
+    }
+  }
+  double worst_excess = 0.0;
+  std::string worst_band;
+  for (const auto& x : acc) {
+    FrequencyBand band;
+    band.name = x.name;
+    band.range = x.range;
+    double excess = 0.0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      band.rms_N[a] = std::sqrt(2.0 * x.power[a] / (static_cast<double>(nfft) * window_power));
+      band.noise_rms_N[a] =
+          engine_.floor()[a] * std::sqrt(static_cast<double>(x.bins) / static_cast<double>(last));
+      excess += band.rms_N[a] * band.rms_N[a] - band.noise_rms_N[a] * band.noise_rms_N[a];
+    }
+    if (excess > worst_excess) {
+      worst_excess = excess;
+      worst_band = x.name;
+    }
+    loc.bands.push_back(band);
+  }
+
+  // Time segments of the band-limited residual.
+  {
+    constexpr int kSegments = 8;
+    std::array<std::vector<double>, 2> limited;
+    Eigen::FFT<double> fft;
+    for (std::size_t a = 0; a < 2; ++a) {
+      std::vector<std::complex<double>> full(nfft, {0.0, 0.0});
+      for (std::size_t b = 1; b <= last; ++b) {
+        full[b] = ev.residual_bins[a][b];
+        full[nfft - b] = std::conj(ev.residual_bins[a][b]);
+      }
+      std::vector<std::complex<double>> out;
+      fft.inv(out, full);
+      limited[a].resize(nfft);
+      for (std::size_t i = 0; i < nfft; ++i) {
+        limited[a][i] = out[i].real();
+      }
+    }
+    const std::size_t per = nfft / kSegments;
+    for (int sgm = 0; sgm < kSegments && per > 0; ++sgm) {
+      std::array<double, 2> r{};
+      for (std::size_t a = 0; a < 2; ++a) {
+        double sum = 0.0;
+        for (std::size_t i = sgm * per; i < (sgm + 1) * per; ++i) {
+          sum += limited[a][i] * limited[a][i];
+        }
+        r[a] = std::sqrt(sum / static_cast<double>(per));
+      }
+      loc.segment_start_s.push_back(static_cast<double>(sgm * per) / fs);
+      loc.segment_rms_N.push_back(r);
+    }
+  }
+
+  // The residual's spectrum for the plot (at most 2000 points: the largest of each group).
+  {
+    const std::size_t group = std::max<std::size_t>(1, (last + 1999) / 2000);
+    for (std::size_t b = 1; b <= last; b += group) {
+      std::array<double, 2> m{};
+      for (std::size_t i = b; i < std::min(last + 1, b + group); ++i) {
+        for (std::size_t a = 0; a < 2; ++a) {
+          m[a] = std::max(m[a], 2.0 * std::abs(ev.residual_bins[a][i]) / static_cast<double>(nfft));
+        }
+      }
+      view.frequency_hz.push_back(static_cast<double>(b) * df);
+      for (std::size_t a = 0; a < 2; ++a) {
+        view.residual_amplitude_N[a].push_back(m[a]);
+      }
+    }
+  }
+
+  // One line: where the excess over the noise is.
+  std::string line;
+  if (worst_band.empty()) {
+    line = "no band stands above the noise";
+  } else {
+    line = "largest excess over the noise: " + worst_band;
+  }
+  if (flutes > 1) {
+    int jmax = 0;
+    for (int j = 1; j < flutes; ++j) {
+      if (std::hypot(loc.flute_rms_N[static_cast<std::size_t>(j)][0],
+                     loc.flute_rms_N[static_cast<std::size_t>(j)][1]) >
+          std::hypot(loc.flute_rms_N[static_cast<std::size_t>(jmax)][0],
+                     loc.flute_rms_N[static_cast<std::size_t>(jmax)][1])) {
+        jmax = j;
+      }
+    }
+    line += "; synchronous residual largest on flute " + std::to_string(jmax) + " (CE" +
+            std::to_string(jmax + 1) + ")";
+  }
+  const double edge = std::hypot(loc.entry_exit_rms_N[0], loc.entry_exit_rms_N[1]);
+  const double middle = std::hypot(loc.middle_rms_N[0], loc.middle_rms_N[1]);
+  line += edge > 1.5 * middle ? ", at entry/exit" : (middle > 1.5 * edge ? ", at the peak" : "");
+  loc.summary = line;
+  return loc;
+}
+
+Stage Diagnoser::stage_of(const std::string& added, const State& s, const Evaluation& ev) {
+  Stage st;
+  st.added = added;
+  st.parameters =
+      added.empty() ? std::vector<Parameter>{} : added_parameters(added, s, ev, engine_.duration());
+  st.coefficients = coefficients_of(ev);
+  for (std::size_t a = 0; a < 2; ++a) {
+    st.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
+    st.residual_percent[a] = engine_.measured_rms()[a] > 0.0
+                                 ? 100.0 * st.residual_rms_N[a] / engine_.measured_rms()[a]
+                                 : 0.0;
+  }
+  st.criterion = ev.criterion;
+  st.free_parameters = ev.free_parameters;
+  st.localisation = localise(s, ev, st.view);
+  return st;
+}
+
+Diagnosis Diagnoser::run() {
+  const auto t0 = std::chrono::steady_clock::now();
+  Diagnosis out;
+  out.band_hz = engine_.band();
+  out.effective_samples = engine_.effective();
+  out.duration_s = engine_.duration();
+  out.commanded_rpm = start_.process.spindle_rpm;
+  out.measured_rms_N = engine_.measured_rms();
+  if (!(out.measured_rms_N[0] > 0.0 || out.measured_rms_N[1] > 0.0)) {
+    out.message = "the record holds no force in the band compared (every sample the same)";
+    return out;
+  }
+
+  std::vector<std::string> names;
+  if (opt_.candidates.empty()) {
+    for (const auto& c : catalogue()) {
+      names.emplace_back(c.name);
+    }
+  } else {
+    names = opt_.candidates;
+  }
+
+  // The starting model: its effects on stay, with their parameters free.
+  State state;
+  state.config = start_;
+  state.rpm = start_.process.spindle_rpm;
+  {
+    const auto& e = start_.effects;
+    state.fit_runout = e.runout.enabled;
+    if (e.deflection.enabled) {
+      state.extra.push_back("stiffness_N_per_um");
+    }
+    if (e.dynamometer.enabled) {
+      for (const char* p : {"natural_hz_x", "natural_hz_y", "damping_ratio_x", "damping_ratio_y"}) {
+        state.extra.push_back(p);
+      }
+    }
+    if (!e.runout.enabled) {
+      state.config.effects.runout.offset_um = 0.0;
+    }
+  }
+  progress("fitting the starting model");
+  Evaluation current = engine_.evaluate(state, nullptr, opt_.uncertainties, nullptr);
+  if (!current.ok) {
+    out.message = "the starting model could not be fitted: " + current.message;
+    return out;
+  }
+  state.config = current.fit.config;
+  engine_.refine_floor(current);
+  out.initial = stage_of("", state, current);
+  auto at_floor = [&](const Evaluation& ev) {
+    for (std::size_t a = 0; a < 2; ++a) {
+      if (std::sqrt(ev.mean_square[a]) > opt_.floor_tolerance * engine_.floor()[a]) {
+        return false;
+      }
+    }
+    return true;
+  };
+  out.stop_reason = "";
+  for (int step = 0; step < opt_.max_steps; ++step) {
+    if (at_floor(current)) {
+      out.stop_reason = "the residual is at the noise floor";
+      break;
+    }
+    std::vector<CandidateScore> scores;
+    std::vector<State> states;
+    std::vector<Evaluation> evals;
+    int done = 0;
+    for (const auto& name : names) {
+      ++done;
+      progress("step " + std::to_string(step + 1) + ": " + name + " (" + std::to_string(done) +
+               "/" + std::to_string(names.size()) + ")");
+      State s = state;
+      CandidateScore score;
+      score.name = name;
+      std::string why;
+      if (!apply(name, s, current, why)) {
+        continue;  // in the model already
+      }
+      // The fitter searches afresh (its starts and alignment scan) for every effect of the
+      // model: a new effect may move the alignment by a pitch (the flute labelling) or the
+      // runout to another basin, where a refinement from the current fit would stay stuck.
+      // The chain's terms hardly move the model: those refine the current fit.
+      const bool chain = name == "amplifier_drift" || name == "mains_hum";
+      Evaluation ev = (name == "min_chip_thickness" || name == "chip_accumulation")
+                          ? profile_h_min(s, current)
+                      : name == "tool_deflection"
+                          ? profile_stiffness(s, current)
+                          : engine_.evaluate(s, &current, false, chain ? &current : nullptr);
+      if (name == "mains_hum" && ev.ok) {
+        State s60 = s;
+        s60.hum_hz = 60.0;
+        Evaluation ev60 = engine_.evaluate(s60, &current, false, &current);
+        if (ev60.ok && ev60.criterion < ev.criterion) {
+          s = s60;
+          ev = std::move(ev60);
+        }
+      }
+      score.ok = ev.ok;
+      score.message = ev.message;
+      if (ev.ok) {
+        score.criterion = ev.criterion;
+        score.gain = current.criterion - ev.criterion;
+        score.free_parameters = ev.free_parameters;
+        for (std::size_t a = 0; a < 2; ++a) {
+          score.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
+        }
+        score.parameters = added_parameters(name, s, ev, engine_.duration());
+      }
+      scores.push_back(score);
+      states.push_back(s);
+      evals.push_back(std::move(ev));
+    }
+    int best = -1, second = -1;
+    for (int i = 0; i < static_cast<int>(scores.size()); ++i) {
+      if (!scores[static_cast<std::size_t>(i)].ok) {
+        continue;
+      }
+      const double c = scores[static_cast<std::size_t>(i)].criterion;
+      if (best < 0 || c < scores[static_cast<std::size_t>(best)].criterion) {
+        second = best;
+        best = i;
+      } else if (second < 0 || c < scores[static_cast<std::size_t>(second)].criterion) {
+        second = i;
+      }
+    }
+    if (best < 0) {
+      out.stop_reason =
+          scores.empty() ? "every candidate is in the model" : "no candidate could be fitted";
+      break;
+    }
+    const auto& win = scores[static_cast<std::size_t>(best)];
+    if (win.gain < opt_.significance) {
+      out.stop_reason =
+          format("no candidate improves the criterion by %.0f or more (best: ", opt_.significance) +
+          win.name + format(", ΔBIC %.1f)", win.gain);
+      out.initial.candidates = step == 0 ? scores : out.initial.candidates;
+      if (step > 0) {
+        out.steps.back().candidates.insert(out.steps.back().candidates.end(), scores.begin(),
+                                           scores.end());
+      }
+      break;
+    }
+    State next = states[static_cast<std::size_t>(best)];
+    progress("step " + std::to_string(step + 1) + ": adding " + win.name);
+    Evaluation final_ev = evals[static_cast<std::size_t>(best)];
+    if (opt_.uncertainties) {
+      Evaluation with_sys = engine_.evaluate(next, &current, true, &final_ev);
+      if (with_sys.ok) {
+        final_ev = std::move(with_sys);
+      }
+    }
+    next.config = final_ev.fit.config;
+    Stage st = stage_of(win.name, next, final_ev);
+    st.gain = current.criterion - final_ev.criterion;
+    if (second >= 0) {
+      st.runner_up = scores[static_cast<std::size_t>(second)].name;
+      st.margin_over_runner_up = scores[static_cast<std::size_t>(second)].criterion - win.criterion;
+    }
+    st.candidates = scores;
+    out.steps.push_back(std::move(st));
+    out.named_effects.push_back(win.name);
+    state = next;
+    current = std::move(final_ev);
+    engine_.refine_floor(current);
+  }
+  if (out.stop_reason.empty()) {
+    out.stop_reason =
+        at_floor(current) ? "the residual is at the noise floor" : "the step limit was reached";
+  }
+  out.noise_floor_N = engine_.floor();
+  out.final_model = current.fit.config;
+  out.final_model.effects.runout.enabled = state.fit_runout;
+  out.spindle_rpm = state.rpm;
+
+  const auto& last_rms =
+      out.steps.empty() ? out.initial.residual_rms_N : out.steps.back().residual_rms_N;
+  const double ratio = std::max(last_rms[0] / std::max(out.noise_floor_N[0], 1e-300),
+                                last_rms[1] / std::max(out.noise_floor_N[1], 1e-300));
+  if (out.named_effects.empty()) {
+    out.verdict =
+        at_floor(current)
+            ? format(
+                  "The model lacks nothing the data can show: its residual (%.4f, %.4f N) is "
+                  "at the noise floor (%.4f, %.4f N).",
+                  last_rms[0], last_rms[1], out.noise_floor_N[0], out.noise_floor_N[1])
+            : format(
+                  "No effect of the catalogue explains the residual (%.1f× the noise floor): "
+                  "look outside the catalogue.",
+                  ratio);
+  } else {
+    std::string list;
+    for (std::size_t i = 0; i < out.named_effects.size(); ++i) {
+      list += (i == 0 ? "" : (i + 1 == out.named_effects.size() ? " and " : ", ")) +
+              out.named_effects[i];
+    }
+    out.verdict = "The model lacked " + list +
+                  format(": adding it brought the residual from %.4f, %.4f N to %.4f, %.4f N",
+                         out.initial.residual_rms_N[0], out.initial.residual_rms_N[1], last_rms[0],
+                         last_rms[1]) +
+                  format(" (%.2f× the noise floor)", ratio) +
+                  (at_floor(current) ? "." : "; something else remains.");
+    if (out.named_effects.size() > 1) {
+      out.verdict.replace(out.verdict.find("adding it"), 9, "adding them");
+    }
+  }
+  out.ok = true;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+model::ModelConfig plain_model(const model::ModelConfig& config) {
+  return model::without_effects(config);
+}
+
+Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
+                   const DiagnoseOptions& options) {
+  const double fs = record.sample_rate_hz;
+  if (!(fs > 0.0) || !std::isfinite(fs)) {
+    throw std::invalid_argument("diagnose: the sample rate must be a positive number (got " +
+                                std::to_string(fs) + ")");
+  }
+  if (record.force_N[0].size() != record.force_N[1].size()) {
+    throw std::invalid_argument("diagnose: fx and fy have different lengths (" +
+                                std::to_string(record.force_N[0].size()) + " and " +
+                                std::to_string(record.force_N[1].size()) + " samples)");
+  }
+  for (std::size_t a = 0; a < 2; ++a) {
+    for (std::size_t i = 0; i < record.force_N[a].size(); ++i) {
+      if (!std::isfinite(record.force_N[a][i])) {
+        throw std::invalid_argument(std::string("diagnose: sample ") + std::to_string(i) + " of " +
+                                    (a == 0 ? "fx" : "fy") + " is not a finite number");
+      }
+    }
+  }
+  model::validate(start);
+  const double rev_s = 60.0 / start.process.spindle_rpm;
+  const double duration = static_cast<double>(record.force_N[0].size()) / fs;
+  if (duration < 10.0 * rev_s) {
+    throw std::invalid_argument(
+        format("diagnose: the record lasts %.4f s, less than 10 revolutions at %.0f rpm (%.4f s)",
+               duration, start.process.spindle_rpm, 10.0 * rev_s));
+  }
+  const double band = options.band_hz > 0.0 ? options.band_hz : std::min(0.4 * fs, 10000.0);
+  if (!(band < 0.5 * fs)) {
+    throw std::invalid_argument(
+        format("diagnose: the band (%.0f Hz) must lie below Nyquist (%.0f Hz)", band, 0.5 * fs));
+  }
+  if (band < start.process.spindle_rpm / 60.0 * start.tool.flutes) {
+    throw std::invalid_argument(
+        format("diagnose: the band (%.0f Hz) must hold the tooth-passing frequency (%.0f Hz)", band,
+               start.process.spindle_rpm / 60.0 * start.tool.flutes));
+  }
+  for (const auto& name : options.candidates) {
+    if (find_candidate(name) == nullptr) {
+      std::string known;
+      for (const auto& c : catalogue()) {
+        known += (known.empty() ? "" : ", ") + std::string(c.name);
+      }
+      throw std::invalid_argument("diagnose: unknown candidate '" + name + "' (known: " + known +
+                                  ")");
+    }
+  }
+  Diagnoser d(record, start, options);
+  return d.run();
+}
+
+}  // namespace millwatch::diagnose

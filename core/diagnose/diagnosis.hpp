@@ -1,0 +1,170 @@
+#pragma once
+// Where model and measurement disagree, which effect is missing, and the gap shrinking as it is
+// added (millwatch issue 8).
+//
+// The record. The force on the tool (model frame) per axis, uniformly sampled, over a steady cut
+// at one commanded speed. The model's time base is the spindle angle φ(t) = 2π·n·t/60 with n the
+// speed the current model assumes (the commanded one until spindle_speed_error is added).
+//
+// One residual for every candidate. The full model of the record is
+//   y_a(t) = m_a(φ(t) + δ) + c_a(t) + noise,
+// m the model's periodic steady state (model::evaluate_steady_state, its accumulation cycle
+// included: revolution m of an L-revolution cycle at revolution m of the record, the cycle's
+// phase fitted), band-limited to [0, band], δ the alignment; c the measurement chain: a constant
+// per axis always, and what the chain candidates add (drift, hum). The model part is fitted by
+// identify::WindowFitter to the synchronous harmonics of y − c (in the spindle-harmonic domain,
+// the fitter's own separable least squares; the filter a brick wall at the band); the chain part
+// by linear least squares on y − m. The residual r = y − m − c is compared in the record's
+// spectrum over (0, band] (record_spectrum.hpp): M bins, 2M real values per axis — the effective
+// number of independent samples of a signal low-passed at the band, 2·f_c·T. Every candidate is
+// scored on this residual, so the criteria compare.
+//
+// The criterion. BIC = Σ_axes n_a·ln(σ̂_a²) + p·ln(Σ n_a), n_a = 2M, σ̂_a² the residual's mean
+// square over the band, p the free parameters (force coefficients, alignment, each added effect's
+// parameters, the chain's terms). A candidate must lower it by `significance` (10: "very strong"
+// evidence on Kass and Raftery's scale) to be added.
+//
+// The loop (issue 8, item 3). From the starting model: score every candidate of the catalogue
+// (catalogue.hpp) not yet in the model — add it, refit, criterion —; add the best when it gains
+// at least `significance` over the current model; repeat. Stop when the residual is at the noise
+// floor (within floor_tolerance on every axis), when no candidate gains enough, or after
+// max_steps. The winner's margin over the runner-up (ΔBIC) says how strongly the data prefer it.
+//
+// Time-varying candidates: tool_wear (the flank wear's rubbing force growing linearly over the
+// record) and runout_change (the record cut in two where the synchronous pattern changes most,
+// each side fitted on its own).
+//
+// Localisation (issue 8, item 1), per model along the way: by flute (the synchronous residual
+// over each flute's pitch sector), by angle (entry/exit against the middle of the engagement),
+// by frequency band (low frequency, mains, spindle harmonics, tooth-passing harmonics, the
+// dynamometer's resonance band, lines between the spindle harmonics, broadband), by time
+// (segments of the record). Each band carries the noise's share so an excess is visible.
+//
+// Runs offline (allocates freely); deterministic.
+
+#include <array>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/model/model_config.hpp"
+
+namespace millwatch::diagnose {
+
+/// A recorded cut: the force on the tool in the model frame (N), uniformly sampled.
+struct CutRecord {
+  double sample_rate_hz = 0.0;
+  std::array<std::vector<double>, 2> force_N;  ///< fx, fy
+};
+
+struct DiagnoseOptions {
+  /// Upper end of the compared band (Hz); 0: 0.4·fs, at most 10 kHz.
+  double band_hz = 0.0;
+  double significance = 10.0;    ///< ΔBIC an effect must gain to be added
+  double floor_tolerance = 1.1;  ///< residual ≤ this × noise floor on every axis: at the floor
+  int max_steps = 5;             ///< effects added at most
+  int steps_per_rev = 720;       ///< the fitted model's angle grid
+  int helix_discs = 5;           ///< discs when helix_lag is added
+  bool uncertainties = true;     ///< the winner refitted with the fitter's systematic spread
+  /// Candidates scored (catalogue names); empty: the whole catalogue.
+  std::vector<std::string> candidates;
+  /// Called with a short line as the work progresses (a terminal's progress line).
+  std::function<void(std::string_view)> progress;
+};
+
+/// One fitted parameter with its 1σ uncertainty (units in the name).
+struct Parameter {
+  std::string name;
+  double value = 0.0;
+  double sigma = 0.0;
+};
+
+/// A candidate added to the current model and refitted.
+struct CandidateScore {
+  std::string name;
+  bool ok = false;
+  std::string message;  ///< why not, when not ok
+  double criterion = 0.0;
+  /// Current model's criterion minus this one's (> 0: better).
+  double gain = 0.0;
+  std::array<double, 2> residual_rms_N{};
+  std::vector<Parameter> parameters;
+  int free_parameters = 0;
+};
+
+struct FrequencyBand {
+  std::string name;
+  std::string range;                    ///< what it holds, for people
+  std::array<double, 2> rms_N{};        ///< the residual in it
+  std::array<double, 2> noise_rms_N{};  ///< the noise floor's share of it
+};
+
+struct Localisation {
+  std::vector<std::array<double, 2>> flute_rms_N;  ///< synchronous residual per flute sector
+  std::array<double, 2> entry_exit_rms_N{};        ///< near entry and exit of the engagement
+  std::array<double, 2> middle_rms_N{};            ///< around the middle (the peak)
+  std::array<double, 2> synchronous_rms_N{};       ///< the synchronous residual over the revolution
+  std::vector<FrequencyBand> bands;
+  std::vector<double> segment_start_s;               ///< time segments of the record
+  std::vector<std::array<double, 2>> segment_rms_N;  ///< band-limited residual per segment
+  std::string summary;                               ///< one line: where the excess is
+};
+
+/// What a plot shows of one model: one revolution measured vs model, the residual's spectrum.
+struct ModelView {
+  std::vector<double> angle_deg;
+  std::array<std::vector<double>, 2> measured_N, model_N;  ///< synchronous average (chain removed)
+  std::vector<double> frequency_hz;
+  std::array<std::vector<double>, 2> residual_amplitude_N;  ///< |R(f)| as a sinusoid's amplitude
+};
+
+/// The model after a step (or the starting model).
+struct Stage {
+  std::string added;                    ///< effect added at this step ("" for the starting model)
+  std::vector<Parameter> parameters;    ///< the added effect's
+  std::vector<Parameter> coefficients;  ///< the force law's, refitted
+  std::array<double, 2> residual_rms_N{};
+  std::array<double, 2> residual_percent{};  ///< of the measured RMS over the band
+  double criterion = 0.0;
+  int free_parameters = 0;
+  double gain = 0.0;                       ///< criterion gained over the previous model
+  std::string runner_up;                   ///< the next best candidate ("" if none)
+  double margin_over_runner_up = 0.0;      ///< its criterion minus the winner's
+  std::vector<CandidateScore> candidates;  ///< every candidate scored at this step
+  Localisation localisation;
+  ModelView view;
+};
+
+struct Diagnosis {
+  bool ok = false;
+  std::string message;  ///< why not, when not ok
+  double band_hz = 0.0;
+  int effective_samples = 0;  ///< per axis: 2·(bins in the band)
+  double duration_s = 0.0;
+  double commanded_rpm = 0.0;
+  double spindle_rpm = 0.0;  ///< the final model's speed
+  std::array<double, 2> measured_rms_N{};
+  std::array<double, 2> noise_floor_N{};
+  Stage initial;
+  std::vector<Stage> steps;
+  std::vector<std::string> named_effects;  ///< in the order added
+  std::string stop_reason;
+  std::string verdict;  ///< one sentence
+  model::ModelConfig final_model;
+  double seconds = 0.0;  ///< wall-clock time
+};
+
+/// Diagnoses a record against a starting model (commanded speed in process.spindle_rpm; its
+/// enabled effects are kept, the others are candidates; its values are the fit's starting point,
+/// e.g. the dynamometer's nominal resonance).
+/// @throws std::invalid_argument naming the problem for a record that cannot be diagnosed (too
+///         short, non-finite samples, a band beyond Nyquist, an unknown candidate name)
+Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
+                   const DiagnoseOptions& options = {});
+
+/// The plain model (issue 8: circular path, no runout, no ploughing, rigid, one disc, no
+/// dynamometer) of a configuration, keeping its values as starting points.
+model::ModelConfig plain_model(const model::ModelConfig& config);
+
+}  // namespace millwatch::diagnose

@@ -1,0 +1,114 @@
+#include "core/diagnose/diagnosis_json.hpp"
+
+#include "core/diagnose/catalogue.hpp"
+
+namespace millwatch::diagnose {
+namespace {
+
+nlohmann::json axes(const std::array<double, 2>& v) {
+  return {{"fx", v[0]}, {"fy", v[1]}};
+}
+
+nlohmann::json parameters(const std::vector<Parameter>& ps) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& p : ps) {
+    j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
+  }
+  return j;
+}
+
+nlohmann::json localisation(const Localisation& l) {
+  nlohmann::json flutes = nlohmann::json::array();
+  for (const auto& f : l.flute_rms_N) {
+    flutes.push_back(axes(f));
+  }
+  nlohmann::json bands = nlohmann::json::array();
+  for (const auto& b : l.bands) {
+    bands.push_back({{"band", b.name},
+                     {"holds", b.range},
+                     {"rms_N", axes(b.rms_N)},
+                     {"noise_rms_N", axes(b.noise_rms_N)}});
+  }
+  nlohmann::json segments = nlohmann::json::array();
+  for (std::size_t i = 0; i < l.segment_rms_N.size(); ++i) {
+    segments.push_back({{"start_s", l.segment_start_s[i]}, {"rms_N", axes(l.segment_rms_N[i])}});
+  }
+  return {{"summary", l.summary},
+          {"by_flute_rms_N", flutes},
+          {"by_angle",
+           {{"entry_exit_rms_N", axes(l.entry_exit_rms_N)},
+            {"middle_rms_N", axes(l.middle_rms_N)},
+            {"synchronous_rms_N", axes(l.synchronous_rms_N)}}},
+          {"by_frequency", bands},
+          {"by_time", segments}};
+}
+
+}  // namespace
+
+nlohmann::json to_json(const Stage& s) {
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const auto& c : s.candidates) {
+    nlohmann::json cj = {{"name", c.name}, {"ok", c.ok}};
+    if (c.ok) {
+      cj["criterion"] = c.criterion;
+      cj["gain"] = c.gain;
+      cj["residual_rms_N"] = axes(c.residual_rms_N);
+      cj["parameters"] = parameters(c.parameters);
+      cj["free_parameters"] = c.free_parameters;
+    } else {
+      cj["message"] = c.message;
+    }
+    candidates.push_back(cj);
+  }
+  nlohmann::json j = {
+      {"added", s.added.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.added)},
+      {"parameters", parameters(s.parameters)},
+      {"coefficients", parameters(s.coefficients)},
+      {"residual_rms_N", axes(s.residual_rms_N)},
+      {"residual_percent", axes(s.residual_percent)},
+      {"criterion", s.criterion},
+      {"free_parameters", s.free_parameters},
+      {"candidates", candidates},
+      {"localisation", localisation(s.localisation)}};
+  if (!s.added.empty()) {
+    j["gain"] = s.gain;
+    j["runner_up"] = s.runner_up.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.runner_up);
+    j["margin_over_runner_up"] = s.margin_over_runner_up;
+  }
+  return j;
+}
+
+nlohmann::json to_json(const Diagnosis& d) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : d.steps) {
+    steps.push_back(to_json(s));
+  }
+  const auto& final_rms =
+      d.steps.empty() ? d.initial.residual_rms_N : d.steps.back().residual_rms_N;
+  nlohmann::json cat = nlohmann::json::array();
+  for (const auto& c : catalogue()) {
+    cat.push_back({{"name", c.name},
+                   {"signature", c.signature},
+                   {"extension", c.extension},
+                   {"parameters", c.parameters}});
+  }
+  return {{"named_effects", d.named_effects},
+          {"steps", steps},
+          {"initial", to_json(d.initial)},
+          {"initial_residual_rms_N", axes(d.initial.residual_rms_N)},
+          {"final_residual_rms_N", axes(final_rms)},
+          {"noise_floor_N", axes(d.noise_floor_N)},
+          {"measured_rms_N", axes(d.measured_rms_N)},
+          {"verdict", d.verdict},
+          {"stop_reason", d.stop_reason},
+          {"criterion", "BIC: sum over fx, fy of n_eff*ln(mean square) + p*ln(2*n_eff)"},
+          {"band_hz", d.band_hz},
+          {"effective_samples_per_axis", d.effective_samples},
+          {"duration_s", d.duration_s},
+          {"commanded_rpm", d.commanded_rpm},
+          {"spindle_rpm", d.spindle_rpm},
+          {"seconds", d.seconds},
+          {"catalogue", cat}};
+}
+
+}  // namespace millwatch::diagnose

@@ -1,0 +1,18 @@
+#pragma once
+// A diagnosis as JSON (report.json, millwatch issue 8 item 4): named_effects (in the order
+// added; empty when nothing is missing), steps [{added, parameters {name: {value, sigma}},
+// residual_rms_N {fx, fy}, residual_percent {fx, fy}, criterion, gain, runner_up,
+// margin_over_runner_up, candidates, localisation}], initial (the starting model, same form),
+// initial_residual_rms_N, final_residual_rms_N, noise_floor_N, measured_rms_N (each {fx, fy}),
+// verdict, stop_reason, band_hz, effective_samples_per_axis, criterion ("BIC"), the catalogue.
+
+#include <nlohmann/json.hpp>
+
+#include "core/diagnose/diagnosis.hpp"
+
+namespace millwatch::diagnose {
+
+nlohmann::json to_json(const Diagnosis& d);
+nlohmann::json to_json(const Stage& s);
+
+}  // namespace millwatch::diagnose

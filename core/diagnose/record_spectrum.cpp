@@ -1,0 +1,105 @@
+#include "core/diagnose/record_spectrum.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <unsupported/Eigen/FFT>
+
+namespace millwatch::diagnose {
+
+std::size_t smooth_length(std::size_t n) {
+  for (std::size_t m = n; m > 1; --m) {
+    std::size_t r = m;
+    for (const std::size_t p : {2U, 3U, 5U}) {
+      while (r % p == 0) {
+        r /= p;
+      }
+    }
+    if (r == 1) {
+      return m;
+    }
+  }
+  return n;
+}
+
+std::vector<std::complex<double>> spectrum(std::span<const double> x, std::size_t bins, bool hann) {
+  std::vector<double> in(x.begin(), x.end());
+  const auto n = in.size();
+  if (hann && n > 1) {
+    for (std::size_t i = 0; i < n; ++i) {
+      in[i] *= 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
+                                    static_cast<double>(n));
+    }
+  }
+  std::vector<std::complex<double>> out;
+  Eigen::FFT<double> fft;
+  fft.fwd(out, in);
+  out.resize(std::min(bins, out.size()));
+  return out;
+}
+
+std::size_t last_band_bin(std::size_t n, double sample_rate_hz, double band_hz) {
+  const auto last =
+      static_cast<std::size_t>(std::floor(band_hz * static_cast<double>(n) / sample_rate_hz));
+  return std::min(last, n / 2 > 1 ? n / 2 - 1 : 0);
+}
+
+double band_mean_square(std::span<const std::complex<double>> bins, std::size_t n,
+                        std::size_t last) {
+  double sum = 0.0;
+  for (std::size_t f = 1; f <= last && f < bins.size(); ++f) {
+    sum += std::norm(bins[f]);
+  }
+  const auto nn = static_cast<double>(n);
+  return 2.0 * sum / (nn * nn);
+}
+
+double noise_floor_rms(std::span<const double> x, std::size_t first, std::size_t last) {
+  const std::size_t n = x.size();
+  if (n < 8 || last < first + 2) {
+    return 0.0;
+  }
+  const auto s = spectrum(x, last + 1, true);
+  std::vector<double> power;
+  power.reserve(last - first + 1);
+  for (std::size_t f = std::max<std::size_t>(first, 1); f <= last; ++f) {
+    power.push_back(std::norm(s[f]));
+  }
+  const auto mid = power.begin() + static_cast<std::ptrdiff_t>(power.size() / 2);
+  std::nth_element(power.begin(), mid, power.end());
+  // E|X_f|² = σ²·Σw² for white noise; Σw² = 3N/8 for the Hann window.
+  const double sigma2 = *mid / std::log(2.0) / (0.375 * static_cast<double>(n));
+  return std::sqrt(sigma2 * 2.0 * static_cast<double>(last) / static_cast<double>(n));
+}
+
+std::size_t synchronous_harmonics(std::span<const double> x, double sample_rate_hz,
+                                  double spindle_hz, int harmonics,
+                                  std::vector<std::complex<double>>& out, double phase0_rad) {
+  out.assign(static_cast<std::size_t>(harmonics + 1), {0.0, 0.0});
+  const double revs_per_sample = spindle_hz / sample_rate_hz;
+  const double whole = std::floor(static_cast<double>(x.size()) * revs_per_sample);
+  if (whole < 1.0) {
+    return 0;
+  }
+  const auto used =
+      std::min(x.size(), static_cast<std::size_t>(std::llround(whole / revs_per_sample)));
+  const double step = 2.0 * std::numbers::pi * revs_per_sample;
+  std::vector<std::complex<double>> acc(out.size(), {0.0, 0.0});
+  for (std::size_t n = 0; n < used; ++n) {
+    const std::complex<double> e = std::polar(1.0, -(step * static_cast<double>(n) + phase0_rad));
+    std::complex<double> p = x[n];
+    acc[0] += p;
+    for (int k = 1; k <= harmonics; ++k) {
+      p *= e;
+      acc[static_cast<std::size_t>(k)] += p;
+    }
+  }
+  const auto u = static_cast<double>(used);
+  out[0] = acc[0] / u;
+  for (int k = 1; k <= harmonics; ++k) {
+    out[static_cast<std::size_t>(k)] = 2.0 * acc[static_cast<std::size_t>(k)] / u;
+  }
+  return used;
+}
+
+}  // namespace millwatch::diagnose

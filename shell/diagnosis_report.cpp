@@ -1,0 +1,352 @@
+#include "shell/diagnosis_report.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "core/diagnose/catalogue.hpp"
+#include "core/diagnose/diagnosis_json.hpp"
+#include "shell/output_file.hpp"
+
+extern char** environ;
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+using diagnose::Diagnosis;
+using diagnose::Stage;
+
+std::string quoted(const fs::path& p) {
+  std::string s = p.string();
+  std::string out = "'";
+  for (const char c : s) {
+    out += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return out + "'";
+}
+
+std::string value_sigma(double v, double s) {
+  if (s > 0.0 && std::isfinite(s)) {
+    return fmt::format("{:.4g} ± {:.2g}", v, s);
+  }
+  return fmt::format("{:.4g}", v);
+}
+
+std::string stage_label(const Stage& s, std::size_t i) {
+  return i == 0 ? std::string("starting model") : "+ " + s.added;
+}
+
+/// Runs gnuplot on a script; "" on success, else why not.
+std::string run_gnuplot(const fs::path& script, const fs::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log_s = log.string();
+  posix_spawn_file_actions_addopen(&actions, 2, log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  std::string program = "gnuplot";
+  std::string script_s = script.string();
+  char* argv[] = {program.data(), script_s.data(), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    return std::string("cannot run gnuplot (") + std::strerror(rc) +
+           "); install it (Debian: gnuplot-nox)";
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    return "gnuplot failed on " + script_s + "; see " + log_s;
+  }
+  return "";
+}
+
+/// The plots' data files and script; returns the PNGs it will draw.
+std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
+                                       const std::string& title, fs::path& script_path) {
+  std::vector<const Stage*> stages = {&d.initial};
+  for (const auto& s : d.steps) {
+    stages.push_back(&s);
+  }
+  std::vector<fs::path> pngs;
+  std::string script =
+      "set terminal pngcairo size 1000,600 noenhanced\nset grid\nset datafile separator ','\n";
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    const Stage& s = *stages[i];
+    const auto& v = s.view;
+    std::string rev = "angle_deg,measured_fx_N,model_fx_N,measured_fy_N,model_fy_N\n";
+    for (std::size_t g = 0; g < v.angle_deg.size(); ++g) {
+      rev += fmt::format("{:.3f},{:.6g},{:.6g},{:.6g},{:.6g}\n", v.angle_deg[g], v.measured_N[0][g],
+                         v.model_N[0][g], v.measured_N[1][g], v.model_N[1][g]);
+    }
+    const fs::path rev_csv = dir / fmt::format("revolution_{}.csv", i);
+    write_text_file(rev_csv, rev);
+    std::string spec = "frequency_hz,residual_fx_N,residual_fy_N\n";
+    for (std::size_t b = 0; b < v.frequency_hz.size(); ++b) {
+      spec += fmt::format("{:.4f},{:.6g},{:.6g}\n", v.frequency_hz[b],
+                          std::max(v.residual_amplitude_N[0][b], 1e-9),
+                          std::max(v.residual_amplitude_N[1][b], 1e-9));
+    }
+    const fs::path spec_csv = dir / fmt::format("spectrum_{}.csv", i);
+    write_text_file(spec_csv, spec);
+    const fs::path rev_png = dir / fmt::format("revolution_{}.png", i);
+    const fs::path spec_png = dir / fmt::format("spectrum_{}.png", i);
+    const std::string label = stage_label(s, i);
+    script += fmt::format(
+        "set output {0}\nset title \"{1}: {2} — residual {3:.4f}, {4:.4f} N\"\n"
+        "set xlabel 'model angle (deg)'\nset ylabel 'force on the tool (N)'\nset xrange [0:360]\n"
+        "set key outside right\n"
+        "plot {5} skip 1 using 1:2 with lines lw 2 lc rgb '#1f77b4' title 'fx measured', "
+        "'' skip 1 using 1:3 with lines dt 2 lw 2 lc rgb '#0b3d66' title 'fx model', "
+        "'' skip 1 using 1:4 with lines lw 2 lc rgb '#d62728' title 'fy measured', "
+        "'' skip 1 using 1:5 with lines dt 2 lw 2 lc rgb '#7a1010' title 'fy model'\n"
+        "set xrange [*:*]\n",
+        quoted(rev_png), title, label, s.residual_rms_N[0], s.residual_rms_N[1], quoted(rev_csv));
+    // A white noise of RMS σ over the band has a mean bin amplitude 2σ/√(2·bins)... shown as the
+    // floor's amplitude per bin: 2·σ_floor/√(n_eff).
+    const double fx_level = 2.0 * d.noise_floor_N[0] / std::sqrt(std::max(1, d.effective_samples));
+    const double fy_level = 2.0 * d.noise_floor_N[1] / std::sqrt(std::max(1, d.effective_samples));
+    script += fmt::format(
+        "set output {0}\nset title \"{1}: {2} — residual spectrum\"\nset logscale y\nset key inside top right\n"
+        "set xlabel 'frequency (Hz)'\nset ylabel 'amplitude (N)'\n"
+        "plot {3} skip 1 using 1:2 with lines lc rgb '#1f77b4' title 'fx', "
+        "'' skip 1 using 1:3 with lines lc rgb '#d62728' title 'fy', "
+        "{4} with lines dt 2 lc rgb '#0b3d66' title 'fx noise floor (mean bin)', "
+        "{5} with lines dt 2 lc rgb '#7a1010' title 'fy noise floor (mean bin)'\n"
+        "unset logscale y\n",
+        quoted(spec_png), title, label, quoted(spec_csv), fx_level, fy_level);
+    pngs.push_back(rev_png);
+    pngs.push_back(spec_png);
+  }
+  script += "unset output\n";
+  script_path = dir / "plots.gp";
+  write_text_file(script_path, script);
+  return pngs;
+}
+
+std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
+  std::string out;
+  for (const auto& p : ps) {
+    out += (out.empty() ? "" : ", ") + p.name + " = " + value_sigma(p.value, p.sigma);
+  }
+  return out.empty() ? "—" : out;
+}
+
+std::string markdown(const Diagnosis& d, const std::string& title, bool have_plots,
+                     const std::string& plot_problem) {
+  std::string md = fmt::format("# Diagnosis: {}\n\n**{}**\n\n", title, d.verdict);
+  md += fmt::format(
+      "Band compared: 0–{:.0f} Hz ({} independent values per axis over {:.3f} s); commanded "
+      "{:.0f} rpm, model at {:.1f} rpm. Noise floor (from the data: the median of the "
+      "spectrum over the band): fx {:.4f} N, fy {:.4f} N. Measured RMS over the band: fx {:.4f} N, "
+      "fy {:.4f} N. Criterion: BIC with the effective number of samples; an effect must gain "
+      "at least 10. Stopped: {}. Diagnosis took {:.1f} s.\n\n",
+      d.band_hz, d.effective_samples, d.duration_s, d.commanded_rpm, d.spindle_rpm,
+      d.noise_floor_N[0], d.noise_floor_N[1], d.measured_rms_N[0], d.measured_rms_N[1],
+      d.stop_reason, d.seconds);
+  md +=
+      "## Steps\n\n| step | effect added | parameters (± 1σ) | residual fx (N, %) | residual fy "
+      "(N, %) | × noise floor | BIC | ΔBIC gained | runner-up (ΔBIC behind) |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<const Stage*> stages = {&d.initial};
+  for (const auto& s : d.steps) {
+    stages.push_back(&s);
+  }
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    const Stage& s = *stages[i];
+    const double ratio = std::max(s.residual_rms_N[0] / std::max(d.noise_floor_N[0], 1e-300),
+                                  s.residual_rms_N[1] / std::max(d.noise_floor_N[1], 1e-300));
+    md += fmt::format(
+        "| {} | {} | {} | {:.4f} ({:.2f} %) | {:.4f} ({:.2f} %) | {:.2f} | {:.1f} | {} | {} |\n", i,
+        i == 0 ? "(starting model)" : s.added, i == 0 ? "—" : parameter_text(s.parameters),
+        s.residual_rms_N[0], s.residual_percent[0], s.residual_rms_N[1], s.residual_percent[1],
+        ratio, s.criterion, i == 0 ? "—" : fmt::format("{:.1f}", s.gain),
+        s.runner_up.empty() ? "—"
+                            : fmt::format("{} ({:.1f})", s.runner_up, s.margin_over_runner_up));
+  }
+  md += "\nForce coefficients of the final model: " + parameter_text(stages.back()->coefficients) +
+        ".\n";
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    const Stage& s = *stages[i];
+    const Stage& scored = i + 1 < stages.size() ? *stages[i + 1] : s;
+    md += fmt::format("\n## Stage {}: {}\n\nWhere the residual is: {}.\n\n", i, stage_label(s, i),
+                      s.localisation.summary);
+    md +=
+        "| frequency band | holds | residual fx / fy (N) | noise's share fx / fy (N) |\n"
+        "|---|---|---|---|\n";
+    for (const auto& b : s.localisation.bands) {
+      md += fmt::format("| {} | {} | {:.4f} / {:.4f} | {:.4f} / {:.4f} |\n", b.name, b.range,
+                        b.rms_N[0], b.rms_N[1], b.noise_rms_N[0], b.noise_rms_N[1]);
+    }
+    md += "\nSynchronous residual per flute (fx / fy, N): ";
+    for (std::size_t j = 0; j < s.localisation.flute_rms_N.size(); ++j) {
+      md += fmt::format("{}CE{} {:.4f} / {:.4f}", j == 0 ? "" : "; ", j + 1,
+                        s.localisation.flute_rms_N[j][0], s.localisation.flute_rms_N[j][1]);
+    }
+    md += fmt::format(
+        ". By angle: entry/exit {:.4f} / {:.4f} N, middle {:.4f} / {:.4f} N. By time (band-limited "
+        "residual per eighth of the record, |F| N): ",
+        s.localisation.entry_exit_rms_N[0], s.localisation.entry_exit_rms_N[1],
+        s.localisation.middle_rms_N[0], s.localisation.middle_rms_N[1]);
+    for (std::size_t k = 0; k < s.localisation.segment_rms_N.size(); ++k) {
+      md += fmt::format(
+          "{}{:.4f}", k == 0 ? "" : ", ",
+          std::hypot(s.localisation.segment_rms_N[k][0], s.localisation.segment_rms_N[k][1]));
+    }
+    md += ".\n";
+    const auto& cands =
+        i + 1 < stages.size() ? scored.candidates : (i == 0 ? d.initial.candidates : s.candidates);
+    if (!cands.empty() && (i + 1 < stages.size() || i == 0)) {
+      md +=
+          "\nCandidates scored from this model:\n\n| candidate | ΔBIC gained | residual fx / fy "
+          "(N) | parameters |\n|---|---|---|---|\n";
+      for (const auto& c : cands) {
+        if (c.ok) {
+          md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {} |\n", c.name, c.gain,
+                            c.residual_rms_N[0], c.residual_rms_N[1], parameter_text(c.parameters));
+        } else {
+          md += fmt::format("| {} | — | — | not fitted: {} |\n", c.name, c.message);
+        }
+      }
+    }
+    if (have_plots) {
+      md += fmt::format(
+          "\n![stage {0} revolution](revolution_{0}.png)\n"
+          "![stage {0} spectrum](spectrum_{0}.png)\n",
+          i);
+    }
+  }
+  if (!have_plots) {
+    md += "\nPlots: not drawn (" + plot_problem + "); their data are in the CSV files.\n";
+  }
+  md +=
+      "\n## Catalogue\n\n| candidate | signature | extension | free parameters |\n"
+      "|---|---|---|---|\n";
+  for (const auto& c : diagnose::catalogue()) {
+    md += fmt::format("| {} | {} | {} | {} |\n", c.name, c.signature, c.extension, c.parameters);
+  }
+  return md;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    switch (c) {
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+/// The markdown as HTML: headings, paragraphs, tables and images (the subset written above).
+std::string html(const std::string& md, const std::string& title) {
+  std::string out = "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>" +
+                    html_escape(title) +
+                    "</title><style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
+                    "table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px}"
+                    "img{max-width:48%}</style></head><body>\n";
+  std::size_t pos = 0;
+  bool in_table = false;
+  while (pos < md.size()) {
+    std::size_t end = md.find('\n', pos);
+    if (end == std::string::npos) {
+      end = md.size();
+    }
+    const std::string line = md.substr(pos, end - pos);
+    pos = end + 1;
+    const bool row = !line.empty() && line[0] == '|';
+    if (in_table && !row) {
+      out += "</table>\n";
+      in_table = false;
+    }
+    if (row) {
+      if (line.rfind("|---", 0) == 0) {
+        continue;
+      }
+      out += in_table ? "<tr>" : "<table><tr>";
+      const bool head = !in_table;
+      in_table = true;
+      std::size_t c = 1;
+      while (c < line.size()) {
+        const std::size_t e = line.find('|', c);
+        if (e == std::string::npos) {
+          break;
+        }
+        out += (head ? "<th>" : "<td>") + html_escape(line.substr(c + 1, e - c - 2)) +
+               (head ? "</th>" : "</td>");
+        c = e + 1;
+      }
+      out += "</tr>\n";
+    } else if (line.rfind("## ", 0) == 0) {
+      out += "<h2>" + html_escape(line.substr(3)) + "</h2>\n";
+    } else if (line.rfind("# ", 0) == 0) {
+      out += "<h1>" + html_escape(line.substr(2)) + "</h1>\n";
+    } else if (line.rfind("![", 0) == 0) {
+      const std::size_t a = line.find("](");
+      out += "<img src=\"" + html_escape(line.substr(a + 2, line.size() - a - 3)) + "\" alt=\"" +
+             html_escape(line.substr(2, a - 2)) + "\">\n";
+    } else if (!line.empty()) {
+      std::string text = html_escape(line);
+      if (text.rfind("**", 0) == 0 && text.size() > 4) {
+        text = "<b>" + text.substr(2, text.size() - 4) + "</b>";
+      }
+      out += "<p>" + text + "</p>\n";
+    }
+  }
+  if (in_table) {
+    out += "</table>\n";
+  }
+  return out + "</body></html>\n";
+}
+
+}  // namespace
+
+ReportFiles write_diagnosis_report(const Diagnosis& d, const fs::path& dir,
+                                   const std::string& title, bool plots) {
+  ReportFiles out;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) {
+    throw std::runtime_error(dir.string() + ": cannot create the report folder (" + ec.message() +
+                             ")");
+  }
+  const fs::path abs = fs::absolute(dir);
+  write_text_file(abs / "report.json", diagnose::to_json(d).dump(2) + "\n");
+  out.written.push_back(abs / "report.json");
+  bool have_plots = false;
+  if (plots) {
+    fs::path script;
+    const auto pngs = write_plot_files(d, abs, title, script);
+    out.plot_problem = run_gnuplot(script, abs / "gnuplot.log");
+    have_plots = out.plot_problem.empty();
+    if (have_plots) {
+      out.written.insert(out.written.end(), pngs.begin(), pngs.end());
+    }
+  } else {
+    out.plot_problem = "--no-plots";
+  }
+  const std::string md = markdown(d, title, have_plots, out.plot_problem);
+  write_text_file(abs / "report.md", md);
+  write_text_file(abs / "report.html", html(md, "Diagnosis: " + title));
+  out.written.push_back(abs / "report.md");
+  out.written.push_back(abs / "report.html");
+  return out;
+}
+
+}  // namespace millwatch::shell

@@ -1,0 +1,125 @@
+// End-to-end tests of `millwatch diagnose CUT --config C.json --report DIR` as a user runs it:
+// a recorded cut with a hidden runout (CSV, a configuration describing the cut as commanded),
+// the report's files and report.json's keys; bad input gives a clear error and exit code 2.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/model/model_config.hpp"
+#include "tests/support/hidden_effect_cut.hpp"
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A recorded cut with a hidden runout, as CSV, and its configuration (the cut as commanded).
+struct CutFiles {
+  fs::path csv, config;
+};
+
+CutFiles write_cut(const fs::path& dir, double duration_s) {
+  const auto cut = test::hidden_effect_cut({"runout"}, {}, duration_s);
+  CutFiles f{dir / "cut.csv", dir / "cut_config.json"};
+  std::FILE* out = std::fopen(f.csv.c_str(), "w");
+  std::fprintf(out, "t_s,fx_N,fy_N,fz_N\n");
+  for (std::size_t i = 0; i < cut.record.force_N[0].size(); ++i) {
+    std::fprintf(out, "%.9f,%.6f,%.6f,0\n", static_cast<double>(i) / cut.record.sample_rate_hz,
+                 cut.record.force_N[0][i], cut.record.force_N[1][i]);
+  }
+  std::fclose(out);
+  nlohmann::json c = {{"model", model::to_json(cut.start)},
+                      {"sample_rate_hz", cut.record.sample_rate_hz},
+                      {"axis_map", {{"x", "fx"}, {"y", "fy"}, {"z", "fz"}}}};
+  std::ofstream(f.config) << c.dump(2);
+  return f;
+}
+
+TEST(DiagnoseCommand, WritesTheReportAndNamesTheHiddenRunout) {
+  const fs::path dir = test::fresh_temp_dir();
+  const CutFiles f = write_cut(dir, 0.3);
+  const fs::path report = dir / "report";
+  const auto r =
+      test::run_command(test::millwatch_cli() + " diagnose " + f.csv.string() + " --config " +
+                        f.config.string() + " --report " + report.string() + " --no-progress");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("runout"), std::string::npos) << r.output;
+  for (const char* name : {"report.md", "report.html", "report.json"}) {
+    EXPECT_TRUE(fs::exists(report / name)) << name;
+  }
+  std::ifstream in(report / "report.json");
+  const auto j = nlohmann::json::parse(in);
+  for (const char* key : {"named_effects", "steps", "initial_residual_rms_N",
+                          "final_residual_rms_N", "noise_floor_N", "verdict"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  ASSERT_EQ(j["named_effects"].size(), 1U) << j["verdict"];
+  EXPECT_EQ(j["named_effects"][0], "runout");
+  ASSERT_EQ(j["steps"].size(), 1U);
+  const auto& step = j["steps"][0];
+  EXPECT_EQ(step["added"], "runout");
+  EXPECT_TRUE(step["parameters"].contains("rho_um"));
+  EXPECT_TRUE(step["parameters"]["rho_um"].contains("sigma"));
+  for (const char* axis : {"fx", "fy"}) {
+    EXPECT_LT(step["residual_rms_N"][axis].get<double>(),
+              j["initial_residual_rms_N"][axis].get<double>());
+    EXPECT_LE(j["final_residual_rms_N"][axis].get<double>(),
+              1.3 * j["noise_floor_N"][axis].get<double>());
+  }
+  EXPECT_TRUE(step.contains("criterion"));
+  EXPECT_FALSE(j["verdict"].get<std::string>().empty());
+  // The plots, when gnuplot is there (before and after the step).
+  if (fs::exists(report / "revolution_0.png")) {
+    for (const char* name : {"revolution_1.png", "spectrum_0.png", "spectrum_1.png"}) {
+      EXPECT_TRUE(fs::exists(report / name)) << name;
+    }
+  }
+  std::ifstream md(report / "report.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("| 1 | runout |"), std::string::npos) << text.substr(0, 2000);
+}
+
+TEST(DiagnoseCommand, BadInputGivesAClearError) {
+  const fs::path dir = test::fresh_temp_dir();
+  const CutFiles f = write_cut(dir, 0.05);  // 21 revolutions: enough to read, checked below
+  const std::string cli = test::millwatch_cli() + " diagnose ";
+  // A recording that does not exist.
+  auto r = test::run_command(cli + (dir / "none.csv").string() + " --config " + f.config.string() +
+                             " --report " + (dir / "r1").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("none.csv: no such recording"), std::string::npos) << r.output;
+  // A configuration with a value out of range names the field.
+  {
+    std::ifstream in(f.config);
+    auto c = nlohmann::json::parse(in);
+    c["model"]["process"]["spindle_rpm"] = -5;
+    std::ofstream(dir / "bad.json") << c.dump();
+  }
+  r = test::run_command(cli + f.csv.string() + " --config " + (dir / "bad.json").string() +
+                        " --report " + (dir / "r2").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("spindle_rpm"), std::string::npos) << r.output;
+  // Too short a stretch of the record.
+  r = test::run_command(cli + f.csv.string() + " --config " + f.config.string() +
+                        " --to-s 0.01 --report " + (dir / "r3").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("less than 10 revolutions"), std::string::npos) << r.output;
+  // An unknown candidate is named with the known ones.
+  r = test::run_command(cli + f.csv.string() + " --config " + f.config.string() +
+                        " --candidates runout,gremlins --report " + (dir / "r4").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown candidate 'gremlins'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("mains_hum"), std::string::npos) << r.output;
+  // No report is left behind by a failed run.
+  EXPECT_FALSE(fs::exists(dir / "r3" / "report.json"));
+}
+
+}  // namespace
+}  // namespace millwatch
