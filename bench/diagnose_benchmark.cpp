@@ -13,8 +13,8 @@ namespace {
 namespace diagnose = millwatch::diagnose;
 
 void BM_DiagnoseOneSecondAt50kHz(benchmark::State& state) {
-  const auto cut = millwatch::test::hidden_effect_cut({"runout", "spindle_speed_error"}, {}, 1.0,
-                                                      50000.0);
+  const auto cut =
+      millwatch::test::hidden_effect_cut({"runout", "spindle_speed_error"}, {}, 1.0, 50000.0);
   diagnose::Diagnosis d;
   for (auto _ : state) {
     d = diagnose::diagnose(cut.record, cut.start);
@@ -22,10 +22,8 @@ void BM_DiagnoseOneSecondAt50kHz(benchmark::State& state) {
   }
   state.counters["effects_named"] = static_cast<double>(d.named_effects.size());
   state.counters["samples"] = static_cast<double>(cut.record.force_N[0].size());
-  state.counters["final_over_floor_x"] = d.steps.empty()
-                                             ? 0.0
-                                             : d.steps.back().residual_rms_N[0] /
-                                                   d.noise_floor_N[0];
+  state.counters["final_over_floor_x"] =
+      d.steps.empty() ? 0.0 : d.steps.back().residual_rms_N[0] / d.noise_floor_N[0];
   state.SetLabel(d.verdict.substr(0, 60));
 }
 BENCHMARK(BM_DiagnoseOneSecondAt50kHz)->Unit(benchmark::kSecond)->Iterations(1);

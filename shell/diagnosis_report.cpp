@@ -113,7 +113,8 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
     const double fx_level = 2.0 * d.noise_floor_N[0] / std::sqrt(std::max(1, d.effective_samples));
     const double fy_level = 2.0 * d.noise_floor_N[1] / std::sqrt(std::max(1, d.effective_samples));
     script += fmt::format(
-        "set output {0}\nset title \"{1}: {2} — residual spectrum\"\nset logscale y\nset key inside top right\n"
+        "set output {0}\nset title \"{1}: {2} — residual spectrum\"\nset logscale y\nset key "
+        "inside top right\n"
         "set xlabel 'frequency (Hz)'\nset ylabel 'amplitude (N)'\n"
         "plot {3} skip 1 using 1:2 with lines lc rgb '#1f77b4' title 'fx', "
         "'' skip 1 using 1:3 with lines lc rgb '#d62728' title 'fy', "

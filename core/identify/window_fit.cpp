@@ -782,7 +782,7 @@ struct WindowFitter::Impl {
     }
     if (best.size() == 0) {  // no start refined: none admissible, or no finite residual
       *cost = std::numeric_limits<double>::infinity();
-      return starts.empty() ? initial_theta(p.config, 0.0, 0.0, 0.0) : starts.front().second;
+      return starts.empty() ? initial_theta(p.config(), 0.0, 0.0, 0.0) : starts.front().second;
     }
     relabel(best);
     const double prior = p.prior_weight;
@@ -883,7 +883,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   out.iterations += full_iterations;
   if (!std::isfinite(cost)) {
     out.message = "the fit did not converge (no start gave a finite residual)";
-    return out;
+    return joint;
   }
   // The weak runout prior, at the noise level the data-only fit leaves.
   if (options.runout_prior_um > 0.0 && options.fit_runout) {
