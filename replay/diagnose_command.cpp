@@ -150,6 +150,17 @@ int diagnose_one(const DiagnoseCliOptions& o) {
   if (source->sample_rate_hz() > 0.0 && (config_rate_hz <= 0.0 || source->rate_stated())) {
     base["sample_rate_hz"] = source->sample_rate_hz();
   }
+  // The monitor's low-pass plays no part here (the diagnosis compares its own band): unless
+  // configured, it is set where the monitor's checks against the tooth-passing frequency pass.
+  const double rate_hz =
+      base.is_object() && base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
+          ? base["sample_rate_hz"].get<double>()
+          : 0.0;
+  if (rate_hz > 0.0 && base.is_object() &&
+      !(base.contains("filter") && base["filter"].is_object() &&
+        base["filter"].contains("cutoff_hz"))) {
+    base["filter"]["cutoff_hz"] = 0.4 * rate_hz;
+  }
   monitor::MonitorConfig config;
   try {
     config = monitor::monitor_config_from_json(base);

@@ -523,7 +523,10 @@ struct WindowFitter::Impl {
       const Eigen::Index ncol = a.cols();
       Eigen::VectorXd r = y - b0;
       last_coefficients = Eigen::VectorXd::Zero(ncol);
-      if (ncol > 0) {
+      if (!r.allFinite() || !a.allFinite()) {
+        return Eigen::VectorXd::Constant(residual_size(), 1e6);  // the model failed there
+      }
+      if (ncol > 0 && a.colwise().norm().maxCoeff() > 0.0) {
         // Columns no axis compared sees (e.g. the axial coefficients without fz) stay at 0.
         std::vector<Eigen::Index> used;
         const double biggest = a.colwise().norm().maxCoeff();
@@ -931,6 +934,11 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     }
   }
   const auto nf = static_cast<Eigen::Index>(free.size());
+  if (nf == 0 || !j.allFinite() || !r.allFinite()) {
+    out.message = nf == 0 ? "the fit did not converge (the force depends on no parameter there)"
+                          : "the fit did not converge (the residual is not finite)";
+    return out;
+  }
   Eigen::MatrixXd jf(mres, nf);
   for (Eigen::Index i = 0; i < nf; ++i) {
     jf.col(i) = j.col(free[static_cast<std::size_t>(i)]);
