@@ -937,7 +937,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   if (nf == 0 || !j.allFinite() || !r.allFinite()) {
     out.message = nf == 0 ? "the fit did not converge (the force depends on no parameter there)"
                           : "the fit did not converge (the residual is not finite)";
-    return out;
+    return joint;
   }
   Eigen::MatrixXd jf(mres, nf);
   for (Eigen::Index i = 0; i < nf; ++i) {
