@@ -121,13 +121,17 @@ bool CsvCutReader::read_line() {
   while (true) {
     const char* from = buffer_.data() + buffer_begin_;
     const std::size_t available = buffer_end_ - buffer_begin_;
-    if (const auto* eol = static_cast<const char*>(std::memchr(from, '\n', available));
+    // memchr needs a valid pointer even for 0 bytes: the buffer is empty before the first read.
+    if (const auto* eol =
+            available == 0 ? nullptr : static_cast<const char*>(std::memchr(from, '\n', available));
         eol != nullptr) {
       text_.append(from, eol);
       buffer_begin_ += static_cast<std::size_t>(eol - from) + 1;
       break;
     }
-    text_.append(from, available);  // a line longer than the buffer's rest: keep reading
+    if (available > 0) {
+      text_.append(from, available);  // a line longer than the buffer's rest: keep reading
+    }
     buffer_begin_ = buffer_end_ = 0;
     if (at_end_) {
       if (text_.empty()) {
