@@ -208,21 +208,31 @@ MatFileCheck check_mat_file(const std::filesystem::path& path, std::int64_t max_
   in.read(head.data(), head.size());
   const auto got = static_cast<std::size_t>(in.gcount());
   const std::string_view h(head.data(), got);
-  if (got >= 520 && h.substr(512, 8) == std::string_view("\x89HDF\r\n\x1A\n", 8)) {
+  // matio picks the format from the header's version field (0x0100 v5, 0x0200 v7.3), not
+  // from the HDF5 signature: a v5 header over an HDF5 block is read as v5 and must be checked
+  // as v5 (found by fuzz_mat_cut_reader: such a file made matio allocate 1.3 GB).
+  const bool has_endian = got >= 128 && (h.substr(126, 2) == "IM" || h.substr(126, 2) == "MI");
+  const bool swap = has_endian && h.substr(126, 2) == "MI";
+  std::uint16_t version = 0;
+  if (has_endian) {
+    std::memcpy(&version, head.data() + 124, 2);
+    version = swap ? __builtin_bswap16(version) : version;
+  }
+  if (has_endian && version == 0x0200) {
     out.version = MatVersion::kV73;
-    if (h.substr(0, 19) != "MATLAB 7.3 MAT-file") {
+    if (got < 520 || h.substr(512, 8) != std::string_view("\x89HDF\r\n\x1A\n", 8)) {
+      out.problem = "a v7.3 MAT-file header without the HDF5 file behind it";
+    } else if (h.substr(0, 19) != "MATLAB 7.3 MAT-file") {
       out.problem = "an HDF5 file that is not a MATLAB 7.3 MAT-file";
     }
     return out;
   }
-  if (got < 128 || h.substr(0, 6) != "MATLAB" ||
-      (h.substr(126, 2) != "IM" && h.substr(126, 2) != "MI")) {
+  if (!has_endian || h.substr(0, 6) != "MATLAB" || version != 0x0100) {
     out.problem = h.substr(0, 6) == "MATLAB" ? "a damaged MAT-file header"
                                              : "not a MAT-file of version 5 or 7.3 (a v4 file: "
                                                "save it with -v7 or -v7.3)";
     return out;
   }
-  const bool swap = h.substr(126, 2) == "MI";
   in.clear();
   in.seekg(0, std::ios::end);
   const auto size = static_cast<std::uint64_t>(std::max<std::streamoff>(in.tellg(), 0));

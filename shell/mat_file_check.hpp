@@ -14,6 +14,8 @@
 //   v7.3  an HDF5 file behind the 512-byte user block whose text says "MATLAB 7.3 MAT-file":
 //         HDF5 reads it (the reader refuses variables above its limit before reading them).
 //   v4    (no header of its own) is not read: save with -v7 or -v7.3.
+// The header's version field (0x0100, 0x0200) decides which, as in matio: an HDF5 signature
+// behind a v5 header does not make the file v7.3 (a fuzzer's find: matio read it as v5).
 
 #include <cstdint>
 #include <filesystem>

@@ -383,6 +383,25 @@ TEST(MatCutReader, ADamagedV73FileIsAnErrorNamingIt) {
                                 "damaged: HDF5 cannot open it)");
 }
 
+TEST(MatCutReader, TheHeadersVersionNotTheHdf5SignatureDecidesTheFormat) {
+  // Found by fuzz_mat_cut_reader: a v5 header (version 0x0100) with the HDF5 signature at byte
+  // 512. The check took it for v7.3 and let HDF5 judge it; matio reads it as v5 and trusted a
+  // damaged tag (it asked for 1.28 GB). The file is checked as what matio will read it as.
+  const fs::path dir = test::fresh_temp_dir();
+  write_mat(dir / "v5.mat", MAT_FT_MAT5, {doubles("Fx", {80, 1}, std::vector<double>(80, 1.0))});
+  patch(dir / "v5.mat", 132, std::string("\xff\xff\xff\x7f", 4));  // the first tag: 2 GiB
+  patch(dir / "v5.mat", 512, std::string("\x89HDF\r\n\x1A\n", 8));
+  EXPECT_NE(error_of(dir / "v5.mat").find("the element at byte 128 claims 2147483647 bytes"),
+            std::string::npos)
+      << error_of(dir / "v5.mat");
+  // A v7.3 header without HDF5 behind it.
+  write_mat(dir / "v73.mat", MAT_FT_MAT5, {doubles("Fx", {80, 1}, std::vector<double>(80, 1.0))});
+  patch(dir / "v73.mat", 124, std::string("\x00\x02", 2));
+  EXPECT_EQ(
+      error_of(dir / "v73.mat"),
+      (dir / "v73.mat").string() + ": a v7.3 MAT-file header without the HDF5 file behind it");
+}
+
 TEST(MatCutReader, AFileWithoutVariablesSaysSo) {
   const fs::path path = test::fresh_temp_dir() / "empty.mat";
   write_mat(path, MAT_FT_MAT5, {});
