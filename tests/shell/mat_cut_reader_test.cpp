@@ -402,6 +402,19 @@ TEST(MatCutReader, TheHeadersVersionNotTheHdf5SignatureDecidesTheFormat) {
       (dir / "v73.mat").string() + ": a v7.3 MAT-file header without the HDF5 file behind it");
 }
 
+TEST(MatCutReader, AVariableOfNoBytesIsRefused) {
+  // Found by fuzz_mat_cut_reader: a top-level matrix element claiming 0 bytes. matio reads its
+  // flags, dimensions and name from the bytes after it anyway and trusted a name length it found
+  // there (it asked for 3.9 GB); the check took the element for an empty matrix.
+  const fs::path path = test::fresh_temp_dir() / "empty_element.mat";
+  write_mat(path, MAT_FT_MAT5, three_vectors());
+  patch(path, 132, std::string(4, '\0'));
+  EXPECT_EQ(error_of(path),
+            path.string() +
+                ": the element at byte 128: a variable of 0 bytes (no array flags, dimensions or "
+                "name)");
+}
+
 TEST(MatCutReader, AFileWithoutVariablesSaysSo) {
   const fs::path path = test::fresh_temp_dir() / "empty.mat";
   write_mat(path, MAT_FT_MAT5, {});
