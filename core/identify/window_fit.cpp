@@ -41,24 +41,32 @@ struct Setting {
 /// too small to see in the fit but large enough to ruin a derivative taken over 1e-5 µm.
 constexpr double kDifferenceStep = 1e-2;
 
-/// Levenberg–Marquardt on a few scaled parameters with a central-difference Jacobian.
+/// Levenberg–Marquardt on a few scaled parameters. The Jacobian by forward differences (one
+/// model evaluation a parameter) while far from the optimum, by central differences (two) near
+/// it, where the forward difference's O(h) error would bias where it stops; `near`: x is
+/// already close (a seed, a refit), central from the first iteration.
 template <typename Residual>
 int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::VectorXd& scale,
-                        int max_iterations, double* cost_out) {
+                        int max_iterations, double* cost_out, bool near = true) {
   Eigen::VectorXd r = residual(x);
   double cost = r.squaredNorm();
   double lambda = 1e-3;
   const auto n = x.size();
   Eigen::MatrixXd j(r.size(), n);
+  bool central = near;
   int it = 0;
   for (; it < max_iterations; ++it) {
     for (Eigen::Index i = 0; i < n; ++i) {
       Eigen::VectorXd xp = x;
       const double h = kDifferenceStep * scale[i];
       xp[i] += h;
-      Eigen::VectorXd xm = x;
-      xm[i] -= h;
-      j.col(i) = (residual(xp) - residual(xm)) / (2.0 * h);
+      if (central) {
+        Eigen::VectorXd xm = x;
+        xm[i] -= h;
+        j.col(i) = (residual(xp) - residual(xm)) / (2.0 * h);
+      } else {
+        j.col(i) = (residual(xp) - r) / h;
+      }
     }
     const Eigen::MatrixXd js = j * scale.asDiagonal();  // scaled parameters
     const Eigen::MatrixXd jtj = js.transpose() * js;
@@ -68,6 +76,15 @@ int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::Ve
       Eigen::MatrixXd a = jtj;
       a.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
       const Eigen::VectorXd step = -a.ldlt().solve(g);
+      // Converged at the model's resolution: the Jacobian comes from differences over
+      // kDifferenceStep, and on the angle grid the force moves in small jumps below it (a
+      // step of 1e-4 µm in runout can double the cost near the optimum): a step far below the
+      // difference step is not worth a model evaluation, nor is a negligible promised decrease.
+      const double promised = -(2.0 * g.dot(step) + step.dot(jtj * step));
+      if (central && (step.norm() < 0.1 * kDifferenceStep || promised < 1e-6 * cost)) {
+        *cost_out = cost;
+        return it;
+      }
       const Eigen::VectorXd trial = x + scale.cwiseProduct(step);
       const Eigen::VectorXd rt = residual(trial);
       const double ct = rt.squaredNorm();
@@ -78,16 +95,20 @@ int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::Ve
         cost = ct;
         lambda = std::max(lambda / 3.0, 1e-9);
         improved = true;
-        if (relative < 1e-5 || step.norm() < 1e-4) {
+        if (central && (relative < 1e-5 || step.norm() < 1e-4)) {
           *cost_out = cost;
           return it + 1;
         }
+        central = central || relative < 1e-3 || step.norm() < 1e-2;
       } else {
         lambda *= 4.0;
       }
     }
     if (!improved) {
-      break;
+      if (central) {
+        break;
+      }
+      central = true;  // the forward difference may have pointed nowhere useful
     }
   }
   *cost_out = cost;
@@ -188,8 +209,16 @@ struct WindowFitter::Impl {
     std::array<std::vector<std::complex<double>>, 3> gains;  // filter (× resonance) at k·f
     bool resonance = false;  // the dynamometer's resonance is in the gains
     std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
-    Eigen::VectorXd cached_key;
-    bool have_cache = false;
+    // The last few evaluations (Levenberg–Marquardt comes back to its base point after each
+    // difference; an alignment alone reuses the columns).
+    struct Cached {
+      Eigen::VectorXd key;
+      std::vector<std::array<std::vector<std::complex<double>>, 3>> columns;
+    };
+    static constexpr std::size_t kCached = 4;
+    std::array<Cached, kCached> cache;
+    std::size_t cache_next = 0;
+    std::size_t cache_current = kCached;  // the entry `columns` holds (kCached: none)
     long evaluations = 0;  // model evaluations (for the cost figures)
 
     void prepare(const MeasuredRevolution& m) {
@@ -243,7 +272,10 @@ struct WindowFitter::Impl {
       }
       config.effects.runout.enabled = true;
       workspace.reserve(config, setting.steps);
-      have_cache = false;
+      for (auto& entry : cache) {
+        entry.key.resize(0);
+      }
+      cache_current = kCached;
     }
 
     /// The filter's response (times the dynamometer's resonance when on) at each entry.
@@ -277,8 +309,15 @@ struct WindowFitter::Impl {
 
     /// The model's columns for the shared nonlinear values (θ without the alignments).
     void evaluate(const Eigen::VectorXd& key) {
-      if (have_cache && key.size() == cached_key.size() && key == cached_key) {
-        return;
+      for (std::size_t i = 0; i < kCached; ++i) {
+        const Cached& entry = cache[i];
+        if (entry.key.size() == key.size() && entry.key == key) {
+          if (i != cache_current) {
+            columns = entry.columns;
+            cache_current = i;
+          }
+          return;
+        }
       }
       const double u = key[0], v = key[1];
       config.effects.runout.offset_um = std::hypot(u, v);
@@ -322,8 +361,11 @@ struct WindowFitter::Impl {
           }
         }
       }
-      cached_key = key;
-      have_cache = true;
+      Cached& entry = cache[cache_next];
+      entry.key = key;
+      entry.columns = columns;
+      cache_current = cache_next;
+      cache_next = (cache_next + 1) % kCached;
       ++evaluations;
     }
 
@@ -777,7 +819,7 @@ struct WindowFitter::Impl {
             }
             return p.residual(y);
           },
-          t, scale, options.max_iterations, &c);
+          t, scale, options.max_iterations, &c, seed != nullptr && i == 0);
       if (c < best_cost) {
         best_cost = c;
         best = t;
@@ -875,7 +917,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   }
   if (seed_ptr == nullptr) {
     Setting coarse = base;
-    coarse.steps = std::max(90, base.steps / 2);
+    coarse.steps = std::max(90, base.steps / 4);
     Problem grid;
     grid.owner = this;
     grid.setting = coarse;
