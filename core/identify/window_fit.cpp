@@ -219,7 +219,7 @@ struct WindowFitter::Impl {
     std::array<Cached, kCached> cache;
     std::size_t cache_next = 0;
     std::size_t cache_current = kCached;  // the entry `columns` holds (kCached: none)
-    long evaluations = 0;  // model evaluations (for the cost figures)
+    long evaluations = 0;                 // model evaluations (for the cost figures)
 
     void prepare(const MeasuredRevolution& m) {
       const int bins = static_cast<int>(m.force_N[0].size());
@@ -335,7 +335,8 @@ struct WindowFitter::Impl {
       }
       const int s = setting.steps;
       if (owner->separable) {
-        const model::ForceBasis& basis = model::evaluate_force_basis(config, rpm, s, workspace);
+        const model::ForceBasis& basis =
+            model::evaluate_force_basis(config, rpm, s, workspace, false);
         columns.resize(static_cast<std::size_t>(basis.columns + 1));
         column_names.assign(basis.names.begin(), basis.names.begin() + basis.columns);
         for (int c = 0; c <= basis.columns; ++c) {

@@ -229,10 +229,11 @@ struct SteadyStateWorkspace::Impl {
   void compute_areas();
   void accumulate_forces(bool with_cycle);
   void accumulate_basis();
-  void assemble(const std::vector<double>& per_flute, int revolutions, int m,
+  void assemble(std::span<const double> per_flute, int revolutions, int m,
                 std::span<double> out) const;
   void apply_dynamometer(std::span<double> waveform, int axis, int revolutions);
-  void evaluate(const ModelConfig& c, double rpm, int steps_per_rev, SteadyStateOutput output);
+  void evaluate(const ModelConfig& c, double rpm, int steps_per_rev, SteadyStateOutput output,
+                bool forces = true);
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -676,11 +677,14 @@ void SteadyStateWorkspace::Impl::solve_slots() {
 
 namespace {
 
-PassRecord to_record(const PassResult& pr, bool deflect) {
+/// `with_log`: ln h wanted (the power law's element force uses it; the deflection solve gives
+/// it for free).
+PassRecord to_record(const PassResult& pr, bool deflect, bool with_log) {
   PassRecord rec;
   rec.h_rigid_um = pr.h_rigid_um;
   rec.h_um = pr.h_um;
-  rec.log_h_um = pr.h_um > 0.0 ? (deflect ? pr.log_h_um : std::log(pr.h_um)) : 0.0;
+  rec.log_h_um =
+      pr.h_um > 0.0 && (deflect || with_log) ? (deflect ? pr.log_h_um : std::log(pr.h_um)) : 0.0;
   rec.contact = pr.h_rigid_um > 0.0 ? 1 : 0;
   rec.removed = (pr.code & kRemoved) != 0 ? 1 : 0;
   return rec;
@@ -728,7 +732,7 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
       const int j = (first + q) % flutes;
       one_revolution[static_cast<std::size_t>(q)] = to_record(
           run_pass(j, engaged[flute_slot(disc, j, b)] != 0, 0.0, kNoCut, [](int) { return 0.0; }),
-          deflect);
+          deflect, law_kind == ForceLawKind::kPowerLaw);
     }
     store_cycle(slot, one_revolution.data(), first, 1);
     result.stats.passes += flutes;
@@ -822,7 +826,7 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
       hist[len++] = pr.deficit_um;
       const std::size_t k = static_cast<std::size_t>(r) * n + static_cast<std::size_t>(q);
       codes[k] = pr.code;
-      trajectory[k] = to_record(pr, deflect);
+      trajectory[k] = to_record(pr, deflect, law_kind == ForceLawKind::kPowerLaw);
       if (pr.h_um > 0.0) {
         guess[uj] = pr.log_h_um;
       }
@@ -869,7 +873,7 @@ bool SteadyStateWorkspace::Impl::newton(int slot, int first, int p, int r, std::
       }
       vals[at] = pr.deficit_um;
       y[q] = pr.deficit_um;
-      nt_records[q] = to_record(pr, deflect);
+      nt_records[q] = to_record(pr, deflect, law_kind == ForceLawKind::kPowerLaw);
       if (pr.h_um > 0.0) {
         nt_h[q] = pr.log_h_um;
       }
@@ -1130,8 +1134,8 @@ void SteadyStateWorkspace::Impl::accumulate_forces(bool with_cycle) {
   }
 }
 
-void SteadyStateWorkspace::Impl::assemble(const std::vector<double>& per_flute, int revolutions,
-                                          int m, std::span<double> out) const {
+void SteadyStateWorkspace::Impl::assemble(std::span<const double> per_flute, int revolutions, int m,
+                                          std::span<double> out) const {
   // Flute j's pass of slot b lands at spindle step b + ψ_j/Δφ: linear interpolation onto the
   // grid between the passes landing at k + w_j (slot k − ⌊ψ_j/Δφ⌋) and k − 1 + w_j (one slot
   // earlier; for k = 0 that pass belongs to the previous revolution).
@@ -1143,18 +1147,21 @@ void SteadyStateWorkspace::Impl::assemble(const std::vector<double>& per_flute, 
   for (int j = 0; j < flutes; ++j) {
     const auto uj = static_cast<std::size_t>(j);
     const double w = output_frac[uj];
-    const int off = land_steps[uj];
     const double* row = &per_flute[base + uj * s];
     const double* row_prev = &per_flute[prev + uj * s];
-    for (int k = 0; k < steps; ++k) {
-      const double here = row[positive_mod(k - off, steps)];
+    // Slot of step k: k − off, wrapped; the steps before the wrap and after it in two runs.
+    const auto first = static_cast<std::size_t>(positive_mod(-land_steps[uj], steps));
+    const std::size_t run = s - first;  // steps 0 .. run−1 read slots first .. s−1
+    for (std::size_t k = 0; k < s; ++k) {
+      const std::size_t slot = k < run ? first + k : k - run;
+      const double here = row[slot];
       if (w == 0.0) {
-        out[static_cast<std::size_t>(k)] += here;
+        out[k] += here;
         continue;
       }
-      const double* before_row = k == 0 ? row_prev : row;
-      const double before = before_row[positive_mod(k - off - 1, steps)];
-      out[static_cast<std::size_t>(k)] += (1.0 - w) * here + w * before;
+      const double before =
+          slot == 0 ? (k == 0 ? row_prev : row)[s - 1] : (k == 0 ? row_prev : row)[slot - 1];
+      out[k] += (1.0 - w) * here + w * before;
     }
   }
 }
@@ -1177,7 +1184,7 @@ void SteadyStateWorkspace::Impl::apply_dynamometer(std::span<double> waveform, i
 }
 
 void SteadyStateWorkspace::Impl::evaluate(const ModelConfig& c, double rpm, int steps_per_rev,
-                                          SteadyStateOutput output) {
+                                          SteadyStateOutput output, bool forces) {
   result.stats = SteadyStateStats{};
   configure(c, rpm, steps_per_rev);
   result.spindle_rpm = rpm;
@@ -1218,6 +1225,13 @@ void SteadyStateWorkspace::Impl::evaluate(const ModelConfig& c, double rpm, int 
     }
     std::swap(area_mean, area_mean_prev);
     area_coupled = true;
+  }
+  if (!forces) {
+    for (auto* w : {&result.mean.fx_N, &result.mean.fy_N, &result.mean.fz_N, &result.cycle.fx_N,
+                    &result.cycle.fy_N, &result.cycle.fz_N}) {
+      w->clear();  // not computed: no stale force of an earlier call
+    }
+    return;
   }
   const bool with_cycle = output == SteadyStateOutput::kMeanAndCycle;
   accumulate_forces(with_cycle);
@@ -1371,6 +1385,12 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
                            static_cast<std::size_t>(m % area_cycle)]
                     : 0.0;
   };
+  const bool linear_fast = law_kind == ForceLawKind::kLinearEdge && !area_law;
+  const std::size_t stride = n * s;  // one column of basis_flute[axis]
+  const std::size_t offset_col = static_cast<std::size_t>(columns) * stride;
+  double* fx = basis_flute[0].data();
+  double* fy = basis_flute[1].data();
+  double* fz = basis_flute[2].data();
   for (int i = 0; i < discs; ++i) {
     for (int b = 0; b < steps; ++b) {
       const auto us = static_cast<std::size_t>(i * steps + b);
@@ -1387,6 +1407,43 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
         const double st = sin_theta[el];
         const auto uj = static_cast<std::size_t>(j);
         const double weight = 1.0 / evaluations;
+        if (linear_fast) {
+          // The common case, written out: each column sees one direction of one element.
+          for (int e = 0; e < evaluations; ++e) {
+            const PassRecord& r = rec[static_cast<std::size_t>(e) * n + uj];
+            if (r.contact == 0) {
+              continue;
+            }
+            const std::size_t at = uj * s + static_cast<std::size_t>(b);
+            const double wt = wear_t_N[uj] * weight;
+            const double wn = wear_n_N[uj] * weight;
+            fx[offset_col + at] += -wt * ct - wn * st;
+            fy[offset_col + at] += wt * st - wn * ct;
+            if (r.h_um <= 0.0) {
+              continue;
+            }
+            if (has_plough_law && law.ploughing(r.h_um)) {
+              const ElementForce f = law.element(r.h_um, dz_mm);  // [002] eq 17
+              fx[offset_col + at] += weight * (-f.tangential_N * ct - f.normal_N * st);
+              fy[offset_col + at] += weight * (f.tangential_N * st - f.normal_N * ct);
+              fz[offset_col + at] += weight * f.axial_N;
+              continue;
+            }
+            const double cut = r.h_um * kMmPerUm * dz_mm * weight;  // K_tc, K_nc, K_ac
+            const double edge = dz_mm * weight;                     // K_te, K_ne, K_ae
+            fx[at] += -cut * ct;
+            fy[at] += cut * st;
+            fx[stride + at] += -cut * st;
+            fy[stride + at] += -cut * ct;
+            fz[2 * stride + at] += cut;
+            fx[3 * stride + at] += -edge * ct;
+            fy[3 * stride + at] += edge * st;
+            fx[4 * stride + at] += -edge * st;
+            fy[4 * stride + at] += -edge * ct;
+            fz[5 * stride + at] += edge;
+          }
+          continue;
+        }
         for (int e = 0; e < evaluations; ++e) {
           const int c = area_law ? positive_mod(e - phase[us], p) : e;
           element(rec[static_cast<std::size_t>(c) * n + uj], j, area_of(us, uj, e));
@@ -1493,14 +1550,15 @@ const SteadyState& evaluate_steady_state(const ModelConfig& config, double spind
 }
 
 const ForceBasis& evaluate_force_basis(const ModelConfig& config, double spindle_rpm,
-                                       int steps_per_rev, SteadyStateWorkspace& workspace) {
+                                       int steps_per_rev, SteadyStateWorkspace& workspace,
+                                       bool with_force) {
   if (config.effects.deflection.enabled) {
     throw std::invalid_argument(
         "evaluate_force_basis: effects.deflection is on; the chips then depend on the "
         "coefficients (the deflection balance, [000] eq 22) and the force is not linear in them");
   }
   SteadyStateWorkspace::Impl& m = *workspace.impl_;
-  m.evaluate(config, spindle_rpm, steps_per_rev, SteadyStateOutput::kMean);
+  m.evaluate(config, spindle_rpm, steps_per_rev, SteadyStateOutput::kMean, with_force);
   m.accumulate_basis();
   const auto s = static_cast<std::size_t>(m.steps);
   const auto n = static_cast<std::size_t>(m.flutes);
@@ -1514,8 +1572,7 @@ const ForceBasis& evaluate_force_basis(const ModelConfig& config, double spindle
       // assemble() reads one revolution of N·S values at the column's offset.
       const std::span<const double> block(&m.basis_flute[ua][static_cast<std::size_t>(col) * n * s],
                                           n * s);
-      m.flute_mean[ua].assign(block.begin(), block.end());  // same size: no allocation
-      m.assemble(m.flute_mean[ua], 1, 0, *axes[ua]);
+      m.assemble(block, 1, 0, *axes[ua]);
       if (m.dynamometer) {
         m.apply_dynamometer(*axes[ua], a, 1);
       }

@@ -196,7 +196,7 @@ class SteadyStateWorkspace {
   friend const SteadyState& evaluate_steady_state(const ModelConfig&, double, int,
                                                   SteadyStateWorkspace&, SteadyStateOutput);
   friend const ForceBasis& evaluate_force_basis(const ModelConfig&, double, int,
-                                                SteadyStateWorkspace&);
+                                                SteadyStateWorkspace&, bool);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -231,8 +231,11 @@ const SteadyState& evaluate_steady_state(
 /// the coefficients by linear least squares for each trial of the other parameters (variable
 /// projection) instead of iterating on them.
 /// @throws std::invalid_argument when effects.deflection is on; otherwise as
-///         evaluate_steady_state(). Also leaves that evaluation's result in the workspace.
+///         evaluate_steady_state(). With `with_force`, also leaves that evaluation's result
+///         (the force at the configured coefficients) in the workspace; without it (a fitter,
+///         which needs the basis alone) the result's force is left empty.
 const ForceBasis& evaluate_force_basis(const ModelConfig& config, double spindle_rpm,
-                                       int steps_per_rev, SteadyStateWorkspace& workspace);
+                                       int steps_per_rev, SteadyStateWorkspace& workspace,
+                                       bool with_force = true);
 
 }  // namespace millwatch::model
