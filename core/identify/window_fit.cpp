@@ -1175,10 +1175,18 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     names[static_cast<std::size_t>(2 + i)] = extra_map.parameters[static_cast<std::size_t>(i)].name;
   }
   if (!separable) {
+    Eigen::VectorXd configured(coefficient_map.size());
+    model::get_parameters(coefficient_map, commanded, configured);
     for (int i = 0; i < coefficient_map.size(); ++i) {
       const std::string& n = coefficient_map.parameters[static_cast<std::size_t>(i)].name;
       names[static_cast<std::size_t>(2 + ne + i)] = n;
-      out.coefficients.push_back(estimate(n, 2 + ne + i, theta[2 + ne + i]));
+      if (cov(2 + ne + i, 2 + ne + i) > 0.0) {
+        out.coefficients.push_back(estimate(n, 2 + ne + i, theta[2 + ne + i]));
+      } else {
+        // No axis compared sees it (K_ac without fz): not fitted, as configured. Levenberg–
+        // Marquardt's damped solve may have moved it by rounding.
+        theta[2 + ne + i] = configured[i];
+      }
     }
   }
   for (Eigen::Index c = 0; c < nc; ++c) {

@@ -999,6 +999,13 @@ void AlertEngine::finish_estimate_baseline() {
         [k, scale](const WindowEstimate& w) { return w.coefficient[at(k)] * scale; },
         [k, scale](const WindowEstimate& w) { return w.coefficient_sigma_stat[at(k)] * scale; },
         config_.sigma_floor, ignored);
+    const double stat =
+        median_of([k](const WindowEstimate& w) { return w.coefficient_sigma_stat[at(k)]; });
+    if (!(stat > 0.0)) {
+      // No statistical σ: the windows did not fit it (held as configured), so its value says
+      // nothing about wear, however steady it looks.
+      base.coefficient_sigma[at(k)] = std::numeric_limits<double>::infinity();
+    }
   }
   base.wear_allowance =
       config_.cusum_k + config_.baseline_margin / std::sqrt(static_cast<double>(n));

@@ -350,6 +350,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     measured.spindle_rpm = m.process.spindle_rpm;
     measured.revolutions = 30;
     measured.shared_bins = false;
+    measured.use_axis[2] = false;  // no axial force compared: K_ac cannot be fitted
     model::ModelConfig start = m;
     start.effects.runout.offset_um = 0.0;
     if (h_min) {
@@ -376,6 +377,15 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     EXPECT_NEAR(e.value, x.truth, std::max(2.0 * e.sigma, 0.0));
     EXPECT_NEAR(e.value, x.truth, 0.1 * x.truth);
     EXPECT_LT(f.residual_rms_N[1], 0.01 * f.measured_rms_N[1]);
+    // K_ac, which no compared axis sees, is not reported (separable or not: with the
+    // deflection the coefficients are Levenberg–Marquardt's) and stays as configured.
+    for (const Estimate& c : f.coefficients) {
+      EXPECT_NE(c.name, "k_ac_Nmm") << x.name;
+      EXPECT_GT(c.sigma_stat, 0.0) << c.name;
+    }
+    EXPECT_EQ(f.config.material.power_law.k_ac_Nmm, start.material.power_law.k_ac_Nmm);
+    // k_tc, k_nc (and the ploughing regime's k_tp, k_np with the minimum chip thickness).
+    EXPECT_EQ(f.coefficients.size(), h_min ? 4u : 2u) << x.name;
   }
 }
 

@@ -662,6 +662,39 @@ TEST(AlertEngine, CoefficientRiseRaisesWearDrift) {
   EXPECT_EQ(eight.count(AlertKind::kWearDrift, true), 0);
 }
 
+// A coefficient the windows did not fit (no statistical σ: K_ac of the demo's power law with no
+// fz compared, held by Levenberg–Marquardt at its rounding) is not wear, however steady it is in
+// the baseline and however far it moves after: found on the demo replay, which raised "k_ac
+// 4.8e-12 → 5.5e-11 (+1051 %)" on a steady cut.
+TEST(AlertEngine, ACoefficientWithoutStatisticalSigmaRaisesNoWear) {
+  AlertEngine engine;
+  std::vector<Alert> alerts;
+  for (int i = 0; i < 40; ++i) {
+    auto w = fitted(29 + 30 * i, -0.9, 0.03, 1100.0, 8.0, 0.01);
+    const double held = i < 10 ? 4.8e-12 : 5.5e-11;  // steady baseline, then ×11
+    w.fit.coefficients.push_back({"k_ac_Nmm", held, 3.8e-11, 0.0, 3.8e-11});
+    engine.on_identification(w, [&](const Alert& a) { alerts.push_back(a); });
+  }
+  for (const Alert& a : alerts) {
+    std::printf("%s\n", a.message.data());
+  }
+  EXPECT_EQ(std::count_if(alerts.begin(), alerts.end(),
+                          [](const Alert& a) { return a.kind == AlertKind::kWearDrift; }),
+            0);
+  // The same jump in a fitted coefficient (statistical σ 0.2 %) is wear.
+  AlertEngine fitted_engine;
+  std::vector<Alert> raised;
+  for (int i = 0; i < 40; ++i) {
+    const double k = i < 10 ? 1100.0 : 1400.0;
+    fitted_engine.on_identification(fitted(29 + 30 * i, -0.9, 0.03, k, 8.0, 0.01),
+                                    [&](const Alert& a) { raised.push_back(a); });
+  }
+  EXPECT_EQ(
+      std::count_if(raised.begin(), raised.end(),
+                    [](const Alert& a) { return a.kind == AlertKind::kWearDrift && a.active; }),
+      1);
+}
+
 // The coefficients are compared at constant conditions: a feed 5 % higher starts a new baseline
 // (no alert although the coefficients and radii come out different there).
 TEST(AlertEngine, OtherConditionsStartANewEstimateBaseline) {
