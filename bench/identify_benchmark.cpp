@@ -91,6 +91,47 @@ void BM_FitTwoFluteSlotWithoutVariants(benchmark::State& s) {
 void BM_FitTwoFluteSlotFromPreviousWithoutVariants(benchmark::State& s) {
   fit(s, 2, model::Operation::kSlot, true, false);
 }
+/// The full model of the demo (config/demo.json: [000]'s cp-Ti power law with trochoidal
+/// path, multi-pass, minimum chip, accumulation, deflection, helix, dynamometer): the
+/// coefficients are no longer linear (the deflection balance), so Levenberg–Marquardt carries
+/// them; fitted from the previous window's result as the continuous identifier does.
+void fit_full_model(benchmark::State& state, bool from_previous) {
+  model::ModelConfig truth;  // every effect on
+  truth.tool.diameter_mm = 0.4;
+  truth.process.radial_depth_mm = 0.4;
+  truth.process.feed_per_tooth_um = 4.0;
+  truth.process.axial_depth_mm = 0.04;
+  truth.effects.runout.offset_um = 1.82;
+  truth.effects.runout.angle_rad = 0.58;
+  truth.effects.min_chip.h_min_um = 0.2;
+  truth.effects.deflection.stiffness_N_per_um = 0.47;
+  truth.effects.helix_lag.discs = 10;
+  const MeasuredRevolution measured = measured_from(truth);
+  model::ModelConfig start = truth;
+  start.effects.runout.offset_um = 0.0;
+  WindowFitter fitter(start,
+                      [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); });
+  const FitResult first = fitter.fit(measured);
+  if (!first.ok) {
+    state.SkipWithError(first.message.c_str());
+    return;
+  }
+  long evaluations = 0;
+  for (auto _ : state) {
+    const FitResult r = fitter.fit(measured, from_previous ? &first : nullptr);
+    evaluations += r.evaluations;
+    benchmark::DoNotOptimize(r.rho_um.value);
+  }
+  state.counters["evaluations"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
+}
+void BM_FitFullModel(benchmark::State& s) {
+  fit_full_model(s, false);
+}
+void BM_FitFullModelFromPrevious(benchmark::State& s) {
+  fit_full_model(s, true);
+}
+
 /// A recorded cut in memory: what the dynamometer read.
 struct Recorded {
   millwatch::monitor::MonitorConfig config;  // as commanded (the fitter's view)
@@ -165,6 +206,8 @@ BENCHMARK(BM_FitTwoFluteSlotWithoutVariants)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotFromPreviousWithoutVariants)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitFourFluteDown)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FitTwoFluteSlotFromPrevious)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FitFullModel)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FitFullModelFromPrevious)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CalibrateFiveOneSecondCuts)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace

@@ -44,29 +44,39 @@ constexpr double kDifferenceStep = 1e-2;
 /// Levenberg–Marquardt on a few scaled parameters. The Jacobian by forward differences (one
 /// model evaluation a parameter) while far from the optimum, by central differences (two) near
 /// it, where the forward difference's O(h) error would bias where it stops; `near`: x is
-/// already close (a seed, a refit), central from the first iteration.
+/// already close (a seed, a refit), central from the first iteration. `linear`: parameters the
+/// residual is nearly linear in (the coefficients under the deflection), whose forward
+/// difference is as good as a central one. A column exactly zero at the first Jacobian (a
+/// parameter no compared axis sees) stays zero without further evaluations.
 template <typename Residual>
 int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::VectorXd& scale,
-                        int max_iterations, double* cost_out, bool near = true) {
+                        int max_iterations, double* cost_out, bool near = true,
+                        const std::vector<bool>& linear = {}) {
   Eigen::VectorXd r = residual(x);
   double cost = r.squaredNorm();
   double lambda = 1e-3;
   const auto n = x.size();
   Eigen::MatrixXd j(r.size(), n);
+  std::vector<bool> blind(static_cast<std::size_t>(n), false);
   bool central = near;
   int it = 0;
   for (; it < max_iterations; ++it) {
     for (Eigen::Index i = 0; i < n; ++i) {
+      const auto ui = static_cast<std::size_t>(i);
+      if (blind[ui]) {
+        continue;
+      }
       Eigen::VectorXd xp = x;
       const double h = kDifferenceStep * scale[i];
       xp[i] += h;
-      if (central) {
+      if (central && !(ui < linear.size() && linear[ui])) {
         Eigen::VectorXd xm = x;
         xm[i] -= h;
         j.col(i) = (residual(xp) - residual(xm)) / (2.0 * h);
       } else {
         j.col(i) = (residual(xp) - r) / h;
       }
+      blind[ui] = it == 0 && (j.col(i).array() == 0.0).all();
     }
     const Eigen::MatrixXd js = j * scale.asDiagonal();  // scaled parameters
     const Eigen::MatrixXd jtj = js.transpose() * js;
@@ -664,6 +674,19 @@ struct WindowFitter::Impl {
     return k;
   }
 
+  /// Which entries of θ the residual is nearly linear in: the coefficients, when the deflection
+  /// puts them in θ (it bends the force's dependence on them only slightly).
+  [[nodiscard]] std::vector<bool> linear_mask() const {
+    std::vector<bool> m(static_cast<std::size_t>(shared_size() + cuts()), false);
+    if (!separable) {
+      const int ne = extra_map.size();
+      for (int i = 0; i < coefficient_map.size(); ++i) {
+        m[static_cast<std::size_t>(2 + ne + i)] = true;
+      }
+    }
+    return m;
+  }
+
   /// The nonlinear vector θ's scales for a problem.
   [[nodiscard]] Eigen::VectorXd scales(const model::ModelConfig& c) const {
     const int ne = extra_map.size();
@@ -820,7 +843,7 @@ struct WindowFitter::Impl {
             }
             return p.residual(y);
           },
-          t, scale, options.max_iterations, &c, seed != nullptr && i == 0);
+          t, scale, options.max_iterations, &c, seed != nullptr && i == 0, linear_mask());
       if (c < best_cost) {
         best_cost = c;
         best = t;
@@ -856,7 +879,7 @@ struct WindowFitter::Impl {
           }
           return p.residual(y);
         },
-        t, scales(p.config()), 2, &c);  // the optimum's shift: a step or two
+        t, scales(p.config()), 2, &c, true, linear_mask());  // the optimum's shift: a step or two
     relabel(t);
     p.residual(t);
     Eigen::VectorXd out(t.size() + p.last_coefficients.size());
@@ -936,8 +959,9 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     const double dof0 = std::max(1.0, static_cast<double>(p.data_size() - theta.size()));
     p.prior_weight = std::sqrt(cost / dof0) / options.runout_prior_um;
     double c = 0.0;
-    out.iterations += levenberg_marquardt([&](const Eigen::VectorXd& x) { return p.residual(x); },
-                                          theta, scales(p.config()), options.max_iterations, &c);
+    out.iterations +=
+        levenberg_marquardt([&](const Eigen::VectorXd& x) { return p.residual(x); }, theta,
+                            scales(p.config()), options.max_iterations, &c, true, linear_mask());
     relabel(theta);
     cost = c;
   }
