@@ -7,34 +7,35 @@
 namespace millwatch::identify {
 namespace {
 
-FitOptions quick(FitOptions o) {
-  o.systematic = false;
-  return o;
-}
-
-/// `e` with the systematic part of `from` (same name) added.
-void carry_systematic(const std::vector<Estimate>& from, std::vector<Estimate>& to) {
-  for (Estimate& e : to) {
-    for (const Estimate& f : from) {
-      if (f.name == e.name) {
-        e.sigma_sys = f.sigma_sys;
-        e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+/// `r` with the systematic part of `s`'s estimates (same quantity) added in quadrature.
+void carry_systematic(const FitResult& s, FitResult& r) {
+  auto carry = [](const Estimate& from, Estimate& to) {
+    to.sigma_sys = from.sigma_sys;
+    to.sigma = std::hypot(to.sigma_stat, to.sigma_sys);
+  };
+  auto carry_named = [&](const std::vector<Estimate>& from, std::vector<Estimate>& to) {
+    for (Estimate& e : to) {
+      for (const Estimate& f : from) {
+        if (f.name == e.name) {
+          carry(f, e);
+        }
       }
     }
-  }
-}
-
-void carry_systematic(const Estimate& from, Estimate& to) {
-  to.sigma_sys = from.sigma_sys;
-  to.sigma = std::hypot(to.sigma_stat, to.sigma_sys);
+  };
+  carry(s.rho_um, r.rho_um);
+  carry(s.gamma_rad, r.gamma_rad);
+  carry(s.alignment_rad, r.alignment_rad);
+  carry_named(s.cutting_radius_um, r.cutting_radius_um);
+  carry_named(s.radius_from_ce1_um, r.radius_from_ce1_um);
+  carry_named(s.coefficients, r.coefficients);
+  carry_named(s.extra, r.extra);
 }
 
 }  // namespace
 
 Identifier::Identifier(const model::ModelConfig& model, FilterResponse filter, FitOptions options,
                        Callback on_result, HandOver hand_over)
-    : fitter_(model, filter, options),
-      quick_fitter_(model, std::move(filter), quick(options)),
+    : fitter_(model, std::move(filter), options),
       on_result_(std::move(on_result)),
       hand_over_(hand_over),
       options_(std::move(options)),
@@ -173,7 +174,6 @@ void Identifier::run() {
         options_ = next_model.options;
         lock.unlock();
         fitter_ = WindowFitter(next_model.model, next_model.filter, options_);
-        quick_fitter_ = WindowFitter(next_model.model, next_model.filter, quick(options_));
         previous.reset();
         systematic_.reset();
         continue;
@@ -231,7 +231,7 @@ FitResult Identifier::fit(const MeasuredRevolution& window,
     }
     return full;
   }
-  FitResult r = quick_fitter_.fit(window, seed);
+  FitResult r = fitter_.fit(window, seed, false);
   const FitResult& s = *systematic_;
   // Moved by more than the uncertainty since the variants were fitted: fit them again.
   const double moved_um = std::hypot(
@@ -245,13 +245,7 @@ FitResult Identifier::fit(const MeasuredRevolution& window,
     }
     return full;
   }
-  carry_systematic(s.rho_um, r.rho_um);
-  carry_systematic(s.gamma_rad, r.gamma_rad);
-  carry_systematic(s.alignment_rad, r.alignment_rad);
-  carry_systematic(s.cutting_radius_um, r.cutting_radius_um);
-  carry_systematic(s.radius_from_ce1_um, r.radius_from_ce1_um);
-  carry_systematic(s.coefficients, r.coefficients);
-  carry_systematic(s.extra, r.extra);
+  carry_systematic(s, r);
   return r;
 }
 

@@ -102,7 +102,6 @@ class Identifier {
   Entry* front();
 
   WindowFitter fitter_;                  // the worker's
-  WindowFitter quick_fitter_;            // the same without the systematic variants
   std::optional<FitResult> systematic_;  // the last fit with them
   int since_systematic_ = 0;
   struct NextModel {

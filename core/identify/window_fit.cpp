@@ -887,11 +887,12 @@ struct WindowFitter::Impl {
     return out;
   }
 
-  JointFitResult fit(const std::vector<const MeasuredRevolution*>& m, const FitResult* previous);
+  JointFitResult fit(const std::vector<const MeasuredRevolution*>& m, const FitResult* previous,
+                     bool with_variants = true);
 };
 
 JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolution*>& ms,
-                                       const FitResult* previous) {
+                                       const FitResult* previous, bool with_variants) {
   JointFitResult joint;
   FitResult& out = joint.fit;
   out.config = commanded;
@@ -1042,7 +1043,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   Eigen::VectorXd full(nt + nc);
   full << theta, coefficients;
   Eigen::VectorXd sys2 = Eigen::VectorXd::Zero(nt + nc);
-  if (options.systematic) {
+  if (options.systematic && with_variants) {
     // Each variant changes one of the model's approximations by a factor of two (coarser, so
     // that the variants cost less than the fit), or what is compared.
     int fewest_harmonics = p.parts.front()->harmonics;
@@ -1346,8 +1347,9 @@ WindowFitter::~WindowFitter() = default;
 WindowFitter::WindowFitter(WindowFitter&&) noexcept = default;
 WindowFitter& WindowFitter::operator=(WindowFitter&&) noexcept = default;
 
-FitResult WindowFitter::fit(const MeasuredRevolution& measured, const FitResult* previous) {
-  return impl_->fit({&measured}, previous).fit;
+FitResult WindowFitter::fit(const MeasuredRevolution& measured, const FitResult* previous,
+                            bool variants) {
+  return impl_->fit({&measured}, previous, variants).fit;
 }
 
 const FitOptions& WindowFitter::options() const {

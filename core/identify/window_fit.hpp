@@ -169,7 +169,10 @@ class WindowFitter {
   WindowFitter& operator=(const WindowFitter&) = delete;
 
   /// Fits one window. `previous` (optional) seeds the search with an earlier result.
-  FitResult fit(const MeasuredRevolution& measured, const FitResult* previous = nullptr);
+  /// `variants` false: no systematic variants this time even if options().systematic (the
+  /// σ's are statistical only; the caller carries the systematic part of an earlier fit).
+  FitResult fit(const MeasuredRevolution& measured, const FitResult* previous = nullptr,
+                bool variants = true);
 
   [[nodiscard]] const FitOptions& options() const;
 
