@@ -24,6 +24,7 @@
 #include "shell/material_preset.hpp"
 #include "shell/monitor_config_file.hpp"
 #include "shell/output_file.hpp"
+#include "shell/progress_line.hpp"
 #include "shell/recording_source.hpp"
 #include "shell/shell_sink.hpp"
 
@@ -41,6 +42,7 @@ struct CalibrateOptions {
   std::string name;
   bool tared = false;
   bool json = false;
+  bool progress = true;
 };
 
 /// The shell's log of a cut (lock, bad input) without its alerts: a calibration is not
@@ -67,7 +69,7 @@ struct MonitoredCut {
 };
 
 MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_file,
-                         std::size_t index) {
+                         std::size_t index, ProgressLine& progress) {
   const fs::path input = o.inputs[index];
   const std::string where = fmt::format("cut {} of {}", index + 1, o.inputs.size());
   if (!fs::exists(input)) {
@@ -130,6 +132,10 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   monitor::Pipeline pipeline(config, sink);
   while (const std::optional<monitor::SampleBlock> block = source->next(4096)) {
     pipeline.process(*block);
+    if (progress.due()) {
+      progress.show(fmt::format("calibrate: {}: {:.0f} %  ({:.1f} s)", where,
+                                100.0 * source->progress(), progress.elapsed_s()));
+    }
   }
   pipeline.finish();
   if (windows.windows().empty()) {
@@ -252,17 +258,22 @@ int run_calibrate(const CalibrateOptions& o) {
   }
   const ConfigFile config_file = read_config_file(o.config);
   std::vector<identify::CalibrationCut> cuts;
+  ProgressLine progress(o.progress, 0.0, 0.25);
   for (std::size_t i = 0; i < o.inputs.size(); ++i) {
-    cuts.push_back(monitor_cut(o, config_file, i).cut);
+    cuts.push_back(monitor_cut(o, config_file, i, progress).cut);
   }
   identify::CalibrationOptions options;
   options.tared = o.tared;
   identify::CalibrationResult r;
+  progress.show(fmt::format("calibrate: fitting {} cuts jointly  ({:.1f} s)", cuts.size(),
+                            progress.elapsed_s()));
   try {
     r = identify::calibrate(cuts, options);
   } catch (const std::invalid_argument& e) {
+    progress.done();
     throw std::runtime_error(e.what());
   }
+  progress.done();
   if (!r.ok) {
     throw std::runtime_error("calibration failed: " + r.message);
   }
@@ -318,6 +329,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--columns", o->columns,
                   "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
   cmd->add_flag("--json", o->json, "Print the calibration as JSON");
+  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->callback([o] { run_subcommand([&o] { return run_calibrate(*o); }); });
 }
 
