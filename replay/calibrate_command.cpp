@@ -22,7 +22,9 @@
 #include "shell/column_map.hpp"
 #include "shell/json_file.hpp"
 #include "shell/material_preset.hpp"
+#include "shell/monitor_config_file.hpp"
 #include "shell/output_file.hpp"
+#include "shell/progress_line.hpp"
 #include "shell/recording_source.hpp"
 #include "shell/shell_sink.hpp"
 
@@ -40,39 +42,8 @@ struct CalibrateOptions {
   std::string name;
   bool tared = false;
   bool json = false;
+  bool progress = true;
 };
-
-/// --config's monitor configuration (a daemon configuration's "monitor"), presets resolved, and
-/// its column map.
-struct ConfigFile {
-  nlohmann::json monitor = nlohmann::json::object();
-  std::optional<ColumnMap> columns;
-};
-
-ConfigFile read_config(const std::string& path) {
-  ConfigFile c;
-  if (path.empty()) {
-    return c;
-  }
-  if (!fs::exists(path)) {
-    throw std::runtime_error(path + ": configuration not found (--config)");
-  }
-  nlohmann::json j = read_json_file(path);
-  resolve_material_presets(j, path);
-  if (j.is_object() && j.contains("monitor")) {
-    j = j["monitor"];
-  }
-  if (j.is_object() && j.contains("columns")) {
-    try {
-      c.columns = column_map_from_json(j["columns"], "columns");
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(path + ": " + e.what());
-    }
-    j.erase("columns");
-  }
-  c.monitor = j;
-  return c;
-}
 
 /// The shell's log of a cut (lock, bad input) without its alerts: a calibration is not
 /// monitoring, and a feed sweep with runout raises the flute-imbalance alert on every cut.
@@ -98,51 +69,25 @@ struct MonitoredCut {
 };
 
 MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_file,
-                         std::size_t index) {
+                         std::size_t index, ProgressLine& progress) {
   const fs::path input = o.inputs[index];
   const std::string where = fmt::format("cut {} of {}", index + 1, o.inputs.size());
   if (!fs::exists(input)) {
     throw std::runtime_error(input.string() + ": recording not found (" + where + ")");
   }
-  const RecordingFormat format = detect_recording_format(input);
-  ColumnMap columns = config_file.columns.value_or(ColumnMap{});
-  if (!o.columns.empty()) {
-    try {
-      columns = parse_column_map(o.columns);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(std::string("--") + e.what());
-    }
-  }
   // The cut: its sidecar under --config's overrides (as the replay does), or --config alone.
-  fs::path sidecar;
-  if (format != RecordingFormat::kLcmLog) {
-    sidecar = input;
-    sidecar.replace_extension(".json");
-    if (!fs::exists(sidecar)) {
-      sidecar.clear();
+  if (o.config.empty()) {
+    fs::path beside = input;
+    if (detect_recording_format(input) == RecordingFormat::kLcmLog ||
+        !fs::exists(beside.replace_extension(".json"))) {
+      throw std::runtime_error(input.string() + ": no sidecar beside it (" + where +
+                               "): describe the cut with --config");
     }
   }
-  if (sidecar.empty() && o.config.empty()) {
-    throw std::runtime_error(input.string() + ": no sidecar beside it (" + where +
-                             "): describe the cut with --config");
-  }
-  nlohmann::json base = config_file.monitor;
-  std::optional<double> sidecar_feed_um;
-  std::string config_name = o.config;
-  if (!sidecar.empty()) {
-    const nlohmann::json side = read_json_file(sidecar);
-    try {
-      base = monitor::monitor_json_from_sidecar(side, config_file.monitor);
-      const nlohmann::json own = monitor::monitor_json_from_sidecar(side);
-      const auto& p = own["model"].value("process", nlohmann::json::object());
-      if (p.contains("feed_per_tooth_um") && p["feed_per_tooth_um"].is_number()) {
-        sidecar_feed_um = p["feed_per_tooth_um"].get<double>();
-      }
-    } catch (const config::ConfigError& e) {
-      throw std::runtime_error(sidecar.string() + ": " + e.what());
-    }
-    config_name = sidecar.string() + (o.config.empty() ? "" : " + " + o.config);
-  }
+  LoadedMonitorConfig loaded =
+      load_monitor_config({input, o.config, "", o.columns, where}, config_file);
+  const std::optional<double> sidecar_feed_um = loaded.sidecar_feed_per_tooth_um;
+  const fs::path sidecar = loaded.sidecar;
   // The cut's feed per tooth: --feeds-um, else its sidecar; both given must agree.
   double feed_um = 0.0;
   if (!o.feeds_um.empty()) {
@@ -162,15 +107,12 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     throw std::runtime_error(fmt::format("{}: feed per tooth {:g} um ({}): must be > 0",
                                          input.string(), feed_um, where));
   }
-  base["model"]["process"]["feed_per_tooth_um"] = feed_um;
-  const double config_rate_hz =
-      base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
-          ? base["sample_rate_hz"].get<double>()
-          : 0.0;
+  loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
+  const double config_rate_hz = loaded.config_rate_hz();
 
   std::int64_t bad = 0;
   RecordingOptions ro;
-  ro.columns = columns;
+  ro.columns = loaded.columns;
   ro.config_rate_hz = config_rate_hz;
   ro.on_bad = [&](std::int64_t at, const std::string& problem) {
     if (++bad <= 5) {
@@ -178,15 +120,8 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     }
   };
   std::unique_ptr<RecordingSource> source = open_recording(input, ro);
-  if (source->sample_rate_hz() > 0.0 && (config_rate_hz <= 0.0 || source->rate_stated())) {
-    base["sample_rate_hz"] = source->sample_rate_hz();
-  }
-  monitor::MonitorConfig config;
-  try {
-    config = monitor::monitor_config_from_json(base);
-  } catch (const config::ConfigError& e) {
-    throw std::runtime_error(config_name + ": " + e.what());
-  }
+  take_recording_rate(loaded, *source, input.string());
+  monitor::MonitorConfig config = parse_monitor_config(loaded);
   config.lockstep = false;  // the model is fitted afterwards; no comparison needed meanwhile
 
   monitor::RunSummary summary(config);
@@ -197,6 +132,10 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   monitor::Pipeline pipeline(config, sink);
   while (const std::optional<monitor::SampleBlock> block = source->next(4096)) {
     pipeline.process(*block);
+    if (progress.due()) {
+      progress.show(fmt::format("calibrate: {}: {:.0f} %  ({:.1f} s)", where,
+                                100.0 * source->progress(), progress.elapsed_s()));
+    }
   }
   pipeline.finish();
   if (windows.windows().empty()) {
@@ -317,19 +256,24 @@ int run_calibrate(const CalibrateOptions& o) {
                                            i + 1, o.inputs.size()));
     }
   }
-  const ConfigFile config_file = read_config(o.config);
+  const ConfigFile config_file = read_config_file(o.config);
   std::vector<identify::CalibrationCut> cuts;
+  ProgressLine progress(o.progress, 0.0, 0.25);
   for (std::size_t i = 0; i < o.inputs.size(); ++i) {
-    cuts.push_back(monitor_cut(o, config_file, i).cut);
+    cuts.push_back(monitor_cut(o, config_file, i, progress).cut);
   }
   identify::CalibrationOptions options;
   options.tared = o.tared;
   identify::CalibrationResult r;
+  progress.show(fmt::format("calibrate: fitting {} cuts jointly  ({:.1f} s)", cuts.size(),
+                            progress.elapsed_s()));
   try {
     r = identify::calibrate(cuts, options);
   } catch (const std::invalid_argument& e) {
+    progress.done();
     throw std::runtime_error(e.what());
   }
+  progress.done();
   if (!r.ok) {
     throw std::runtime_error("calibration failed: " + r.message);
   }
@@ -385,6 +329,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--columns", o->columns,
                   "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
   cmd->add_flag("--json", o->json, "Print the calibration as JSON");
+  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->callback([o] { run_subcommand([&o] { return run_calibrate(*o); }); });
 }
 

@@ -2,24 +2,24 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/config/json_reader.hpp"
+#include "core/diagnose/across_feeds.hpp"
 #include "core/diagnose/diagnosis.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "replay/command_exit.hpp"
-#include "shell/column_map.hpp"
 #include "shell/diagnosis_report.hpp"
-#include "shell/json_file.hpp"
+#include "shell/monitor_config_file.hpp"
+#include "shell/progress_line.hpp"
 #include "shell/recording_source.hpp"
 
 namespace millwatch::shell {
@@ -28,47 +28,19 @@ namespace {
 namespace fs = std::filesystem;
 
 struct DiagnoseCliOptions {
-  std::string input;
+  std::vector<std::string> inputs;
   std::string config;
   std::string sidecar;
   std::string report;
   std::string start = "plain";
   std::string candidates;
+  std::vector<double> feeds_um;
   double band_hz = 0.0;
   double from_s = 0.0;
   double to_s = 0.0;
   int max_steps = 5;
   bool plots = true;
   bool progress = true;
-};
-
-/// The progress line on stderr when it is a terminal: the step, the candidate, the time.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool enabled)
-      : enabled_(enabled && isatty(STDERR_FILENO) != 0), start_(std::chrono::steady_clock::now()) {}
-  void show(std::string_view what) {
-    if (!enabled_) {
-      return;
-    }
-    const double s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    std::fprintf(stderr, "\r  diagnose: %.*s  (%.1f s)\033[K", static_cast<int>(what.size()),
-                 what.data(), s);
-    std::fflush(stderr);
-    shown_ = true;
-  }
-  void done() {
-    if (shown_) {
-      std::fprintf(stderr, "\r\033[K");
-      std::fflush(stderr);
-    }
-  }
-
- private:
-  bool enabled_;
-  bool shown_ = false;
-  std::chrono::steady_clock::time_point start_;
 };
 
 std::vector<std::string> split_names(const std::string& list) {
@@ -83,149 +55,128 @@ std::vector<std::string> split_names(const std::string& list) {
   return out;
 }
 
-int diagnose_one(const DiagnoseCliOptions& o) {
-  const fs::path input = o.input;
+/// A cut read for the diagnosis: its record in the model frame and its starting model.
+struct LoadedCut {
+  std::string input;
+  std::string config_name;
+  diagnose::CutRecord record;
+  model::ModelConfig start;
+};
+
+LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::size_t index) {
+  const fs::path input = o.inputs[index];
+  const bool several = o.inputs.size() > 1;
+  const std::string where =
+      several ? fmt::format("cut {} of {}", index + 1, o.inputs.size()) : std::string();
   if (!fs::exists(input)) {
-    throw std::runtime_error(input.string() + ": no such recording");
+    throw std::runtime_error(input.string() + ": no such recording" +
+                             (several ? " (" + where + ")" : ""));
   }
-  const RecordingFormat format = detect_recording_format(input);
-  // --config: a monitor configuration (or {"monitor": ...}), optionally with "columns".
-  nlohmann::json overrides = nlohmann::json::object();
-  ColumnMap columns;
-  if (!o.config.empty()) {
-    overrides = read_json_file(o.config);
-    auto take_columns = [&](nlohmann::json& object, const std::string& where) {
-      if (object.is_object() && object.contains("columns")) {
-        try {
-          columns = column_map_from_json(object["columns"], where);
-        } catch (const std::invalid_argument& e) {
-          throw std::runtime_error(o.config + ": " + e.what());
-        }
-        object.erase("columns");
-      }
-    };
-    take_columns(overrides, "columns");
-    if (overrides.is_object() && overrides.contains("monitor")) {
-      overrides = nlohmann::json(overrides["monitor"]);
-      take_columns(overrides, "monitor.columns");
+  LoadedMonitorConfig loaded = load_monitor_config({input, o.config, o.sidecar, "", where}, file);
+  // The cut's feed per tooth: --feeds-um, else its sidecar, else --config's; both --feeds-um and
+  // a sidecar given must agree. Across feeds each cut's own feed is needed.
+  if (!o.feeds_um.empty()) {
+    const double f = o.feeds_um[index];
+    if (!(f > 0.0)) {
+      throw std::runtime_error(
+          fmt::format("--feeds-um: {:g} um per tooth for {}: must be > 0", f, input.string()));
     }
+    if (loaded.sidecar_feed_per_tooth_um &&
+        std::fabs(*loaded.sidecar_feed_per_tooth_um - f) > 1e-6 * f) {
+      throw std::runtime_error(fmt::format(
+          "{}: --feeds-um gives {:g} um per tooth, its sidecar {} says {:g} um", input.string(), f,
+          loaded.sidecar.string(), *loaded.sidecar_feed_per_tooth_um));
+    }
+    loaded.json["model"]["process"]["feed_per_tooth_um"] = f;
+  } else if (several && !loaded.sidecar_feed_per_tooth_um) {
+    throw std::runtime_error(input.string() + ": no feed per tooth (" + where +
+                             "): no sidecar states it; give --feeds-um, one per cut");
   }
-  fs::path sidecar = o.sidecar;
-  if (sidecar.empty() && format != RecordingFormat::kLcmLog) {
-    sidecar = input;
-    sidecar.replace_extension(".json");
-    if (!fs::exists(sidecar) && !o.config.empty()) {
-      sidecar.clear();
-    }
-  }
-  nlohmann::json base = overrides;
-  std::string config_name = o.config.empty() ? "(defaults)" : o.config;
-  if (!sidecar.empty()) {
-    if (!fs::exists(sidecar)) {
-      throw std::runtime_error(sidecar.string() +
-                               ": sidecar not found (describe the cut with --sidecar or --config)");
-    }
-    try {
-      base = monitor::monitor_json_from_sidecar(read_json_file(sidecar), overrides);
-    } catch (const config::ConfigError& e) {
-      throw std::runtime_error(sidecar.string() + ": " + e.what());
-    }
-    config_name = sidecar.string() + (o.config.empty() ? "" : " + " + o.config);
-  }
-  const double config_rate_hz =
-      base.is_object() && base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
-          ? base["sample_rate_hz"].get<double>()
-          : 0.0;
   RecordingOptions ro;
-  ro.columns = columns;
-  ro.config_rate_hz = config_rate_hz;
+  ro.columns = loaded.columns;
+  ro.config_rate_hz = loaded.config_rate_hz();
   std::int64_t bad = 0;
-  ro.on_bad = [&](std::int64_t where, const std::string& problem) {
+  ro.on_bad = [&](std::int64_t at, const std::string& problem) {
     if (++bad <= 20) {
-      spdlog::warn("{}: {}: {}; skipped", input.string(), where, problem);
+      spdlog::warn("{}: {}: {}; skipped", input.string(), at, problem);
     }
   };
   auto source = open_recording(input, ro);
   spdlog::info("{}: {}", input.string(), source->description());
-  if (source->sample_rate_hz() > 0.0 && (config_rate_hz <= 0.0 || source->rate_stated())) {
-    base["sample_rate_hz"] = source->sample_rate_hz();
-  }
+  take_recording_rate(loaded, *source, input.string());
   // The monitor's low-pass plays no part here (the diagnosis compares its own band): unless
   // configured, it is set where the monitor's checks against the tooth-passing frequency pass.
-  const double rate_hz =
-      base.is_object() && base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
-          ? base["sample_rate_hz"].get<double>()
-          : 0.0;
+  const double rate_hz = loaded.config_rate_hz();
+  nlohmann::json& base = loaded.json;
   if (rate_hz > 0.0 && base.is_object() &&
       !(base.contains("filter") && base["filter"].is_object() &&
         base["filter"].contains("cutoff_hz"))) {
     base["filter"]["cutoff_hz"] = 0.4 * rate_hz;
   }
-  monitor::MonitorConfig config;
-  try {
-    config = monitor::monitor_config_from_json(base);
-  } catch (const config::ConfigError& e) {
-    throw std::runtime_error(config_name + ": " + e.what());
-  }
+  const monitor::MonitorConfig config = parse_monitor_config(loaded);
 
   // The record in the model frame, trimmed to [--from-s, --to-s).
-  diagnose::CutRecord record;
+  LoadedCut cut;
+  cut.input = input.string();
+  cut.config_name = loaded.name;
   double rate = 0.0;
-  std::int64_t index = 0;
+  std::int64_t i_sample = 0;
   while (auto block = source->next(65536)) {
     if (rate <= 0.0) {
       rate = block->sample_rate_hz;
     }
-    for (std::size_t i = 0; i < block->fx_N.size(); ++i, ++index) {
-      const double t = static_cast<double>(index) / rate;
+    for (std::size_t i = 0; i < block->fx_N.size(); ++i, ++i_sample) {
+      const double t = static_cast<double>(i_sample) / rate;
       if (t < o.from_s || (o.to_s > 0.0 && t >= o.to_s)) {
         continue;
       }
       const auto f = config.axis_map.to_model({block->fx_N[i], block->fy_N[i], block->fz_N[i]});
-      record.force_N[0].push_back(f[0]);
-      record.force_N[1].push_back(f[1]);
+      cut.record.force_N[0].push_back(f[0]);
+      cut.record.force_N[1].push_back(f[1]);
     }
   }
-  if (rate <= 0.0 || record.force_N[0].empty()) {
+  if (rate <= 0.0 || cut.record.force_N[0].empty()) {
     throw std::runtime_error(input.string() + ": no samples to diagnose" +
                              (o.from_s > 0.0 || o.to_s > 0.0 ? " within --from-s/--to-s" : ""));
   }
-  record.sample_rate_hz = rate;
+  cut.record.sample_rate_hz = rate;
   if (bad > 0) {
     spdlog::warn("{}: {} bad {} skipped", input.string(), bad, source->record_unit());
   }
-
-  model::ModelConfig start = config.model;
+  cut.start = config.model;
   if (o.start == "plain") {
-    start = diagnose::plain_model(start);
-  } else if (o.start != "configured") {
-    throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");
+    cut.start = diagnose::plain_model(cut.start);
   }
+  return cut;
+}
+
+diagnose::Diagnosis diagnose_cut(const DiagnoseCliOptions& o, const LoadedCut& cut,
+                                 ProgressLine& progress, const std::string& prefix) {
   diagnose::DiagnoseOptions options;
   options.band_hz = o.band_hz;
   options.max_steps = o.max_steps;
   options.candidates = split_names(o.candidates);
-  ProgressLine progress(o.progress);
-  options.progress = [&](std::string_view line) { progress.show(line); };
+  options.progress = [&](std::string_view line) {
+    progress.show(fmt::format("diagnose: {}{}  ({:.1f} s)", prefix, line, progress.elapsed_s()));
+  };
   diagnose::Diagnosis d;
   try {
-    d = diagnose::diagnose(record, start, options);
+    d = diagnose::diagnose(cut.record, cut.start, options);
   } catch (const config::ConfigError& e) {
     progress.done();
-    throw std::runtime_error(config_name + ": " + e.what());
+    throw std::runtime_error(cut.config_name + ": " + e.what());
   } catch (const std::invalid_argument& e) {
     progress.done();
-    throw std::runtime_error(input.string() + ": " + e.what());
+    throw std::runtime_error(cut.input + ": " + e.what());
   }
   progress.done();
   if (!d.ok) {
-    throw std::runtime_error(input.string() + ": " + d.message);
+    throw std::runtime_error(cut.input + ": " + d.message);
   }
-  const ReportFiles files = write_diagnosis_report(d, o.report, input.filename().string(), o.plots);
-  if (!files.plot_problem.empty() && o.plots) {
-    spdlog::warn("plots left out: {}", files.plot_problem);
-  }
-  std::printf("%s\n", d.verdict.c_str());
+  return d;
+}
+
+void print_steps(const diagnose::Diagnosis& d) {
   std::printf("  start: residual %.4f, %.4f N (noise floor %.4f, %.4f N)\n",
               d.initial.residual_rms_N[0], d.initial.residual_rms_N[1], d.noise_floor_N[0],
               d.noise_floor_N[1]);
@@ -233,6 +184,97 @@ int diagnose_one(const DiagnoseCliOptions& o) {
     std::printf("  + %-22s residual %.4f, %.4f N  ΔBIC %.1f (over %s by %.1f)\n", s.added.c_str(),
                 s.residual_rms_N[0], s.residual_rms_N[1], s.gain,
                 s.runner_up.empty() ? "-" : s.runner_up.c_str(), s.margin_over_runner_up);
+  }
+  for (const auto& p : d.at_bound) {
+    std::printf("  %s held at its %s bound %g (outside the physical range)\n", p.name.c_str(),
+                p.at_bound.c_str(), p.value);
+  }
+}
+
+/// Folder names per cut: the file's stem, made unique.
+std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
+  std::vector<std::string> stems;
+  std::map<std::string, int> seen;
+  for (const auto& in : inputs) {
+    std::string stem = fs::path(in).stem().string();
+    const int n = ++seen[stem];
+    stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
+  }
+  return stems;
+}
+
+int run_diagnose(const DiagnoseCliOptions& o) {
+  if (o.start != "plain" && o.start != "configured") {
+    throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");
+  }
+  const bool several = o.inputs.size() > 1;
+  if (several && !o.sidecar.empty()) {
+    throw std::runtime_error(
+        "--sidecar describes one cut: with several, each cut's CUT.json beside it (or --config "
+        "and --feeds-um) describes it");
+  }
+  if (!o.feeds_um.empty() && o.feeds_um.size() != o.inputs.size()) {
+    throw std::runtime_error(fmt::format(
+        "--feeds-um gives {} feed(s) for {} cut(s): one per cut, in the order of the cuts",
+        o.feeds_um.size(), o.inputs.size()));
+  }
+  const ConfigFile file = read_config_file(o.config);
+  ProgressLine progress(o.progress);
+  if (!several) {
+    const LoadedCut cut = load_cut(o, file, 0);
+    const diagnose::Diagnosis d = diagnose_cut(o, cut, progress, "");
+    const ReportFiles files =
+        write_diagnosis_report(d, o.report, fs::path(cut.input).filename().string(), o.plots);
+    if (!files.plot_problem.empty() && o.plots) {
+      spdlog::warn("plots left out: {}", files.plot_problem);
+    }
+    std::printf("%s\n", d.verdict.c_str());
+    print_steps(d);
+    std::printf("  report: %s\n", (fs::path(o.report) / "report.md").string().c_str());
+    return 0;
+  }
+  // Several cuts: each read and diagnosed in turn (its report in DIR/<stem>/), then compared.
+  std::vector<LoadedCut> cuts;
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {  // every cut read before the long work
+    cuts.push_back(load_cut(o, file, i));
+  }
+  const std::vector<std::string> stems = unique_stems(o.inputs);
+  std::vector<diagnose::Diagnosis> diagnoses;
+  diagnoses.reserve(cuts.size());
+  for (std::size_t i = 0; i < cuts.size(); ++i) {
+    diagnoses.push_back(
+        diagnose_cut(o, cuts[i], progress, fmt::format("cut {}/{}: ", i + 1, cuts.size())));
+    cuts[i].record = {};  // its samples are no longer needed
+    const ReportFiles files =
+        write_diagnosis_report(diagnoses.back(), fs::path(o.report) / stems[i],
+                               fs::path(cuts[i].input).filename().string(), o.plots);
+    if (!files.plot_problem.empty() && o.plots) {
+      spdlog::warn("{}: plots left out: {}", cuts[i].input, files.plot_problem);
+    }
+  }
+  std::vector<diagnose::FeedCut> feed_cuts;
+  std::vector<CutReport> reports;
+  for (std::size_t i = 0; i < cuts.size(); ++i) {
+    const std::string name = fs::path(cuts[i].input).filename().string();
+    feed_cuts.push_back({name, cuts[i].start.process.feed_per_tooth_um, &diagnoses[i]});
+    reports.push_back({name, stems[i], &diagnoses[i]});
+  }
+  const diagnose::AcrossFeeds across = diagnose::across_feeds(feed_cuts);
+  const ReportFiles files = write_across_feeds_report(across, reports, o.report, o.plots);
+  if (!files.plot_problem.empty() && o.plots) {
+    spdlog::warn("plot left out: {}", files.plot_problem);
+  }
+  std::printf("%s\n  %s\n", across.verdict.c_str(), across.trend.sentence.c_str());
+  std::printf("  %-28s %7s  %-19s %-19s %s\n", "cut", "f_t um", "residual before N",
+              "residual after N", "named");
+  for (const auto& c : across.cuts) {
+    std::string named;
+    for (const auto& e : c.named_effects) {
+      named += (named.empty() ? "" : ", ") + e;
+    }
+    std::printf("  %-28s %7.3g  %8.4f, %8.4f  %8.4f, %8.4f  %s\n", c.name.c_str(),
+                c.feed_per_tooth_um, c.before.total_N[0], c.before.total_N[1], c.after.total_N[0],
+                c.after.total_N[1], named.empty() ? "-" : named.c_str());
   }
   std::printf("  report: %s\n", (fs::path(o.report) / "report.md").string().c_str());
   return 0;
@@ -244,11 +286,23 @@ void add_diagnose_command(CLI::App& app) {
   auto o = std::make_shared<DiagnoseCliOptions>();
   CLI::App* cmd = app.add_subcommand(
       "diagnose",
-      "Where model and measurement disagree: name the missing effect, add it, show the gap shrink");
-  cmd->add_option("cut", o->input, "Recorded cut (any format the replay reads)")->required();
-  cmd->add_option("--config", o->config, "Monitor configuration JSON (the cut as commanded)");
-  cmd->add_option("--sidecar", o->sidecar, "The recording's sidecar (default: CUT.json if there)");
-  cmd->add_option("--report", o->report, "Folder for report.md, report.html, report.json, plots")
+      "Where model and measurement disagree: name the missing effect, add it, show the gap "
+      "shrink (several cuts: also across their feeds)");
+  cmd->add_option("cuts", o->inputs,
+                  "Recorded cut(s) (any format the replay reads); several: one tool and material "
+                  "at different feeds")
+      ->required();
+  cmd->add_option("--config", o->config,
+                  "Monitor configuration JSON (the cut as commanded), merged over each sidecar");
+  cmd->add_option("--sidecar", o->sidecar,
+                  "The recording's sidecar (one cut; default: CUT.json if there)");
+  cmd->add_option("--feeds-um", o->feeds_um,
+                  "Feed per tooth of each cut (um), in the order of the cuts (default: each "
+                  "cut's sidecar)")
+      ->delimiter(',');
+  cmd->add_option("--report", o->report,
+                  "Folder for report.md, report.html, report.json, plots (several cuts: one "
+                  "folder per cut inside, and the comparison across feeds)")
       ->required();
   cmd->add_option("--start", o->start,
                   "Starting model: 'plain' (no effects, default) or 'configured'");
@@ -259,7 +313,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 5)");
   cmd->add_flag("!--no-plots", o->plots, "Do not draw the plots");
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
-  cmd->callback([o]() { run_subcommand([&]() { return diagnose_one(*o); }); });
+  cmd->callback([o]() { run_subcommand([&]() { return run_diagnose(*o); }); });
 }
 
 }  // namespace millwatch::shell

@@ -31,9 +31,10 @@
 #include "shell/column_map.hpp"
 #include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
-#include "shell/material_preset.hpp"
+#include "shell/monitor_config_file.hpp"
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
+#include "shell/progress_line.hpp"
 #include "shell/recording_source.hpp"
 #include "shell/run_plots.hpp"
 #include "shell/run_recorder.hpp"
@@ -73,128 +74,26 @@ struct ReplayOptions {
   int block_samples = 1000;
 };
 
-/// --config's JSON without its "columns" (the shell's, not the monitor's), and that map.
-struct ConfigFile {
-  nlohmann::json monitor = nlohmann::json::object();
-  std::optional<ColumnMap> columns;
-};
-
-ConfigFile read_config(const std::string& path) {
-  ConfigFile c;
-  if (path.empty()) {
-    return c;
-  }
-  nlohmann::json j = read_json_file(path);
-  resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
-  auto take_columns = [&](nlohmann::json& object, const std::string& where) {
-    if (object.is_object() && object.contains("columns")) {
-      try {
-        c.columns = column_map_from_json(object["columns"], where);
-      } catch (const std::invalid_argument& e) {
-        throw std::runtime_error(path + ": " + e.what());
-      }
-      object.erase("columns");
-    }
-  };
-  take_columns(j, "columns");
-  if (j.is_object() && j.contains("monitor")) {
-    j = j["monitor"];
-    take_columns(j, "monitor.columns");
-  }
-  c.monitor = j;
-  return c;
+std::string progress_text(double fraction, double sample_time_s, double wall_s) {
+  const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
+  return fmt::format(
+      "{:5.1f} %  {:.1f} s of recording in {:.1f} s ({:.0f}× real time), {:.0f} s left",
+      100.0 * fraction, sample_time_s, wall_s, sample_time_s / wall_s, left_s);
 }
-
-std::string rate_text(double hz) {
-  return fmt::format("{:.6g} Hz", hz);
-}
-
-/// Progress on stderr when it is a terminal and the replay has run for a while.
-class Progress {
- public:
-  explicit Progress(bool enabled)
-      : enabled_(enabled && isatty(STDERR_FILENO) != 0),
-        start_(std::chrono::steady_clock::now()),
-        next_(start_ + std::chrono::seconds(2)) {}
-  void update(double fraction, double sample_time_s) {
-    if (!enabled_) {
-      return;
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (now < next_) {
-      return;
-    }
-    next_ = now + std::chrono::milliseconds(250);
-    const double wall_s = std::chrono::duration<double>(now - start_).count();
-    const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
-    std::fprintf(stderr,
-                 "\r  %5.1f %%  %.1f s of recording in %.1f s (%.0f× real time), %.0f s left\033[K",
-                 100.0 * fraction, sample_time_s, wall_s, sample_time_s / wall_s, left_s);
-    std::fflush(stderr);
-    shown_ = true;
-  }
-  void done() {
-    if (shown_) {
-      std::fprintf(stderr, "\r\033[K");
-      std::fflush(stderr);
-    }
-  }
-
- private:
-  bool enabled_;
-  bool shown_ = false;
-  std::chrono::steady_clock::time_point start_, next_;
-};
 
 int replay_one(const ReplayOptions& o) {
   const fs::path input = o.inputs.front();
   const RecordingFormat format = detect_recording_format(input);
   const bool lcm_log = format == RecordingFormat::kLcmLog;
-  ConfigFile config_file = read_config(o.config);
-  ColumnMap columns = config_file.columns.value_or(ColumnMap{});
-  if (!o.columns.empty()) {
-    try {
-      columns = parse_column_map(o.columns);  // the command line beats the configuration
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(std::string("--") + e.what());
-    }
-  }
-
   // The configuration: the sidecar's cut under --config's overrides.
-  const nlohmann::json& overrides = config_file.monitor;
-  std::string config_name = o.config.empty() ? "(defaults)" : o.config;
-  fs::path sidecar = o.sidecar;
-  if (sidecar.empty() && !lcm_log) {
-    sidecar = input;
-    sidecar.replace_extension(".json");
-    if (!fs::exists(sidecar) && !o.config.empty()) {
-      sidecar.clear();  // no sidecar beside the recording: --config describes the cut alone
-    }
-  }
-  nlohmann::json base;
-  if (!sidecar.empty()) {
-    if (!fs::exists(sidecar)) {
-      throw std::runtime_error(sidecar.string() +
-                               ": sidecar not found (describe the cut with --sidecar or --config)");
-    }
-    try {
-      base = monitor::monitor_json_from_sidecar(read_json_file(sidecar), overrides);
-    } catch (const config::ConfigError& e) {
-      throw std::runtime_error(sidecar.string() + ": " + e.what());
-    }
-    config_name = sidecar.string() + (o.config.empty() ? "" : " + " + o.config);
-  } else {
-    base = overrides;
-  }
-  const double config_rate_hz =
-      base.is_object() && base.contains("sample_rate_hz") && base["sample_rate_hz"].is_number()
-          ? base["sample_rate_hz"].get<double>()
-          : 0.0;
+  LoadedMonitorConfig loaded =
+      load_monitor_config({input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
+  const double config_rate_hz = loaded.config_rate_hz();
 
   std::int64_t bad = 0;
   const char* unit = lcm_log ? "events" : format == RecordingFormat::kMat ? "samples" : "lines";
   RecordingOptions ro;
-  ro.columns = columns;
+  ro.columns = loaded.columns;
   ro.config_rate_hz = config_rate_hz;
   ro.lcm_channel = o.raw_channel;
   ro.on_bad = [&](std::int64_t where, const std::string& problem) {
@@ -211,24 +110,8 @@ int replay_one(const ReplayOptions& o) {
   };
   std::unique_ptr<RecordingSource> source = open_recording(input, ro);
   spdlog::info("{}: {}", input.string(), source->description());
-  // The rate: a recording that states one beats the configuration (said so if they differ).
-  const double source_rate_hz = source->sample_rate_hz();
-  if (source_rate_hz > 0.0 && base.is_object()) {
-    if (config_rate_hz > 0.0 && source->rate_stated() &&
-        std::fabs(source_rate_hz - config_rate_hz) > 1e-3 * config_rate_hz) {
-      spdlog::warn("{}: the recording states {}, {} says {}; using the recording's", input.string(),
-                   rate_text(source_rate_hz), config_name, rate_text(config_rate_hz));
-    }
-    if (config_rate_hz <= 0.0 || source->rate_stated()) {
-      base["sample_rate_hz"] = source_rate_hz;
-    }
-  }
-  monitor::MonitorConfig config;
-  try {
-    config = monitor::monitor_config_from_json(base);
-  } catch (const config::ConfigError& e) {
-    throw std::runtime_error(config_name + ": " + e.what());
-  }
+  take_recording_rate(loaded, *source, input.string());
+  monitor::MonitorConfig config = parse_monitor_config(loaded);
   if (o.zero_phase) {
     config.filter_zero_phase = true;
   }
@@ -262,7 +145,7 @@ int replay_one(const ReplayOptions& o) {
   g_stop = false;
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
-  Progress progress(o.progress);
+  ProgressLine progress(o.progress, 2.0, 0.25);
   // The record's in-plane force √(Fx² + Fy²), in the model's frame and before any filter: what
   // the record holds even where no revolution can be measured (a campaign's first, light cuts).
   double in_plane_sum_sq = 0.0;
@@ -301,7 +184,11 @@ int replay_one(const ReplayOptions& o) {
       }
     }
     run.process(block);
-    progress.update(source->progress(), static_cast<double>(block.utime_us - first_utime) * 1e-6);
+    if (progress.due()) {
+      progress.show(progress_text(source->progress(),
+                                  static_cast<double>(block.utime_us - first_utime) * 1e-6,
+                                  progress.elapsed_s()));
+    }
   }
   progress.done();
   run.finish();

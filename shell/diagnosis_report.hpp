@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/diagnose/across_feeds.hpp"
 #include "core/diagnose/diagnosis.hpp"
 
 namespace millwatch::shell {
@@ -29,5 +30,23 @@ struct ReportFiles {
 /// be written. A missing or failing gnuplot leaves the plots out (said in the report).
 ReportFiles write_diagnosis_report(const diagnose::Diagnosis& d, const std::filesystem::path& dir,
                                    const std::string& title, bool plots = true);
+
+/// One cut of a several-cut diagnosis: its name and the folder of its own report (relative to
+/// the top report's folder).
+struct CutReport {
+  std::string name;
+  std::string folder;
+  const diagnose::Diagnosis* diagnosis = nullptr;
+};
+
+/// The report across feeds (`millwatch diagnose CUT1 CUT2 …`), each cut's own report being in
+/// its folder already: DIR/report.json (cuts [{cut, feed_per_tooth_um, report, named_effects,
+/// verdict, initial/final residual, noise floor}], across_feeds (diagnosis_json.hpp),
+/// named_effects: those named in every cut, verdict), report.md/.html (the across-feeds table,
+/// the trend, links to each cut's report) and residual_vs_feed.png (the residual's excess over
+/// the noise against the feed, before and after, with the noise floor).
+ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
+                                      const std::vector<CutReport>& cuts,
+                                      const std::filesystem::path& dir, bool plots = true);
 
 }  // namespace millwatch::shell

@@ -42,6 +42,17 @@ struct State {
   double change_s = 0.0;        // the runout changed at this time (0: it did not)
   double change_sigma_s = 0.0;
   bool wear_trend = false;  // flank wear's rubbing, growing linearly over the record
+  // Parameters held at a physical bound once a model with them was accepted (taken out of
+  // extra; still counted in the criterion): name → "lower"/"upper".
+  std::vector<std::pair<std::string, std::string>> held;
+
+  /// Holds what an accepted evaluation left on a bound (its value is in config already).
+  void hold(const std::vector<std::pair<std::string, std::string>>& at_bound) {
+    for (const auto& h : at_bound) {
+      extra.erase(std::remove(extra.begin(), extra.end(), h.first), extra.end());
+      held.push_back(h);
+    }
+  }
 };
 
 /// One fit of a state to the record.
@@ -63,6 +74,8 @@ struct Evaluation {
   double wear_slope_um = 0.0;  // VB's change per unit of τ = 2t/T − 1
   double wear_slope_sigma_um = 0.0;
   double wear_normal = 1.0;
+  /// Damping ratios held at a physical bound (name → "lower"/"upper"), from the last segment.
+  std::vector<std::pair<std::string, std::string>> at_bound;
 };
 
 class Engine {
@@ -148,7 +161,8 @@ class Engine {
         seed_fit =
             sg == 0 && segments.size() > 1 && seed->fit_before.ok ? &seed->fit_before : &seed->fit;
       }
-      if (!fit_segment(s, target, i0, i1, k_max, systematic, seed_fit, fit, ev.message)) {
+      if (!fit_segment(s, target, i0, i1, k_max, systematic, seed_fit, fit, ev.message,
+                       ev.at_bound)) {
         return ev;
       }
       if (!synthesize(fit.config, s.rpm, fit.alignment_rad.value, ev, i0, i1)) {
@@ -220,7 +234,7 @@ class Engine {
     int p = 1;  // alignment
     p += static_cast<int>(ev.fit.coefficients.size());
     p += s.fit_runout ? 2 : 0;
-    p += static_cast<int>(s.extra.size());
+    p += static_cast<int>(s.extra.size() + s.held.size());
     if (split > 0) {  // the segment before the change: its own fit, and the change's time
       p += 2 + static_cast<int>(ev.fit_before.coefficients.size()) + (s.fit_runout ? 2 : 0) +
            static_cast<int>(s.extra.size());
@@ -241,7 +255,8 @@ class Engine {
   /// Fits the model part to the synchronous harmonics of target over samples [i0, i1).
   bool fit_segment(const State& s, const std::array<std::vector<double>, 2>& target, std::size_t i0,
                    std::size_t i1, int k_max, bool systematic, const identify::FitResult* seed,
-                   identify::FitResult& fit, std::string& message) {
+                   identify::FitResult& fit, std::string& message,
+                   std::vector<std::pair<std::string, std::string>>& at_bound) {
     const double f = s.rpm / 60.0;
     identify::MeasuredRevolution m;
     const int bins = std::max(64, 4 * (k_max + 2));
@@ -276,9 +291,9 @@ class Engine {
     fo.extra_parameters = s.extra;
     fo.systematic = systematic;
     const double band = band_;
+    const auto filter = [band](double hz) { return hz <= band * (1.0 + 1e-9) ? 1.0 : 0.0; };
     try {
-      identify::WindowFitter fitter(
-          s.config, [band](double hz) { return hz <= band * (1.0 + 1e-9) ? 1.0 : 0.0; }, fo);
+      identify::WindowFitter fitter(s.config, filter, fo);
       fit = fitter.fit(m, seed);
     } catch (const std::exception& e) {
       message = e.what();
@@ -287,6 +302,48 @@ class Engine {
     if (!fit.ok) {
       message = fit.message;
       return false;
+    }
+    // A damping ratio outside the physical range is held at the bound it crossed and the other
+    // parameters refitted from there (the bound is active: the constrained optimum lies on it).
+    // Held ratios stay counted as free parameters in the criterion (the bound was chosen by the
+    // fit). Twice at most: holding one may push the other out.
+    at_bound.clear();
+    model::ModelConfig held = fit.config;
+    for (int round = 0; round < 2; ++round) {
+      bool moved = false;
+      for (const auto& e : fit.extra) {
+        if (e.name.rfind("damping_ratio_", 0) != 0 ||
+            (e.value >= kDampingRatioMin && e.value <= kDampingRatioMax)) {
+          continue;
+        }
+        const std::size_t axis = e.name == "damping_ratio_x"   ? 0
+                                 : e.name == "damping_ratio_y" ? 1
+                                                               : 2;
+        const bool low = e.value < kDampingRatioMin;
+        held.effects.dynamometer.damping_ratio[axis] = low ? kDampingRatioMin : kDampingRatioMax;
+        fo.extra_parameters.erase(
+            std::remove(fo.extra_parameters.begin(), fo.extra_parameters.end(), e.name),
+            fo.extra_parameters.end());
+        at_bound.emplace_back(e.name, low ? "lower" : "upper");
+        moved = true;
+      }
+      if (!moved) {
+        break;
+      }
+      identify::FitResult refit;
+      try {
+        identify::WindowFitter fitter(held, filter, fo);
+        refit = fitter.fit(m, &fit);
+      } catch (const std::exception& e) {
+        message = e.what();
+        return false;
+      }
+      if (!refit.ok) {
+        message = refit.message;
+        return false;
+      }
+      fit = std::move(refit);
+      held = fit.config;
     }
     return true;
   }
@@ -748,7 +805,13 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
     };
     for (const auto& e : fit.extra) {
       if (wanted(e.name)) {
-        out.push_back({e.name, e.value, e.sigma});
+        out.push_back({e.name, e.value, e.sigma, ""});
+      }
+    }
+    if (name == "dynamometer_dynamics") {
+      for (const auto& [held, side] : ev.at_bound) {
+        const std::size_t axis = held == "damping_ratio_x" ? 0 : held == "damping_ratio_y" ? 1 : 2;
+        out.push_back({held, fit.config.effects.dynamometer.damping_ratio[axis], 0.0, side});
       }
     }
   } else if (name == "spindle_speed_error") {
@@ -1404,6 +1467,7 @@ Diagnosis Diagnoser::run() {
     return out;
   }
   state.config = current.fit.config;
+  state.hold(current.at_bound);
   engine_.refine_floor(current);
   out.initial = stage_of("", state, current);
   auto at_floor = [&](const Evaluation& ev) {
@@ -1509,6 +1573,7 @@ Diagnosis Diagnoser::run() {
       }
     }
     next.config = final_ev.fit.config;
+    next.hold(final_ev.at_bound);
     Stage st = stage_of(win.name, next, final_ev);
     st.gain = current.criterion - final_ev.criterion;
     if (second >= 0) {
@@ -1529,6 +1594,11 @@ Diagnosis Diagnoser::run() {
   out.noise_floor_N = engine_.floor();
   out.final_model = current.fit.config;
   out.final_model.effects.runout.enabled = state.fit_runout;
+  for (const auto& [name, side] : state.held) {
+    const std::size_t axis = name == "damping_ratio_x" ? 0 : name == "damping_ratio_y" ? 1 : 2;
+    out.at_bound.emplace_back(name, out.final_model.effects.dynamometer.damping_ratio[axis], 0.0,
+                              side);
+  }
   out.spindle_rpm = state.rpm;
 
   const auto& last_rms =

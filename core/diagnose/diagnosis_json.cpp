@@ -12,7 +12,15 @@ nlohmann::json axes(const std::array<double, 2>& v) {
 nlohmann::json parameters(const std::vector<Parameter>& ps) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& p : ps) {
-    j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
+    if (p.at_bound.empty()) {
+      j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
+    } else {  // a bound, not an estimate: no σ
+      j[p.name] = {{"value", p.value},
+                   {"sigma", nullptr},
+                   {"at_bound", p.at_bound},
+                   {"note", "the fit sits on the " + p.at_bound +
+                                " end of the physical range; held there, the rest refitted"}};
+    }
   }
   return j;
 }
@@ -100,6 +108,8 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"noise_floor_N", axes(d.noise_floor_N)},
           {"measured_rms_N", axes(d.measured_rms_N)},
           {"verdict", d.verdict},
+          {"parameters_at_bound", parameters(d.at_bound)},
+          {"damping_ratio_range", {kDampingRatioMin, kDampingRatioMax}},
           {"stop_reason", d.stop_reason},
           {"criterion", "BIC: sum over fx, fy of n_eff*ln(mean square) + p*ln(2*n_eff)"},
           {"band_hz", d.band_hz},
@@ -109,6 +119,55 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"spindle_rpm", d.spindle_rpm},
           {"seconds", d.seconds},
           {"catalogue", cat}};
+}
+
+namespace {
+
+nlohmann::json bands(const ResidualByBand& r) {
+  return {{"spindle_harmonics", axes(r.spindle_harmonics_N)},
+          {"tooth_passing_harmonics", axes(r.tooth_harmonics_N)},
+          {"rest", axes(r.rest_N)}};
+}
+
+nlohmann::json trend(const FeedTrend& t) {
+  nlohmann::json j = {{"name", t.name},
+                      {"band", t.band},
+                      {"suggests", t.suggests},
+                      {"sentence", t.sentence},
+                      {"law", "excess over the noise floor ~ feed_per_tooth^exponent"}};
+  j["exponent"] = t.has_exponent ? nlohmann::json(t.exponent) : nlohmann::json(nullptr);
+  j["exponent_sigma"] = t.has_sigma ? nlohmann::json(t.exponent_sigma) : nlohmann::json(nullptr);
+  if (!t.has_exponent) {
+    j["exponent_absent"] = t.name == "one_feed" ? "fewer than two distinct feeds"
+                                                : "no cut stands above its noise floor";
+  } else if (!t.has_sigma) {
+    j["exponent_sigma_absent"] = "two feeds fit a line exactly: sigma needs three or more";
+  }
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const AcrossFeeds& a) {
+  nlohmann::json cuts = nlohmann::json::array();
+  for (const auto& c : a.cuts) {
+    cuts.push_back(
+        {{"cut", c.name},
+         {"feed_per_tooth_um", c.feed_per_tooth_um},
+         {"measured_rms_N", axes(c.measured_rms_N)},
+         {"noise_floor_N", axes(c.noise_floor_N)},
+         {"residual_rms_N", {{"before", axes(c.before.total_N)}, {"after", axes(c.after.total_N)}}},
+         {"by_band", {{"before", bands(c.before)}, {"after", bands(c.after)}}},
+         {"excess_N", {{"before", c.before.excess_N}, {"after", c.after.excess_N}}},
+         {"named_effects", c.named_effects}});
+  }
+  return {{"cuts", cuts},
+          {"trend", trend(a.trend)},
+          {"trend_after", trend(a.trend_after)},
+          {"named_in_every_cut", a.named_in_every_cut},
+          {"named_in_some_cuts", a.named_in_some_cuts},
+          {"shrinks_in_every_cut", a.shrinks_in_every_cut},
+          {"verdict", a.verdict}};
 }
 
 }  // namespace millwatch::diagnose

@@ -8,11 +8,19 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/diagnose/across_feeds.hpp"
 #include "core/diagnose/diagnosis.hpp"
 
 namespace millwatch::diagnose {
 
 nlohmann::json to_json(const Diagnosis& d);
 nlohmann::json to_json(const Stage& s);
+/// across_feeds: {cuts [{cut, feed_per_tooth_um, measured_rms_N, noise_floor_N,
+/// residual_rms_N {before, after}, by_band {before, after: {spindle_harmonics,
+/// tooth_passing_harmonics, rest}}, excess_N {before, after}, named_effects}], trend, trend_after
+/// ({name, exponent, exponent_sigma, band, suggests, sentence}; exponent and σ null with a reason
+/// when they cannot be read), named_in_every_cut, named_in_some_cuts, shrinks_in_every_cut,
+/// verdict}.
+nlohmann::json to_json(const AcrossFeeds& a);
 
 }  // namespace millwatch::diagnose

@@ -25,9 +25,14 @@ struct CutFiles {
   fs::path csv, config;
 };
 
-CutFiles write_cut(const fs::path& dir, double duration_s) {
-  const auto cut = test::hidden_effect_cut({"runout"}, {}, duration_s);
-  CutFiles f{dir / "cut.csv", dir / "cut_config.json"};
+CutFiles write_cut(const fs::path& dir, double duration_s, double feed_per_tooth_um = 0.0,
+                   const std::string& stem = "cut") {
+  const auto cut = feed_per_tooth_um > 0.0
+                       ? test::hidden_effect_cut_at_feed({"runout"}, feed_per_tooth_um, duration_s)
+                       : test::hidden_effect_cut({"runout"}, {}, duration_s);
+  CutFiles f{dir / stem, dir / stem};
+  f.csv += ".csv";
+  f.config += "_config.json";
   std::FILE* out = std::fopen(f.csv.c_str(), "w");
   std::fprintf(out, "t_s,fx_N,fy_N,fz_N\n");
   for (std::size_t i = 0; i < cut.record.force_N[0].size(); ++i) {
@@ -118,6 +123,67 @@ TEST(DiagnoseCommand, BadInputGivesAClearError) {
   EXPECT_NE(r.output.find("unknown candidate 'gremlins'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("mains_hum"), std::string::npos) << r.output;
   // No report is left behind by a failed run.
+  EXPECT_FALSE(fs::exists(dir / "r3" / "report.json"));
+}
+
+TEST(DiagnoseCommand, SeveralCutsAreComparedAcrossFeeds) {
+  // A feed sweep with one tool (a hidden runout): three cuts at 1, 2 and 4 µm per tooth, one
+  // configuration (the cut as commanded at 4 µm), the feeds given by --feeds-um.
+  const fs::path dir = test::fresh_temp_dir();
+  std::string csvs;
+  CutFiles f;
+  for (const double feed : {2.0, 1.0, 4.0}) {  // not in order: the comparison sorts them
+    char stem[16];
+    std::snprintf(stem, sizeof stem, "cut_f%d", static_cast<int>(feed));
+    f = write_cut(dir, 0.2, feed, stem);
+    csvs.append(" ").append(f.csv.string());
+  }
+  const fs::path report = dir / "report";
+  const std::string cli = test::millwatch_cli() + " diagnose" + csvs + " --config " +
+                          f.config.string() +
+                          " --candidates runout,min_chip_thickness,amplifier_drift";
+  auto r = test::run_command(cli + " --feeds-um 2,1,4 --report " + report.string() +
+                             " --no-progress --no-plots");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("independent_of_feed"), std::string::npos) << r.output;
+  for (const char* name : {"report.md", "report.html", "report.json", "residual_vs_feed.csv",
+                           "cut_f1/report.json", "cut_f2/report.md", "cut_f4/report.json"}) {
+    EXPECT_TRUE(fs::exists(report / name)) << name;
+  }
+  std::ifstream in(report / "report.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j.contains("across_feeds")) << j.dump(1).substr(0, 2000);
+  const auto& a = j["across_feeds"];
+  ASSERT_EQ(a["cuts"].size(), 3U);
+  EXPECT_EQ(a["trend"]["name"], "independent_of_feed") << a["trend"]["sentence"];
+  EXPECT_EQ(a["trend"]["band"], "spindle_harmonics");
+  EXPECT_TRUE(a["trend"]["exponent_sigma"].is_number());
+  EXPECT_TRUE(a["shrinks_in_every_cut"].get<bool>());
+  EXPECT_EQ(j["named_effects"], nlohmann::json::array({"runout"}));
+  double previous_feed = 0.0;
+  for (const auto& c : a["cuts"]) {
+    const double feed = c["feed_per_tooth_um"].get<double>();
+    EXPECT_GT(feed, previous_feed);  // rising feed
+    previous_feed = feed;
+    for (const char* axis : {"fx", "fy"}) {
+      EXPECT_LT(c["residual_rms_N"]["after"][axis].get<double>(),
+                0.2 * c["residual_rms_N"]["before"][axis].get<double>())
+          << c["cut"];
+      EXPECT_TRUE(c["by_band"]["before"]["spindle_harmonics"][axis].is_number());
+    }
+  }
+  std::ifstream md(report / "report.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("| cut_f1.csv | 1 |"), std::string::npos) << text.substr(0, 3000);
+
+  // Each cut needs its feed: --feeds-um with one per cut, or a sidecar stating it.
+  r = test::run_command(cli + " --feeds-um 2,1 --report " + (dir / "r2").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--feeds-um gives 2 feed(s) for 3 cut(s)"), std::string::npos)
+      << r.output;
+  r = test::run_command(cli + " --report " + (dir / "r3").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no feed per tooth (cut 1 of 3)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "r3" / "report.json"));
 }
 

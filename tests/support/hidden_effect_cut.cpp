@@ -176,13 +176,18 @@ diagnose::CutRecord record_in_model_frame(const sim::Scenario& s) {
   return r;
 }
 
-HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
-                                  const std::vector<std::string>& known, double duration_s,
-                                  double sample_rate_hz, unsigned seed) {
+namespace {
+
+HiddenEffectCut make_cut(const std::vector<std::string>& hidden,
+                         const std::vector<std::string>& known, double duration_s,
+                         double sample_rate_hz, unsigned seed, double feed_per_tooth_um) {
   HiddenEffectCut c;
   std::vector<std::string> all = hidden;
   all.insert(all.end(), known.begin(), known.end());
   c.scenario = hidden_effect_scenario(all, duration_s, sample_rate_hz, seed);
+  if (feed_per_tooth_um > 0.0) {
+    c.scenario.model.process.feed_per_tooth_um = feed_per_tooth_um;
+  }
   c.record = record_in_model_frame(c.scenario);
   // What the diagnosis knows: the plain model of the cut as commanded, at the fitter's
   // resolution, the coefficients off by tens of percent (they are fitted).
@@ -207,6 +212,20 @@ HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
   }
   c.start = m;
   return c;
+}
+
+}  // namespace
+
+HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
+                                  const std::vector<std::string>& known, double duration_s,
+                                  double sample_rate_hz, unsigned seed) {
+  return make_cut(hidden, known, duration_s, sample_rate_hz, seed, 0.0);
+}
+
+HiddenEffectCut hidden_effect_cut_at_feed(const std::vector<std::string>& hidden,
+                                          double feed_per_tooth_um, double duration_s,
+                                          double sample_rate_hz, unsigned seed) {
+  return make_cut(hidden, {}, duration_s, sample_rate_hz, seed, feed_per_tooth_um);
 }
 
 }  // namespace millwatch::test

@@ -28,6 +28,12 @@ HiddenEffectCut hidden_effect_cut(const std::vector<std::string>& hidden,
                                   double duration_s = 0.4, double sample_rate_hz = 20000.0,
                                   unsigned seed = 7);
 
+/// The same cut at another feed per tooth (a feed sweep with one tool: the hidden effects' own
+/// parameters as hidden_effect_cut sets them; its accumulation recipes keep their own feed).
+HiddenEffectCut hidden_effect_cut_at_feed(const std::vector<std::string>& hidden,
+                                          double feed_per_tooth_um, double duration_s = 0.4,
+                                          double sample_rate_hz = 20000.0, unsigned seed = 7);
+
 /// Only simulates: the scenario as hidden_effect_cut builds it, before recording.
 sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, double duration_s,
                                      double sample_rate_hz, unsigned seed);

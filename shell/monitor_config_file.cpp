@@ -1,0 +1,125 @@
+#include "shell/monitor_config_file.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/config/json_reader.hpp"
+#include "shell/json_file.hpp"
+#include "shell/material_preset.hpp"
+#include "shell/recording_source.hpp"
+
+namespace millwatch::shell {
+
+namespace fs = std::filesystem;
+
+ConfigFile read_config_file(const std::string& path) {
+  ConfigFile c;
+  if (path.empty()) {
+    return c;
+  }
+  if (!fs::exists(path)) {
+    throw std::runtime_error(path + ": configuration not found (--config)");
+  }
+  nlohmann::json j = read_json_file(path);
+  resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
+  auto take_columns = [&](nlohmann::json& object, const std::string& where) {
+    if (object.is_object() && object.contains("columns")) {
+      try {
+        c.columns = column_map_from_json(object["columns"], where);
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(path + ": " + e.what());
+      }
+      object.erase("columns");
+    }
+  };
+  take_columns(j, "columns");
+  if (j.is_object() && j.contains("monitor")) {
+    j = nlohmann::json(j["monitor"]);
+    take_columns(j, "monitor.columns");
+  }
+  c.monitor = j;
+  return c;
+}
+
+double LoadedMonitorConfig::config_rate_hz() const {
+  return json.is_object() && json.contains("sample_rate_hz") && json["sample_rate_hz"].is_number()
+             ? json["sample_rate_hz"].get<double>()
+             : 0.0;
+}
+
+LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
+                                        const ConfigFile& file) {
+  LoadedMonitorConfig out;
+  const std::string where = sources.where.empty() ? "" : " (" + sources.where + ")";
+  out.columns = file.columns.value_or(ColumnMap{});
+  if (!sources.columns.empty()) {
+    try {
+      out.columns = parse_column_map(sources.columns);  // the command line beats the file
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("--") + e.what());
+    }
+  }
+  out.name = sources.config.empty() ? "(defaults)" : sources.config;
+  fs::path sidecar = sources.sidecar;
+  if (sidecar.empty() && detect_recording_format(sources.input) != RecordingFormat::kLcmLog) {
+    sidecar = sources.input;
+    sidecar.replace_extension(".json");
+    if (!fs::exists(sidecar) && !sources.config.empty()) {
+      sidecar.clear();  // no sidecar beside the recording: --config describes the cut alone
+    }
+  }
+  out.json = file.monitor;
+  if (sidecar.empty()) {
+    return out;
+  }
+  if (!fs::exists(sidecar)) {
+    throw std::runtime_error(sidecar.string() + ": sidecar not found" + where +
+                             " (describe the cut with --sidecar or --config)");
+  }
+  const nlohmann::json side = read_json_file(sidecar);
+  try {
+    out.json = monitor::monitor_json_from_sidecar(side, file.monitor);
+    const nlohmann::json own = monitor::monitor_json_from_sidecar(side);
+    const auto p = own.contains("model") && own["model"].is_object()
+                       ? own["model"].value("process", nlohmann::json::object())
+                       : nlohmann::json::object();
+    if (p.is_object() && p.contains("feed_per_tooth_um") && p["feed_per_tooth_um"].is_number()) {
+      out.sidecar_feed_per_tooth_um = p["feed_per_tooth_um"].get<double>();
+    }
+  } catch (const config::ConfigError& e) {
+    throw std::runtime_error(sidecar.string() + ": " + e.what());
+  }
+  out.sidecar = sidecar;
+  out.name = sidecar.string() + (sources.config.empty() ? "" : " + " + sources.config);
+  return out;
+}
+
+void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& source,
+                         const std::string& input) {
+  const double source_hz = source.sample_rate_hz();
+  const double config_hz = config.config_rate_hz();
+  if (!(source_hz > 0.0) || !config.json.is_object()) {
+    return;
+  }
+  if (config_hz > 0.0 && source.rate_stated() &&
+      std::fabs(source_hz - config_hz) > 1e-3 * config_hz) {
+    spdlog::warn("{}: the recording states {:.6g} Hz, {} says {:.6g} Hz; using the recording's",
+                 input, source_hz, config.name, config_hz);
+  }
+  if (config_hz <= 0.0 || source.rate_stated()) {
+    config.json["sample_rate_hz"] = source_hz;
+  }
+}
+
+monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config) {
+  try {
+    return monitor::monitor_config_from_json(config.json);
+  } catch (const config::ConfigError& e) {
+    throw std::runtime_error(config.name + ": " + e.what());
+  }
+}
+
+}  // namespace millwatch::shell
