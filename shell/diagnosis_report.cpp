@@ -178,10 +178,11 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
         ".\n";
   if (!d.at_bound.empty()) {
     md += fmt::format(
-        "\nOn a physical bound (damping ratio held within {:g}–{:g}, a clamped piezoelectric "
-        "dynamometer's range; the fit wanted a value outside, the rest was refitted with it "
-        "held): {}.\n",
-        diagnose::kDampingRatioMin, diagnose::kDampingRatioMax, parameter_text(d.at_bound));
+        "\nOn a physical bound (a clamped piezoelectric dynamometer's range: damping ratio "
+        "{:g}–{:g}, natural frequency {:g}–{:g} Hz; the fit wanted a value outside, the rest was "
+        "refitted with it held): {}.\n",
+        diagnose::kDampingRatioMin, diagnose::kDampingRatioMax, diagnose::kNaturalHzMin,
+        diagnose::kNaturalHzMax, parameter_text(d.at_bound));
   }
   for (std::size_t i = 0; i < stages.size(); ++i) {
     const Stage& s = *stages[i];

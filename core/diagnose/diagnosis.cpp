@@ -303,24 +303,21 @@ class Engine {
       message = fit.message;
       return false;
     }
-    // A damping ratio outside the physical range is held at the bound it crossed and the other
-    // parameters refitted from there (the bound is active: the constrained optimum lies on it).
-    // Held ratios stay counted as free parameters in the criterion (the bound was chosen by the
-    // fit). Twice at most: holding one may push the other out.
+    // A dynamometer parameter outside its physical range is held at the bound it crossed and
+    // the other parameters refitted from there (the bound is active: the constrained optimum
+    // lies on it). Held parameters stay counted as free in the criterion (the bound was chosen
+    // by the fit). Twice at most: holding one may push another out.
     at_bound.clear();
     model::ModelConfig held = fit.config;
     for (int round = 0; round < 2; ++round) {
       bool moved = false;
       for (const auto& e : fit.extra) {
-        if (e.name.rfind("damping_ratio_", 0) != 0 ||
-            (e.value >= kDampingRatioMin && e.value <= kDampingRatioMax)) {
+        const auto range = physical_range(e.name);
+        if (range[1] == 0.0 || (e.value >= range[0] && e.value <= range[1])) {
           continue;
         }
-        const std::size_t axis = e.name == "damping_ratio_x"   ? 0
-                                 : e.name == "damping_ratio_y" ? 1
-                                                               : 2;
-        const bool low = e.value < kDampingRatioMin;
-        held.effects.dynamometer.damping_ratio[axis] = low ? kDampingRatioMin : kDampingRatioMax;
+        const bool low = e.value < range[0];
+        dynamometer_parameter(held, e.name) = low ? range[0] : range[1];
         fo.extra_parameters.erase(
             std::remove(fo.extra_parameters.begin(), fo.extra_parameters.end(), e.name),
             fo.extra_parameters.end());
@@ -810,8 +807,8 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
     }
     if (name == "dynamometer_dynamics") {
       for (const auto& [held, side] : ev.at_bound) {
-        const std::size_t axis = held == "damping_ratio_x" ? 0 : held == "damping_ratio_y" ? 1 : 2;
-        out.push_back({held, fit.config.effects.dynamometer.damping_ratio[axis], 0.0, side});
+        model::ModelConfig c = fit.config;
+        out.push_back({held, dynamometer_parameter(c, held), 0.0, side});
       }
     }
   } else if (name == "spindle_speed_error") {
@@ -1595,9 +1592,7 @@ Diagnosis Diagnoser::run() {
   out.final_model = current.fit.config;
   out.final_model.effects.runout.enabled = state.fit_runout;
   for (const auto& [name, side] : state.held) {
-    const std::size_t axis = name == "damping_ratio_x" ? 0 : name == "damping_ratio_y" ? 1 : 2;
-    out.at_bound.emplace_back(name, out.final_model.effects.dynamometer.damping_ratio[axis], 0.0,
-                              side);
+    out.at_bound.emplace_back(name, dynamometer_parameter(out.final_model, name), 0.0, side);
   }
   out.spindle_rpm = state.rpm;
 
@@ -1691,6 +1686,29 @@ Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
   }
   Diagnoser d(record, start, options);
   return d.run();
+}
+
+std::array<double, 2> physical_range(const std::string& name) {
+  if (name.rfind("damping_ratio_", 0) == 0) {
+    return {kDampingRatioMin, kDampingRatioMax};
+  }
+  if (name.rfind("natural_hz_", 0) == 0) {
+    return {kNaturalHzMin, kNaturalHzMax};
+  }
+  return {0.0, 0.0};
+}
+
+double& dynamometer_parameter(model::ModelConfig& config, const std::string& name) {
+  const char axis = name.empty() ? 'x' : name.back();
+  const std::size_t a = axis == 'x' ? 0 : axis == 'y' ? 1 : 2;
+  auto& d = config.effects.dynamometer;
+  if (name.rfind("natural_hz_", 0) == 0) {
+    return d.natural_hz[a];
+  }
+  if (name.rfind("damping_ratio_", 0) == 0) {
+    return d.damping_ratio[a];
+  }
+  throw std::invalid_argument("not a dynamometer parameter: " + name);
 }
 
 }  // namespace millwatch::diagnose

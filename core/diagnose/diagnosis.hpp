@@ -94,6 +94,18 @@ struct Parameter {
 /// is held at the bound, the rest refitted, and the report says so.
 inline constexpr double kDampingRatioMin = 0.002;
 inline constexpr double kDampingRatioMax = 0.10;
+/// The physical range of its natural frequency: Kistler's clamped dynamometers ring between
+/// about 1 kHz (a 9257B under a heavy fixture) and some 20 kHz (a miniature 9109AA); 500 Hz to
+/// 50 kHz leaves room on both sides. A fit that puts the resonance below the spindle frequency
+/// (30 Hz on PHM 2010's c1_cut315) is explaining something else with it.
+inline constexpr double kNaturalHzMin = 500.0;
+inline constexpr double kNaturalHzMax = 50000.0;
+
+/// The physical range [min, max] of a fitted dynamometer parameter by name (damping_ratio_x…,
+/// natural_hz_x…), or {0, 0} for a parameter without one.
+std::array<double, 2> physical_range(const std::string& name);
+/// The value of a dynamometer parameter (damping_ratio_x…, natural_hz_x…) in `config`.
+double& dynamometer_parameter(model::ModelConfig& config, const std::string& name);
 
 /// A candidate added to the current model and refitted.
 struct CandidateScore {

@@ -110,6 +110,7 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"verdict", d.verdict},
           {"parameters_at_bound", parameters(d.at_bound)},
           {"damping_ratio_range", {kDampingRatioMin, kDampingRatioMax}},
+          {"natural_hz_range", {kNaturalHzMin, kNaturalHzMax}},
           {"stop_reason", d.stop_reason},
           {"criterion", "BIC: sum over fx, fy of n_eff*ln(mean square) + p*ln(2*n_eff)"},
           {"band_hz", d.band_hz},
