@@ -134,9 +134,14 @@ bool Lockstep::align(const SyncAverage& measured) {
       norm_d += d[b] * d[b];
     }
     for (std::size_t sh = 0; sh < ub; ++sh) {
+      // Σ_b m[b]·d[(b + sh) mod B] in two runs, without a modulo per term (same order of terms).
       double c = 0.0;
-      for (std::size_t b = 0; b < ub; ++b) {
-        c += m[b] * d[(b + sh) % ub];
+      const std::size_t wrap = ub - sh;
+      for (std::size_t b = 0; b < wrap; ++b) {
+        c += m[b] * d[b + sh];
+      }
+      for (std::size_t b = wrap; b < ub; ++b) {
+        c += m[b] * d[b - wrap];
       }
       corr[sh] += c;
     }
