@@ -108,12 +108,11 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   for (std::size_t a = 0; a < 3; ++a) {
     const double limit = std::min(plausible, std::nextafter(config_.saturation_N[a], 0.0));
     const double* v = in[a].data();
-    // Counted, not and-ed into a bool: the compiler vectorises the count (two samples a compare).
-    std::int64_t within = 0;
+    bool ok = true;
     for (std::size_t i = 0; i < n; ++i) {
-      within += std::fabs(v[i]) <= limit ? 1 : 0;
+      ok &= std::fabs(v[i]) <= limit;
     }
-    clean = clean && within == static_cast<std::int64_t>(n);
+    clean = clean && ok;
   }
   if (clean) {
     for (std::size_t a = 0; a < 3; ++a) {
