@@ -4,9 +4,11 @@
 //   build/release/bench/pipeline_benchmark
 
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
+#include <thread>
 #include <vector>
 
 #include "core/identify/identifier.hpp"
@@ -153,6 +155,65 @@ void BM_PipelineWithIdentification(benchmark::State& state) {
   state.counters["taken"] = per_run(taken);
 }
 BENCHMARK(BM_PipelineWithIdentification)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+/// CPU time (s) of the whole process (every thread) or of the calling thread.
+double cpu_s(int who) {
+  rusage u{};
+  getrusage(who, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+/// The daemon's load at 333.3 kHz with identification running, as live: blocks of 1 ms fed at
+/// real time (paced by the clock) to the pipeline with the identifier's worker attached (live
+/// hand-over), CPU time from getrusage over the run, per second of signal (1 = a whole core):
+/// the sample thread alone, and the process (sample thread and worker), from 0.5 s on (after the
+/// lock and the model build). Without the daemon's
+/// LCM receive and publish (a few per cent of the sample thread's work).
+void BM_DaemonLoadRealTime(benchmark::State& state) {
+  const double fs = 333300.0;
+  const std::size_t block = 333;
+  const Recording r = make_recording(fs, 3.0);
+  monitor::MonitorConfig c;
+  c.sample_rate_hz = fs;
+  double signal_s = 0.0, process_s = 0.0, thread_s = 0.0;
+  std::int64_t fitted = 0, dropped = 0;
+  for (auto _ : state) {
+    monitor::PipelineSink sink;
+    monitor::Pipeline p(c, sink);
+    const signal::ButterworthDesign filter = p.filter();
+    identify::Identifier id(
+        c.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
+        nullptr, identify::HandOver::kWhenReady);
+    p.attach_identifier(&id);
+    // Timed from 0.5 s on (the lock and the model build before it happen once).
+    const std::size_t steady = static_cast<std::size_t>(0.5 * fs) / block * block;
+    double process0 = 0.0, thread0 = 0.0;
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < r.t.size(); i += block) {
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(r.t[i]));
+      if (i == steady) {
+        process0 = cpu_s(RUSAGE_SELF);
+        thread0 = cpu_s(RUSAGE_THREAD);
+      }
+      const std::size_t n = std::min(block, r.t.size() - i);
+      p.process({std::llround(r.t[i] * 1e6), 0, fs, std::span(r.fx).subspan(i, n),
+                 std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
+    }
+    process_s += cpu_s(RUSAGE_SELF) - process0;  // the worker's fits so far included
+    thread_s += cpu_s(RUSAGE_THREAD) - thread0;
+    signal_s += static_cast<double>(r.t.size() - steady) / fs;
+    p.attach_identifier(nullptr);
+    id.finish();
+    fitted += id.fitted();
+    dropped += id.superseded();
+  }
+  state.counters["sample_thread_of_a_core"] = thread_s / signal_s;
+  state.counters["process_of_a_core"] = process_s / signal_s;
+  state.counters["windows_fitted"] = static_cast<double>(fitted);
+  state.counters["windows_dropped"] = static_cast<double>(dropped);
+}
+BENCHMARK(BM_DaemonLoadRealTime)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
 /// What a new lock costs once: building the lockstep model at the measured speed.
 void BM_LockstepModelBuild(benchmark::State& state) {

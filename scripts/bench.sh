@@ -60,6 +60,14 @@ if whole:
           f" `millwatch replay --no-identify` {whole['millwatch_s'] * 1e3:.0f} ms, the reference"
           f" script (np.loadtxt + the steps above) {whole['reference_s'] * 1e3:.0f} ms:"
           f" {whole['ratio']:.1f}× (target ≥ 10×); wall clock, best of {whole['repeats']}.")
+daemon = [r for name, rs in runs.items() if name.startswith("BM_DaemonLoadRealTime") for r in rs]
+if daemon:
+    sample = sorted(r["sample_thread_of_a_core"] for r in daemon)[len(daemon) // 2]
+    process = sorted(r["process_of_a_core"] for r in daemon)[len(daemon) // 2]
+    print(f"\nDaemon at 333.3 kHz with identification running, fed at real time"
+          f" (`BM_DaemonLoadRealTime`, median of {len(daemon)}): the sample thread"
+          f" {100 * sample:.1f} % of a core, the process (sample thread and identification worker)"
+          f" {100 * process:.0f} % (target < 5 %).")
 cpu = next((l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")))
 r = next(iter(ref.values()))
 print(f"\nFull model, one revolution (2 flutes, 10 discs, 0.5°, every effect on): {rev:.2f} ms"

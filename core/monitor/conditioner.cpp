@@ -19,6 +19,10 @@ Conditioner::Conditioner(const MonitorConfig& config, const signal::ButterworthD
   // The envelope forgets over about two revolutions at the commanded speed.
   const double revolution_hz = config.model.process.spindle_rpm / 60.0;
   envelope_decay_ = std::exp(-2.0 / (2.0 * config.sample_rate_hz / revolution_hz));
+  decay_power_[0] = 1.0;
+  for (std::size_t k = 1; k < decay_power_.size(); ++k) {
+    decay_power_[k] = decay_power_[k - 1] * envelope_decay_;
+  }
 }
 
 }  // namespace millwatch::monitor

@@ -60,15 +60,21 @@ class Conditioner {
     emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
   }
 
-  /// A block of checked samples (instrument channels, N) from absolute sample index `first`:
-  /// the same output as push() sample by sample. The causal filters run over chunks of the
-  /// block channel-wise (signal::LowPassFilter::process_three), then the tare and `out` per
-  /// sample.
-  template <typename Out>
+  /// A block of checked samples (instrument channels, N) from absolute sample index `first`,
+  /// handed on in runs: the same output as push() sample by sample, as long as the caller
+  /// changes the conditioner's state (set_quiet) only between runs. `run_limit(n)` (≥ 1) is how
+  /// many samples from sample n on the caller takes in one run; `out_run(n, count, fx, fy, fz)`
+  /// receives them (model frame, tared; the arrays are the conditioner's scratch, writable).
+  /// The causal filters run over chunks of the block channel-wise
+  /// (signal::LowPassFilter::process_three), the tare over each run.
+  template <typename Limit, typename OutRun>
   void push_block(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
-                  std::span<const double> fz, Out&& out) {
+                  std::span<const double> fz, Limit&& run_limit, OutRun&& out_run) {
     const std::size_t count = fx.size();
     if (zero_phase_on_) {
+      auto out = [&out_run](std::int64_t n, double x, double y, double z) {
+        out_run(n, std::size_t{1}, &x, &y, &z);
+      };
       for (std::size_t i = 0; i < count; ++i) {
         push(first + static_cast<std::int64_t>(i), {fx[i], fy[i], fz[i]}, out);
       }
@@ -97,9 +103,15 @@ class Conditioner {
       }
       signal::LowPassFilter::process_three(
           lowpass_, {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
-      for (std::size_t i = 0; i < n; ++i) {
-        emit(first + static_cast<std::int64_t>(from + i), chunk_[0][i], chunk_[1][i], chunk_[2][i],
-             out);
+      for (std::size_t i = 0; i < n;) {
+        const std::int64_t at = first + static_cast<std::int64_t>(from + i);
+        const std::size_t run = std::min(n - i, std::max<std::size_t>(1, run_limit(at)));
+        double* x = chunk_[0].data() + i;
+        double* y = chunk_[1].data() + i;
+        double* z = chunk_[2].data() + i;
+        tare_run(x, y, z, run);
+        out_run(at, run, x, y, z);
+        i += run;
       }
     }
   }
@@ -130,8 +142,54 @@ class Conditioner {
     zero_phase_next_ += static_cast<std::int64_t>(ready);
   }
 
+  /// emit()'s tare over a run of samples, in place.
+  void tare_run(double* fx, double* fy, double* fz, std::size_t count) {
+    if (quiet_ && typical_peak_N_ > 0.0) {  // the tare may move: sample by sample
+      for (std::size_t i = 0; i < count; ++i) {
+        emit(0, fx[i], fy[i], fz[i], [&](std::int64_t, double x, double y, double z) {
+          fx[i] = x;
+          fy[i] = y;
+          fz[i] = z;
+        });
+      }
+      return;
+    }
+    // Cutting (or no usual peak yet): the tare stands; only the envelope moves. Its recursion
+    // e = max(x, e·d) runs as four interleaved ones (every fourth sample, decay d⁴), joined at
+    // the end: the same maximum of x_j·d^(age), up to the rounding of the powers of d.
+    const double tx = tare_N_[0], ty = tare_N_[1], tz = tare_N_[2];
+    const auto square = [&](std::size_t i) {
+      const double ex = fx[i] - tx;
+      const double ey = fy[i] - ty;
+      return ex * ex + ey * ey;
+    };
+    const std::size_t whole = count / 4 * 4;  // count ≤ kChunk
+    double envelope_sq = envelope_sq_ * decay_power_[whole];
+    if (whole > 0) {
+      const double d4 = decay_power_[4];
+      double e0 = 0.0, e1 = 0.0, e2 = 0.0, e3 = 0.0;
+      for (std::size_t i = 0; i < whole; i += 4) {
+        e0 = std::max(square(i), e0 * d4);
+        e1 = std::max(square(i + 1), e1 * d4);
+        e2 = std::max(square(i + 2), e2 * d4);
+        e3 = std::max(square(i + 3), e3 * d4);
+      }
+      envelope_sq = std::max(
+          {envelope_sq, e0 * decay_power_[3], e1 * decay_power_[2], e2 * decay_power_[1], e3});
+    }
+    for (std::size_t i = whole; i < count; ++i) {
+      envelope_sq = std::max(square(i), envelope_sq * envelope_decay_);
+    }
+    envelope_sq_ = envelope_sq;
+    for (std::size_t i = 0; i < count; ++i) {
+      fx[i] -= tx;
+      fy[i] -= ty;
+      fz[i] -= tz;
+    }
+  }
+
   template <typename Out>
-  void emit(std::int64_t n, double fx, double fy, double fz, Out& out) {
+  void emit(std::int64_t n, double fx, double fy, double fz, Out&& out) {
     const double ex = fx - tare_N_[0];
     const double ey = fy - tare_N_[1];
     envelope_sq_ = std::max(ex * ex + ey * ey, envelope_sq_ * envelope_decay_);
@@ -158,6 +216,7 @@ class Conditioner {
   double tare_gain_ = 0.0;
   double envelope_sq_ = 0.0;  // decaying peak of the squared in-plane force, N²
   double envelope_decay_ = 0.0;
+  std::array<double, kChunk + 1> decay_power_{};  // envelope_decay_^k
   bool quiet_ = false;
   double typical_peak_N_ = 0.0;
 };

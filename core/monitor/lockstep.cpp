@@ -33,6 +33,7 @@ Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDes
   for (auto& f : filtered_) {
     f.assign(steps, 0.0);
   }
+  line_table_.assign(steps * kLineRow, 0.0);
 }
 
 bool Lockstep::set_spindle_hz(double spindle_hz) {
@@ -78,6 +79,16 @@ void Lockstep::filter_periodic() {
   for (std::size_t a = 0; a < 3; ++a) {
     std::copy(in[a]->begin(), in[a]->end(), filtered_[a].begin());
     response_.apply(filtered_[a], spindle_hz_, response, use);
+  }
+  // forces_on_line()'s table: per grid point the three values and the steps to the next point.
+  const std::size_t n = filtered_[0].size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t k1 = k + 1 == n ? 0 : k + 1;
+    double* row = &line_table_[k * kLineRow];
+    for (std::size_t a = 0; a < 3; ++a) {
+      row[a] = filtered_[a][k];
+      row[3 + a] = filtered_[a][k1] - filtered_[a][k];
+    }
   }
 }
 
@@ -134,9 +145,14 @@ bool Lockstep::align(const SyncAverage& measured) {
       norm_d += d[b] * d[b];
     }
     for (std::size_t sh = 0; sh < ub; ++sh) {
+      // Σ_b m[b]·d[(b + sh) mod B] in two runs, without a modulo per term (same order of terms).
       double c = 0.0;
-      for (std::size_t b = 0; b < ub; ++b) {
-        c += m[b] * d[(b + sh) % ub];
+      const std::size_t wrap = ub - sh;
+      for (std::size_t b = 0; b < wrap; ++b) {
+        c += m[b] * d[b + sh];
+      }
+      for (std::size_t b = wrap; b < ub; ++b) {
+        c += m[b] * d[b - wrap];
       }
       corr[sh] += c;
     }
@@ -185,9 +201,6 @@ void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t co
   const double turns = (angle0_rad + offset_rad_) / kTwoPi;
   const double start = (turns - std::floor(turns)) * grid;  // [0, n]
   const double step = step_rad / kTwoPi * grid;             // grid points per sample, < n
-  const double* wx = filtered_[0].data();
-  const double* wy = filtered_[1].data();
-  const double* wz = filtered_[2].data();
   double wrapped = 0.0;  // whole turns of the grid passed, in grid points
   for (std::size_t i = 0; i < count; ++i) {
     double pos = start + step * static_cast<double>(i) - wrapped;
@@ -196,13 +209,14 @@ void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t co
       pos -= grid;
     }
     const auto k0 = std::min(static_cast<std::size_t>(pos), n - 1);
-    const std::size_t k1 = k0 + 1 == n ? 0 : k0 + 1;
     const double f = pos - static_cast<double>(k0);
-    const double fx = wx[k0] + f * (wx[k1] - wx[k0]);
-    const double fy = wy[k0] + f * (wy[k1] - wy[k0]);
+    // w[k0] + f·(w[k0 + 1] − w[k0]) from one row of the line table.
+    const double* t = &line_table_[k0 * kLineRow];
+    const double fx = t[0] + f * t[3];
+    const double fy = t[1] + f * t[4];
     out[0][i] = fx;
     out[1][i] = fy;
-    out[2][i] = wz[k0] + f * (wz[k1] - wz[k0]);
+    out[2][i] = t[2] + f * t[5];
     squared[i] = fx * fx + fy * fy;
   }
 }

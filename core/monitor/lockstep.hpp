@@ -80,6 +80,10 @@ class Lockstep {
   model::PeriodicResponse response_;
   model::ForceWaveform waveform_;
   std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
+  // filtered_ for forces_on_line(), a row per grid point k: fx, fy, fz at k and their steps to
+  // k + 1 (cyclic), so that a sample's interpolation reads one short run of memory.
+  static constexpr std::size_t kLineRow = 6;
+  std::vector<double> line_table_;
   // Scratch of align(): the model and the measured average on the tracker grid, correlations.
   std::array<std::vector<double>, 3> model_bins_, measured_bins_;
   std::vector<double> correlation_scratch_;

@@ -194,11 +194,11 @@ void Pipeline::process(const SampleBlock& block) {
           "at or beyond the charge amplifier's range", block.seq);
   }
 
-  const auto out = [this](std::int64_t n, double fx, double fy, double fz) {
-    downstream(n, fx, fy, fz);
-  };
   const std::size_t count = c.fx_N.size();
-  conditioner_.push_block(c.first_sample, c.fx_N, c.fy_N, c.fz_N, out);
+  conditioner_.push_block(
+      c.first_sample, c.fx_N, c.fy_N, c.fz_N, [this](std::int64_t n) { return run_limit(n); },
+      [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
+             const double* fz) { downstream_run(n, run, fx, fy, fz); });
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
 
   if (sync_revolutions_since_report_ >= config_.sync_window_revolutions) {
@@ -239,26 +239,51 @@ void Pipeline::finish() {
 }
 
 void Pipeline::downstream(std::int64_t n, double fx, double fy, double fz) {
+  downstream_run(n, 1, &fx, &fy, &fz);
+}
+
+std::size_t Pipeline::run_limit(std::int64_t n) const {
+  // The tracker's next update comes with its k-th sample from now, which is input sample
+  // n + decimation_phase_ + (k − 1)·decimation_.
+  const auto k = static_cast<std::int64_t>(tracker_.samples_to_update());
+  std::int64_t last = n + decimation_phase_ + (k - 1) * decimation_;
+  if (events_.active()) {
+    last = std::min(last, events_.needed_sample());
+  }
+  last = std::min(last, next_health_check_);
+  return last > n ? static_cast<std::size_t>(last - n + 1) : 1;
+}
+
+void Pipeline::downstream_run(std::int64_t n, std::size_t count, const double* fx, const double* fy,
+                              const double* fz) {
   // Valleys are sought on the squared in-plane force: near a valley the force is nearly
   // linear in time, so its square is a smooth parabola.
-  const double detect = fx * fx + fy * fy;
-  const std::array<double, kRingChannels> v = {fx, fy, fz, detect};
-  ring_.push(n, v.data());
-  if (decimation_phase_ == 0) {
-    decimation_phase_ = decimation_;
-    const double magnitude = std::sqrt(detect);
-    if (tracker_.process({&magnitude, 1}) > 0) {
-      on_tracker_update();
+  std::array<double, kRingChannels> v{};
+  bool updated = false;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double detect = fx[i] * fx[i] + fy[i] * fy[i];
+    v = {fx[i], fy[i], fz[i], detect};
+    ring_.push(n + static_cast<std::int64_t>(i), v.data());
+    if (decimation_phase_ == 0) {
+      decimation_phase_ = decimation_;
+      const double magnitude = std::sqrt(detect);
+      // run_limit(): only the run's last sample can start an update.
+      updated = tracker_.process({&magnitude, 1}) > 0 || updated;
     }
+    --decimation_phase_;
   }
-  --decimation_phase_;
-  if (events_.active() && n >= events_.needed_sample()) {
+  // What the last sample needs (run_limit(): none of the others needs anything).
+  const std::int64_t last = n + static_cast<std::int64_t>(count) - 1;
+  if (updated) {
+    on_tracker_update();
+  }
+  if (events_.active() && last >= events_.needed_sample()) {
     events_.advance(ring_, [this](const RevolutionEvents& e) { on_revolution(e); });
   }
-  if (n >= next_health_check_) {
-    alerts_.on_input(input_.counters(), input_.utime_of(n),
+  if (last >= next_health_check_) {
+    alerts_.on_input(input_.counters(), input_.utime_of(last),
                      [this](const Alert& a) { sink_.on_alert(a); });
-    next_health_check_ = n + static_cast<std::int64_t>(0.5 * config_.sample_rate_hz);
+    next_health_check_ = last + static_cast<std::int64_t>(0.5 * config_.sample_rate_hz);
   }
 }
 

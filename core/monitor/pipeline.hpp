@@ -149,6 +149,12 @@ class Pipeline {
   void bridge_gap(std::int64_t first_sample);
   /// Everything after the conditioner, for filtered sample n.
   void downstream(std::int64_t n, double fx, double fy, double fz);
+  /// downstream() for `count` samples from n on, within run_limit(n).
+  void downstream_run(std::int64_t n, std::size_t count, const double* fx, const double* fy,
+                      const double* fz);
+  /// How many samples from n on downstream_run() can take at once: up to the next one that
+  /// needs a look (a tracker update, the tooth events' next needed sample, a health check).
+  [[nodiscard]] std::size_t run_limit(std::int64_t n) const;
   void on_tracker_update();
   void start_events();
   bool build_template(std::int64_t anchor, ToothEventTemplate& out);

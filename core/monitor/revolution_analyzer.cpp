@@ -194,6 +194,13 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   double start_rad = map.at(static_cast<double>(from));
   start_rad -= kTwoPi * std::floor(start_rad / kTwoPi);
   double turns_rad = 0.0;  // whole turns passed since `from`
+  // A run of samples in one flute window and one sector is summed in registers, then added to
+  // its sums (adding to memory sample by sample would wait on each store).
+  std::size_t run_sector = 0;
+  double run_sector_sum = 0.0;
+  int run_sector_n = 0;
+  double run_flute_sum = 0.0;
+  int run_flute_n = 0;
   for (std::int64_t s = from; s <= to; ++s) {
     const auto i = static_cast<std::size_t>(s - first_);
     const double* v = ring.row(s);
@@ -204,11 +211,17 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
     }
     measured_sum += v[3];  // Fx² + Fy²
     const double d_xy2 = d[0] * d[0] + d[1] * d[1];
-    while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
-      ++flute;
+    if (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
+      flute_sum[flute] += run_flute_sum;
+      flute_n[flute] += run_flute_n;
+      run_flute_sum = 0.0;
+      run_flute_n = 0;
+      while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
+        ++flute;
+      }
     }
-    flute_sum[flute] += d_xy2;
-    ++flute_n[flute];
+    run_flute_sum += d_xy2;
+    ++run_flute_n;
     double a = start_rad + map.slope_rad_per_sample * static_cast<double>(s - from) - turns_rad;
     if (a >= kTwoPi) {
       turns_rad += kTwoPi;
@@ -216,9 +229,20 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
     }
     const auto sector = static_cast<std::size_t>(
         std::clamp(static_cast<int>(a * sectors_per_rad), 0, sectors_ - 1));
-    sector_sum[sector] += d_xy2;
-    ++sector_n[sector];
+    if (sector != run_sector) {
+      sector_sum[run_sector] += run_sector_sum;
+      sector_n[run_sector] += run_sector_n;
+      run_sector = sector;
+      run_sector_sum = 0.0;
+      run_sector_n = 0;
+    }
+    run_sector_sum += d_xy2;
+    ++run_sector_n;
   }
+  flute_sum[flute] += run_flute_sum;
+  flute_n[flute] += run_flute_n;
+  sector_sum[run_sector] += run_sector_sum;
+  sector_n[run_sector] += run_sector_n;
   const auto count = static_cast<double>(to - from + 1);
   for (std::size_t a = 0; a < 3; ++a) {
     out.residual_rms_N[a] = std::sqrt(sum[a] / count);

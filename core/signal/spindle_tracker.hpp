@@ -43,6 +43,7 @@
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -126,6 +127,14 @@ class SpindleTracker {
   /// The resolved window and hop (samples).
   [[nodiscard]] std::size_t window_samples() const { return window_; }
   [[nodiscard]] std::size_t hop_samples() const { return hop_; }
+  /// Samples process() takes from now until the one that starts the next update (≥ 1): a
+  /// caller can hand over that many at once and act on the update after the last.
+  [[nodiscard]] std::size_t samples_to_update() const {
+    const auto filled = static_cast<std::size_t>(next_sample_ - stream_start_);
+    const std::size_t to_hop = since_hop_ < hop_ ? hop_ - since_hop_ : 0;
+    const std::size_t to_window = filled < window_ ? window_ - filled : 0;
+    return std::max<std::size_t>({to_hop, to_window, 1});
+  }
 
  private:
   void update();
