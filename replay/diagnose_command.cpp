@@ -19,6 +19,7 @@
 #include "replay/command_exit.hpp"
 #include "shell/diagnosis_report.hpp"
 #include "shell/monitor_config_file.hpp"
+#include "shell/output_file.hpp"
 #include "shell/progress_line.hpp"
 #include "shell/recording_source.hpp"
 
@@ -191,18 +192,6 @@ void print_steps(const diagnose::Diagnosis& d) {
   }
 }
 
-/// Folder names per cut: the file's stem, made unique.
-std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
-  std::vector<std::string> stems;
-  std::map<std::string, int> seen;
-  for (const auto& in : inputs) {
-    std::string stem = fs::path(in).stem().string();
-    const int n = ++seen[stem];
-    stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
-  }
-  return stems;
-}
-
 int run_diagnose(const DiagnoseCliOptions& o) {
   if (o.start != "plain" && o.start != "configured") {
     throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");
@@ -238,7 +227,7 @@ int run_diagnose(const DiagnoseCliOptions& o) {
   for (std::size_t i = 0; i < o.inputs.size(); ++i) {  // every cut read before the long work
     cuts.push_back(load_cut(o, file, i));
   }
-  const std::vector<std::string> stems = unique_stems(o.inputs);
+  const std::vector<std::string> stems = shell::unique_stems(o.inputs);
   std::vector<diagnose::Diagnosis> diagnoses;
   diagnoses.reserve(cuts.size());
   for (std::size_t i = 0; i < cuts.size(); ++i) {

@@ -249,18 +249,6 @@ pid_t spawn(const std::vector<std::string>& args) {
   return pid;
 }
 
-/// Names per cut for per-cut outputs: the file's stem, made unique.
-std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
-  std::vector<std::string> stems;
-  std::map<std::string, int> seen;
-  for (const auto& in : inputs) {
-    std::string stem = fs::path(in).stem().string();
-    const int n = ++seen[stem];
-    stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
-  }
-  return stems;
-}
-
 int replay_many(const ReplayOptions& o) {
   if (!o.publish_url.empty() || o.realtime || o.speed > 0.0) {
     throw std::runtime_error(
@@ -270,7 +258,7 @@ int replay_many(const ReplayOptions& o) {
   const std::size_t n = o.inputs.size();
   const int jobs =
       o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const std::vector<std::string> stems = unique_stems(o.inputs);
+  const std::vector<std::string> stems = shell::unique_stems(o.inputs);
   for (const std::string* dir : {&o.summary, &o.revolutions, &o.plot}) {
     if (!dir->empty()) {
       fs::create_directories(*dir);

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <map>
 #include <stdexcept>
 #include <system_error>
 
@@ -54,6 +55,17 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
   OutputFile out(path);
   out.write(text);
   out.commit();
+}
+
+std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
+  std::vector<std::string> stems;
+  std::map<std::string, int> seen;
+  for (const auto& in : inputs) {
+    std::string stem = std::filesystem::path(in).stem().string();
+    const int n = ++seen[stem];
+    stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
+  }
+  return stems;
 }
 
 }  // namespace millwatch::shell

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace millwatch::shell {
 
@@ -33,5 +34,8 @@ class OutputFile {
 
 /// Writes `text` to `path` through an OutputFile. @throws std::runtime_error naming the path.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
+
+/// Names for per-cut outputs (files, folders): each input's stem, made unique ("cut", "cut_2").
+std::vector<std::string> unique_stems(const std::vector<std::string>& inputs);
 
 }  // namespace millwatch::shell
