@@ -154,7 +154,19 @@ class Pipeline {
                       const double* fz);
   /// How many samples from n on downstream_run() can take at once: up to the next one that
   /// needs a look (a tracker update, the tooth events' next needed sample, a health check).
+  void measure_run(std::int64_t n, std::size_t count, const double* fx, const double* fy,
+                   const double* fz);
   [[nodiscard]] std::size_t run_limit(std::int64_t n) const;
+  /// The first measuring sample at or after input sample n, and back.
+  [[nodiscard]] std::int64_t measuring_sample(std::int64_t n) const {
+    return n >= 0 ? (n + stride_ - 1) / stride_ : -((-n) / stride_);
+  }
+  [[nodiscard]] std::int64_t input_sample(std::int64_t m) const {
+    return m == INT64_MIN ? m : m * stride_;
+  }
+  [[nodiscard]] std::int64_t utime_at(std::int64_t m) const {
+    return input_.utime_of(input_sample(m));
+  }
   void on_tracker_update();
   void start_events();
   bool build_template(std::int64_t anchor, ToothEventTemplate& out);
@@ -174,9 +186,13 @@ class Pipeline {
   signal::ButterworthDesign filter_;
   Conditioner conditioner_;
   signal::SpindleTracker tracker_;
-  int decimation_ = 1;
-  int decimation_phase_ = 0;  // samples until the tracker's next one
-  signal::PhaseModel phase_;  // the tracker's, at full rate
+  // The measuring stages (ring, tracker, tooth events, analyser, model) take every stride_-th
+  // filtered sample, at rate_hz_; their sample numbers count those (input sample / stride_).
+  int stride_ = 1;
+  double rate_hz_ = 0.0;
+  int decimation_ = 1;        // the tracker takes every decimation_-th measuring sample
+  int decimation_phase_ = 0;  // measuring samples until the tracker's next one
+  signal::PhaseModel phase_;  // the tracker's, at the measuring rate
   SampleRing ring_;
   ToothEventTracker events_;
   RevolutionAnalyzer analyzer_;
