@@ -9,6 +9,7 @@
 
 #include "core/config/json_reader.hpp"
 #include "core/signal/fftw_planner.hpp"
+#include "core/signal/order_statistic.hpp"
 
 namespace millwatch::signal {
 namespace {
@@ -168,7 +169,8 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
   floor_bin_.assign(fft_size_ / 2 + 1, 0);
   past_.assign(window_ / hop_ + 2, Past{});
-  scratch_.reserve(fft_size_ / 2 + 1);
+  scratch_.assign(fft_size_ / 2 + 1, 0.0);
+  floor_scratch_.assign(fft_size_ / 2 + 1, 0.0);
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
   {
@@ -303,8 +305,9 @@ void SpindleTracker::update() {
   const std::size_t last_bin =
       std::min(magnitude_.size() - 1,
                static_cast<std::size_t>(std::lround(harmonics_ * harmonic_bins)) + reach + 1);
+  const double per_bin = 1.0 / harmonic_bins;
   for (std::size_t c = 1; c <= last_bin; ++c) {
-    const double x = static_cast<double>(c) / harmonic_bins;  // in harmonics
+    const double x = static_cast<double>(c) * per_bin;  // in harmonics
     // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
     const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
     floor_bin_[c] = std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe ? 1 : 0;
@@ -322,21 +325,18 @@ void SpindleTracker::update() {
         k = c;
       }
     }
-    scratch_.clear();
     const std::size_t from = center > reach + 1 ? center - reach : 1;
     const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
+    std::size_t count = 0;  // the floor bins, gathered without a branch per bin
     for (std::size_t c = from; c <= std::min(to, last_bin); ++c) {
-      if (floor_bin_[c] != 0) {
-        scratch_.push_back(magnitude_[c]);
-      }
+      scratch_[count] = magnitude_[c];
+      count += floor_bin_[c];
     }
-    if (scratch_.size() < 8) {
+    if (count < 8) {
       continue;
     }
-    std::nth_element(scratch_.begin(),
-                     scratch_.begin() + static_cast<std::ptrdiff_t>(scratch_.size() / 2),
-                     scratch_.end());
-    const double floor = std::max(scratch_[scratch_.size() / 2], 1e-300);
+    const double floor =
+        std::max(kth_smallest(std::span(scratch_).first(count), count / 2, floor_scratch_), 1e-300);
     const double m = magnitude_[k];
     sum_peak += m;
     sum_floor += floor;

@@ -154,6 +154,7 @@ class SpindleTracker {
   std::vector<double> hann_;
   std::vector<double> magnitude_;
   std::vector<double> scratch_;          // for the median
+  std::vector<double> floor_scratch_;    // kth_smallest()'s second buffer
   std::vector<std::uint8_t> floor_bin_;  // per bin: outside every harmonic's lobe (update())
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
