@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace millwatch::monitor {
 
 InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
@@ -14,6 +18,25 @@ InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
 }
 
 namespace {
+
+/// Whether |v[i]| ≤ limit for every i (a NaN is not): two samples per SSE2 comparison.
+bool all_within(const double* v, std::size_t n, double limit) {
+  std::size_t i = 0;
+  bool ok = true;
+#if defined(__SSE2__)
+  const __m128d sign = _mm_set1_pd(-0.0);
+  const __m128d bound = _mm_set1_pd(limit);
+  __m128d all = _mm_cmpeq_pd(bound, bound);  // every bit set (limit is not NaN)
+  for (; i + 2 <= n; i += 2) {
+    all = _mm_and_pd(all, _mm_cmple_pd(_mm_andnot_pd(sign, _mm_loadu_pd(v + i)), bound));
+  }
+  ok = _mm_movemask_pd(all) == 3;
+#endif
+  for (; i < n; ++i) {
+    ok = ok && std::fabs(v[i]) <= limit;
+  }
+  return ok;
+}
 
 bool plausible_utime(std::int64_t utime_us) {
   return utime_us >= -kMaxAbsUtime_us && utime_us <= kMaxAbsUtime_us;
@@ -107,12 +130,7 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   bool clean = true;
   for (std::size_t a = 0; a < 3; ++a) {
     const double limit = std::min(plausible, std::nextafter(config_.saturation_N[a], 0.0));
-    const double* v = in[a].data();
-    bool ok = true;
-    for (std::size_t i = 0; i < n; ++i) {
-      ok &= std::fabs(v[i]) <= limit;
-    }
-    clean = clean && ok;
+    clean = clean && all_within(in[a].data(), n, limit);
   }
   if (clean) {
     for (std::size_t a = 0; a < 3; ++a) {

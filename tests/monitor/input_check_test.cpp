@@ -67,6 +67,28 @@ TEST(InputCheck, NonFiniteSamplesAreReplacedFlaggedAndCounted) {
   EXPECT_EQ(check.counters().samples_accepted, 10);
 }
 
+// The clean-block test takes two samples at a time: one bad value at any position of a block
+// of any length (the pairs and the odd tail), in any channel, of any kind, is still found.
+TEST(InputCheck, OneBadValueAnywhereIsFound) {
+  const std::vector<double> bad = {std::numeric_limits<double>::quiet_NaN(),
+                                   -std::numeric_limits<double>::infinity(), -100.0, 100.0};
+  for (std::size_t n = 1; n <= 9; ++n) {
+    for (std::size_t at = 0; at < n; ++at) {
+      for (std::size_t channel = 0; channel < 3; ++channel) {
+        for (const double value : bad) {
+          InputCheck check(config());
+          Block b = ramp(n, -50.0);
+          (channel == 0 ? b.fx : channel == 1 ? b.fy : b.fz)[at] = value;
+          const auto c = check.check(b.view(0));
+          ASSERT_EQ(c.verdict, BlockVerdict::kAccepted);
+          EXPECT_NE(c.flags[at], 0) << n << " " << at << " " << channel << " " << value;
+          EXPECT_EQ(check.counters().samples_flagged, 1) << n << " " << at << " " << value;
+        }
+      }
+    }
+  }
+}
+
 TEST(InputCheck, ImplausibleValuesAreTreatedLikeNonFiniteOnes) {
   InputCheck check(config());
   Block a = ramp(4);
