@@ -53,17 +53,20 @@ MeasuredRevolution measured_from(const model::ModelConfig& truth) {
   return m;
 }
 
-void fit(benchmark::State& state, int flutes, model::Operation op, bool from_previous,
-         bool systematic = true) {
-  const model::ModelConfig truth = cut(flutes, op);
+/// Fits `truth`'s measured window from `truth` without runout (or, from_previous, from the
+/// first fit's result) each iteration; the evaluations per fit as a counter.
+void fit_window(benchmark::State& state, const model::ModelConfig& truth, bool from_previous,
+                const millwatch::identify::FitOptions& options) {
   const MeasuredRevolution measured = measured_from(truth);
   model::ModelConfig start = truth;
   start.effects.runout.offset_um = 0.0;
-  millwatch::identify::FitOptions options;
-  options.systematic = systematic;
   WindowFitter fitter(
       start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); }, options);
   const FitResult first = fitter.fit(measured);
+  if (!first.ok) {
+    state.SkipWithError(first.message.c_str());
+    return;
+  }
   long evaluations = 0;
   for (auto _ : state) {
     const FitResult r = fitter.fit(measured, from_previous ? &first : nullptr);
@@ -72,6 +75,13 @@ void fit(benchmark::State& state, int flutes, model::Operation op, bool from_pre
   }
   state.counters["evaluations"] =
       benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
+}
+
+void fit(benchmark::State& state, int flutes, model::Operation op, bool from_previous,
+         bool systematic = true) {
+  millwatch::identify::FitOptions options;
+  options.systematic = systematic;
+  fit_window(state, cut(flutes, op), from_previous, options);
 }
 
 void BM_FitTwoFluteSlot(benchmark::State& s) {
@@ -106,24 +116,7 @@ void fit_full_model(benchmark::State& state, bool from_previous) {
   truth.effects.min_chip.h_min_um = 0.2;
   truth.effects.deflection.stiffness_N_per_um = 0.47;
   truth.effects.helix_lag.discs = 10;
-  const MeasuredRevolution measured = measured_from(truth);
-  model::ModelConfig start = truth;
-  start.effects.runout.offset_um = 0.0;
-  WindowFitter fitter(start,
-                      [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); });
-  const FitResult first = fitter.fit(measured);
-  if (!first.ok) {
-    state.SkipWithError(first.message.c_str());
-    return;
-  }
-  long evaluations = 0;
-  for (auto _ : state) {
-    const FitResult r = fitter.fit(measured, from_previous ? &first : nullptr);
-    evaluations += r.evaluations;
-    benchmark::DoNotOptimize(r.rho_um.value);
-  }
-  state.counters["evaluations"] =
-      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kAvgIterations);
+  fit_window(state, truth, from_previous, millwatch::identify::FitOptions{});
 }
 void BM_FitFullModel(benchmark::State& s) {
   fit_full_model(s, false);

@@ -327,20 +327,30 @@ std::string html(const std::string& md, const std::string& title) {
   return out + "</body></html>\n";
 }
 
-}  // namespace
-
-ReportFiles write_diagnosis_report(const Diagnosis& d, const fs::path& dir,
-                                   const std::string& title, bool plots) {
-  ReportFiles out;
+/// Creates the report folder (and its parents) and returns its absolute path.
+fs::path report_folder(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) {
     throw std::runtime_error(dir.string() + ": cannot create the report folder (" + ec.message() +
                              ")");
   }
-  const fs::path abs = fs::absolute(dir);
-  write_text_file(abs / "report.json", diagnose::to_json(d).dump(2) + "\n");
-  out.written.push_back(abs / "report.json");
+  return fs::absolute(dir);
+}
+
+/// Writes one of the report's files and lists it.
+void write_report_file(const fs::path& path, const std::string& text, ReportFiles& out) {
+  write_text_file(path, text);
+  out.written.push_back(path);
+}
+
+}  // namespace
+
+ReportFiles write_diagnosis_report(const Diagnosis& d, const fs::path& dir,
+                                   const std::string& title, bool plots) {
+  ReportFiles out;
+  const fs::path abs = report_folder(dir);
+  write_report_file(abs / "report.json", diagnose::to_json(d).dump(2) + "\n", out);
   bool have_plots = false;
   if (plots) {
     fs::path script;
@@ -354,10 +364,8 @@ ReportFiles write_diagnosis_report(const Diagnosis& d, const fs::path& dir,
     out.plot_problem = "--no-plots";
   }
   const std::string md = markdown(d, title, have_plots, out.plot_problem);
-  write_text_file(abs / "report.md", md);
-  write_text_file(abs / "report.html", html(md, "Diagnosis: " + title));
-  out.written.push_back(abs / "report.md");
-  out.written.push_back(abs / "report.html");
+  write_report_file(abs / "report.md", md, out);
+  write_report_file(abs / "report.html", html(md, "Diagnosis: " + title), out);
   return out;
 }
 
@@ -420,13 +428,7 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
                                       const std::vector<CutReport>& cuts, const fs::path& dir,
                                       bool plots) {
   ReportFiles out;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) {
-    throw std::runtime_error(dir.string() + ": cannot create the report folder (" + ec.message() +
-                             ")");
-  }
-  const fs::path abs = fs::absolute(dir);
+  const fs::path abs = report_folder(dir);
   nlohmann::json list = nlohmann::json::array();
   for (const auto& c : cuts) {
     nlohmann::json j = {{"cut", c.name}, {"report", c.folder + "/report.json"}};
@@ -448,8 +450,7 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
                                  {"across_feeds", diagnose::to_json(across)},
                                  {"named_effects", across.named_in_every_cut},
                                  {"verdict", across.verdict}};
-  write_text_file(abs / "report.json", report.dump(2) + "\n");
-  out.written.push_back(abs / "report.json");
+  write_report_file(abs / "report.json", report.dump(2) + "\n", out);
   std::string csv =
       "feed_per_tooth_um,residual_before_N,residual_after_N,excess_before_N,excess_after_N,"
       "noise_floor_N\n";
@@ -487,10 +488,8 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
     out.plot_problem = "--no-plots";
   }
   const std::string md = across_markdown(across, cuts, have_plot, out.plot_problem);
-  write_text_file(abs / "report.md", md);
-  write_text_file(abs / "report.html", html(md, "Diagnosis across feeds"));
-  out.written.push_back(abs / "report.md");
-  out.written.push_back(abs / "report.html");
+  write_report_file(abs / "report.md", md, out);
+  write_report_file(abs / "report.html", html(md, "Diagnosis across feeds"), out);
   return out;
 }
 

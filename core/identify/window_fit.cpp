@@ -760,6 +760,19 @@ struct WindowFitter::Impl {
     }
   }
 
+  /// p's residual as Levenberg–Marquardt calls it: with the runout held at `held`'s when the
+  /// options do not fit it.
+  auto residual_of(Problem& p, const Eigen::VectorXd& held) const {
+    return [this, &p, &held](const Eigen::VectorXd& x) -> Eigen::VectorXd {
+      if (options.fit_runout) {
+        return p.residual(x);
+      }
+      Eigen::VectorXd y = x;
+      y.head(2) = held.head(2);
+      return p.residual(y);
+    };
+  }
+
   /// Best start: runout on a grid, each cut's alignment on a fine grid; then the best few
   /// refined. `grid`: the problem the starts are ranked on (a coarser angle grid: only their
   /// order matters), or null to refine the seed alone.
@@ -835,15 +848,9 @@ struct WindowFitter::Impl {
       }
       Eigen::VectorXd t = starts[i].second;
       double c = 0.0;
-      *iterations += levenberg_marquardt(
-          [&](const Eigen::VectorXd& x) {
-            Eigen::VectorXd y = x;
-            if (!options.fit_runout) {
-              y.head(2) = starts[i].second.head(2);
-            }
-            return p.residual(y);
-          },
-          t, scale, options.max_iterations, &c, seed != nullptr && i == 0, linear_mask());
+      *iterations +=
+          levenberg_marquardt(residual_of(p, starts[i].second), t, scale, options.max_iterations,
+                              &c, seed != nullptr && i == 0, linear_mask());
       if (c < best_cost) {
         best_cost = c;
         best = t;
@@ -871,15 +878,8 @@ struct WindowFitter::Impl {
     p.prior_weight = prior_weight;
     Eigen::VectorXd t = theta;
     double c = 0.0;
-    levenberg_marquardt(
-        [&](const Eigen::VectorXd& x) {
-          Eigen::VectorXd y = x;
-          if (!options.fit_runout) {
-            y.head(2) = theta.head(2);
-          }
-          return p.residual(y);
-        },
-        t, scales(p.config()), 2, &c, true, linear_mask());  // the optimum's shift: a step or two
+    // The optimum's shift: a step or two.
+    levenberg_marquardt(residual_of(p, theta), t, scales(p.config()), 2, &c, true, linear_mask());
     relabel(t);
     p.residual(t);
     Eigen::VectorXd out(t.size() + p.last_coefficients.size());
@@ -960,9 +960,8 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     const double dof0 = std::max(1.0, static_cast<double>(p.data_size() - theta.size()));
     p.prior_weight = std::sqrt(cost / dof0) / options.runout_prior_um;
     double c = 0.0;
-    out.iterations +=
-        levenberg_marquardt([&](const Eigen::VectorXd& x) { return p.residual(x); }, theta,
-                            scales(p.config()), options.max_iterations, &c, true, linear_mask());
+    out.iterations += levenberg_marquardt(residual_of(p, theta), theta, scales(p.config()),
+                                          options.max_iterations, &c, true, linear_mask());
     relabel(theta);
     cost = c;
   }
