@@ -1,0 +1,49 @@
+#include "core/monitor/extremum.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace millwatch::monitor {
+namespace {
+
+// A parabola sampled around its vertex: the fit (parabola for h = 1, cubic beyond) finds the
+// vertex and its value exactly, whatever the half width (the moments of the fit come in closed
+// form).
+TEST(Extremum, FindsTheVertexOfASampledParabolaAtEveryHalfWidth) {
+  for (int h = 1; h <= 300; h += (h < 20 ? 1 : 17)) {
+    for (const double vertex : {-0.45, 0.0, 0.3}) {
+      for (const bool minimum : {true, false}) {
+        const double curvature = minimum ? 0.7 : -0.7;
+        const auto parabola = [&](std::int64_t n) {
+          const double u = static_cast<double>(n - 1000) - vertex;
+          return 2.5 + curvature * u * u;
+        };
+        const Extremum e = refine_extremum(parabola, 1000, h, minimum);
+        ASSERT_TRUE(e.valid) << h << " " << vertex;
+        EXPECT_NEAR(e.position, 1000.0 + vertex, 1e-9 * h) << h;
+        EXPECT_NEAR(e.value, 2.5, 1e-9 * h * h) << h;
+        EXPECT_FALSE(refine_extremum(parabola, 1000, h, !minimum).valid) << h;
+      }
+    }
+  }
+}
+
+// An asymmetric valley, (u − δ)²·(1 + u/10) for |u| ≤ h: the cubic term is fitted exactly for
+// h ≥ 2, and the stationary point nearest the centre is δ.
+TEST(Extremum, TheCubicAbsorbsAnAsymmetricValley) {
+  for (int h = 2; h <= 8; ++h) {
+    const double delta = 0.2;
+    const auto valley = [&](std::int64_t n) {
+      const double u = static_cast<double>(n);
+      return (u - delta) * (u - delta) * (1.0 + u / 10.0);
+    };
+    const Extremum e = refine_extremum(valley, 0, h, true);
+    ASSERT_TRUE(e.valid);
+    EXPECT_NEAR(e.position, delta, 1e-9) << h;
+    EXPECT_NEAR(e.value, 0.0, 1e-9) << h;
+  }
+}
+
+}  // namespace
+}  // namespace millwatch::monitor
