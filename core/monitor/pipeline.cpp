@@ -15,9 +15,11 @@ constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest 
 constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
 constexpr int kIdleToStop = 3;               // idle revolutions in a row: cutting has stopped
 constexpr int kWindowsWithoutEstimate = 3;   // then the alerts follow the flute forces
-// Past the low-pass, the stages after it take every stride-th sample, at no less than this rate:
-// the filter leaves nothing above a few cut-offs (4th order at 3.3 kHz: −74 dB at 27.8 kHz), and
-// the valley fits span a fixed fraction of the tooth pitch, so 333.3 kHz measures like 55.6 kHz.
+// Past the low-pass, the stages after it take every stride-th sample, at no less than this rate
+// and no fewer samples per revolution (at the commanded speed) than the synchronous average has
+// bins: the filter leaves nothing above a few cut-offs (order 4 at 3.3 kHz: −74 dB at 27.8 kHz),
+// the valley fits span a fixed fraction of the tooth pitch, and the average (what identification
+// fits) stays as well filled. A 333.3 kHz cut at 25,000 rpm measures at 111.1 kHz.
 constexpr double kMeasuringRate_hz = 50000.0;
 
 InputCheckConfig input_config(const MonitorConfig& c) {
@@ -38,10 +40,11 @@ signal::ButterworthDesign design(const MonitorConfig& c) {
   return signal::ButterworthDesign::lowpass(c.sample_rate_hz, cutoff_hz, c.filter_order);
 }
 
-/// Every how many filtered samples the measuring stages take one (1 up to twice
-/// kMeasuringRate_hz).
+/// Every how many filtered samples the measuring stages take one.
 int stride_for(const MonitorConfig& c) {
-  return std::max(1, static_cast<int>(c.sample_rate_hz / kMeasuringRate_hz));
+  const double lowest_hz =
+      std::max(kMeasuringRate_hz, c.sync_bins * c.model.process.spindle_rpm / 60.0);
+  return std::max(1, static_cast<int>(c.sample_rate_hz / lowest_hz));
 }
 
 /// The configuration the measuring stages see: the sample rate they run at.

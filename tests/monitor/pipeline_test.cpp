@@ -94,32 +94,46 @@ TEST(Pipeline, MeetsTheAccuracyTargetsOnASimulatedCut) {
   EXPECT_GT(compared, 100);
 }
 
-// Issue 10: past the low-pass, a 333.3 kHz recording is measured on every sixth sample (55.6
-// kHz). The same cut recorded at 333.3 kHz with measurement errors must meet the accuracy
-// targets against the noise-free detector at 50 kHz, as the 50 kHz recording does, and its
-// lockstep residual must be as small.
-TEST(Pipeline, MeasuresA333kHzRecordingAsAccuratelyAsA50kHzOne) {
-  // Without the dynamometer's resonance close above the cut-off: it leaks through the 50 kHz
-  // and the 333.3 kHz filters differently (see the next test) and would move α by itself.
+/// Standard deviation of the per-revolution α of `c`'s valid revolutions.
+double alpha_scatter_deg(const Collector& c) {
+  double n = 0.0, sum = 0.0, sum2 = 0.0;
+  for (const auto& r : c.revolutions) {
+    if (r.measured.valid) {
+      n += 1.0;
+      sum += r.measured.alpha_deg;
+      sum2 += r.measured.alpha_deg * r.measured.alpha_deg;
+    }
+  }
+  return n > 1.0 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1.0))) : 0.0;
+}
+
+// Issue 10: past the low-pass, a 333.3 kHz recording of a cut at 25,000 rpm is measured on every
+// third sample (111.1 kHz). It must meet issue 3's accuracy targets against the noise-free
+// detector at the same rate, and measure each revolution's α at least as steadily as a 50 kHz
+// recording of the same cut does.
+TEST(Pipeline, MeasuresA333kHzRecordingToTheAccuracyTargets) {
   sim::Scenario fast = cut_at_50khz(true);
-  fast.model.effects.dynamometer.enabled = false;
   fast.sample_rate_hz = 333300.0;
   fast.duration_s = 0.8;
-  sim::Scenario clean = cut_at_50khz(false);
-  clean.model.effects.dynamometer.enabled = false;
-  Collector a, b;
+  sim::Scenario fast_clean = cut_at_50khz(false);
+  fast_clean.sample_rate_hz = 333300.0;
+  fast_clean.duration_s = 0.8;
+  sim::Scenario slow = cut_at_50khz(true);
+  slow.duration_s = 0.8;
+  Collector a, b, c;
   Pipeline pa(monitor_for(fast), a);
-  Pipeline pb(monitor_for(clean), b);
+  Pipeline pb(monitor_for(fast_clean), b);
+  Pipeline pc(monitor_for(slow), c);
   replay(pa, record(fast), 3333);
-  replay(pb, record(clean), 1000);
+  replay(pb, record(fast_clean), 3333);
+  replay(pc, record(slow), 1000);
   ASSERT_GT(a.revolutions.size(), 250u);
   int compared = 0;
-  double residual_fast = 0.0, residual_slow = 0.0, worst_alpha_deg = 0.0;
   for (const auto& ra : a.revolutions) {
     const RevolutionRecord* match = at_time(b.revolutions, ra.utime_us);
     ASSERT_NE(match, nullptr) << ra.utime_us;
     const auto& rb = *match;
-    if (ra.window_revolutions < 30 || !ra.model_valid || !rb.model_valid) {
+    if (ra.window_revolutions < 30) {
       continue;
     }
     ++compared;
@@ -127,18 +141,13 @@ TEST(Pipeline, MeasuresA333kHzRecordingAsAccuratelyAsA50kHzOne) {
     EXPECT_NEAR(ra.delta_fy_mean_N, rb.delta_fy_mean_N, 0.02 * std::fabs(rb.delta_fy_mean_N))
         << ra.utime_us;
     EXPECT_NEAR(ra.spindle_rpm, 25252.0, 0.0005 * 25252.0);
-    EXPECT_EQ(ra.measured.valid, rb.measured.valid) << ra.utime_us;
-    residual_fast += ra.residual_rms_N[1];
-    residual_slow += rb.residual_rms_N[1];
-    worst_alpha_deg = std::max(worst_alpha_deg, std::fabs(ra.alpha_mean_deg - rb.alpha_mean_deg));
+    EXPECT_TRUE(ra.model_valid) << ra.utime_us;
   }
-  EXPECT_GT(compared, 150);
-  // The noise (0.02 N) adds to the residual of the noisy record; not much more.
-  EXPECT_LT(residual_fast / compared, residual_slow / compared + 0.05);
-  std::printf(
-      "333.3 kHz against 50 kHz: %d revolutions, α within %.3f°, mean Fy residual %.3f N against "
-      "%.3f N\n",
-      compared, worst_alpha_deg, residual_fast / compared, residual_slow / compared);
+  EXPECT_GT(compared, 250);
+  const double scatter_fast = alpha_scatter_deg(a), scatter_slow = alpha_scatter_deg(c);
+  EXPECT_LE(scatter_fast, scatter_slow);
+  std::printf("333.3 kHz: %d revolutions; α per revolution ± %.3f° (50 kHz: ± %.3f°)\n", compared,
+              scatter_fast, scatter_slow);
 }
 
 // Issue 3 §2: the causal filter (delay corrected) and the offline zero-phase option measure the
