@@ -441,6 +441,44 @@ TEST(Pipeline, BadSamplesGapsAndBadBlocksAreCountedAndSurvived) {
   EXPECT_GT(out.revolutions.back().utime_us, 900000);
 }
 
+// At 333.3 kHz (measured on every third sample) a lost block of 1001 samples — not a whole
+// number of strides — is bridged: the lock holds, the gap's event names input samples, and the
+// revolutions after it are measured at the right times.
+TEST(Pipeline, AGapAt333kHzIsBridgedOnTheStride) {
+  sim::Scenario s = cut_at_50khz(true);
+  s.sample_rate_hz = 333300.0;
+  s.duration_s = 0.6;
+  const Recording r = record(s);
+  Collector whole, holed;
+  Pipeline pw(monitor_for(s), whole);
+  Pipeline ph(monitor_for(s), holed);
+  replay(pw, r, 1001);
+  replay(ph, r, 1001, [](std::int64_t seq, SampleBlock&) { return seq != 150; });
+  EXPECT_EQ(ph.status().input.samples_dropped, 1001);
+  ASSERT_EQ(holed.count(PipelineEventKind::kGap), 1);
+  for (const auto& e : holed.events) {
+    if (e.kind == PipelineEventKind::kGap) {
+      EXPECT_EQ(e.sample, 151 * 1001);  // the first sample after the hole, in input samples
+      EXPECT_EQ(e.count, 1001);
+    }
+  }
+  EXPECT_EQ(holed.count(PipelineEventKind::kLockAcquired), 1);
+  EXPECT_EQ(holed.count(PipelineEventKind::kLockLost), 0);
+  // After the gap, the same revolutions at the same times as without it.
+  int after = 0;
+  for (const auto& rh : holed.revolutions) {
+    if (rh.utime_us < 151 * 1001 * 3 + 20000) {  // µs: the hole ends at 0.4535 s
+      continue;
+    }
+    const RevolutionRecord* rw = at_time(whole.revolutions, rh.utime_us);
+    ASSERT_NE(rw, nullptr) << rh.utime_us;
+    EXPECT_LE(std::llabs(rw->utime_us - rh.utime_us), 3) << rh.utime_us;
+    EXPECT_NEAR(rw->measured.alpha_deg, rh.measured.alpha_deg, 0.5) << rh.utime_us;
+    ++after;
+  }
+  EXPECT_GT(after, 40);
+}
+
 TEST(Pipeline, StopStartLosesAndRegainsTheLockAndReZeroesTheDrift) {
   sim::Scenario s = cut_at_50khz(true);
   s.drift.enabled = true;  // the feed hold re-zeroes it
