@@ -51,18 +51,17 @@ void LcmSource::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& ch
     return;
   }
   // The check makes all three arrays num_samples ≤ max_block_samples_ ≤ the slot's size long.
+  // Copied once, from the decoded message straight into the queue's free slot.
   const std::size_t n = message_.fx_N.size();
-  slot_.utime_us = message_.utime;
-  slot_.seq = message_.seq;
-  slot_.sample_rate_hz = message_.sample_rate_hz;
-  slot_.count = n;
-  std::copy_n(message_.fx_N.begin(), n, slot_.fx.begin());
-  std::copy_n(message_.fy_N.begin(), n, slot_.fy.begin());
-  std::copy_n(message_.fz_N.begin(), n, slot_.fz.begin());
-  if (!queue_.try_push(slot_)) {
+  BlockSlot* slot = queue_.claim();
+  if (slot == nullptr) {
     ++counters_.queue_full;
     counters_.samples_dropped += static_cast<std::int64_t>(n);
+    return;
   }
+  slot->assign(message_.utime, message_.seq, message_.sample_rate_hz, message_.fx_N.data(),
+               message_.fy_N.data(), message_.fz_N.data(), n);
+  queue_.publish();
 }
 
 }  // namespace millwatch::daemon

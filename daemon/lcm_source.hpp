@@ -2,7 +2,8 @@
 // Live source (c): raw sample blocks published on an LCM channel by a DAQ bridge. The LCM
 // thread checks each message before decoding it (msgs/force_block_check.hpp: one malformed
 // datagram must neither crash the daemon nor make it allocate what its count asks for), decodes
-// it and copies it into the block queue; what is not a whole force_block_t, has more samples
+// it and copies it into the block queue's free slot (the one copy on the way to the pipeline,
+// which reads the slot in place); what is not a whole force_block_t, has more samples
 // than source.max_block_samples or finds the queue full is dropped and counted (never the
 // daemon).
 
@@ -43,7 +44,6 @@ class LcmSource {
   BlockQueue& queue_;
   SourceCounters& counters_;
   force_block_t message_;  // decoded here (LCM thread); its arrays keep their capacity
-  BlockSlot slot_;         // filled here, then copied into the queue
 };
 
 }  // namespace millwatch::daemon
