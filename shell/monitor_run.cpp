@@ -152,13 +152,14 @@ void MonitorRun::finish() {
   summary_.finish(final_status);
   if (identifier_) {
     pipeline_->attach_identifier(nullptr);
-    identifier_->finish();  // the window in progress and the one waiting are fitted
+    identifier_->finish();  // the window in progress and any waiting are fitted
     if (const auto last = identifier_->latest()) {
       nlohmann::json j = identify::to_json(*last);
       j["fit"]["windows_fitted"] = identifier_->fitted();
       j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
       j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due
-      j["fit"]["windows_skipped_for_budget"] = identifier_->skipped_for_budget();  // live, on purpose
+      j["fit"]["windows_skipped_for_budget"] =
+          identifier_->skipped_for_budget();  // live, on purpose
       summary_.set_identification(j);
     }
   }
