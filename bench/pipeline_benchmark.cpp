@@ -24,11 +24,11 @@ struct Recording {
   std::vector<double> t, fx, fy, fz;
 };
 
-Recording make_recording(double sample_rate_hz, double duration_s) {
+Recording make_recording(double sample_rate_hz, double duration_s, double rpm = 25252.0) {
   sim::Scenario s;
   s.sample_rate_hz = sample_rate_hz;
   s.duration_s = duration_s;
-  s.spindle.actual_rpm = 25252.0;
+  s.spindle.actual_rpm = rpm;
   s.noise.enabled = true;
   s.quantisation.enabled = true;
   sim::CutSimulator sim(s);
@@ -166,54 +166,81 @@ double cpu_s(int who) {
 
 /// The daemon's load at 333.3 kHz with identification running, as live: blocks of 1 ms fed at
 /// real time (paced by the clock) to the pipeline with the identifier's worker attached (live
-/// hand-over), CPU time from getrusage over the run, per second of signal (1 = a whole core):
-/// the sample thread alone, and the process (sample thread and worker), from 0.5 s on (after the
-/// lock and the model build). Without the daemon's
-/// LCM receive and publish (a few per cent of the sample thread's work).
+/// hand-over) under identification.cpu_budget (arg 1: the configuration's default when 0, else
+/// per mille; 1000 = no budget), CPU time from getrusage, per second of signal (1 = a whole
+/// core): the sample thread alone, and the process (sample thread and worker), from 0.5 s on
+/// (after the lock and the model build) for arg 0 seconds of signal. A budget of b fits one
+/// window per t/b (t ≈ 0.4 s of CPU a fit): the run must span several such periods, so the
+/// recording's last ~2.5 s are fed again and again — at 25,250 rpm a revolution is 792 samples
+/// exactly, so the loop joins without a phase step and the spindle stays locked. Without the
+/// daemon's LCM receive and publish (a few per cent of the sample thread's work).
 void BM_DaemonLoadRealTime(benchmark::State& state) {
   const double fs = 333300.0;
   const std::size_t block = 333;
-  const Recording r = make_recording(fs, 3.0);
+  const double horizon_s = static_cast<double>(state.range(0));
+  const Recording r = make_recording(fs, 3.0, 25250.0);
+  const std::size_t n = r.t.size();
+  constexpr std::size_t kRevolution = 792;  // samples at 25,250 rpm
+  const std::size_t loop_from =
+      n - (n - static_cast<std::size_t>(0.5 * fs)) / kRevolution * kRevolution;
   monitor::MonitorConfig c;
   c.sample_rate_hz = fs;
+  c.model.process.spindle_rpm = 25250.0;
+  const double budget =
+      state.range(1) == 0 ? c.identification.cpu_budget : static_cast<double>(state.range(1)) / 1e3;
   double signal_s = 0.0, process_s = 0.0, thread_s = 0.0;
-  std::int64_t fitted = 0, dropped = 0;
+  std::int64_t fitted = 0, dropped = 0, skipped = 0;
+  std::vector<double> fx(block), fy(block), fz(block);
   for (auto _ : state) {
     monitor::PipelineSink sink;
     monitor::Pipeline p(c, sink);
     const signal::ButterworthDesign filter = p.filter();
     identify::Identifier id(
         c.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
-        nullptr, identify::HandOver::kWhenReady);
+        nullptr, identify::HandOver::kWhenReady, budget);
     p.attach_identifier(&id);
     // Timed from 0.5 s on (the lock and the model build before it happen once).
-    const std::size_t steady = static_cast<std::size_t>(0.5 * fs) / block * block;
+    const auto steady = static_cast<std::size_t>(0.5 * fs) / block * block;
+    const auto total = static_cast<std::size_t>((0.5 + horizon_s) * fs) / block * block;
     double process0 = 0.0, thread0 = 0.0;
     const auto start = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < r.t.size(); i += block) {
-      std::this_thread::sleep_until(start + std::chrono::duration<double>(r.t[i]));
-      if (i == steady) {
+    for (std::size_t g = 0; g < total; g += block) {  // g: samples since the start
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(g / fs));
+      if (g == steady) {
         process0 = cpu_s(RUSAGE_SELF);
         thread0 = cpu_s(RUSAGE_THREAD);
       }
-      const std::size_t n = std::min(block, r.t.size() - i);
-      p.process({std::llround(r.t[i] * 1e6), 0, fs, std::span(r.fx).subspan(i, n),
-                 std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
+      for (std::size_t k = 0; k < block; ++k) {  // the block, as the daemon takes it off its queue
+        const std::size_t s = g + k < n ? g + k : loop_from + (g + k - n) % (n - loop_from);
+        fx[k] = r.fx[s];
+        fy[k] = r.fy[s];
+        fz[k] = r.fz[s];
+      }
+      p.process({std::llround(static_cast<double>(g) / fs * 1e6), 0, fs, fx, fy, fz});
     }
     process_s += cpu_s(RUSAGE_SELF) - process0;  // the worker's fits so far included
     thread_s += cpu_s(RUSAGE_THREAD) - thread0;
-    signal_s += static_cast<double>(r.t.size() - steady) / fs;
+    signal_s += static_cast<double>(total - steady) / fs;
     p.attach_identifier(nullptr);
     id.finish();
     fitted += id.fitted();
     dropped += id.superseded();
+    skipped += id.skipped_for_budget();
   }
   state.counters["sample_thread_of_a_core"] = thread_s / signal_s;
   state.counters["process_of_a_core"] = process_s / signal_s;
-  state.counters["windows_fitted"] = static_cast<double>(fitted);
-  state.counters["windows_dropped"] = static_cast<double>(dropped);
+  state.counters["budget"] = budget;
+  state.counters["fitted_per_s"] = static_cast<double>(fitted) / signal_s;
+  state.counters["skipped_for_budget_per_s"] = static_cast<double>(skipped) / signal_s;
+  state.counters["dropped_per_s"] = static_cast<double>(dropped) / signal_s;
 }
-BENCHMARK(BM_DaemonLoadRealTime)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+// 60 s with the default budget (two or three of its periods); 5 s without a budget (before it).
+BENCHMARK(BM_DaemonLoadRealTime)
+    ->Args({60, 0})
+    ->Args({5, 1000})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 /// What a new lock costs once: building the lockstep model at the measured speed.
 void BM_LockstepModelBuild(benchmark::State& state) {

@@ -95,7 +95,6 @@ void ComediSource::run() {
   const std::size_t bytes_per_sample = long_samples_ ? sizeof(lsampl_t) : sizeof(sampl_t);
   const auto block = static_cast<std::size_t>(config_.block_samples);
   std::vector<unsigned char> buffer(block * 3 * bytes_per_sample);
-  BlockSlot slot;
   std::int64_t seq = 0;
   std::int64_t sample = 0;
   const std::int64_t start_us = std::chrono::duration_cast<std::chrono::microseconds>(
@@ -114,11 +113,20 @@ void ComediSource::run() {
       continue;
     }
     filled = 0;
-    slot.count = block;
-    slot.seq = seq++;
-    slot.sample_rate_hz = sample_rate_hz_;
-    slot.utime_us =
-        start_us + static_cast<std::int64_t>(static_cast<double>(sample) * 1e6 / sample_rate_hz_);
+    const std::int64_t block_seq = seq++;
+    const std::int64_t first = sample;
+    sample += static_cast<std::int64_t>(block);
+    BlockSlot* slot = queue_.claim();  // converted straight into the queue's free slot
+    if (slot == nullptr) {
+      ++counters_.queue_full;
+      counters_.samples_dropped += static_cast<std::int64_t>(block);
+      continue;
+    }
+    slot->count = block;
+    slot->seq = block_seq;
+    slot->sample_rate_hz = sample_rate_hz_;
+    slot->utime_us =
+        start_us + static_cast<std::int64_t>(static_cast<double>(first) * 1e6 / sample_rate_hz_);
     for (std::size_t i = 0; i < block; ++i) {
       for (std::size_t a = 0; a < 3; ++a) {
         const std::size_t k = i * 3 + a;
@@ -129,14 +137,10 @@ void ComediSource::run() {
           code = reinterpret_cast<const sampl_t*>(buffer.data())[k];
         }
         const auto s = config_.channels[a].scale(code);
-        (a == 0 ? slot.fx : a == 1 ? slot.fy : slot.fz)[i] = s.force_N;
+        (a == 0 ? slot->fx : a == 1 ? slot->fy : slot->fz)[i] = s.force_N;
       }
     }
-    sample += static_cast<std::int64_t>(block);
-    if (!queue_.try_push(slot)) {
-      ++counters_.queue_full;
-      counters_.samples_dropped += static_cast<std::int64_t>(block);
-    }
+    queue_.publish();
   }
 }
 

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "msgs/force_block_check.hpp"
 
@@ -11,22 +12,32 @@ namespace millwatch::daemon {
 LcmSource::LcmSource(lcm::LCM& lcm, const std::string& channel, std::int64_t max_block_samples,
                      BlockQueue& queue, SourceCounters& counters)
     : lcm_(lcm),
+      channel_(channel),
       max_block_samples_(
           std::min(max_block_samples, static_cast<std::int64_t>(BlockSlot::kMaxSamples))),
       queue_(queue),
       counters_(counters) {
-  subscription_ = lcm_.subscribe(channel, &LcmSource::on_message, this);
-  subscription_->setQueueCapacity(1000);
+  subscription_ =
+      lcm_subscribe(lcm_.getUnderlyingLCM(), channel_.c_str(), &LcmSource::receive, this);
+  if (subscription_ == nullptr) {
+    throw std::runtime_error("cannot subscribe to the LCM channel " + channel_);
+  }
+  lcm_subscription_set_queue_capacity(subscription_, 1000);
 }
 
 LcmSource::~LcmSource() {
-  lcm_.unsubscribe(subscription_);
+  lcm_unsubscribe(lcm_.getUnderlyingLCM(), subscription_);
 }
 
-void LcmSource::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+void LcmSource::receive(const lcm_recv_buf_t* rbuf, const char* /*channel*/, void* self) {
+  static_cast<LcmSource*>(self)->on_message(*rbuf);
+}
+
+void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
+  const std::string& channel = channel_;
   const std::int64_t number = ++counters_.messages;
   const messaging::ForceBlockCheck c =
-      messaging::decode_force_block(rbuf->data, rbuf->data_size, max_block_samples_, message_);
+      messaging::decode_force_block(rbuf.data, rbuf.data_size, max_block_samples_, message_);
   if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
     // A whole block, only longer than we take: its samples are lost.
     const auto n = ++counters_.oversized;
@@ -44,25 +55,24 @@ void LcmSource::on_message(const lcm::ReceiveBuffer* rbuf, const std::string& ch
     if (n <= 10) {
       spdlog::warn(
           "{}: message {} of {} bytes does not decode as millwatch.force_block_t ({}); dropped",
-          channel, number, rbuf->data_size, c.describe());
+          channel, number, rbuf.data_size, c.describe());
     } else if (n == 11) {
       spdlog::warn("{}: more messages that do not decode follow; counted in the status", channel);
     }
     return;
   }
   // The check makes all three arrays num_samples ≤ max_block_samples_ ≤ the slot's size long.
+  // Copied once, from the decoded message straight into the queue's free slot.
   const std::size_t n = message_.fx_N.size();
-  slot_.utime_us = message_.utime;
-  slot_.seq = message_.seq;
-  slot_.sample_rate_hz = message_.sample_rate_hz;
-  slot_.count = n;
-  std::copy_n(message_.fx_N.begin(), n, slot_.fx.begin());
-  std::copy_n(message_.fy_N.begin(), n, slot_.fy.begin());
-  std::copy_n(message_.fz_N.begin(), n, slot_.fz.begin());
-  if (!queue_.try_push(slot_)) {
+  BlockSlot* slot = queue_.claim();
+  if (slot == nullptr) {
     ++counters_.queue_full;
     counters_.samples_dropped += static_cast<std::int64_t>(n);
+    return;
   }
+  slot->assign(message_.utime, message_.seq, message_.sample_rate_hz, message_.fx_N.data(),
+               message_.fy_N.data(), message_.fz_N.data(), n);
+  queue_.publish();
 }
 
 }  // namespace millwatch::daemon

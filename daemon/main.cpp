@@ -1,12 +1,12 @@
 // millwatchd — the live monitor beside the machine.
 //
 // Threads: an LCM receiver (or the Comedi reader) fills a bounded queue of sample blocks; the
-// sample thread runs the pipeline on them (never publishing, never waiting on LCM); the
-// publisher thread (messaging::LcmOutput) publishes every output. The main thread waits for
-// signals: SIGTERM/SIGINT stop cleanly (the queue is drained, a final status and summary are
-// published and logged), SIGHUP reloads the configuration between two blocks (a bad file is
-// reported and the running configuration kept). A reload applies the monitor section,
-// status_period_s and log_level; the source and the LCM set-up take a restart (said so).
+// sample thread (asleep while the queue is empty) runs the pipeline on them, in place (never
+// publishing, never waiting on LCM); the publisher thread (messaging::LcmOutput) publishes every
+// output. The main thread waits for signals: SIGTERM/SIGINT stop cleanly (the queue is drained, a
+// final status and summary are published and logged), SIGHUP reloads the configuration between two
+// blocks (a bad file is reported and the running configuration kept). A reload applies the monitor
+// section, status_period_s and log_level; the source and the LCM set-up take a restart (said so).
 // Under systemd (Type=notify): READY=1 once the source is open, WATCHDOG=1 from the sample loop,
 // RELOADING=1/READY=1 around a reload, STOPPING=1 (daemon/service_notifier.hpp).
 
@@ -204,7 +204,6 @@ int run(const std::string& config_path, const std::string& url_override,
 
   const auto started = std::chrono::steady_clock::now();
   std::thread sample_thread([&] {
-    auto slot = std::make_unique<daemon::BlockSlot>();
     while (true) {
       notifier.watchdog();  // a stalled loop stops the pings: systemd restarts the daemon
       if (stall_after_s > 0.0 && std::chrono::steady_clock::now() - started >
@@ -236,15 +235,18 @@ int run(const std::string& config_path, const std::string& url_override,
               run->carried_samples_in());
         }
       }
-      if (queue.try_pop(*slot)) {
-        run->process(slot->view());
+      if (const daemon::BlockSlot* block = queue.front()) {
+        run->process(block->view());  // in the queue's slot: no copy
+        queue.pop();
         continue;
       }
       if (stop.load()) {
         break;  // the queue is drained
       }
       run->idle();  // no samples: still a status every status period
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      // Asleep until the source publishes a block; woken at least every 20 ms for the status,
+      // the watchdog, a reload and the stop.
+      queue.wait(std::chrono::milliseconds(20));
     }
     run->finish();
   });

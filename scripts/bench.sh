@@ -60,14 +60,23 @@ if whole:
           f" `millwatch replay --no-identify` {whole['millwatch_s'] * 1e3:.0f} ms, the reference"
           f" script (np.loadtxt + the steps above) {whole['reference_s'] * 1e3:.0f} ms:"
           f" {whole['ratio']:.1f}× (target ≥ 10×); wall clock, best of {whole['repeats']}.")
-daemon = [r for name, rs in runs.items() if name.startswith("BM_DaemonLoadRealTime") for r in rs]
+daemon = [r for name, rs in runs.items() if name.startswith("BM_DaemonLoadRealTime/60/0/") for r in rs]
+unbudgeted = [r for name, rs in runs.items() if name.startswith("BM_DaemonLoadRealTime/5/1000/")
+              for r in rs]
+median = lambda rs, key: sorted(r[key] for r in rs)[len(rs) // 2]
 if daemon:
-    sample = sorted(r["sample_thread_of_a_core"] for r in daemon)[len(daemon) // 2]
-    process = sorted(r["process_of_a_core"] for r in daemon)[len(daemon) // 2]
     print(f"\nDaemon at 333.3 kHz with identification running, fed at real time"
-          f" (`BM_DaemonLoadRealTime`, median of {len(daemon)}): the sample thread"
-          f" {100 * sample:.1f} % of a core, the process (sample thread and identification worker)"
-          f" {100 * process:.0f} % (target < 5 %).")
+          f" (`BM_DaemonLoadRealTime`, 60 s, median of {len(daemon)}), identification.cpu_budget"
+          f" {median(daemon, 'budget'):g}: the sample thread {100 * median(daemon, 'sample_thread_of_a_core'):.1f} %"
+          f" of a core, the process (sample thread and identification worker)"
+          f" {100 * median(daemon, 'process_of_a_core'):.1f} % (target < 5 %); windows fitted"
+          f" {median(daemon, 'fitted_per_s'):.3f}/s, skipped for the budget"
+          f" {median(daemon, 'skipped_for_budget_per_s'):.1f}/s.")
+if unbudgeted:
+    print(f"Without a budget (cpu_budget 1, 5 s): the sample thread"
+          f" {100 * median(unbudgeted, 'sample_thread_of_a_core'):.1f} %, the process"
+          f" {100 * median(unbudgeted, 'process_of_a_core'):.0f} %; windows fitted"
+          f" {median(unbudgeted, 'fitted_per_s'):.1f}/s, dropped {median(unbudgeted, 'dropped_per_s'):.1f}/s.")
 cpu = next((l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")))
 r = next(iter(ref.values()))
 print(f"\nFull model, one revolution (2 flutes, 10 discs, 0.5°, every effect on): {rev:.2f} ms"

@@ -64,10 +64,12 @@ void MonitorRun::start_identifier(const monitor::MonitorConfig& config) {
   if (identifier_) {
     identifier_->restart(config.model, std::move(response),
                          fit_options(config));  // does not wait for a fit
+    identifier_->set_cpu_budget(config.identification.cpu_budget);
   } else {
     identifier_ = std::make_unique<identify::Identifier>(
         config.model, std::move(response), fit_options(config),
-        [this](const identify::IdentifiedWindow& w) { on_identified(w); }, options_.hand_over);
+        [this](const identify::IdentifiedWindow& w) { on_identified(w); }, options_.hand_over,
+        config.identification.cpu_budget);  // live only: a replay waits for every fit
   }
   pipeline_->attach_identifier(identifier_.get());
 }
@@ -150,12 +152,14 @@ void MonitorRun::finish() {
   summary_.finish(final_status);
   if (identifier_) {
     pipeline_->attach_identifier(nullptr);
-    identifier_->finish();  // the window in progress and the one waiting are fitted
+    identifier_->finish();  // the window in progress and any waiting are fitted
     if (const auto last = identifier_->latest()) {
       nlohmann::json j = identify::to_json(*last);
       j["fit"]["windows_fitted"] = identifier_->fitted();
       j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
       j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due
+      j["fit"]["windows_skipped_for_budget"] =
+          identifier_->skipped_for_budget();  // live, on purpose
       summary_.set_identification(j);
     }
   }

@@ -1,11 +1,27 @@
 #include "core/identify/identifier.hpp"
 
+#include <time.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
 
 namespace millwatch::identify {
 namespace {
+
+/// Seconds on the steady clock (the budget's wall time).
+double steady_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/// CPU time of the calling thread, s (what the budget counts: the fit's own work, not the time
+/// it waited for the core).
+double thread_cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 /// `r` with the systematic part of `s`'s estimates (same quantity) added in quadrature.
 void carry_systematic(const FitResult& s, FitResult& r) {
@@ -34,11 +50,12 @@ void carry_systematic(const FitResult& s, FitResult& r) {
 }  // namespace
 
 Identifier::Identifier(const model::ModelConfig& model, FilterResponse filter, FitOptions options,
-                       Callback on_result, HandOver hand_over)
+                       Callback on_result, HandOver hand_over, double cpu_budget)
     : fitter_(model, std::move(filter), options),
       on_result_(std::move(on_result)),
       hand_over_(hand_over),
       options_(std::move(options)),
+      budget_(cpu_budget),
       worker_([this] { run(); }) {}
 
 Identifier::~Identifier() {
@@ -51,6 +68,16 @@ void Identifier::submit(const MeasuredRevolution& window, std::int64_t revolutio
     const std::lock_guard lock(mutex_);
     if (stop_) {
       return;
+    }
+    if (hand_over_ == HandOver::kWhenReady && budget_.limits()) {
+      // A fit in progress is followed by a rest, and the first window after the rest is fitted:
+      // what comes before is not (nor copied).
+      const bool fitting =
+          std::any_of(queue_.begin(), queue_.end(), [](const Entry& e) { return e.fitting; });
+      if (fitting || !budget_.allows(steady_s())) {
+        ++skipped_for_budget_;
+        return;
+      }
     }
     if (hand_over_ == HandOver::kWhenReady) {
       int waiting = 0;
@@ -152,6 +179,22 @@ std::int64_t Identifier::late() const {
   return late_;
 }
 
+std::int64_t Identifier::skipped_for_budget() const {
+  const std::lock_guard lock(mutex_);
+  return skipped_for_budget_;
+}
+
+double Identifier::budget_period_s() const {
+  const std::lock_guard lock(mutex_);
+  return hand_over_ == HandOver::kWhenReady && budget_.limits() ? budget_.period_s() : 0.0;
+}
+
+void Identifier::set_cpu_budget(double fraction) {
+  const CpuBudget next(fraction);  // throws before anything changes
+  const std::lock_guard lock(mutex_);
+  budget_ = next;
+}
+
 void Identifier::run() {
   std::optional<FitResult> previous;
   const auto next = [this]() -> Entry* {
@@ -191,15 +234,23 @@ void Identifier::run() {
     }
     // The entry stays in the list while it is being fitted (only finished entries are taken,
     // only waiting ones dropped), and list nodes do not move.
-    const auto start = std::chrono::steady_clock::now();
+    const double cpu0_s = thread_cpu_s();
+    out.fit_started_s = steady_s();
     out.fit = fit(entry->window, previous);
-    out.fit_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double end_s = steady_s();
+    out.fit_cpu_seconds = thread_cpu_s() - cpu0_s;
+    out.fit_seconds = end_s - out.fit_started_s;
     if (out.fit.ok) {
       previous = out.fit;
     }
     {
       const std::lock_guard lock(mutex_);
+      if (hand_over_ == HandOver::kWhenReady && budget_.limits()) {
+        // The rest begins: the windows that came during the fit are not fitted either.
+        budget_.fit_done(out.fit_cpu_seconds, end_s);
+        skipped_for_budget_ += static_cast<std::int64_t>(queue_.remove_if(
+            [&](const Entry& e) { return &e != entry && !e.fitting && !e.result; }));
+      }
       if (entry->stale) {  // fitted for a model replaced meanwhile
         queue_.remove_if([&](const Entry& e) { return &e == entry; });
         continue;

@@ -12,12 +12,21 @@
 // Live, a worker that falls behind drops the oldest window still waiting (counted as superseded)
 // rather than let the queue grow.
 //
+// CPU budget (live only; identification.cpu_budget, identify::CpuBudget). After a fit that took
+// t s of the worker's CPU time (its thread's clock, not the wall clock), the worker takes no new
+// window for t·(1/budget − 1) s of wall time: windows submitted during the fit or the rest are
+// not fitted (nor copied), counted as skipped for the budget, and nothing is superseded. The
+// first window submitted after the rest is fitted. submitted = fitted + superseded + skipped for
+// the budget
+// (+ the ones a restart() or finish() dropped, + the ones still queued). A replay (kWait) waits
+// for every fit and ignores the budget.
+//
 // Cost. The systematic part of the uncertainty (the spread over model variants, window_fit.hpp)
 // costs several refits; the model's discrepancy changes slowly, so it is re-estimated on the
 // first window, every kSystematicEvery windows and whenever the estimate moved by more than its
 // uncertainty since, and carried over (per parameter) in between.
 //
-//   Identifier id(model, filter, options, publish, HandOver::kWhenReady);
+//   Identifier id(model, filter, options, publish, HandOver::kWhenReady, 0.02);
 //   id.submit(window, revolution, utime_us, due_revolution);  // sample thread: a copy, no fit
 //   if (auto w = id.take_due(revolution)) use(*w);            // sample thread, per revolution
 //   id.finish();                                              // fits what is waiting, stops
@@ -31,6 +40,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/identify/cpu_budget.hpp"
 #include "core/identify/window_fit.hpp"
 
 namespace millwatch::identify {
@@ -41,7 +51,9 @@ struct IdentifiedWindow {
   std::int64_t revolution = 0;  ///< last revolution of the window
   std::int64_t utime_us = 0;    ///< its end
   int window_revolutions = 0;
-  double fit_seconds = 0.0;  ///< wall-clock time the fit took
+  double fit_seconds = 0.0;      ///< wall-clock time the fit took
+  double fit_cpu_seconds = 0.0;  ///< the worker thread's CPU time for it (what the budget counts)
+  double fit_started_s = 0.0;    ///< steady-clock time (s since its epoch) the fit began
 };
 
 /// How take_due() treats a result whose fit is still running when it is due.
@@ -55,13 +67,17 @@ class Identifier {
   using Callback = std::function<void(const IdentifiedWindow&)>;
 
   /// @param on_result called in the worker thread after each fit
+  /// @param cpu_budget fraction of one core the fits may use on average, in (0, 1] (1: none);
+  /// kWhenReady only (see CPU budget above). @throws std::invalid_argument outside (0, 1].
   Identifier(const model::ModelConfig& model, FilterResponse filter, FitOptions options,
-             Callback on_result, HandOver hand_over = HandOver::kWhenReady);
+             Callback on_result, HandOver hand_over = HandOver::kWhenReady,
+             double cpu_budget = 1.0);
   ~Identifier();
   Identifier(const Identifier&) = delete;
   Identifier& operator=(const Identifier&) = delete;
 
-  /// Queues a window (ending at `revolution`) whose result is due at `due_revolution`.
+  /// Queues a window (ending at `revolution`) whose result is due at `due_revolution`; during a
+  /// budget's rest, counts it as skipped instead.
   void submit(const MeasuredRevolution& window, std::int64_t revolution, std::int64_t utime_us,
               std::int64_t due_revolution);
   /// The oldest result due at or before `revolution`, if any (see HandOver).
@@ -71,6 +87,9 @@ class Identifier {
   void restart(const model::ModelConfig& model, FilterResponse filter, FitOptions options);
   /// Fits what is waiting and stops the worker; later submits are ignored.
   void finish();
+  /// A new CPU budget (a reconfiguration): a rest in progress ends, the next fit's end starts
+  /// one by the new budget. @throws std::invalid_argument outside (0, 1].
+  void set_cpu_budget(double fraction);
 
   /// The newest result, if any.
   [[nodiscard]] std::optional<IdentifiedWindow> latest() const;
@@ -79,6 +98,12 @@ class Identifier {
   [[nodiscard]] std::int64_t fitted() const;
   [[nodiscard]] std::int64_t superseded() const;
   [[nodiscard]] std::int64_t late() const;
+  /// Windows not fitted on purpose: submitted during a fit or the budget's rest after it (or,
+  /// rarely, queued beside the window the worker took).
+  [[nodiscard]] std::int64_t skipped_for_budget() const;
+  /// The interval between fits the budget allows, the last fit's CPU time over the budget; 0 when
+  /// no budget applies (kWait, a budget of 1, no fit yet). EstimateWatch's pace.
+  [[nodiscard]] double budget_period_s() const;
 
  private:
   struct Entry {
@@ -121,6 +146,8 @@ class Identifier {
   std::int64_t fitted_ = 0;
   std::int64_t superseded_ = 0;
   std::int64_t late_ = 0;
+  std::int64_t skipped_for_budget_ = 0;
+  CpuBudget budget_;  // kWhenReady only
   bool stop_ = false;
   bool stopped_ = false;  // the worker has returned
   std::thread worker_;    // last: started once everything above exists

@@ -86,6 +86,7 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     o.max_unexplained = id.number("max_unexplained", o.max_unexplained, config::positive(1.0));
     o.runout_prior_um =
         id.number("runout_prior_um", o.runout_prior_um, config::non_negative(1000.0, "um"));
+    o.cpu_budget = id.number("cpu_budget", o.cpu_budget, config::positive(1.0));
     id.finish();
     model::ParameterMap map;
     try {
@@ -179,7 +180,8 @@ nlohmann::json to_json(const MonitorConfig& c) {
            {{"enabled", c.identification.enabled},
             {"extra_parameters", c.identification.extra_parameters},
             {"max_unexplained", c.identification.max_unexplained},
-            {"runout_prior_um", c.identification.runout_prior_um}}},
+            {"runout_prior_um", c.identification.runout_prior_um},
+            {"cpu_budget", c.identification.cpu_budget}}},
           {"alerts", to_json(c.alerts)}};
 }
 

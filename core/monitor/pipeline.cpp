@@ -14,7 +14,6 @@ constexpr double kMaxBridgedGap_s = 0.05;    // shorter gaps keep the lock
 constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest revolution analysed
 constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
 constexpr int kIdleToStop = 3;               // idle revolutions in a row: cutting has stopped
-constexpr int kWindowsWithoutEstimate = 3;   // then the alerts follow the flute forces
 // Past the low-pass, the stages after it take every stride-th sample, at no less than this rate
 // and no fewer samples per revolution (at the commanded speed) than the synchronous average has
 // bins: the filter leaves nothing above a few cut-offs (order 4 at 3.3 kHz: −74 dB at 27.8 kHz),
@@ -463,13 +462,17 @@ void Pipeline::submit_window() {
   window_rpm_sum_ = 0.0;
   window_rpm_count_ = 0;
   // Due when the next window ends: the fit has a window's time to finish.
+  const std::int64_t end_us = utime_at(ring_.newest());
+  identifier_->submit(window_, revolutions_ - 1, end_us,
+                      revolutions_ + config_.sync_window_revolutions);
   // While no estimate comes (fits rejected, or live, a worker that cannot keep up), the alerts
-  // follow the flute forces; the next accepted estimate takes over again.
-  if (++windows_without_estimate_ >= kWindowsWithoutEstimate) {
+  // follow the flute forces; the next accepted estimate takes over again. Windows the live
+  // identifier skips for its CPU budget do not count while the last estimate is recent enough
+  // (identify::EstimateWatch).
+  const double window_s = 60.0 * window_.revolutions / window_.spindle_rpm;
+  if (estimate_watch_.window_submitted(end_us, window_s, identifier_->budget_period_s())) {
     alerts_.expect_estimates(false);
   }
-  identifier_->submit(window_, revolutions_ - 1, utime_at(ring_.newest()),
-                      revolutions_ + config_.sync_window_revolutions);
 }
 
 void Pipeline::take_identification() {
@@ -491,7 +494,7 @@ void Pipeline::take_identification() {
     ++identifications_rejected_;
     return;  // a model that does not fit the cut says nothing reliable about it
   }
-  windows_without_estimate_ = 0;
+  estimate_watch_.estimate_accepted(w->utime_us);
   alerts_.on_identification(*w, [this](const Alert& a) { sink_.on_alert(a); });
   if (!config_.lockstep) {
     return;

@@ -22,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/identify/estimate_watch.hpp"
 #include "core/identify/identifier.hpp"
 #include "core/monitor/alert_engine.hpp"
 #include "core/monitor/conditioner.hpp"
@@ -127,7 +128,8 @@ class Pipeline {
   /// did when no result came late (identify::Identifier).
   /// The alert engine follows the estimates it takes (runout high, runout change, wear drift);
   /// after three windows without an accepted one (fits rejected, or a live worker that cannot
-  /// keep up) it follows the flute forces until the next.
+  /// keep up; with a CPU budget, three budget periods: identify::EstimateWatch) it follows the
+  /// flute forces until the next.
   void attach_identifier(identify::Identifier* identifier) {
     identifier_ = identifier;
     alerts_.expect_estimates(identifier != nullptr);
@@ -229,7 +231,7 @@ class Pipeline {
   std::int64_t lock_revolution_ = 0;  // first revolution of the current lock
   std::int64_t identifications_taken_ = 0;
   std::int64_t identifications_rejected_ = 0;
-  int windows_without_estimate_ = 0;  // submitted since the last accepted estimate
+  identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
 };
 

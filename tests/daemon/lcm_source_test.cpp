@@ -1,6 +1,7 @@
 // millwatchd's LCM source in process (memq://): malformed raw messages — a count that wraps
 // lcm-gen's size check, a negative count, short and long buffers, garbage, more samples than
 // source.max_block_samples — are counted and dropped before decoding; good blocks still arrive.
+// In steady state a block costs the source no heap allocation on its way into the queue.
 
 #include "daemon/lcm_source.hpp"
 
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "msgs/lcm_convert.hpp"
+#include "tests/support/allocation_counter.hpp"
 
 namespace millwatch::daemon {
 namespace {
@@ -96,6 +98,38 @@ TEST(LcmSource, TheMaximumIsAtMostASlot) {
   EXPECT_EQ(counters.oversized.load(), 1);
   auto slot = std::make_unique<BlockSlot>();
   EXPECT_FALSE(queue->try_pop(*slot));
+}
+
+// The channel name is longer than a std::string holds in place: the LCM C++ interface's
+// per-message std::string of it allocated; the C one, with the decoded message's arrays kept,
+// allocates nothing (LCM's own buffers are malloc'ed, not counted here).
+TEST(LcmSource, ABlockCostsNoAllocationInSteadyState) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  auto queue = std::make_unique<BlockQueue>();
+  SourceCounters counters;
+  const std::string channel = "MILLWATCH_FORCE_RAW";
+  LcmSource source(lcm, channel, 4096, *queue, counters);
+  std::vector<std::vector<std::uint8_t>> blocks;
+  for (int k = 0; k < 20; ++k) {
+    blocks.push_back(encoded(k, 333));
+  }
+  auto send = [&](const std::vector<std::uint8_t>& bytes) {
+    lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    ASSERT_EQ(lcm.handleTimeout(1000), 1);
+    const BlockSlot* s = queue->front();
+    ASSERT_NE(s, nullptr);
+    EXPECT_EQ(s->count, 333u);
+    queue->pop();
+  };
+  send(blocks[0]);  // the decoded message's arrays take their size
+  const test::AllocationCounter counter;
+  for (std::size_t k = 1; k < blocks.size(); ++k) {
+    send(blocks[k]);
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+  EXPECT_EQ(counters.messages.load(), 20);
+  EXPECT_EQ(counters.samples_dropped.load(), 0);
 }
 
 }  // namespace

@@ -78,9 +78,12 @@ void prepare_cut(const fs::path& dir) {
       test::run_command(test::millwatch_cli() + " simulate " + (dir / "scenario.json").string() +
                         " -o " + (dir / "cut.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json config = {{"monitor", {{"sample_rate_hz", 50000.0}}},
-                                 {"source", {{"kind", "lcm"}}},
-                                 {"status_period_s", 0.2}};
+  // No CPU budget (identification.cpu_budget 1): the live worker fits every window it gets to,
+  // so that the live run can agree with the replay exactly.
+  const nlohmann::json config = {
+      {"monitor", {{"sample_rate_hz", 50000.0}, {"identification", {{"cpu_budget", 1.0}}}}},
+      {"source", {{"kind", "lcm"}}},
+      {"status_period_s", 0.2}};
   std::ofstream(dir / "monitor.json") << config.dump(2);
 }
 
@@ -281,11 +284,13 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   // when the live identifier kept up (no window dropped, no result late); on a machine too busy
   // for that, the live run said so in its summary and the residuals agree to a few percent.
   ASSERT_TRUE(live.contains("fit")) << live.dump(2);
-  const bool kept_up =
-      live["fit"]["windows_dropped"].get<int>() == 0 && live["fit"]["results_late"].get<int>() == 0;
+  const bool kept_up = live["fit"]["windows_dropped"].get<int>() == 0 &&
+                       live["fit"]["results_late"].get<int>() == 0 &&
+                       live["fit"]["windows_skipped_for_budget"].get<int>() == 0;
   EXPECT_GT(offline["model"]["identified_parameters_taken"].get<int>(), 0) << offline.dump(2);
   EXPECT_EQ(offline["fit"]["windows_dropped"].get<int>(), 0);
   EXPECT_EQ(offline["fit"]["results_late"].get<int>(), 0);
+  EXPECT_EQ(offline["fit"]["windows_skipped_for_budget"].get<int>(), 0);  // a replay: no budget
   for (const char* axis : {"fx", "fy", "fz"}) {
     const double a = offline["residual_rms_N"][axis].get<double>();
     const double b = live["residual_rms_N"][axis].get<double>();

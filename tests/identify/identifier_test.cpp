@@ -1,16 +1,19 @@
 // The continuous identifier: windows fitted in its worker thread, each result handed to the
 // callback and handed over at its due revolution — waited for in a replay, taken when ready
-// live (late ones counted, a backlog dropped oldest first); a finished identifier ignores later
-// windows.
+// live (late ones counted, a backlog dropped oldest first; with a CPU budget, a rest after each
+// fit, the windows skipped counted); a finished identifier ignores later windows.
 
 #include "core/identify/identifier.hpp"
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <complex>
+#include <mutex>
 #include <thread>
+#include <vector>
 
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
@@ -131,6 +134,86 @@ TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
   ASSERT_TRUE(last.has_value() && last->fit.ok);
   EXPECT_NEAR(rho_before, 0.8, 0.05);
   EXPECT_NEAR(last->fit.rho_um.value, 2.0, std::max(0.05, 2.0 * last->fit.rho_um.sigma));
+}
+
+// Live with a CPU budget of 0.25: after each fit of t s of CPU the worker takes no window for
+// 3t s of wall time. Windows submitted every 2 ms until three fits are done: every window is
+// fitted or skipped for the budget (none superseded, none lost), and no fit starts before the
+// previous one's rest is over — checked on the times the worker measured, not on a stopwatch.
+TEST(Identifier, LiveWithACpuBudgetItRestsAfterEachFitAndCountsTheWindowsItSkips) {
+  const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
+  model::ModelConfig start = truth;
+  start.effects.runout.offset_um = 0.0;
+  constexpr double kBudget = 0.25;
+  std::mutex m;
+  std::vector<IdentifiedWindow> results;
+  Identifier id(
+      start, pass_band, FitOptions{},
+      [&](const IdentifiedWindow& w) {
+        const std::lock_guard lock(m);
+        results.push_back(w);
+      },
+      HandOver::kWhenReady, kBudget);
+  EXPECT_EQ(id.budget_period_s(), 0.0);  // no fit yet
+  const MeasuredRevolution w = window_of(truth);
+  int submitted = 0;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (id.fitted() < 3 && std::chrono::steady_clock::now() < give_up) {
+    ++submitted;
+    id.submit(w, 30 * submitted, 1000 * submitted, 30 * submitted + 30);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  id.finish();
+  ASSERT_GE(id.fitted(), 3);
+  EXPECT_EQ(id.fitted() + id.skipped_for_budget(), submitted);
+  EXPECT_EQ(id.superseded(), 0);
+  EXPECT_GT(id.skipped_for_budget(), 0);
+  const std::lock_guard lock(m);
+  ASSERT_EQ(static_cast<std::int64_t>(results.size()), id.fitted());
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const IdentifiedWindow& r = results[i];
+    ASSERT_TRUE(r.fit.ok) << r.fit.message;
+    EXPECT_NEAR(r.fit.rho_um.value, 1.2, std::max(0.05, 2.0 * r.fit.rho_um.sigma));
+    EXPECT_GT(r.fit_cpu_seconds, 0.0);
+    if (i == 0) {
+      EXPECT_EQ(r.revolution, 30);  // the first window is fitted at once
+      continue;
+    }
+    const IdentifiedWindow& p = results[i - 1];
+    const double rest_over_s =
+        p.fit_started_s + p.fit_seconds + p.fit_cpu_seconds * (1.0 / kBudget - 1.0);
+    EXPECT_GE(r.fit_started_s, rest_over_s - 1e-9) << "fit " << i;
+    EXPECT_GT(r.revolution, p.revolution);
+  }
+  EXPECT_NEAR(id.budget_period_s(), results.back().fit_cpu_seconds / kBudget, 1e-12);
+}
+
+// A replay waits for every fit: the budget does not apply, every window is fitted.
+TEST(Identifier, InAReplayTheBudgetIsIgnored) {
+  const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
+  Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait, 0.001);
+  const MeasuredRevolution w = window_of(truth);
+  for (int k = 1; k <= 4; ++k) {
+    id.submit(w, 30 * k, 1000 * k, 30 * k + 30);
+  }
+  for (int k = 1; k <= 4; ++k) {
+    const auto r = id.take_due(30 * k + 30);
+    ASSERT_TRUE(r.has_value()) << k;
+    EXPECT_EQ(r->revolution, 30 * k);
+  }
+  id.finish();
+  EXPECT_EQ(id.fitted(), 4);
+  EXPECT_EQ(id.skipped_for_budget(), 0);
+  EXPECT_EQ(id.superseded(), 0);
+  EXPECT_EQ(id.budget_period_s(), 0.0);  // nothing for the alerts to wait on
+}
+
+TEST(Identifier, RefusesABudgetOutsideZeroToOne) {
+  const model::ModelConfig m = three_flute_slot(1.2, 0.4);
+  EXPECT_THROW(Identifier(m, pass_band, FitOptions{}, nullptr, HandOver::kWhenReady, 0.0),
+               std::invalid_argument);
+  Identifier id(m, pass_band, FitOptions{}, nullptr, HandOver::kWhenReady, 0.5);
+  EXPECT_THROW(id.set_cpu_budget(2.0), std::invalid_argument);
 }
 
 }  // namespace

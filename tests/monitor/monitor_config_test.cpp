@@ -66,5 +66,27 @@ TEST(MonitorConfig, IdentificationErrorsNameTheField) {
   EXPECT_NE(typo.find("enable"), std::string::npos) << typo;
 }
 
+// identification.cpu_budget: a fraction of one core in (0, 1], round-tripped; anything else is an
+// error naming the key and the range.
+TEST(MonitorConfig, CpuBudgetIsAFractionOfOneCore) {
+  const MonitorConfig d = monitor_config_from_json(nlohmann::json::object());
+  EXPECT_GT(d.identification.cpu_budget, 0.0);
+  EXPECT_LE(d.identification.cpu_budget, 0.05);  // the daemon's 5 % of a core, all told
+  for (const double ok : {1e-4, 0.5, 1.0}) {
+    nlohmann::json j = {{"identification", {{"cpu_budget", ok}}}};
+    const MonitorConfig c = monitor_config_from_json(j);
+    EXPECT_DOUBLE_EQ(c.identification.cpu_budget, ok);
+    EXPECT_DOUBLE_EQ(to_json(c)["identification"]["cpu_budget"].get<double>(), ok);
+  }
+  for (const nlohmann::json& bad : {nlohmann::json(0.0), nlohmann::json(-0.1), nlohmann::json(1.5),
+                                    nlohmann::json("2 %"), nlohmann::json(nullptr)}) {
+    const std::string e = error_of({{"identification", {{"cpu_budget", bad}}}});
+    EXPECT_NE(e.find("config.identification.cpu_budget"), std::string::npos)
+        << bad.dump() << ": " << e;
+  }
+  EXPECT_NE(error_of({{"identification", {{"cpu_budget", 0.0}}}}).find("(0, 1]"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
