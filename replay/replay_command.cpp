@@ -35,6 +35,7 @@
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
 #include "shell/progress_line.hpp"
+#include "shell/read_ahead_source.hpp"
 #include "shell/recording_source.hpp"
 #include "shell/run_plots.hpp"
 #include "shell/run_recorder.hpp"
@@ -108,7 +109,9 @@ int replay_one(const ReplayOptions& o) {
       spdlog::warn("{}: more bad {} follow; counted in the summary", input.string(), unit);
     }
   };
-  std::unique_ptr<RecordingSource> source = open_recording(input, ro);
+  // Read on a second thread, a few blocks ahead: parsing overlaps the pipeline.
+  const auto block_samples = static_cast<std::size_t>(o.block_samples);
+  std::unique_ptr<RecordingSource> source = open_recording_read_ahead(input, ro, block_samples);
   spdlog::info("{}: {}", input.string(), source->description());
   take_recording_rate(loaded, *source, input.string());
   monitor::MonitorConfig config = parse_monitor_config(loaded);
@@ -151,7 +154,6 @@ int replay_one(const ReplayOptions& o) {
   double in_plane_sum_sq = 0.0;
   double in_plane_max = 0.0;
   std::int64_t in_plane_samples = 0;
-  const auto block_samples = static_cast<std::size_t>(o.block_samples);
   while (!g_stop) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
