@@ -1,6 +1,6 @@
 #include "shell/read_ahead_source.hpp"
 
-#include <array>
+#include <algorithm>
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
@@ -39,6 +39,7 @@ class ReadAheadSource : public RecordingSource {
     rate_stated_ = source_->rate_stated();
     bad_records_ = source_->bad_records();
     progress_ = source_->progress();
+    slots_.resize(slot_count(max_samples));
     for (Slot& s : slots_) {
       s.fx.reserve(max_samples);
       s.fy.reserve(max_samples);
@@ -70,9 +71,9 @@ class ReadAheadSource : public RecordingSource {
     std::unique_lock lock(mutex_);
     if (holding_) {  // the block returned last is done with: its slot can be read into
       holding_ = false;
-      head_ = (head_ + 1) % kSlots;
+      head_ = (head_ + 1) % slots_.size();
       --filled_;
-      if (reader_waiting_ && filled_ <= kSlots / 2) {
+      if (reader_waiting_ && filled_ <= slots_.size() / 2) {
         space_.notify_one();
       }
     }
@@ -120,22 +121,25 @@ class ReadAheadSource : public RecordingSource {
     bool end = false;  // no block: the recording ends here
     std::exception_ptr error;
   };
-  static constexpr std::size_t kSlots = 16;
+  /// Up to 16 blocks ahead, and at most ~64 Ki samples (--block 65536: two blocks, 3 MiB).
+  static std::size_t slot_count(std::size_t max_samples) {
+    return std::clamp<std::size_t>(std::size_t{65536} / max_samples, 2, 16);
+  }
 
   /// The reading thread: fills the free slots in order until the recording ends or fails.
   void read() {
     while (true) {
       std::unique_lock lock(mutex_);
-      // Once the slots are full, wait for half of them to be free: one wake-up per 8 blocks.
-      if (filled_ == kSlots) {
+      // Once the slots are full, wait for half of them to be free: one wake-up per half.
+      if (filled_ == slots_.size()) {
         reader_waiting_ = true;
-        space_.wait(lock, [this] { return stop_ || filled_ <= kSlots / 2; });
+        space_.wait(lock, [this] { return stop_ || filled_ <= slots_.size() / 2; });
         reader_waiting_ = false;
       }
       if (stop_) {
         return;
       }
-      Slot& s = slots_[(head_ + filled_) % kSlots];
+      Slot& s = slots_[(head_ + filled_) % slots_.size()];
       lock.unlock();
       s.bad.clear();
       s.end = false;
@@ -171,7 +175,7 @@ class ReadAheadSource : public RecordingSource {
   OnBadRecord on_bad_;
   std::size_t max_samples_;
   std::unique_ptr<RecordingSource> source_;  // used by the reading thread once it runs
-  std::array<Slot, kSlots> slots_;
+  std::vector<Slot> slots_;
   Slot* filling_ = nullptr;  // the slot being read into (reading thread)
   // The caller's side.
   bool holding_ = false;  // slots_[head_] holds the block next() returned last

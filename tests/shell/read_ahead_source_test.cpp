@@ -116,6 +116,7 @@ TEST(ReadAheadSource, GivesTheSameBlocksAndReportsInTheSameOrder) {
   EXPECT_EQ(expected.back(), "end, 36 bad");
   EXPECT_EQ(ahead(100, -1, 64), expected);
   EXPECT_EQ(ahead(0, -1, 1), in_line(0, -1, 1));
+  EXPECT_EQ(ahead(30, -1, 40000), in_line(30, -1, 40000));  // large blocks: two slots
 }
 
 TEST(ReadAheadSource, AnErrorComesAfterTheBlocksBeforeIt) {
