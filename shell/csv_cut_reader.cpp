@@ -146,7 +146,9 @@ bool CsvCutReader::fill() {
     lines_end_ = 0;
     data_end_ = kept;
     if (buffer_.size() < kept + read_bytes_ + 1) {
-      buffer_.resize(kept + read_bytes_ + 1);  // once, unless a line is longer than a read
+      // Room for a read after a line of up to 4 KiB; a longer line doubles it.
+      buffer_.resize(
+          std::max(kept + read_bytes_ + 1, std::max(2 * buffer_.size(), read_bytes_ + 4096)));
     }
     if (at_end_) {
       if (kept == 0) {
