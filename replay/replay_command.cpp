@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -19,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <thread>
 #include <utility>
@@ -35,6 +37,7 @@
 #include "shell/monitor_run.hpp"
 #include "shell/output_file.hpp"
 #include "shell/progress_line.hpp"
+#include "shell/read_ahead_source.hpp"
 #include "shell/recording_source.hpp"
 #include "shell/run_plots.hpp"
 #include "shell/run_recorder.hpp"
@@ -108,7 +111,9 @@ int replay_one(const ReplayOptions& o) {
       spdlog::warn("{}: more bad {} follow; counted in the summary", input.string(), unit);
     }
   };
-  std::unique_ptr<RecordingSource> source = open_recording(input, ro);
+  // Read on a second thread, a few blocks ahead: parsing overlaps the pipeline.
+  const auto block_samples = static_cast<std::size_t>(o.block_samples);
+  std::unique_ptr<RecordingSource> source = open_recording_read_ahead(input, ro, block_samples);
   spdlog::info("{}: {}", input.string(), source->description());
   take_recording_rate(loaded, *source, input.string());
   monitor::MonitorConfig config = parse_monitor_config(loaded);
@@ -149,9 +154,8 @@ int replay_one(const ReplayOptions& o) {
   // The record's in-plane force √(Fx² + Fy²), in the model's frame and before any filter: what
   // the record holds even where no revolution can be measured (a campaign's first, light cuts).
   double in_plane_sum_sq = 0.0;
-  double in_plane_max = 0.0;
+  double in_plane_max_sq = 0.0;
   std::int64_t in_plane_samples = 0;
-  const auto block_samples = static_cast<std::size_t>(o.block_samples);
   while (!g_stop) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
@@ -174,13 +178,20 @@ int replay_one(const ReplayOptions& o) {
     if (recorder) {
       recorder->add_samples(block);
     }
-    for (std::size_t k = 0; k < block.fx_N.size(); ++k) {
-      const auto f = config.axis_map.to_model({block.fx_N[k], block.fy_N[k], block.fz_N[k]});
-      const double r2 = f[0] * f[0] + f[1] * f[1];
-      if (std::isfinite(r2)) {
-        in_plane_sum_sq += r2;
-        in_plane_max = std::max(in_plane_max, std::sqrt(r2));
-        ++in_plane_samples;
+    {
+      // The model's x and y are ± two of the channels: the signs do not change the squares.
+      const std::array<std::span<const double>, 3> channel = {block.fx_N, block.fy_N, block.fz_N};
+      const std::span<const double> x =
+          channel[static_cast<std::size_t>(config.axis_map.source[0])];
+      const std::span<const double> y =
+          channel[static_cast<std::size_t>(config.axis_map.source[1])];
+      for (std::size_t k = 0; k < x.size(); ++k) {
+        const double r2 = x[k] * x[k] + y[k] * y[k];
+        if (std::isfinite(r2)) {
+          in_plane_sum_sq += r2;
+          in_plane_max_sq = std::max(in_plane_max_sq, r2);  // √ once, at the end
+          ++in_plane_samples;
+        }
       }
     }
     run.process(block);
@@ -205,7 +216,7 @@ int replay_one(const ReplayOptions& o) {
       in_plane_samples > 0
           ? nlohmann::json{{"rms",
                             std::sqrt(in_plane_sum_sq / static_cast<double>(in_plane_samples))},
-                           {"max", in_plane_max}}
+                           {"max", std::sqrt(in_plane_max_sq)}}
           : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
   if (recorder) {
     recorder->commit();

@@ -18,12 +18,12 @@ namespace {
 
 constexpr const char* kHeader = "t_s,fx_N,fy_N,fz_N";
 
-/// Parses "a,b,c,d" into four doubles ("nan" and "inf" are numbers, found later as non-finite).
-const char* parse_row(const std::string& s, double* v) {
-  const char* p = s.data();
-  const char* end = s.data() + s.size();
+/// Parses the row "a,b,c,d" at `p` in place ("nan" and "inf" are numbers, found later as
+/// non-finite); on success leaves `p` at the row's '\n'. A '\n' follows `p` before `end`
+/// (CsvCutReader::fill), which is where every scan stops.
+const char* parse_row(const char*& p, const char* end, double* v) {
   for (int i = 0; i < 4; ++i) {
-    while (p < end && *p == ' ') {
+    while (*p == ' ') {
       ++p;
     }
     const auto r = read_decimal(p, end, v[i]);
@@ -33,17 +33,28 @@ const char* parse_row(const std::string& s, double* v) {
       return i == 0 ? "t_s is not a number" : "a force is not a number";
     }
     p = r.ptr;
-    while (p < end && *p == ' ') {
+    while (*p == ' ') {
       ++p;
     }
     if (i < 3) {
-      if (p == end || *p != ',') {
+      if (*p != ',') {
         return "fewer than 4 columns";
       }
       ++p;
     }
   }
-  return p == end ? nullptr : "more than 4 columns";
+  if (*p == '\r' && p[1] == '\n') {
+    ++p;  // CRLF
+  }
+  return *p == '\n' ? nullptr : "more than 4 columns";
+}
+
+/// The line [from, eol) without one '\r' at its end.
+std::string_view line_text(const char* from, const char* eol) {
+  if (eol > from && eol[-1] == '\r') {
+    --eol;
+  }
+  return {from, static_cast<std::size_t>(eol - from)};
 }
 
 /// Shortest text that reads back as `v`.
@@ -61,7 +72,9 @@ std::string at_line(double t_s, std::int64_t line) {
 
 CsvCutReader::CsvCutReader(const std::filesystem::path& path, double sample_rate_hz,
                            OnBadLine on_bad_line)
-    : sample_rate_hz_(sample_rate_hz), on_bad_line_(std::move(on_bad_line)) {
+    : sample_rate_hz_(sample_rate_hz),
+      on_bad_line_(std::move(on_bad_line)),
+      read_bytes_(kDefaultBufferBytes) {
   file_ = std::make_unique<std::ifstream>(path, std::ios::binary);
   if (!*file_) {
     throw std::runtime_error(path.string() + ": cannot read: " + std::strerror(errno));
@@ -71,26 +84,30 @@ CsvCutReader::CsvCutReader(const std::filesystem::path& path, double sample_rate
 }
 
 CsvCutReader::CsvCutReader(std::istream& in, const std::string& name, double sample_rate_hz,
-                           OnBadLine on_bad_line)
-    : in_(&in), sample_rate_hz_(sample_rate_hz), on_bad_line_(std::move(on_bad_line)) {
+                           OnBadLine on_bad_line, std::size_t buffer_bytes)
+    : in_(&in),
+      sample_rate_hz_(sample_rate_hz),
+      on_bad_line_(std::move(on_bad_line)),
+      read_bytes_(std::max<std::size_t>(buffer_bytes, 1)) {
   read_header(name);
 }
 
 CsvCutReader::CsvCutReader(std::istream& in, const TextLayout& layout, double sample_rate_hz,
-                           OnBadLine on_bad_line)
+                           OnBadLine on_bad_line, std::size_t buffer_bytes)
     : in_(&in),
       layout_(layout),
       sample_rate_hz_(sample_rate_hz),
       on_bad_line_(std::move(on_bad_line)),
-      line_(layout.header_lines) {
+      line_(layout.header_lines),
+      read_bytes_(std::max<std::size_t>(buffer_bytes, 1)) {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
     throw std::invalid_argument("CsvCutReader: the sample rate must be positive");
   }
 }
 
-std::string CsvCutReader::parse_mapped(double* v) {
+std::string CsvCutReader::parse_mapped(std::string_view line, double* v) {
   const TextLayout& l = layout_;
-  split_fields(text_, l.delimiter, fields_);
+  split_fields(line, l.delimiter, fields_);
   if (fields_.size() < static_cast<std::size_t>(l.needed_columns)) {
     return "fewer than " + std::to_string(l.needed_columns) + " columns";
   }
@@ -108,47 +125,61 @@ std::string CsvCutReader::parse_mapped(double* v) {
 }
 
 void CsvCutReader::read_header(const std::string& name) {
-  if (!read_line() || text_ != kHeader) {
-    throw std::runtime_error(name + ":1: header is \"" + text_.substr(0, 80) + "\"; expected \"" +
-                             kHeader + "\"");
+  std::string_view line;
+  if (!take_line(line) || line != kHeader) {
+    throw std::runtime_error(name + ":1: header is \"" + std::string(line.substr(0, 80)) +
+                             "\"; expected \"" + kHeader + "\"");
   }
 }
 
-bool CsvCutReader::read_line() {
-  // Lines come out of a large buffer refilled by whole reads (std::getline costs more than
-  // parsing the numbers).
-  text_.clear();
+bool CsvCutReader::fill() {
+  if (next_ < lines_end_) {
+    return true;
+  }
   while (true) {
-    const char* from = buffer_.data() + buffer_begin_;
-    const std::size_t available = buffer_end_ - buffer_begin_;
-    // memchr needs a valid pointer even for 0 bytes: the buffer is empty before the first read.
-    if (const auto* eol =
-            available == 0 ? nullptr : static_cast<const char*>(std::memchr(from, '\n', available));
-        eol != nullptr) {
-      text_.append(from, eol);
-      buffer_begin_ += static_cast<std::size_t>(eol - from) + 1;
-      break;
+    // The unfinished line [next_, data_end_) moves to the front; the read goes after it.
+    const std::size_t kept = data_end_ - next_;
+    if (kept > 0 && next_ > 0) {
+      std::memmove(buffer_.data(), buffer_.data() + next_, kept);
     }
-    if (available > 0) {
-      text_.append(from, available);  // a line longer than the buffer's rest: keep reading
+    next_ = 0;
+    lines_end_ = 0;
+    data_end_ = kept;
+    if (buffer_.size() < kept + read_bytes_ + 1) {
+      // Room for a read after a line of up to 4 KiB; a longer line doubles it.
+      buffer_.resize(
+          std::max(kept + read_bytes_ + 1, std::max(2 * buffer_.size(), read_bytes_ + 4096)));
     }
-    buffer_begin_ = buffer_end_ = 0;
     if (at_end_) {
-      if (text_.empty()) {
-        return false;  // nothing left (a last line without its end-of-line is still read)
+      if (kept == 0) {
+        return false;
       }
-      break;
+      buffer_[data_end_++] = '\n';  // a last line without its end-of-line
+      lines_end_ = data_end_;
+      return true;
     }
-    if (buffer_.empty()) {
-      buffer_.resize(kBufferBytes);
+    in_->read(buffer_.data() + kept, static_cast<std::streamsize>(read_bytes_));
+    const auto n = static_cast<std::size_t>(in_->gcount());
+    data_end_ += n;
+    at_end_ = n < read_bytes_;
+    // The kept bytes hold no '\n': the last one, if any, is in what was just read.
+    if (const void* eol = n == 0 ? nullptr : memrchr(buffer_.data() + kept, '\n', n);
+        eol != nullptr) {
+      lines_end_ = static_cast<std::size_t>(static_cast<const char*>(eol) - buffer_.data()) + 1;
+      return true;
     }
-    in_->read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-    buffer_end_ = static_cast<std::size_t>(in_->gcount());
-    at_end_ = buffer_end_ < buffer_.size();
   }
-  if (!text_.empty() && text_.back() == '\r') {
-    text_.pop_back();
+}
+
+bool CsvCutReader::take_line(std::string_view& line) {
+  if (!fill()) {
+    return false;
   }
+  const char* from = buffer_.data() + next_;
+  // Found: [next_, lines_end_) ends in '\n'.
+  const auto* eol = static_cast<const char*>(std::memchr(from, '\n', lines_end_ - next_));
+  next_ = static_cast<std::size_t>(eol - buffer_.data()) + 1;
+  line = line_text(from, eol);
   return true;
 }
 
@@ -161,25 +192,36 @@ void CsvCutReader::bad(std::int64_t line, const std::string& problem) {
 
 bool CsvCutReader::parse_next(Row& row) {
   double v[4] = {};
-  while (read_line()) {
+  while (fill()) {
     ++line_;
-    if (text_.empty()) {
-      continue;
-    }
-    if (layout_.format != TextFormat::kMillwatch) {
-      ++data_rows_;
-      if (const std::string problem = parse_mapped(v); !problem.empty()) {
-        bad(line_, problem + " in \"" + text_.substr(0, 60) + "\"");
+    std::string_view line;
+    if (layout_.format == TextFormat::kMillwatch) {
+      const char* from = buffer_.data() + next_;
+      const char* p = from;
+      if (const char* problem = parse_row(p, buffer_.data() + lines_end_, v); problem != nullptr) {
+        take_line(line);
+        if (!line.empty()) {  // an empty line is no row
+          bad(line_, std::string(problem) + " in \"" + std::string(line.substr(0, 60)) + "\"");
+        }
         continue;
       }
-    } else if (const char* problem = parse_row(text_, v); problem != nullptr) {
-      bad(line_, std::string(problem) + " in \"" + text_.substr(0, 60) + "\"");
-      continue;
+      next_ = static_cast<std::size_t>(p - buffer_.data()) + 1;
+      line = line_text(from, p);
+    } else {
+      take_line(line);
+      if (line.empty()) {
+        continue;
+      }
+      ++data_rows_;
+      if (const std::string problem = parse_mapped(line, v); !problem.empty()) {
+        bad(line_, problem + " in \"" + std::string(line.substr(0, 60)) + "\"");
+        continue;
+      }
     }
     if (!std::isfinite(v[0])) {
       const std::string_view time_text =
           layout_.format == TextFormat::kMillwatch
-              ? std::string_view(text_).substr(0, std::min<std::size_t>(text_.find(','), 30))
+              ? line.substr(0, std::min<std::size_t>(line.find(','), 30))
               : fields_[static_cast<std::size_t>(layout_.column[0])].substr(0, 30);
       bad(line_, layout_.label[0] + " is not finite (" + std::string(time_text) + ")");
       continue;

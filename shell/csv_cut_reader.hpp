@@ -22,6 +22,7 @@
 #include <istream>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/monitor/sample_block.hpp"
@@ -38,14 +39,18 @@ class CsvCutReader {
   /// Reads the file at `path`.
   /// @throws std::runtime_error "PATH: cannot read" or "PATH:1: header is ...; expected ...".
   CsvCutReader(const std::filesystem::path& path, double sample_rate_hz, OnBadLine on_bad_line);
+  /// Bytes read from the input at a time (a line longer than that grows the buffer).
+  static constexpr std::size_t kDefaultBufferBytes = std::size_t{1} << 20;
+
   /// Reads `in` (which must outlive the reader), named `name` in errors.
+  /// @param buffer_bytes bytes read at a time (> 0; the result does not depend on it)
   /// @throws std::runtime_error "NAME:1: header is ...; expected ...".
   CsvCutReader(std::istream& in, const std::string& name, double sample_rate_hz,
-               OnBadLine on_bad_line);
+               OnBadLine on_bad_line, std::size_t buffer_bytes = kDefaultBufferBytes);
   /// Reads `in` laid out as `layout` (read_text_layout() left it at the first sample row).
   /// @param sample_rate_hz the rate (> 0): the layout's, or the configuration's
   CsvCutReader(std::istream& in, const TextLayout& layout, double sample_rate_hz,
-               OnBadLine on_bad_line);
+               OnBadLine on_bad_line, std::size_t buffer_bytes = kDefaultBufferBytes);
   CsvCutReader(const CsvCutReader&) = delete;
   CsvCutReader& operator=(const CsvCutReader&) = delete;
 
@@ -64,15 +69,18 @@ class CsvCutReader {
   };
 
   void read_header(const std::string& name);
-  /// Reads one line without its end-of-line into text_; false at the end of the input.
-  bool read_line();
+  /// Makes [next_, lines_end_) hold at least one whole line, each ending in '\n' (a last line
+  /// without one is given it); false at the end of the input.
+  bool fill();
+  /// Takes the line at next_ (without its end-of-line and one '\r' before it); false at the end.
+  bool take_line(std::string_view& line);
   /// The next row of four numbers with a finite time in range; false at the end.
   bool parse_next(Row& row);
   /// The next row whose time is in order; false at the end.
   bool next_row(Row& row);
   void bad(std::int64_t line, const std::string& problem);
   /// A row of layout_ (not millwatch's) into t and forces; the problem, or empty.
-  std::string parse_mapped(double* v);
+  std::string parse_mapped(std::string_view line, double* v);
 
   std::unique_ptr<std::ifstream> file_;  // when reading a path
   std::istream* in_ = nullptr;
@@ -91,12 +99,14 @@ class CsvCutReader {
   bool pending_ = false;  // an accepted row that starts the next block
   Row pending_row_;
   std::vector<double> fx_, fy_, fz_;
-  std::string text_;
-  // read_line()'s buffer: bytes [buffer_begin_, buffer_end_) are read and not yet taken.
-  static constexpr std::size_t kBufferBytes = std::size_t{1} << 18;
+  // Rows are parsed in place in a large buffer refilled by whole reads: bytes [next_, data_end_)
+  // are read and not yet taken, [next_, lines_end_) of them whole lines (lines_end_ follows a
+  // '\n'). A line cut by the buffer's end is moved to its front before the next read.
+  std::size_t read_bytes_;
   std::vector<char> buffer_;
-  std::size_t buffer_begin_ = 0;
-  std::size_t buffer_end_ = 0;
+  std::size_t next_ = 0;
+  std::size_t lines_end_ = 0;
+  std::size_t data_end_ = 0;
   bool at_end_ = false;  // the input has nothing more to read
 };
 

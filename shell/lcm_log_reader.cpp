@@ -82,8 +82,11 @@ std::optional<monitor::SampleBlock> LcmLogReader::next() {
 bool LcmLogReader::read_event() {
   while (position_ + kHeaderBytes <= size_bytes_) {
     std::array<char, kHeaderBytes> header{};
-    file_->clear();
-    file_->seekg(position_);
+    if (stream_at_ != position_) {  // not where the last event ended: after damage, or the first
+      file_->clear();
+      file_->seekg(position_);
+    }
+    stream_at_ = -1;  // until a whole event is read
     file_->read(header.data(), kHeaderBytes);
     const auto channel_bytes = static_cast<std::int32_t>(big_endian(header.data() + 20, 4));
     const auto data_bytes = static_cast<std::int32_t>(big_endian(header.data() + 24, 4));
@@ -97,7 +100,7 @@ bool LcmLogReader::read_event() {
       file_->read(event_channel_.data(), channel_bytes);
       file_->read(reinterpret_cast<char*>(data_.data()), data_bytes);
       if (*file_) {
-        position_ = end;
+        position_ = stream_at_ = end;  // the next event is read on without a seek
         return true;
       }
     }

@@ -70,6 +70,9 @@ class LcmLogReader {
   std::istream* file_ = nullptr;
   std::int64_t size_bytes_ = 0;
   std::int64_t position_ = 0;  ///< byte offset of the next event
+  /// Where the stream is if known (after a whole event), else -1: events read in sequence need
+  /// no seek, which would drop the stream's buffer.
+  std::int64_t stream_at_ = -1;
   std::string event_channel_;
   std::vector<std::uint8_t> data_;
   force_block_t message_;

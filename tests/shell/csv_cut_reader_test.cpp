@@ -24,12 +24,14 @@ struct Read {
   std::vector<std::vector<double>> fx_N;                  // of each block
 };
 
-Read read(const std::string& text, std::size_t block = 1000) {
+Read read(const std::string& text, std::size_t block = 1000,
+          std::size_t buffer_bytes = CsvCutReader::kDefaultBufferBytes) {
   std::istringstream in(text);
   Read out;
-  CsvCutReader reader(in, "mem.csv", kRate_hz, [&](std::int64_t line, const std::string& p) {
-    out.bad.emplace_back(line, p);
-  });
+  CsvCutReader reader(
+      in, "mem.csv", kRate_hz,
+      [&](std::int64_t line, const std::string& p) { out.bad.emplace_back(line, p); },
+      buffer_bytes);
   for (auto b = reader.next(block); !b.fx_N.empty(); b = reader.next(block)) {
     out.utimes_us.push_back(b.utime_us);
     out.fx_N.emplace_back(b.fx_N.begin(), b.fx_N.end());
@@ -137,6 +139,28 @@ TEST(CsvCutReader, MalformedRowsAreReportedByLine) {
   EXPECT_EQ(r.bad[2].second, "fewer than 4 columns in \"0.00002,1,2\"");
   EXPECT_EQ(r.bad[3].first, 6);
   EXPECT_EQ(r.bad[3].second, "more than 4 columns in \"0.00002,1,2,3,4\"");
+}
+
+TEST(CsvCutReader, ReadsTheSameWhereverTheBufferEnds) {
+  // Reads of 1 to 70 bytes cut every number, every CRLF and the header somewhere; a line longer
+  // than the read (the bad one, 80 characters) spans several; the last line has no end-of-line.
+  const std::string long_bad = "0.00010," + std::string(72, '7');
+  const std::string text = "t_s,fx_N,fy_N,fz_N\r\n" + rows(0, 3) + "\r\n" +  // lines 2-5
+                           "0.00006,-3.25,1e-3,0.5\r\n" +                    // 6
+                           "0.00008,4,nan,0\n" + long_bad + "\n" +           // 7-8
+                           "\n\n" + rows(6, 9) + "0.00018,9.125,0,0";        // 9-14
+  for (std::size_t bytes = 1; bytes <= 70; ++bytes) {
+    SCOPED_TRACE("reads of " + std::to_string(bytes) + " bytes");
+    const Read r = read(text, 1000, bytes);
+    ASSERT_EQ(r.bad.size(), 1u);
+    EXPECT_EQ(r.bad[0].first, 8);
+    EXPECT_EQ(r.bad[0].second, "fewer than 4 columns in \"" + long_bad.substr(0, 60) + "\"");
+    ASSERT_EQ(r.utimes_us.size(), 2u);  // the bad line's sample is a gap
+    EXPECT_EQ(r.utimes_us[0], 0);
+    EXPECT_EQ(r.fx_N[0], (std::vector<double>{0, 1, 2, -3.25, 4}));
+    EXPECT_EQ(r.utimes_us[1], 120);
+    EXPECT_EQ(r.fx_N[1], (std::vector<double>{6, 7, 8, 9.125}));
+  }
 }
 
 }  // namespace
