@@ -553,12 +553,13 @@ void steady_state_allocates_nothing(const sim::Scenario& s) {
     ASSERT_EQ(p.status().state, "measuring");
     test::AllocationCounter counter;
     for (std::size_t i = half; i < r.t.size(); i += 1000) {
+      const std::size_t n = std::min<std::size_t>(1000, r.t.size() - i);
       SampleBlock b{std::llround(r.t[i] * 1e6),
                     0,
                     r.sample_rate_hz,
-                    std::span(r.fx).subspan(i, 1000),
-                    std::span(r.fy).subspan(i, 1000),
-                    std::span(r.fz).subspan(i, 1000)};
+                    std::span(r.fx).subspan(i, n),
+                    std::span(r.fy).subspan(i, n),
+                    std::span(r.fz).subspan(i, n)};
       p.process(b);
     }
     p.finish();
