@@ -264,6 +264,14 @@ MatFileCheck check_mat_file(const std::filesystem::path& path, std::int64_t max_
       return out;
     }
     const std::string where = "the element at byte " + std::to_string(offset) + ": ";
+    if (type == kMiMatrix && bytes % 8 != 0) {
+      // A matrix is padded to 8 bytes; matio takes the next element from the unpadded end, the
+      // check from the padded one: they would read different elements (found by
+      // fuzz_mat_cut_reader: a 196-byte matrix hid a 1.3 GB dimension tag from the check).
+      out.problem =
+          where + "a matrix of " + std::to_string(bytes) + " bytes, not padded to a multiple of 8";
+      return out;
+    }
     if (type == kMiMatrix) {
       window.resize(static_cast<std::size_t>(std::min<std::uint64_t>(bytes, kWindow)));
       in.read(reinterpret_cast<char*>(window.data()), static_cast<std::streamsize>(window.size()));

@@ -9,8 +9,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -413,6 +415,23 @@ TEST(MatCutReader, AVariableOfNoBytesIsRefused) {
             path.string() +
                 ": the element at byte 128: a variable of 0 bytes (no array flags, dimensions or "
                 "name)");
+}
+
+TEST(MatCutReader, AnUnpaddedMatrixIsRefused) {
+  // Found by fuzz_mat_cut_reader: a top-level matrix of 196 bytes (not a multiple of 8). matio
+  // reads the next element right after it, the check read it after the padding, so the check
+  // never saw the damaged dimension tag matio then trusted (it asked for 2.6 GB).
+  const fs::path path = test::fresh_temp_dir() / "unpadded.mat";
+  write_mat(path, MAT_FT_MAT5, three_vectors());
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::uint32_t size = 0;
+  std::memcpy(&size, bytes.data() + 132, 4);
+  ASSERT_EQ(size % 8, 0u);
+  size -= 4;  // the first matrix now ends 4 bytes before its padding
+  patch(path, 132, std::string(reinterpret_cast<const char*>(&size), 4));
+  EXPECT_EQ(error_of(path), path.string() + ": the element at byte 128: a matrix of " +
+                                std::to_string(size) + " bytes, not padded to a multiple of 8");
 }
 
 TEST(MatCutReader, AFileWithoutVariablesSaysSo) {
