@@ -273,6 +273,14 @@ void AlertEngine::examine(const RevolutionRecord& r) {
   add_to_block(f, rev, t);
 }
 
+void AlertEngine::expect_estimates(bool expected) {
+  estimates_expected_ = expected;
+  if (!expected && estimates_) {
+    estimates_ = false;  // back to the flute forces until the next window
+    runout_.streak = 0;  // counted in revolutions again
+  }
+}
+
 void AlertEngine::check_runout(const Flutes& f, std::int64_t rev, std::int64_t t) {
   const double limit = config_.runout_imbalance;
   const int persist = config_.persist_revolutions;

@@ -218,8 +218,10 @@ class AlertEngine {
     flush(sink);
   }
   /// Identification runs (identified windows will come): runout and wear drift wait for the
-  /// estimates instead of following the flute forces until the first window arrives.
-  void expect_estimates(bool expected = true) { estimates_expected_ = expected; }
+  /// estimates instead of following the flute forces until the first window arrives. With
+  /// `expected` false (estimates stopped coming: fits rejected, a worker that cannot keep up)
+  /// they follow the flute forces again, even after estimates came, until the next window.
+  void expect_estimates(bool expected = true);
   /// Forget the baselines (a new tool, a reconfiguration); active runout change, wear drift and
   /// breakage alerts are cleared at the next revolution.
   void rebaseline();

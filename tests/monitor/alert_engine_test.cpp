@@ -723,6 +723,32 @@ TEST(AlertEngine, ExpectedEstimatesSilenceTheImbalanceRunout) {
   EXPECT_EQ(without.count(AlertKind::kRunout, true), 1);
 }
 
+// Estimates that stop coming hand runout back to the flute forces: after one identified window
+// (runout 30 % of f_t) the 114 % imbalance raises nothing while estimates are followed; once the
+// pipeline says they stopped (expect_estimates(false)), the imbalance raises runout within its
+// persistence, and the next window takes over again (the imbalance is silent, no second alarm).
+TEST(AlertEngine, EstimatesThatStopComingHandRunoutBackToTheFluteForces) {
+  Feed run({}, 62);
+  run.engine.expect_estimates();
+  run.noisy(100, 2, {1.0, 1.0}, 0.01);
+  run.engine.on_identification(fitted(99, -0.9, 0.03, 1100.0, 8.0, 0.01),
+                               [&](const Alert& a) { run.alerts.push_back(a); });
+  run.noisy(1000, 2, {1.5, 0.5}, 0.01);
+  EXPECT_EQ(run.count(AlertKind::kRunout, true), 0);
+  run.engine.expect_estimates(false);
+  const std::int64_t stopped = run.next;
+  run.noisy(1000, 2, {1.5, 0.5}, 0.01);
+  ASSERT_EQ(run.count(AlertKind::kRunout, true), 1);
+  const Alert& raised = *run.first(AlertKind::kRunout);
+  EXPECT_EQ(raised.quantity, "flute_imbalance");
+  EXPECT_NEAR(raised.value, 1.0, 0.1);  // (1.5 − 0.5)/1
+  EXPECT_LE(raised.revolution, stopped + AlertConfig{}.persist_revolutions + 1);
+  run.engine.on_identification(fitted(run.next, -0.9, 0.03, 1100.0, 8.0, 0.01),
+                               [&](const Alert& a) { run.alerts.push_back(a); });
+  run.noisy(1000, 2, {1.5, 0.5}, 0.01);
+  EXPECT_EQ(run.count(AlertKind::kRunout, true), 1);
+}
+
 // Steady state: nothing is allocated per identified window either.
 TEST(AlertEngine, ExaminingAWindowAllocatesNothing) {
   std::vector<identify::IdentifiedWindow> windows;
