@@ -18,6 +18,7 @@
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
 #include "core/monitor/pipeline.hpp"
+#include "tests/support/realistic_cut.hpp"
 #include "tests/support/recording.hpp"
 
 namespace millwatch::identify {
@@ -79,34 +80,17 @@ struct Outcome {
 };
 
 Outcome identify_case(const Case& k) {
-  sim::Scenario s;
-  s.sample_rate_hz = 50000.0;
-  s.duration_s = 0.4;
-  s.seed = 9;
-  auto& m = s.model;
-  m = model::without_effects(m);
-  m.material.law = model::ForceLawKind::kLinearEdge;
-  m.tool.flutes = k.flutes;
-  m.tool.diameter_mm = k.diameter_mm;
-  m.process.operation = k.operation;
-  m.process.radial_depth_mm = k.radial_depth_mm;
-  m.process.feed_per_tooth_um = k.feed_um;
-  m.process.axial_depth_mm = 0.05;
-  model::set_effect(m, "runout", true);
-  m.effects.runout.offset_um = k.rho_um;
-  m.effects.runout.angle_rad = k.gamma_rad;
-  model::set_effect(m, "helix_lag", true);
-  model::set_effect(m, "dynamometer", true);
-  m.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
-  s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
-  s.noise.enabled = true;
-  s.noise.sigma_N = {0.015, 0.015, 0.015};
-  s.quantisation.enabled = true;
-  s.quantisation.bits = 16;
-  s.quantisation.range_N = {327.68, 327.68, 327.68};  // 0.01 N steps
-  // The truth, finer than the fitter: 0.125° and 20 discs.
-  m.resolution.steps_per_rev = 2880;
-  m.effects.helix_lag.discs = 20;
+  // The truth, finer than the fitter (0.125° and 20 discs).
+  const sim::Scenario s = test::realistic_cut({.duration_s = 0.4,
+                                               .seed = 9,
+                                               .flutes = k.flutes,
+                                               .diameter_mm = k.diameter_mm,
+                                               .operation = k.operation,
+                                               .radial_depth_mm = k.radial_depth_mm,
+                                               .feed_um = k.feed_um,
+                                               .rho_um = k.rho_um,
+                                               .gamma_rad = k.gamma_rad});
+  const model::ModelConfig& m = s.model;
 
   // What the monitor knows: the cut as commanded, coarser, runout unknown, coefficients off.
   monitor::MonitorConfig c = test::monitor_for(s);

@@ -15,6 +15,7 @@
 #include "core/model/periodic_response.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
 #include "tests/support/allocation_counter.hpp"
+#include "tests/support/helix_integral.hpp"
 
 namespace millwatch::model {
 namespace {
@@ -289,33 +290,6 @@ TEST(SteadyState, HelixDiscsConvergeToTheAnalyticIntegral) {
   c.effects.helix_lag.enabled = true;
   c.tool.helix_deg = 45.0;
   c.process.axial_depth_mm = 0.2;  // a large lag, β ≈ 57°
-  const double radius = c.tool.diameter_mm / 2;
-  const double t = c.process.axial_depth_mm * std::tan(c.tool.helix_deg * kPi / 180.0);
-  const double beta = std::acos((2 * radius * radius - t * t) / (2 * radius * radius));
-  const double kt = c.material.linear_edge.k_tc_N_per_mm2;
-  const double kn = c.material.linear_edge.k_nc_N_per_mm2;
-  const double ft_mm = c.process.feed_per_tooth_um * 1e-3;
-  auto integral_fx = [&](double a, double b) {
-    a = std::max(a, 0.0);
-    b = std::min(b, kPi);
-    if (b <= a) {
-      return 0.0;
-    }
-    auto prim = [&](double x) {
-      return -ft_mm * (kt * std::sin(x) * std::sin(x) / 2 + kn * (x / 2 - std::sin(2 * x) / 4));
-    };
-    return prim(b) - prim(a);
-  };
-  auto analytic_fx = [&](double phi) {
-    double sum = 0.0;
-    for (int j = 0; j < 2; ++j) {
-      for (double wrap : {0.0, 2.0 * kPi, -2.0 * kPi}) {
-        const double top = phi - j * kPi + wrap;
-        sum += integral_fx(top - beta, top);
-      }
-    }
-    return c.process.axial_depth_mm / beta * sum;
-  };
   double previous_error = 1e9;
   SteadyStateWorkspace ws;
   for (int discs : {5, 10, 20, 40}) {
@@ -324,7 +298,7 @@ TEST(SteadyState, HelixDiscsConvergeToTheAnalyticIntegral) {
     double error = 0.0;
     double scale = 0.0;
     for (int k = 0; k < 720; ++k) {
-      const double exact = analytic_fx(2.0 * kPi * k / 720);
+      const double exact = test::helix_integral_fx_N(c, 2.0 * kPi * k / 720);
       error = std::max(error, std::fabs(st.mean.fx_N[static_cast<std::size_t>(k)] - exact));
       scale = std::max(scale, std::fabs(exact));
     }

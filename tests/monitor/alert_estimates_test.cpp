@@ -17,6 +17,7 @@
 #include "core/model/model_config.hpp"
 #include "core/monitor/alert_engine.hpp"
 #include "tests/support/identified_cut.hpp"
+#include "tests/support/realistic_cut.hpp"
 #include "tests/support/recording.hpp"
 
 namespace millwatch::monitor {
@@ -25,34 +26,15 @@ namespace {
 /// A slot cut with the linear-edge law, runout and helix, measured through the whole chain.
 sim::Scenario fine_cut(double duration_s, int flutes, double diameter_mm, double feed_um,
                        double rho_um, double gamma_rad) {
-  sim::Scenario s;
-  s.sample_rate_hz = 50000.0;
-  s.duration_s = duration_s;
-  s.seed = 17;
-  auto& m = s.model;
-  m = model::without_effects(m);
-  m.material.law = model::ForceLawKind::kLinearEdge;
-  m.tool.flutes = flutes;
-  m.tool.diameter_mm = diameter_mm;
-  m.process.radial_depth_mm = diameter_mm;
-  m.process.feed_per_tooth_um = feed_um;
-  m.process.axial_depth_mm = 0.05;
-  model::set_effect(m, "runout", true);
-  m.effects.runout.offset_um = rho_um;
-  m.effects.runout.angle_rad = gamma_rad;
-  model::set_effect(m, "helix_lag", true);
-  model::set_effect(m, "dynamometer", true);
-  m.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
-  s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
-  s.noise.enabled = true;
-  s.noise.sigma_N = {0.015, 0.015, 0.015};
-  s.quantisation.enabled = true;
-  s.quantisation.bits = 16;
-  s.quantisation.range_N = {327.68, 327.68, 327.68};  // 0.01 N steps
-  // The truth, finer than the monitor's model: 0.125° and 20 discs.
-  m.resolution.steps_per_rev = 2880;
-  m.effects.helix_lag.discs = 20;
-  return s;
+  return test::realistic_cut({.duration_s = duration_s,
+                              .seed = 17,
+                              .flutes = flutes,
+                              .diameter_mm = diameter_mm,
+                              .operation = model::Operation::kSlot,
+                              .radial_depth_mm = diameter_mm,
+                              .feed_um = feed_um,
+                              .rho_um = rho_um,
+                              .gamma_rad = gamma_rad});
 }
 
 /// What the monitor knows: the cut as commanded, coarser, runout unknown.
