@@ -105,17 +105,12 @@ void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
   const std::int64_t first = std::max(from, ring.oldest());
   const std::int64_t last = std::min(to, ring.newest());
   if (last >= first) {
-    sync.add_run(
+    // The spindle angle within this turn, in bins: the map is a line.
+    const double bins_per_rad = sync.bins() / kTwoPi;
+    sync.add_line(
         static_cast<std::size_t>(last - first + 1),
-        [&](std::size_t i) {
-          const double a = map.at(static_cast<double>(first + static_cast<std::int64_t>(i))) -
-                           turn_rad;  // within a revolution of [0, 2π)
-          if (a >= 0.0 && a < kTwoPi) {
-            return a;
-          }
-          return a >= kTwoPi && a < 2.0 * kTwoPi ? a - kTwoPi : a - kTwoPi * std::floor(a / kTwoPi);
-        },
-        [&](std::size_t i) {
+        (map.at(static_cast<double>(first)) - turn_rad) * bins_per_rad,
+        map.slope_rad_per_sample * bins_per_rad, [&](std::size_t i) {
           const double* v = ring.row(first + static_cast<std::int64_t>(i));
           return std::array<double, SyncAverage::kChannels>{v[0], v[1], v[2], std::sqrt(v[3])};
         });

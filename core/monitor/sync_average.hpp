@@ -4,6 +4,7 @@
 // between its two neighbouring bins in proportion to its angle, so a grid finer than the
 // samples of one revolution still fills in over several revolutions.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -52,6 +53,45 @@ class SyncAverage {
       hi[kChannels] += w;
     }
     flush_run(k0, lo, hi);
+  }
+  /// Adds `count` samples on a line of positions: sample i at bin position first_bin +
+  /// i·bins_per_sample (any real, taken modulo bins(); 0 ≤ bins_per_sample < bins()) with
+  /// values(i). The same sums as add_run(); when the samples are sparser than the bins (each
+  /// in bins of its own) each goes straight to its two bins, its position advanced by a step
+  /// instead of an angle wrapped per sample.
+  template <typename Values>
+  void add_line(std::size_t count, double first_bin, double bins_per_sample, const Values& values) {
+    const auto grid = static_cast<double>(bins_);
+    if (!(bins_per_sample >= 1.0 && bins_per_sample < grid)) {
+      add_run(
+          count,
+          [&](std::size_t i) {
+            const double pos = first_bin + bins_per_sample * static_cast<double>(i);
+            return (pos - grid * std::floor(pos / grid)) / bins_per_rad_;
+          },
+          values);
+      return;
+    }
+    const double start = first_bin - grid * std::floor(first_bin / grid);  // [0, bins)
+    double wrapped = 0.0;  // whole turns of the grid passed, in bins
+    for (std::size_t i = 0; i < count; ++i) {
+      double pos = start + bins_per_sample * static_cast<double>(i) - wrapped;
+      if (pos >= grid) {
+        wrapped += grid;
+        pos -= grid;
+      }
+      const int k = std::min(static_cast<int>(pos), bins_ - 1);
+      const double w = pos - k;
+      double* a = &sums_[index(slot_, 0, k)];
+      double* b = &sums_[index(slot_, 0, k + 1 == bins_ ? 0 : k + 1)];
+      const std::array<double, kChannels> v = values(i);
+      for (std::size_t c = 0; c < static_cast<std::size_t>(kChannels); ++c) {
+        a[c] += (1.0 - w) * v[c];
+        b[c] += w * v[c];
+      }
+      a[kChannels] += 1.0 - w;
+      b[kChannels] += w;
+    }
   }
   /// Closes the current revolution: it joins the window, the oldest leaves it.
   void end_revolution();

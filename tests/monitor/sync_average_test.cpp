@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -90,6 +91,36 @@ TEST(SyncAverage, FillsAFineGridOverSeveralRevolutions) {
         std::max(worst, std::fabs(out[static_cast<std::size_t>(k)] - std::sin(kTwoPi * k / 256)));
   }
   EXPECT_LT(worst, 0.02);
+}
+
+// A line of samples (add_line) gives the sums that adding them one by one at their wrapped
+// angles gives: samples sparser than the bins (2.15 bins apart, the pipeline's 50 kHz case) and
+// denser (0.97 apart, its 333.3 kHz case), a line starting below zero and crossing 2π.
+TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
+  for (const double bins_per_sample : {2.15, 0.97, 1.0}) {
+    SyncAverage line(256, 4);
+    SyncAverage one_by_one(256, 4);
+    const double first_bin = -3.7123;  // no sample on a bin (a weight of 1e-14 there)
+    const auto count = static_cast<std::size_t>(std::ceil(260.0 / bins_per_sample));
+    const auto values = [](std::size_t i) {
+      const double x = 0.01 * static_cast<double>(i);
+      return std::array<double, SyncAverage::kChannels>{std::sin(x), std::cos(x), x, 1.0 + x};
+    };
+    line.add_line(count, first_bin, bins_per_sample, values);
+    for (std::size_t i = 0; i < count; ++i) {
+      const double bin = first_bin + bins_per_sample * static_cast<double>(i);
+      const double wrapped = bin - 256.0 * std::floor(bin / 256.0);
+      one_by_one.add(kTwoPi * wrapped / 256.0, values(i));
+    }
+    line.end_revolution();
+    one_by_one.end_revolution();
+    for (int c = 0; c < SyncAverage::kChannels; ++c) {
+      for (int k = 0; k < 256; ++k) {
+        ASSERT_NEAR(line.average(c, k), one_by_one.average(c, k), 1e-9)
+            << bins_per_sample << " channel " << c << " bin " << k;
+      }
+    }
+  }
 }
 
 TEST(SyncAverage, AddingAndClosingAllocateNothing) {
