@@ -35,6 +35,9 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd")
+if(MILLWATCH_MATIO_PACKAGE)  # loaded with dlopen (shell/matio_library.hpp): not in shlibdeps
+  string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", ${MILLWATCH_MATIO_PACKAGE}")
+endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "gnuplot-nox, liblcm-bin, liblcm-java")  # plots; lcm-logger, lcm-spy
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/postinst ${PROJECT_SOURCE_DIR}/packaging/prerm

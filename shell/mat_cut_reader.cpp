@@ -1,8 +1,5 @@
 #include "shell/mat_cut_reader.hpp"
 
-#include <H5public.h>
-#include <matio.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -18,6 +15,7 @@
 
 #include "core/monitor/input_check.hpp"
 #include "shell/mat_file_check.hpp"
+#include "shell/matio_library.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -39,8 +37,11 @@ void quiet_matio() {
     // abbreviations after our error. Only read here, so nothing needs HDF5's cleanup. It must
     // come before HDF5's first use (Mat_LogInitFunc is one: it turns HDF5's error printing off);
     // in a process that wrote a v7.3 file before, it comes too late and changes nothing.
-    H5dont_atexit();
-    Mat_LogInitFunc("millwatch", matio_log);
+    const MatioLibrary& m = matio_library();
+    if (m.hdf5_dont_atexit != nullptr) {
+      m.hdf5_dont_atexit();
+    }
+    m.log_init("millwatch", matio_log);
   });
 }
 
@@ -48,12 +49,12 @@ struct MatFile {
   mat_t* mat = nullptr;
   ~MatFile() {
     if (mat != nullptr) {
-      Mat_Close(mat);
+      matio_library().close(mat);
     }
   }
 };
 struct VarDeleter {
-  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+  void operator()(matvar_t* v) const { matio_library().free(v); }
 };
 using Var = std::unique_ptr<matvar_t, VarDeleter>;
 
@@ -230,18 +231,22 @@ class Reader {
  public:
   Reader(const fs::path& path, std::int64_t max_elements)
       : name_(path.string()), max_elements_(max_elements) {
-    quiet_matio();
+    try {
+      quiet_matio();
+    } catch (const std::runtime_error& e) {  // libmatio could not be loaded
+      throw std::runtime_error(name_ + ": " + e.what());
+    }
     const MatFileCheck check = check_mat_file(path, max_elements * 8);
     if (!check.problem.empty()) {
       throw std::runtime_error(name_ + ": " + check.problem);
     }
     g_matio_message.clear();
-    file_.mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
+    file_.mat = matio_library().open(path.c_str(), MAT_ACC_RDONLY);
     if (file_.mat == nullptr) {
       throw std::runtime_error(name_ + ": cannot read as a MATLAB .mat file" +
                                (g_matio_message.empty() ? "" : " (" + g_matio_message + ")"));
     }
-    switch (Mat_GetVersion(file_.mat)) {
+    switch (matio_library().version(file_.mat)) {
       case MAT_FT_MAT73:
         version_ = "v7.3";
         break;
@@ -253,7 +258,7 @@ class Reader {
     }
     // The variables' names, shapes and classes (no data read yet).
     for (int n = 0; n < 10000; ++n) {
-      Var v(Mat_VarReadNextInfo(file_.mat));
+      Var v(matio_library().read_next_info(file_.mat));
       if (!v) {
         break;
       }
@@ -267,7 +272,7 @@ class Reader {
         classes_.push_back(v->class_type);
       }
     }
-    Mat_Rewind(file_.mat);
+    matio_library().rewind(file_.mat);
     if (names_.empty()) {
       // matio opens a v7.3 file whose HDF5 structure cannot be read (H5Fopen fails) as one
       // without variables (found by fuzz_mat_cut_reader).
@@ -333,7 +338,7 @@ class Reader {
                                " elements)");
     }
     g_matio_message.clear();
-    Var whole(Mat_VarRead(file_.mat, variable.c_str()));
+    Var whole(matio_library().read(file_.mat, variable.c_str()));
     if (!whole) {
       throw std::runtime_error(name_ + ": variable " + variable + " cannot be read" +
                                (g_matio_message.empty() ? "" : " (" + g_matio_message + ")"));
@@ -349,7 +354,7 @@ class Reader {
         throw std::runtime_error(name_ + ": " + key + ": " + variable +
                                  " is a struct array; name a field of a 1×1 struct");
       }
-      v = Mat_VarGetStructFieldByName(whole.get(), s.field.c_str(), 0);
+      v = matio_library().struct_field(whole.get(), s.field.c_str(), 0);
       if (v == nullptr) {
         throw std::runtime_error(name_ + ": " + key + ": struct " + variable + " has no field " +
                                  s.field);
