@@ -20,9 +20,10 @@
 // At an even N the Nyquist harmonic k = N/2 is a real cosine (−1)ⁿ: a gain g acts on it as Re(g)
 // (the sampled output of cos(πn + arg g)·|g| is Re(g)·(−1)ⁿ).
 //
-// Set up once per period length (allocates FFTW buffers and plans, FFTW_ESTIMATE; plans are made
-// and destroyed under signal::fftw_planner_mutex(), so any thread may do it); apply() then
-// allocates nothing, takes no lock and may run in a real-time thread.
+// Set up once per period length (allocates FFTW buffers and plans: complex DFTs, FFTW_ESTIMATE,
+// ~0.6 ms for 720 points; plans are made and destroyed under signal::fftw_planner_mutex(), so any
+// thread may do it); apply() then allocates nothing, takes no lock and may run in a real-time
+// thread.
 // One object per thread (the buffers are the object's own).
 
 #include <complex>
@@ -103,8 +104,8 @@ class PeriodicResponse {
   void release();
 
   int samples_ = 0;
-  double* time_ = nullptr;                    // fftw_malloc'ed, N
-  std::complex<double>* spectrum_ = nullptr;  // fftw_malloc'ed, N/2 + 1 (fftw_complex layout)
+  std::complex<double>* time_ = nullptr;      // fftw_malloc'ed, N (fftw_complex layout)
+  std::complex<double>* spectrum_ = nullptr;  // fftw_malloc'ed, N
   std::complex<double>* gains_ = nullptr;     // N/2 + 1
   fftw_plan_s* forward_ = nullptr;
   fftw_plan_s* backward_ = nullptr;
