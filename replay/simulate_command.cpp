@@ -34,7 +34,7 @@ struct SimulateOptions {
   std::string output_csv;
   double duration_s = 0.0;
   long long seed = -1;
-  std::string summary_json;
+  std::string truth_json;  ///< "": beside the CSV, CUT.truth.json
 };
 
 nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simulator) {
@@ -75,8 +75,16 @@ nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simul
         {"cutting", cutting}}}};
 }
 
+/// The sidecar's truth: the truth without its per-revolution arrays (most of it: ~60 kB a
+/// second of cut, which every replay of the cut would read for nothing), and where they are.
+nlohmann::json truth_summary_json(nlohmann::json truth, const std::string& truth_file_name) {
+  truth.erase("revolutions");
+  truth["revolutions_file"] = truth_file_name;
+  return truth;
+}
+
 nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& simulator,
-                            const std::string& csv_name) {
+                            const nlohmann::json& truth_summary, const std::string& csv_name) {
   const nlohmann::json model = model::to_json(s.model);
   return {{"format", "millwatch-cut/1"},
           {"csv", csv_name},
@@ -96,13 +104,13 @@ nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& sim
             {"axis_map", signal::to_json(s.axis_map)},
             {"axis_map_meaning", "model[axis] = sign * column[channel]"}}},
           {"model", model},
-          {"truth", truth_json(s, simulator)},
+          {"truth", truth_summary},
           {"scenario", sim::to_json(s)}};
 }
 
 void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
                    const sim::ChannelStats& clean, const std::string& csv_path,
-                   const std::string& sidecar_path) {
+                   const std::string& sidecar_path, const std::string& truth_path) {
   const auto& m = s.model;
   const auto pitch = model::flute_pitch_angles_rad(m.tool);
   const auto& r = m.effects.runout;
@@ -130,8 +138,8 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
       "  force on tool   peak |Fxy| %.3f N; Fx [%.3f, %.3f] Fy [%.3f, %.3f] Fz [%.3f, %.3f] N\n",
       clean.peak_resultant_xy(), clean.min(0), clean.max(0), clean.min(1), clean.max(1),
       clean.min(2), clean.max(2));
-  std::printf("  wrote           %s\n                  %s\n", csv_path.c_str(),
-              sidecar_path.c_str());
+  std::printf("  wrote           %s\n                  %s\n                  %s\n",
+              csv_path.c_str(), sidecar_path.c_str(), truth_path.c_str());
 }
 
 int run_simulate(const SimulateOptions& o) {
@@ -157,6 +165,15 @@ int run_simulate(const SimulateOptions& o) {
   if (sidecar_path == csv_path) {
     sidecar_path += ".json";
   }
+  std::filesystem::path truth_path = o.truth_json;
+  if (truth_path.empty()) {
+    truth_path = csv_path;
+    truth_path.replace_extension(".truth.json");
+  }
+  if (truth_path == csv_path || truth_path == sidecar_path) {
+    spdlog::error("--truth-json {}: the CSV and its sidecar go there", truth_path.string());
+    return 2;
+  }
 
   g_interrupted = false;
   std::signal(SIGINT, on_interrupt);
@@ -165,6 +182,7 @@ int run_simulate(const SimulateOptions& o) {
     sim::CutSimulator simulator(scenario);
     OutputFile csv(csv_path);
     OutputFile sidecar(sidecar_path);
+    OutputFile truth_file(truth_path);
     std::fputs("t_s,fx_N,fy_N,fz_N\n", csv.stream());
     constexpr std::size_t kBlock = 4096;
     std::vector<double> t(kBlock), fx(kBlock), fy(kBlock), fz(kBlock);
@@ -181,17 +199,21 @@ int run_simulate(const SimulateOptions& o) {
       spdlog::error("interrupted: no output written");
       return 130;
     }
-    sidecar.write(sidecar_json(scenario, simulator, csv_path.filename().string()).dump(2) + "\n");
+    const nlohmann::json truth = truth_json(scenario, simulator);
+    truth_file.write(truth.dump(2) + "\n");
+    // The sidecar names the truth file relative to itself when they share a folder.
+    const std::string truth_name = truth_path.parent_path() == sidecar_path.parent_path()
+                                       ? truth_path.filename().string()
+                                       : std::filesystem::absolute(truth_path).string();
+    sidecar.write(sidecar_json(scenario, simulator, truth_summary_json(truth, truth_name),
+                               csv_path.filename().string())
+                      .dump(2) +
+                  "\n");
     csv.commit();
     sidecar.commit();
+    truth_file.commit();
     print_summary(scenario, simulator, simulator.clean_stats(), csv_path.string(),
-                  sidecar_path.string());
-    if (!o.summary_json.empty()) {
-      OutputFile summary(o.summary_json);
-      summary.write(
-          sidecar_json(scenario, simulator, csv_path.filename().string())["truth"].dump(2));
-      summary.commit();
-    }
+                  sidecar_path.string(), truth_path.string());
   } catch (const config::ConfigError& e) {
     spdlog::error("{}: {}", o.scenario_path, e.what());
     return 2;
@@ -219,7 +241,9 @@ void add_simulate_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", options->seed, "Override the noise seed")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--truth-json", options->summary_json, "Also write the truth block to this file");
+  cmd->add_option("--truth-json", options->truth_json,
+                  "Where the truth (per revolution: speed, chip load, runout, wear) goes "
+                  "(default: beside the CSV, CUT.truth.json)");
   cmd->callback([options] {
     const int rc = run_simulate(*options);
     if (rc != 0) {

@@ -49,7 +49,23 @@ TEST(SimulateCommand, WritesCsvAndSidecarForEveryPreset) {
     EXPECT_TRUE(j.contains("sample_rate_hz"));
     EXPECT_TRUE(j["material"].contains("law"));
     EXPECT_TRUE(j["force_sign_convention"].contains("axis_map"));
-    EXPECT_TRUE(j["truth"]["revolutions"].contains("spindle_rpm"));
+    // The truth per revolution in its own file, which the sidecar names (a replay reads the
+    // sidecar, not the truth).
+    EXPECT_FALSE(j["truth"].contains("revolutions"));
+    EXPECT_TRUE(j["truth"].contains("spindle_rpm_actual"));
+    ASSERT_EQ(j["truth"]["revolutions_file"], entry.path().stem().string() + ".truth.json");
+    std::ifstream tj(dir / j["truth"]["revolutions_file"].get<std::string>());
+    const auto truth = nlohmann::json::parse(tj);
+    EXPECT_EQ(truth["spindle_rpm_actual"], j["truth"]["spindle_rpm_actual"]);
+    const auto& rpm = truth["revolutions"]["spindle_rpm"];
+    ASSERT_FALSE(rpm.empty());
+    EXPECT_EQ(truth["revolutions"]["start_s"].size(), rpm.size());
+    // A revolution takes 60/rpm s: the starts (on samples) are that far apart.
+    if (rpm.size() >= 2) {
+      EXPECT_NEAR(truth["revolutions"]["start_s"][1].get<double>() -
+                      truth["revolutions"]["start_s"][0].get<double>(),
+                  60.0 / rpm[0].get<double>(), 1.0 / j["sample_rate_hz"].get<double>());
+    }
     EXPECT_EQ(
         j["samples"].get<long>() + 1,
         static_cast<long>(std::count(std::istreambuf_iterator<char>(std::ifstream(csv).rdbuf()),
