@@ -52,6 +52,19 @@ messaging::ChannelNames read_channels(ObjectReader r) {
   return c;
 }
 
+/// An LCM URL: "provider://..." (udpm://, memq://, file://, tcpq://); LCM itself only says
+/// "cannot open" at start.
+std::string read_url(ObjectReader& r, std::string_view key, const std::string& fallback) {
+  std::string url = r.string(key, fallback);
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos || scheme == 0) {
+    config::fail(r.path_of(key), "\"" + url +
+                                     "\" is not an LCM URL (provider://..., e.g. "
+                                     "udpm://239.255.76.67:7667?ttl=0)");
+  }
+  return url;
+}
+
 }  // namespace
 
 DaemonConfig daemon_config_from_json(const nlohmann::json& j) {
@@ -61,7 +74,8 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j) {
   c.source = read_source(r.object("source"), c.monitor.saturation_N);
   {
     auto l = r.object("lcm");
-    c.lcm_url = l.string("url", c.lcm_url);
+    c.lcm_url = read_url(l, "url", c.lcm_url);
+    c.lcm_output_url = read_url(l, "output_url", c.lcm_output_url);
     c.channels = read_channels(l.object("channels"));
     l.finish();
   }

@@ -4,7 +4,8 @@
 //     "source": { "kind": "lcm", "channel": "MILLWATCH_FORCE_RAW", "max_block_samples": 4096 }
 //            or { "kind": "comedi", "device": "/dev/comedi0", "subdevice": -1,
 //                 "block_samples": 1000, "channels": [DaqChannelScaling x3] (fx, fy, fz) },
-//     "lcm": { "url": "udpm://239.255.76.67:7667?ttl=0", "channels": { ChannelNames } },
+//     "lcm": { "url": "udpm://239.255.76.67:7667?ttl=0",
+//              "output_url": "udpm://239.255.76.67:7668?ttl=0", "channels": { ChannelNames } },
 //     "status_period_s": 1.0,
 //     "log_level": "info" }
 
@@ -33,7 +34,13 @@ struct SourceConfig {
 struct DaemonConfig {
   monitor::MonitorConfig monitor;
   SourceConfig source;
+  /// Where the raw blocks come in (an LCM source).
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  /// Where the results go. Its own port by default: every socket on a udpm group and port
+  /// receives every datagram sent there, so with one URL the daemon's LCM receive thread would
+  /// also read back its own ~1,300 output messages a second (and a subscriber to the results,
+  /// the raw stream's 8 MB/s).
+  std::string lcm_output_url = "udpm://239.255.76.67:7668?ttl=0";
   messaging::ChannelNames channels;
   double status_period_s = 1.0;
   std::string log_level = "info";

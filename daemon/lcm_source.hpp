@@ -1,14 +1,13 @@
 #pragma once
-// Live source (c): raw sample blocks published on an LCM channel by a DAQ bridge. The LCM
-// thread checks each message before decoding it (msgs/force_block_check.hpp: one malformed
-// datagram must neither crash the daemon nor make it allocate what its count asks for), decodes
-// it and copies it into the block queue's free slot (the one copy on the way to the pipeline,
-// which reads the slot in place); what is not a whole force_block_t, has more samples
-// than source.max_block_samples or finds the queue full is dropped and counted (never the
-// daemon).
-// Subscribed through LCM's C interface: the C++ one builds a std::string of the channel name for
-// every message (a heap allocation for a name of more than 15 characters, as
-// MILLWATCH_FORCE_RAW): in steady state a block costs no allocation here.
+// Live source (c): raw sample blocks published on an LCM channel by a DAQ bridge. The thread
+// that runs the LCM instance's handle() (millwatchd's sample thread) checks each message before
+// decoding it (msgs/force_block_check.hpp: one malformed datagram must neither crash the daemon nor
+// make it allocate what its count asks for), decodes it and copies it into the block queue's free
+// slot (the one copy on the way to the pipeline, which reads the slot in place); what is not a
+// whole force_block_t, has more samples than source.max_block_samples or finds the queue full is
+// dropped and counted (never the daemon). Subscribed through LCM's C interface: the C++ one builds
+// a std::string of the channel name for every message (a heap allocation for a name of more than 15
+// characters, as MILLWATCH_FORCE_RAW): in steady state a block costs no allocation here.
 
 #include <atomic>
 #include <cstdint>

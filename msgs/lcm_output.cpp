@@ -1,5 +1,7 @@
 #include "msgs/lcm_output.hpp"
 
+#include <pthread.h>
+
 #include <chrono>
 #include <numbers>
 
@@ -21,11 +23,20 @@ LcmOutput::~LcmOutput() {
   thread_.join();
 }
 
+void LcmOutput::wake_if_asleep() {
+  // Pairs with the fence in run(): either the publisher sees what was just queued, or this sees
+  // it asleep and wakes it.
+  std::atomic_thread_fence(std::memory_order_seq_cst);
+  if (asleep_.load(std::memory_order_relaxed)) {
+    signal_.fetch_add(1, std::memory_order_release);
+    signal_.notify_one();
+  }
+}
+
 void LcmOutput::enqueue(const Item& item) {
   if (queue_.try_push(item)) {
     queued_.fetch_add(1);
-    signal_.fetch_add(1, std::memory_order_release);
-    signal_.notify_one();
+    wake_if_asleep();
   } else {
     dropped_.fetch_add(1);
   }
@@ -84,8 +95,7 @@ void LcmOutput::on_sync_average(const monitor::SyncAverage& measured,
   }
   if (sync_queue_.try_push(s)) {
     queued_.fetch_add(1);
-    signal_.fetch_add(1, std::memory_order_release);
-    signal_.notify_one();
+    wake_if_asleep();
   } else {
     dropped_.fetch_add(1);
   }
@@ -94,35 +104,45 @@ void LcmOutput::on_sync_average(const monitor::SyncAverage& measured,
   }
 }
 
+template <class Message>
+bool LcmOutput::send(const std::string& channel, const Message& message) {
+  // Not lcm::LCM::publish: it allocates a buffer per message and ignores encode()'s result.
+  const int size = message.getEncodedSize();
+  if (size < 0) {
+    dropped_.fetch_add(1);
+    return false;
+  }
+  if (buffer_.size() < static_cast<std::size_t>(size)) {
+    buffer_.resize(static_cast<std::size_t>(size));
+  }
+  if (message.encode(buffer_.data(), 0, size) != size ||
+      lcm_publish(lcm_.getUnderlyingLCM(), channel.c_str(), buffer_.data(),
+                  static_cast<unsigned int>(size)) != 0) {
+    dropped_.fetch_add(1);
+    return false;
+  }
+  published_.fetch_add(1);
+  return true;
+}
+
 void LcmOutput::publish(const Item& item) {
   if (const auto* r = std::get_if<monitor::RevolutionRecord>(&item)) {
-    const tooth_periods2_t t = tooth_periods(*r);
-    const flute_peaks2_t p = flute_peaks(*r);
-    lcm_.publish(channels_.tooth_periods, &t);
-    lcm_.publish(channels_.flute_peaks, &p);
-    published_ += 2;
+    send(channels_.tooth_periods, tooth_periods(*r));
+    send(channels_.flute_peaks, flute_peaks(*r));
     if (r->model_valid) {
-      const model_residual_t m = model_residual(*r);
-      lcm_.publish(channels_.residual, &m);
-      ++published_;
+      send(channels_.residual, model_residual(*r));
     }
   } else if (const auto* u = std::get_if<monitor::SpindleUpdate>(&item)) {
-    const spindle_state2_t s = spindle_state(*u);
-    lcm_.publish(channels_.spindle, &s);
-    ++published_;
+    send(channels_.spindle, spindle_state(*u));
   } else if (const auto* a = std::get_if<monitor::Alert>(&item)) {
-    const tool_alert_t t = tool_alert(*a, ++alert_seq_);
-    lcm_.publish(channels_.alert, &t);
-    ++published_;
+    send(channels_.alert, tool_alert(*a, ++alert_seq_));
   } else if (const auto* st = std::get_if<monitor::PipelineStatus>(&item)) {
-    const pipeline_status2_t p =
-        pipeline_status(*st, ++status_seq_, published_.load(), dropped_.load());
-    lcm_.publish(channels_.status, &p);
-    ++published_;
+    send(channels_.status, pipeline_status(*st, ++status_seq_, published_.load(), dropped_.load()));
   }
 }
 
 void LcmOutput::run() {
+  pthread_setname_np(pthread_self(), "mw-publish");  // for top -H and scripts/daemon_load.sh
   Item item;
   SyncSnapshot snapshot;
   std::uint64_t seen = 0;
@@ -147,7 +167,7 @@ void LcmOutput::run() {
       burst = 0;
     }
     if (sync_queue_.try_pop(snapshot)) {
-      sync_average2_t s;
+      sync_average2_t& s = sync_message_;
       s.utime = snapshot.utime_us;
       s.revolution = snapshot.revolution;
       s.window_revolutions = snapshot.window_revolutions;
@@ -160,22 +180,26 @@ void LcmOutput::run() {
       s.model_fz_N.assign(snapshot.values[5].begin(), snapshot.values[5].begin() + n);
       s.num_bins = static_cast<std::int32_t>(s.fx_N.size());
       s.model_valid = snapshot.model_valid;
-      lcm_.publish(channels_.sync_average, &s);
-      ++published_;
+      send(channels_.sync_average, s);
       handled_.fetch_add(1);
       any = true;
     }
     if (any) {
+      // What comes in the next kPace goes out in one round, without a wake-up per output.
+      std::this_thread::sleep_for(kPace);
       continue;
     }
     if (stop_.load()) {
       return;
     }
-    // Sleep until the producer signals (or a short timeout, to notice a stop).
+    // Nothing to do: asleep until the producer signals (a stop or a drain signals too).
+    asleep_.store(true, std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_seq_cst);  // pairs with wake_if_asleep()
     const std::uint64_t now = signal_.load(std::memory_order_acquire);
-    if (now == seen) {
+    if (now == seen && queue_.empty() && sync_queue_.empty() && !stop_.load()) {
       signal_.wait(now, std::memory_order_acquire);
     }
+    asleep_.store(false, std::memory_order_relaxed);
     seen = signal_.load(std::memory_order_acquire);
   }
 }
