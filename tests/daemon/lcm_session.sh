@@ -8,6 +8,9 @@
 #              daemon.log
 #   logplayer  lcm-logplayer plays live.lcmlog's raw channel into a fresh millwatchd, stopped
 #              with SIGINT → played.json, played.log
+#   split      millwatchd takes its raw blocks on one URL and publishes on another
+#              (--lcm-output-url); a logger on each records what it hears while cut.lcmlog's raw
+#              channel is played → in.lcmlog, out.lcmlog, split.json, split.log
 #   reload     millwatchd starts on initial.json and gets part1.lcmlog, SIGHUP with good.json,
 #              SIGHUP with bad.json, garbage.lcmlog, part2.lcmlog (all played raw) while
 #              lcm-logger records → reload.lcmlog, reload.json, reload.log
@@ -21,9 +24,10 @@ trap 'kill -KILL $(jobs -p) 2>/dev/null' EXIT
 ip link set lo up
 ip route add 239.0.0.0/8 dev lo
 url="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
+out_url="udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304"
 
-start_daemon() {  # config, summary, log
-  "$MILLWATCH_DAEMON" -c "$1" --lcm-url "$url" --summary "$2" >"$3" 2>&1 &
+start_daemon() {  # config, summary, log, [options]
+  "$MILLWATCH_DAEMON" -c "$1" --lcm-url "$url" --summary "$2" "${@:4}" >"$3" 2>&1 &
   daemon=$!
   sleep 0.5  # subscribed and listening
 }
@@ -56,16 +60,17 @@ else
   logger_priority=(nice -n -5)
 fi
 
-start_logger() {  # log file
-  "${logger_priority[@]}" lcm-logger -q --lcm-url="$url" "$1" >logger.out 2>&1 &
+start_logger() {  # log file, [URL]
+  "${logger_priority[@]}" lcm-logger -q --lcm-url="${2:-$url}" "$1" >>logger.out 2>&1 &
   logger=$!
 }
 
-stop_logger() {
+stop_logger() {  # [pid]
+  local pid=${1:-$logger}
   sleep 1  # lcm-logger 1.3.1 can lose buffered events on a hard stop
-  kill -INT "$logger"
-  await_exit "$logger" 50 "lcm-logger did not stop within 5 s of SIGINT"
-  wait "$logger"
+  kill -INT "$pid"
+  await_exit "$pid" 50 "lcm-logger did not stop within 5 s of SIGINT"
+  wait "$pid"
   echo "logger exit $?"
 }
 
@@ -88,6 +93,16 @@ case "$mode" in
     start_daemon monitor.json played.json played.log
     play live.lcmlog
     stop_daemon INT
+    ;;
+  split)
+    start_logger out.lcmlog "$out_url"
+    out_logger=$logger
+    start_logger in.lcmlog
+    start_daemon monitor.json split.json split.log --lcm-output-url "$out_url"
+    play cut.lcmlog
+    stop_daemon TERM
+    stop_logger
+    stop_logger "$out_logger"
     ;;
   reload)
     cp initial.json reloadable.json

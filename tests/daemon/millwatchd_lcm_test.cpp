@@ -136,6 +136,43 @@ class MillwatchdSession : public ::testing::Test {
   fs::path dir_;
 };
 
+// Issue 10: with lcm.output_url (here --lcm-output-url) the results go to their own URL and the
+// input URL carries the raw blocks only — the daemon's LCM receive thread no longer reads back its
+// own outputs; every sample is still monitored and every result arrives where it was sent.
+TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
+  sim::Scenario s;
+  s.sample_rate_hz = 50000.0;
+  s.duration_s = 1.0;
+  s.spindle.actual_rpm = 25252.0;
+  test::write_force_log(dir_ / "cut.lcmlog", s, 250, 0, 200);
+  const auto r = session("split", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.output << read_text(dir_ / "split.log");
+  EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
+  const nlohmann::json summary = read_json(dir_ / "split.json");
+  ASSERT_FALSE(summary.is_null()) << read_text(dir_ / "split.log");
+  EXPECT_EQ(summary["samples"], 50000);
+  EXPECT_EQ(summary["dropped_samples"], 0);
+  const int revolutions = summary["revolutions"].get<int>();
+  EXPECT_GT(revolutions, 250);
+
+  const auto in = read_log(dir_ / "in.lcmlog");
+  EXPECT_EQ(events(in, "MILLWATCH_FORCE_RAW").size(), 200u);
+  for (const auto& [channel, e] : in) {  // LCM's own LCM_SELF_TEST aside
+    EXPECT_TRUE(channel == "MILLWATCH_FORCE_RAW" || channel == "LCM_SELF_TEST")
+        << channel << " on the input URL";
+  }
+  const auto out = read_log(dir_ / "out.lcmlog");
+  EXPECT_EQ(out.count("MILLWATCH_FORCE_RAW"), 0u);
+  const auto periods = decode_all<tooth_periods2_t>(events(out, "MILLWATCH_TOOTH_PERIODS"));
+  EXPECT_GE(periods.size(), static_cast<std::size_t>(0.95 * revolutions));
+  EXPECT_GE(decode_all<flute_peaks2_t>(events(out, "MILLWATCH_FLUTE_PEAKS")).size(),
+            static_cast<std::size_t>(0.95 * revolutions));
+  const auto status = decode_all<pipeline_status2_t>(events(out, "MILLWATCH_STATUS"));
+  ASSERT_FALSE(status.empty());
+  EXPECT_EQ(status.back().samples_in, 50000);  // the final status, published on SIGTERM
+  EXPECT_EQ(status.back().revolutions, revolutions);
+}
+
 // Issue 3 §3 and §5: lcm-logger records a live run's raw samples and the daemon's outputs; the
 // recorded outputs decode; replaying the recorded raw channel gives the live run's results.
 TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
@@ -492,6 +529,9 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
       {"unknown", "/monitor/filter/cutof_hz", 3300.0, "monitor.filter.cutof_hz: unknown key"},
       {"choice", "/source/kind", "serial", "source.kind"},
       {"url", "/lcm/url", 7, "lcm.url"},
+      {"output_url", "/lcm/output_url", 7, "lcm.output_url"},
+      {"output_url_form", "/lcm/output_url", "239.255.76.67:7668",
+       "lcm.output_url: \"239.255.76.67:7668\" is not an LCM URL"},
       {"max_block", "/source/max_block_samples", 5000,
        "source.max_block_samples: value 5000 is out of range [1, 4096]"},
       // A Comedi block must fit the queue's slots (4096 samples; 8192 used to be accepted).
