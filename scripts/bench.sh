@@ -11,7 +11,8 @@ cd "$(dirname "$0")/.."
 build=build/release
 out=build/bench
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" --target pipeline_benchmark model_benchmark millwatch >&2
+cmake --build "$build" --target pipeline_benchmark model_benchmark millwatch millwatchd \
+  daemon_feeder >&2
 mkdir -p "$out"
 for b in pipeline model; do
   echo "== ${b}_benchmark" >&2
@@ -85,3 +86,22 @@ print(f"{cpu}, one core, Release; C++ best of 3 repetitions (latency: the larges
       f" NumPy/SciPy best of {r['repeats']} (Python {r['python']}, NumPy {r['numpy']},"
       f" SciPy {r['scipy']}); × real time from CPU time, latency from the wall clock.")
 EOF
+# millwatchd itself over LCM (needs root for unshare -n; skipped, saying so, without it).
+if unshare -n true 2>/dev/null; then
+  echo "== millwatchd over LCM (scripts/daemon_load.sh)" >&2
+  scripts/daemon_load.sh --build "$build" >"$out/daemon_load.json"
+  /usr/bin/python3 - "$out/daemon_load.json" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1]))
+t = r["threads_percent_of_a_core"]
+share = lambda prefix: sum(v for k, v in t.items() if k.startswith(prefix))
+print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['seconds']:g} s): the process"
+      f" {r['process_percent_of_a_core']:.1f} % of a core (target < 5 %): the sample thread"
+      f" {share('mw-sample'):.1f} %, LCM's receive thread {share('mw-lcm-receive'):.1f} %, the"
+      f" publisher {share('mw-publish'):.1f} %, identification {share('mw-identify'):.1f} %"
+      f" ({r['windows_fitted']} window fitted, {r['windows_skipped_for_budget']} skipped for the"
+      f" budget); {r['dropped_samples']} samples dropped.")
+EOF
+else
+  echo "== millwatchd over LCM: skipped (unshare -n needs root)" >&2
+fi
