@@ -21,25 +21,45 @@ class SyncAverage {
 
   /// Adds one sample at spindle angle `angle_rad` ∈ [0, 2π) to the current revolution.
   void add(double angle_rad, const std::array<double, kChannels>& values);
-  /// Adds `count` samples to the current revolution, sample i at angle_rad(i) ∈ [0, 2π) with
-  /// values(i) (std::array<double, kChannels>): the same sums as add() sample by sample, with
-  /// the two bins a run of samples shares held in registers until the run moves on (the bins of
-  /// neighbouring samples are the same, and adding to memory one sample after the other would
-  /// wait on each store).
-  template <typename Angle, typename Values>
-  void add_run(std::size_t count, const Angle& angle_rad, const Values& values) {
+  /// Adds `count` samples to the current revolution on a line of positions: sample i at bin
+  /// position first_bin + i·bins_per_sample (any real, taken modulo bins()) with values(i)
+  /// (std::array<double, kChannels>): the same sums as add() sample by sample. The position
+  /// advances by a step, wrapped once a turn, instead of an angle wrapped per sample. Samples
+  /// sparser than the bins (each in bins of its own: 50 kHz) go straight to their two bins;
+  /// denser ones (a run sharing two bins: 333.3 kHz) are summed in registers until the run moves
+  /// on (adding to memory one sample after the other would wait on each store).
+  template <typename Values>
+  void add_line(std::size_t count, double first_bin, double bins_per_sample, const Values& values) {
+    const auto grid = static_cast<double>(bins_);
+    if (!(bins_per_sample >= 0.0 && bins_per_sample < grid)) {  // not a spindle's line: any
+      for (std::size_t i = 0; i < count; ++i) {
+        const double pos = first_bin + bins_per_sample * static_cast<double>(i);
+        add_at(pos - grid * std::floor(pos / grid), values(i));
+      }
+      return;
+    }
+    const double start = first_bin - grid * std::floor(first_bin / grid);  // [0, bins]
+    double wrapped = 0.0;  // whole turns of the grid passed, in bins
+    const auto position = [&](std::size_t i) {
+      double pos = start + bins_per_sample * static_cast<double>(i) - wrapped;
+      if (pos >= grid) {
+        wrapped += grid;
+        pos -= grid;
+      }
+      return pos;
+    };
+    if (bins_per_sample >= 1.0) {
+      for (std::size_t i = 0; i < count; ++i) {
+        add_at(position(i), values(i));
+      }
+      return;
+    }
     int k0 = -1;
     std::array<double, kChannels + 1> lo{}, hi{};
     for (std::size_t i = 0; i < count; ++i) {
-      const double pos = angle_rad(i) * bins_per_rad_;
-      const double whole =
-          pos >= 0.0 ? static_cast<double>(static_cast<int>(pos)) : std::floor(pos);
-      const double w = pos - whole;
-      int k = static_cast<int>(whole);
-      if (k >= bins_ || k < 0) {
-        k %= bins_;
-        k += k < 0 ? bins_ : 0;
-      }
+      const double pos = position(i);
+      const int k = std::min(static_cast<int>(pos), bins_ - 1);
+      const double w = pos - k;
       if (k != k0) {
         flush_run(k0, lo, hi);
         k0 = k;
@@ -53,45 +73,6 @@ class SyncAverage {
       hi[kChannels] += w;
     }
     flush_run(k0, lo, hi);
-  }
-  /// Adds `count` samples on a line of positions: sample i at bin position first_bin +
-  /// i·bins_per_sample (any real, taken modulo bins(); 0 ≤ bins_per_sample < bins()) with
-  /// values(i). The same sums as add_run(); when the samples are sparser than the bins (each
-  /// in bins of its own) each goes straight to its two bins, its position advanced by a step
-  /// instead of an angle wrapped per sample.
-  template <typename Values>
-  void add_line(std::size_t count, double first_bin, double bins_per_sample, const Values& values) {
-    const auto grid = static_cast<double>(bins_);
-    if (!(bins_per_sample >= 1.0 && bins_per_sample < grid)) {
-      add_run(
-          count,
-          [&](std::size_t i) {
-            const double pos = first_bin + bins_per_sample * static_cast<double>(i);
-            return (pos - grid * std::floor(pos / grid)) / bins_per_rad_;
-          },
-          values);
-      return;
-    }
-    const double start = first_bin - grid * std::floor(first_bin / grid);  // [0, bins)
-    double wrapped = 0.0;  // whole turns of the grid passed, in bins
-    for (std::size_t i = 0; i < count; ++i) {
-      double pos = start + bins_per_sample * static_cast<double>(i) - wrapped;
-      if (pos >= grid) {
-        wrapped += grid;
-        pos -= grid;
-      }
-      const int k = std::min(static_cast<int>(pos), bins_ - 1);
-      const double w = pos - k;
-      double* a = &sums_[index(slot_, 0, k)];
-      double* b = &sums_[index(slot_, 0, k + 1 == bins_ ? 0 : k + 1)];
-      const std::array<double, kChannels> v = values(i);
-      for (std::size_t c = 0; c < static_cast<std::size_t>(kChannels); ++c) {
-        a[c] += (1.0 - w) * v[c];
-        b[c] += w * v[c];
-      }
-      a[kChannels] += 1.0 - w;
-      b[kChannels] += w;
-    }
   }
   /// Closes the current revolution: it joins the window, the oldest leaves it.
   void end_revolution();
@@ -120,6 +101,19 @@ class SyncAverage {
       lo[c] = 0.0;
       hi[c] = 0.0;
     }
+  }
+  /// Adds one sample at bin position pos ∈ [0, bins] to its two bins.
+  void add_at(double pos, const std::array<double, kChannels>& v) {
+    const int k = std::min(static_cast<int>(pos), bins_ - 1);
+    const double w = pos - k;
+    double* a = &sums_[index(slot_, 0, k)];
+    double* b = &sums_[index(slot_, 0, k + 1 == bins_ ? 0 : k + 1)];
+    for (std::size_t c = 0; c < static_cast<std::size_t>(kChannels); ++c) {
+      a[c] += (1.0 - w) * v[c];
+      b[c] += w * v[c];
+    }
+    a[kChannels] += 1.0 - w;
+    b[kChannels] += w;
   }
   // Layout [slot][bin][channel]: a sample's two bins are two short contiguous runs.
   [[nodiscard]] std::size_t index(int slot, int channel, int bin) const {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -95,13 +96,15 @@ TEST(SyncAverage, FillsAFineGridOverSeveralRevolutions) {
 
 // A line of samples (add_line) gives the sums that adding them one by one at their wrapped
 // angles gives: samples sparser than the bins (2.15 bins apart, the pipeline's 50 kHz case) and
-// denser (0.97 apart, its 333.3 kHz case), a line starting below zero and crossing 2π.
+// denser (0.97 apart, its 333.3 kHz case; 0.31: runs of three or four in two bins), a line
+// starting below zero and crossing 2π; and lines no spindle makes (backwards, over a turn a step).
 TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
-  for (const double bins_per_sample : {2.15, 0.97, 1.0}) {
+  for (const double bins_per_sample : {2.15, 0.97, 1.0, 0.31, -0.8, 300.5}) {
     SyncAverage line(256, 4);
     SyncAverage one_by_one(256, 4);
     const double first_bin = -3.7123;  // no sample on a bin (a weight of 1e-14 there)
-    const auto count = static_cast<std::size_t>(std::ceil(260.0 / bins_per_sample));
+    const auto count = std::max<std::size_t>(
+        40, static_cast<std::size_t>(std::ceil(260.0 / std::fabs(bins_per_sample))));
     const auto values = [](std::size_t i) {
       const double x = 0.01 * static_cast<double>(i);
       return std::array<double, SyncAverage::kChannels>{std::sin(x), std::cos(x), x, 1.0 + x};

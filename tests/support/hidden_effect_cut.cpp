@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/sim/cut_simulator.hpp"
+#include "tests/support/realistic_cut.hpp"
 
 namespace millwatch::test {
 
@@ -21,14 +22,7 @@ sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, dou
   auto& m = s.model;
   m = model::without_effects(m);
   m.process.feed_per_tooth_um = 4.0;
-  s.noise.enabled = true;
-  s.noise.sigma_N = {0.015, 0.015, 0.015};
-  s.quantisation.enabled = true;
-  s.quantisation.bits = 16;
-  s.quantisation.range_N = {327.68, 327.68, 327.68};  // 0.01 N steps
-  // The truth is finer than the fitted model: 0.125° steps, 20 discs.
-  m.resolution.steps_per_rev = 2880;
-  m.effects.helix_lag.discs = 20;
+  measure_like_a_real_cut(s);  // noise, quantisation, a truth finer than the fitted model
   // The dynamometer's nominal resonance, as configured (the truth's differs when hidden).
   m.effects.dynamometer.natural_hz = {2145.0, 2192.0, 3000.0};
   for (const auto& h : hidden) {

@@ -23,14 +23,18 @@ sim::Scenario realistic_cut(const RealisticCut& k) {
   model::set_effect(m, "dynamometer", true);
   m.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
   s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
+  measure_like_a_real_cut(s);
+  return s;
+}
+
+void measure_like_a_real_cut(sim::Scenario& s) {
   s.noise.enabled = true;
   s.noise.sigma_N = {0.015, 0.015, 0.015};
   s.quantisation.enabled = true;
   s.quantisation.bits = 16;
   s.quantisation.range_N = {327.68, 327.68, 327.68};  // 0.01 N steps
-  m.resolution.steps_per_rev = 2880;
-  m.effects.helix_lag.discs = 20;
-  return s;
+  s.model.resolution.steps_per_rev = 2880;
+  s.model.effects.helix_lag.discs = 20;
 }
 
 }  // namespace millwatch::test
