@@ -20,9 +20,11 @@ if ((${#targets[@]} == 0)); then
 fi
 build=build/fuzz
 
+# Line tables only (-g1): enough for the sanitizers' reports, and a faster build.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
   -DCMAKE_CXX_COMPILER=clang++ -DMILLWATCH_FUZZ=ON -DMILLWATCH_BUILD_TESTS=OFF \
-  -DMILLWATCH_BUILD_BENCHMARKS=OFF >/dev/null
+  -DMILLWATCH_BUILD_BENCHMARKS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" \
+  "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" >/dev/null
 cmake --build "$build" -j "$(nproc)" --target fuzzers
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
