@@ -17,9 +17,10 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
-#include "core/sim/cut_simulator.hpp"
+#include "bench/benchmark_cut.hpp"
 #include "msgs/lcm_convert.hpp"
 
 namespace {
@@ -34,22 +35,10 @@ struct Recording {
   std::vector<double> fx_N, fy_N, fz_N;
 };
 
+/// BM_DaemonLoadRealTime's cut (bench/benchmark_cut.hpp), 3 s.
 Recording simulate() {
-  sim::Scenario s;
-  s.sample_rate_hz = kSampleRate_hz;
-  s.duration_s = 3.0;
-  s.spindle.actual_rpm = kSpindle_rpm;
-  s.noise.enabled = true;
-  s.quantisation.enabled = true;
-  sim::CutSimulator sim(s);
-  const auto n = static_cast<std::size_t>(sim.total_samples());
-  Recording r;
-  std::vector<double> t(n);
-  r.fx_N.resize(n);
-  r.fy_N.resize(n);
-  r.fz_N.resize(n);
-  sim.next_block(t, r.fx_N, r.fy_N, r.fz_N);
-  return r;
+  bench::BenchmarkCut c = bench::simulate_benchmark_cut(kSampleRate_hz, 3.0, kSpindle_rpm);
+  return {std::move(c.fx), std::move(c.fy), std::move(c.fz)};
 }
 
 /// The recording from `cache` (raw doubles: n, then fx, fy, fz), or simulated and written there.

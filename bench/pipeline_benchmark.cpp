@@ -11,36 +11,18 @@
 #include <thread>
 #include <vector>
 
+#include "bench/benchmark_cut.hpp"
 #include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
-#include "core/sim/cut_simulator.hpp"
 
 namespace {
 
 using namespace millwatch;
 
-struct Recording {
-  double sample_rate_hz = 0.0;
-  std::vector<double> t, fx, fy, fz;
-};
+using Recording = bench::BenchmarkCut;
 
 Recording make_recording(double sample_rate_hz, double duration_s, double rpm = 25252.0) {
-  sim::Scenario s;
-  s.sample_rate_hz = sample_rate_hz;
-  s.duration_s = duration_s;
-  s.spindle.actual_rpm = rpm;
-  s.noise.enabled = true;
-  s.quantisation.enabled = true;
-  sim::CutSimulator sim(s);
-  Recording r;
-  r.sample_rate_hz = sample_rate_hz;
-  const auto n = static_cast<std::size_t>(sim.total_samples());
-  r.t.resize(n);
-  r.fx.resize(n);
-  r.fy.resize(n);
-  r.fz.resize(n);
-  sim.next_block(r.t, r.fx, r.fy, r.fz);
-  return r;
+  return bench::simulate_benchmark_cut(sample_rate_hz, duration_s, rpm);
 }
 
 /// Measures the time from the last sample of a revolution (the block that completes it) to the
