@@ -18,6 +18,7 @@ SourceConfig read_source(ObjectReader r, std::array<double, 3>& saturation_N) {
   constexpr int kSlot = static_cast<int>(BlockSlot::kMaxSamples);
   s.block_samples = r.integer("block_samples", s.block_samples, 16, kSlot);
   s.max_block_samples = r.integer("max_block_samples", s.max_block_samples, 1, kSlot);
+  s.wake_period_s = r.number("wake_period_s", s.wake_period_s, config::closed(0.0, 0.1, "s"));
   const nlohmann::json& channels = r.raw("channels");
   if (s.kind == SourceConfig::Kind::kComedi) {
     if (!channels.is_array() || channels.size() != 3) {

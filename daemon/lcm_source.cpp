@@ -36,8 +36,16 @@ void LcmSource::receive(const lcm_recv_buf_t* rbuf, const char* /*channel*/, voi
 void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   const std::string& channel = channel_;
   const std::int64_t number = ++counters_.messages;
+  // Decoded straight into the queue's free slot (no message object in between); a message that
+  // does not pass the check leaves the slot unpublished, for the next one.
+  BlockSlot* slot = queue_.claim();
+  messaging::ForceBlockHeader header;
   const messaging::ForceBlockCheck c =
-      messaging::decode_force_block(rbuf.data, rbuf.data_size, max_block_samples_, message_);
+      slot != nullptr
+          ? messaging::decode_force_block_into(rbuf.data, rbuf.data_size, max_block_samples_,
+                                               header, slot->fx.data(), slot->fy.data(),
+                                               slot->fz.data())
+          : messaging::check_force_block(rbuf.data, rbuf.data_size, max_block_samples_);
   if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
     // A whole block, only longer than we take: its samples are lost.
     const auto n = ++counters_.oversized;
@@ -61,17 +69,16 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
     }
     return;
   }
-  // The check makes all three arrays num_samples ≤ max_block_samples_ ≤ the slot's size long.
-  // Copied once, from the decoded message straight into the queue's free slot.
-  const std::size_t n = message_.fx_N.size();
-  BlockSlot* slot = queue_.claim();
   if (slot == nullptr) {
     ++counters_.queue_full;
-    counters_.samples_dropped += static_cast<std::int64_t>(n);
+    counters_.samples_dropped += c.num_samples;
     return;
   }
-  slot->assign(message_.utime, message_.seq, message_.sample_rate_hz, message_.fx_N.data(),
-               message_.fy_N.data(), message_.fz_N.data(), n);
+  // The check made num_samples ≤ max_block_samples_ ≤ the slot's size.
+  slot->utime_us = header.utime;
+  slot->seq = header.seq;
+  slot->sample_rate_hz = header.sample_rate_hz;
+  slot->count = header.num_samples;
   queue_.publish();
 }
 

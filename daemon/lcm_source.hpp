@@ -2,7 +2,7 @@
 // Live source (c): raw sample blocks published on an LCM channel by a DAQ bridge. The thread
 // that runs the LCM instance's handle() (millwatchd's sample thread) checks each message before
 // decoding it (msgs/force_block_check.hpp: one malformed datagram must neither crash the daemon nor
-// make it allocate what its count asks for), decodes it and copies it into the block queue's free
+// make it allocate what its count asks for) and decodes it straight into the block queue's free
 // slot (the one copy on the way to the pipeline, which reads the slot in place); what is not a
 // whole force_block_t, has more samples than source.max_block_samples or finds the queue full is
 // dropped and counted (never the daemon). Subscribed through LCM's C interface: the C++ one builds
@@ -15,7 +15,6 @@
 #include <string>
 
 #include "daemon/block_queue.hpp"
-#include "millwatch/force_block_t.hpp"
 
 namespace millwatch::daemon {
 
@@ -47,7 +46,6 @@ class LcmSource {
   std::int64_t max_block_samples_;
   BlockQueue& queue_;
   SourceCounters& counters_;
-  force_block_t message_;  // decoded here (LCM thread); its arrays keep their capacity
 };
 
 }  // namespace millwatch::daemon

@@ -109,6 +109,7 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
   note(a.subdevice != b.subdevice, "source.subdevice");
   note(a.block_samples != b.block_samples, "source.block_samples");
   note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
+  note(a.wake_period_s != b.wake_period_s, "source.wake_period_s");
   bool channels_differ = false;
   for (std::size_t i = 0; i < a.channels.size(); ++i) {
     const auto& x = a.channels[i];
@@ -226,6 +227,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   }
 
   const auto started = std::chrono::steady_clock::now();
+  const auto wake_period = std::chrono::duration<double>(config.source.wake_period_s);
   std::thread sample_thread([&] {
     pthread_setname_np(pthread_self(), "mw-sample");
     while (true) {
@@ -275,7 +277,12 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
       // Asleep until the source has a block; woken at least every 20 ms for the status, the
       // watchdog, a reload and the stop.
       if (lcm_source) {
-        lcm_in.handleTimeout(20);  // a block: decoded into the queue by LcmSource
+        if (lcm_in.handleTimeout(0) > 0) {
+          continue;  // the next block had come already: decoded into the queue by LcmSource
+        }
+        // None waiting: the next ones gather for a wake period, then come in one round.
+        std::this_thread::sleep_for(wake_period);
+        lcm_in.handleTimeout(20);
       } else {
         queue.wait(std::chrono::milliseconds(20));
       }

@@ -1,7 +1,9 @@
 #include "msgs/force_block_check.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstdio>
+#include <cstring>
 
 namespace millwatch::messaging {
 namespace {
@@ -62,6 +64,42 @@ ForceBlockCheck decode_force_block(const void* data, std::size_t size_bytes,
     if (used != static_cast<int>(size_bytes)) {  // cannot happen after the check
       c.problem = ForceBlockProblem::kWrongLength;
     }
+  }
+  return c;
+}
+
+namespace {
+
+double big_endian_double(const unsigned char* bytes) {
+  std::uint64_t v = 0;
+  std::memcpy(&v, bytes, sizeof v);
+  if constexpr (std::endian::native == std::endian::little) {
+    v = __builtin_bswap64(v);  // one instruction (the compiler vectorises the loops below)
+  }
+  return std::bit_cast<double>(v);
+}
+
+}  // namespace
+
+ForceBlockCheck decode_force_block_into(const void* data, std::size_t size_bytes,
+                                        std::int64_t max_samples, ForceBlockHeader& header,
+                                        double* fx, double* fy, double* fz) {
+  const ForceBlockCheck c = check_force_block(data, size_bytes, max_samples);
+  if (!c.ok()) {
+    return c;
+  }
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  header.utime = static_cast<std::int64_t>(big_endian(bytes + 8, 8));
+  header.seq = static_cast<std::int64_t>(big_endian(bytes + 16, 8));
+  header.sample_rate_hz = big_endian_double(bytes + 24);
+  header.num_samples = static_cast<std::size_t>(c.num_samples);
+  const std::size_t n = header.num_samples;
+  const unsigned char* samples = bytes + kForceBlockHeaderBytes;
+  for (double* axis : {fx, fy, fz}) {
+    for (std::size_t i = 0; i < n; ++i) {
+      axis[i] = big_endian_double(samples + 8 * i);
+    }
+    samples += 8 * n;
   }
   return c;
 }

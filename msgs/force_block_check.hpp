@@ -65,4 +65,19 @@ ForceBlockCheck check_force_block(const void* data, std::size_t size_bytes,
 ForceBlockCheck decode_force_block(const void* data, std::size_t size_bytes,
                                    std::int64_t max_samples, force_block_t& out);
 
+/// A force_block_t's fixed fields, as decode_force_block_into() gives them.
+struct ForceBlockHeader {
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  double sample_rate_hz = 0.0;
+  std::size_t num_samples = 0;
+};
+
+/// check_force_block(), then (only if it passed) decodes the fixed fields into `header` and the
+/// samples straight into `fx`, `fy`, `fz`, which hold at least `max_samples` each: no message
+/// object in between (the daemon decodes into its queue's slot). Untouched when it does not pass.
+ForceBlockCheck decode_force_block_into(const void* data, std::size_t size_bytes,
+                                        std::int64_t max_samples, ForceBlockHeader& header,
+                                        double* fx, double* fy, double* fz);
+
 }  // namespace millwatch::messaging

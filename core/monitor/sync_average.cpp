@@ -12,12 +12,15 @@ SyncAverage::SyncAverage(int bins, int window_revolutions)
   sums_.assign(
       static_cast<std::size_t>(window_ + 1) * (kChannels + 1) * static_cast<std::size_t>(bins_),
       0.0);
+  totals_.assign((kChannels + 1) * static_cast<std::size_t>(bins_), 0.0);
+  totals_stale_ = true;
 }
 
 void SyncAverage::clear() {
   std::fill(sums_.begin(), sums_.end(), 0.0);
   slot_ = 0;
   filled_ = 0;
+  totals_stale_ = true;
 }
 
 void SyncAverage::add(double angle_rad, const std::array<double, kChannels>& values) {
@@ -47,21 +50,30 @@ void SyncAverage::end_revolution() {
   const auto begin = sums_.begin() + static_cast<std::ptrdiff_t>(index(slot_, 0, 0));
   std::fill(begin, begin + static_cast<std::ptrdiff_t>((kChannels + 1) * bins_), 0.0);
   filled_ = std::min(filled_ + 1, window_);
+  totals_stale_ = true;
 }
 
-double SyncAverage::total(int channel, int bin) const {
-  double sum = 0.0;
+void SyncAverage::sum_window() const {
+  if (!totals_stale_) {
+    return;
+  }
+  const std::size_t size = totals_.size();
+  std::fill(totals_.begin(), totals_.end(), 0.0);
   for (int s = 0; s <= window_; ++s) {
     if (s != slot_) {
-      sum += sums_[index(s, channel, bin)];
+      const double* slot = &sums_[index(s, 0, 0)];
+      for (std::size_t i = 0; i < size; ++i) {
+        totals_[i] += slot[i];
+      }
     }
   }
-  return sum;
+  totals_stale_ = false;
 }
 
 double SyncAverage::average(int channel, int bin) const {
-  const double weight = total(kChannels, bin);
-  return weight > 0.0 ? total(channel, bin) / weight : 0.0;
+  sum_window();
+  const double* t = &totals_[static_cast<std::size_t>(bin) * (kChannels + 1)];
+  return t[kChannels] > 0.0 ? t[channel] / t[kChannels] : 0.0;
 }
 
 void SyncAverage::average(int channel, std::vector<double>& out) const {
@@ -71,7 +83,7 @@ void SyncAverage::average(int channel, std::vector<double>& out) const {
   }
   // Bins no sample has reached yet take their neighbours' mean.
   for (int k = 0; k < bins_; ++k) {
-    if (total(kChannels, k) <= 0.0) {
+    if (totals_[static_cast<std::size_t>(k) * (kChannels + 1) + kChannels] <= 0.0) {
       const int prev = (k + bins_ - 1) % bins_;
       const int next = (k + 1) % bins_;
       out[static_cast<std::size_t>(k)] =

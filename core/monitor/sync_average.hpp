@@ -86,7 +86,8 @@ class SyncAverage {
   void clear();
 
  private:
-  [[nodiscard]] double total(int channel, int bin) const;
+  /// The window's sums per bin (totals_), from the closed revolutions' slots, when they changed.
+  void sum_window() const;
   /// Adds a run's sums to bin k and the next one (nothing for k < 0), and zeroes them.
   void flush_run(int k, std::array<double, kChannels + 1>& lo,
                  std::array<double, kChannels + 1>& hi) {
@@ -131,6 +132,11 @@ class SyncAverage {
   // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled):
   // kChannels weighted sums and the weights, per bin.
   std::vector<double> sums_;
+  // The window's sums, [bin][channel], summed once after the window changed: averages are read
+  // a few times per window (a report, an alignment), each reading every bin of several
+  // channels. The slot being filled is not in them, so add() leaves them valid.
+  mutable std::vector<double> totals_;
+  mutable bool totals_stale_ = true;
 };
 
 }  // namespace millwatch::monitor

@@ -534,6 +534,8 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
        "lcm.output_url: \"239.255.76.67:7668\" is not an LCM URL"},
       {"max_block", "/source/max_block_samples", 5000,
        "source.max_block_samples: value 5000 is out of range [1, 4096]"},
+      {"wake_period", "/source/wake_period_s", 0.5,
+       "source.wake_period_s: value 0.5 is out of range [0, 0.1]"},
       // A Comedi block must fit the queue's slots (4096 samples; 8192 used to be accepted).
       {"block", "/source/block_samples", 8192,
        "source.block_samples: value 8192 is out of range [16, 4096]"},

@@ -1,8 +1,9 @@
 // libFuzzer: one raw-sample datagram as millwatchd receives it. The bytes go over in-process LCM
-// (memq://) to the daemon's LcmSource, which checks and decodes them into the block queue; a
-// queued block then goes through InputCheck. Also the check itself: a message it passes decodes
-// to exactly its declared count.
+// (memq://) to the daemon's LcmSource, which checks and decodes them into the block queue's slot
+// (the values lcm-gen's decode gives, to the bit); a queued block then goes through InputCheck.
+// Also the check itself: a message it passes decodes to exactly its declared count.
 
+#include <bit>
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
@@ -53,6 +54,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   while (daemon.queue->try_pop(*daemon.slot)) {
     MW_FUZZ_CHECK(c.ok());
     MW_FUZZ_CHECK(static_cast<std::int64_t>(daemon.slot->count) == c.num_samples);
+    // The source decodes into the slot itself: the values lcm-gen's decode gives, to the bit.
+    MW_FUZZ_CHECK(daemon.slot->utime_us == m.utime && daemon.slot->seq == m.seq);
+    const auto same = [](double a, double b) {
+      return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+    };
+    MW_FUZZ_CHECK(same(daemon.slot->sample_rate_hz, m.sample_rate_hz));
+    for (std::size_t i = 0; i < daemon.slot->count; ++i) {
+      MW_FUZZ_CHECK(same(daemon.slot->fx[i], m.fx_N[i]) && same(daemon.slot->fy[i], m.fy_N[i]) &&
+                    same(daemon.slot->fz[i], m.fz_N[i]));
+    }
     fuzz::check_block(daemon.check, daemon.slot->view());
   }
   return 0;

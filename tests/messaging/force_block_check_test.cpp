@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -152,6 +153,47 @@ TEST(ForceBlockCheck, AnEmptyBlockDecodedIntoAReusedMessageIsEmpty) {
   EXPECT_TRUE(m.fx_N.empty());
   EXPECT_TRUE(m.fy_N.empty());
   EXPECT_TRUE(m.fz_N.empty());
+}
+
+// The daemon's decode straight into its queue slot gives what lcm-gen's decode gives, to the bit
+// (negative zero, a subnormal, infinities and NaN included), and touches nothing of a message
+// that does not pass the check.
+TEST(ForceBlockCheck, DecodingIntoArraysGivesLcmGensValues) {
+  const std::vector<double> fx = {0.0, -0.0, 4.9e-324, -1.25, 1e300};
+  const std::vector<double> fy = {std::numeric_limits<double>::infinity(), 2.5, -3.0, 7.0, 8.0};
+  const std::vector<double> fz = {std::numeric_limits<double>::quiet_NaN(), 1.0, 2.0, 3.0, 4.0};
+  const force_block_t m = to_message({123'456'789, -3, 333300.0, fx, fy, fz});
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  force_block_t generated;
+  ASSERT_TRUE(decode_force_block(bytes.data(), bytes.size(), 8, generated).ok());
+
+  std::vector<double> x(8, 99.0), y(8, 99.0), z(8, 99.0);
+  ForceBlockHeader h;
+  const ForceBlockCheck c =
+      decode_force_block_into(bytes.data(), bytes.size(), 8, h, x.data(), y.data(), z.data());
+  ASSERT_TRUE(c.ok()) << c.describe();
+  EXPECT_EQ(h.utime, generated.utime);
+  EXPECT_EQ(h.seq, generated.seq);
+  EXPECT_EQ(h.sample_rate_hz, generated.sample_rate_hz);
+  ASSERT_EQ(h.num_samples, 5u);
+  const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(bits(x[i]), bits(generated.fx_N[i])) << i;
+    EXPECT_EQ(bits(y[i]), bits(generated.fy_N[i])) << i;
+    EXPECT_EQ(bits(z[i]), bits(generated.fz_N[i])) << i;
+  }
+  EXPECT_EQ(x[5], 99.0);  // nothing written past the block
+
+  std::vector<double> untouched(4, 99.0);
+  ForceBlockHeader h2;
+  EXPECT_EQ(decode_force_block_into(bytes.data(), bytes.size(), 4, h2, untouched.data(),
+                                    untouched.data(), untouched.data())
+                .problem,
+            ForceBlockProblem::kTooManySamples);
+  EXPECT_EQ(untouched, std::vector<double>(4, 99.0));
+  EXPECT_EQ(h2.num_samples, 0u);
 }
 
 }  // namespace
