@@ -41,11 +41,10 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   BlockSlot* slot = queue_.claim();
   messaging::ForceBlockHeader header;
   const messaging::ForceBlockCheck c =
-      slot != nullptr
-          ? messaging::decode_force_block_into(rbuf.data, rbuf.data_size, max_block_samples_,
-                                               header, slot->fx.data(), slot->fy.data(),
-                                               slot->fz.data())
-          : messaging::check_force_block(rbuf.data, rbuf.data_size, max_block_samples_);
+      slot != nullptr ? messaging::decode_force_block_into(
+                            rbuf.data, rbuf.data_size, max_block_samples_, header, slot->fx.data(),
+                            slot->fy.data(), slot->fz.data())
+                      : messaging::check_force_block(rbuf.data, rbuf.data_size, max_block_samples_);
   if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
     // A whole block, only longer than we take: its samples are lost.
     const auto n = ++counters_.oversized;
