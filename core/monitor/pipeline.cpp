@@ -133,6 +133,7 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   analyzer_ = RevolutionAnalyzer(
       measuring, static_cast<std::size_t>(slowest_revolution * (1.0 + 2.0 / flutes)) + 64);
   sync_ = SyncAverage(config_.sync_bins, config_.sync_window_revolutions);
+  resultant_ = SyncAverageOf<1>(config_.sync_bins, config_.sync_window_revolutions);
   template_average_.reserve(static_cast<std::size_t>(config_.sync_bins));
   if (config_.lockstep) {
     lockstep_ = Lockstep(config_.model, filter_, config_.filter_zero_phase);
@@ -383,19 +384,22 @@ bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
     return false;
   }
   sync_.clear();
+  resultant_.clear();
   double previous_turn = std::floor(phase_.angle_at(static_cast<double>(lo)) / kTwoPi);
   for (std::int64_t s = lo; s <= hi; ++s) {
     const double a = phase_.angle_at(static_cast<double>(s));
     const double turn = std::floor(a / kTwoPi);
     if (turn > previous_turn) {
       sync_.end_revolution();
+      resultant_.end_revolution();
       previous_turn = turn;
     }
-    sync_.add(a - kTwoPi * turn, {ring_.at(0, s), ring_.at(1, s), ring_.at(2, s),
-                                  std::sqrt(ring_.at(kDetectChannel, s))});
+    sync_.add(a - kTwoPi * turn, {ring_.at(0, s), ring_.at(1, s), ring_.at(2, s)});
+    resultant_.add(a - kTwoPi * turn, {std::sqrt(ring_.at(kDetectChannel, s))});
   }
   sync_.end_revolution();
-  sync_.average(3, template_average_);
+  resultant_.end_revolution();
+  resultant_.average(0, template_average_);
   out = find_tooth_event_template(template_average_, config_.model.tool.flutes);
   return out.valid;
 }

@@ -199,6 +199,9 @@ class Pipeline {
   ToothEventTracker events_;
   RevolutionAnalyzer analyzer_;
   SyncAverage sync_;
+  // The in-plane resultant's average on the same grid and window, for the tooth events'
+  // template at a lock (build_template()).
+  SyncAverageOf<1> resultant_;
   Lockstep lockstep_;
   RevolutionStats stats_;
   AlertEngine alerts_;

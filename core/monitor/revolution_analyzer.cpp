@@ -112,7 +112,7 @@ void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
         (map.at(static_cast<double>(first)) - turn_rad) * bins_per_rad,
         map.slope_rad_per_sample * bins_per_rad, [&](std::size_t i) {
           const double* v = ring.row(first + static_cast<std::int64_t>(i));
-          return std::array<double, SyncAverage::kChannels>{v[0], v[1], v[2], std::sqrt(v[3])};
+          return SyncAverage::Values{v[0], v[1], v[2]};
         });
   }
   sync.end_revolution();

@@ -17,6 +17,8 @@ namespace millwatch::monitor {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// Four channels: the pipeline's three and one more (any channel count averages alike).
+using Average = SyncAverageOf<4>;
 
 double shape(double angle, double scale) {
   return scale * (1.0 + 0.5 * std::cos(angle) + 0.3 * std::sin(3.0 * angle + 0.4));
@@ -24,7 +26,7 @@ double shape(double angle, double scale) {
 
 /// Feeds `revolutions` revolutions of `samples_per_rev` samples (not a multiple of the bins,
 /// so the samples land between bins) with amplitude `scale`.
-void feed(SyncAverage& avg, int revolutions, double samples_per_rev, double scale, double& phase) {
+void feed(Average& avg, int revolutions, double samples_per_rev, double scale, double& phase) {
   for (int r = 0; r < revolutions; ++r) {
     while (phase < kTwoPi) {
       avg.add(phase, {shape(phase, scale), -shape(phase, scale), 0.5 * scale, scale});
@@ -39,7 +41,7 @@ void feed(SyncAverage& avg, int revolutions, double samples_per_rev, double scal
 // channel, and is the mean over the window when the level changes.
 TEST(SyncAverage, RecoversAKnownRevolutionAndRollsItsWindow) {
   const int bins = 128;
-  SyncAverage avg(bins, 10);
+  Average avg(bins, 10);
   double phase = 0.123;
   feed(avg, 10, 517.3, 1.0, phase);
   EXPECT_EQ(avg.revolutions(), 10);
@@ -73,7 +75,7 @@ TEST(SyncAverage, RecoversAKnownRevolutionAndRollsItsWindow) {
 // A grid finer than one revolution's samples: the bins no sample reached in a revolution fill
 // in over several; bins none reached take their neighbours' mean.
 TEST(SyncAverage, FillsAFineGridOverSeveralRevolutions) {
-  SyncAverage avg(256, 30);
+  Average avg(256, 30);
   std::vector<double> out;
   double phase = 0.0;
   for (int r = 0; r < 30; ++r) {
@@ -100,14 +102,14 @@ TEST(SyncAverage, FillsAFineGridOverSeveralRevolutions) {
 // starting below zero and crossing 2π; and lines no spindle makes (backwards, over a turn a step).
 TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
   for (const double bins_per_sample : {2.15, 0.97, 1.0, 0.31, -0.8, 300.5}) {
-    SyncAverage line(256, 4);
-    SyncAverage one_by_one(256, 4);
+    Average line(256, 4);
+    Average one_by_one(256, 4);
     const double first_bin = -3.7123;  // no sample on a bin (a weight of 1e-14 there)
     const auto count = std::max<std::size_t>(
         40, static_cast<std::size_t>(std::ceil(260.0 / std::fabs(bins_per_sample))));
     const auto values = [](std::size_t i) {
       const double x = 0.01 * static_cast<double>(i);
-      return std::array<double, SyncAverage::kChannels>{std::sin(x), std::cos(x), x, 1.0 + x};
+      return std::array<double, Average::kChannels>{std::sin(x), std::cos(x), x, 1.0 + x};
     };
     line.add_line(count, first_bin, bins_per_sample, values);
     for (std::size_t i = 0; i < count; ++i) {
@@ -117,7 +119,7 @@ TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
     }
     line.end_revolution();
     one_by_one.end_revolution();
-    for (int c = 0; c < SyncAverage::kChannels; ++c) {
+    for (int c = 0; c < Average::kChannels; ++c) {
       for (int k = 0; k < 256; ++k) {
         ASSERT_NEAR(line.average(c, k), one_by_one.average(c, k), 1e-9)
             << bins_per_sample << " channel " << c << " bin " << k;
@@ -127,7 +129,7 @@ TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
 }
 
 TEST(SyncAverage, AddingAndClosingAllocateNothing) {
-  SyncAverage avg(256, 30);
+  Average avg(256, 30);
   double phase = 0.0;
   feed(avg, 3, 300.0, 1.0, phase);
   test::AllocationCounter counter;

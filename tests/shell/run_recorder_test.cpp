@@ -104,7 +104,7 @@ TEST(RunRecorder, ABinNoSampleReachedTakesItsNeighboursMean) {
   for (int b = 0; b < 8; ++b) {
     if (b != 3) {
       const double v = 10.0 + b;
-      sync.add(2.0 * std::numbers::pi * b / 8.0, {v, v, v, v});
+      sync.add(2.0 * std::numbers::pi * b / 8.0, {v, v, v});
     }
   }
   sync.end_revolution();
