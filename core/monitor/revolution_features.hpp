@@ -73,23 +73,22 @@ void measure_revolution(const Channel& channel, double sample_rate_hz, Revolutio
     }
     std::int64_t best_squared = from;
     double largest_squared = channel(3, from);
+    // Written as selects, not branches: a force rising or falling through a flute's window
+    // makes "a new extreme" true and false in runs the branch predictor keeps missing.
     for (std::int64_t n = from + 1; n <= to; ++n) {
       for (std::size_t c = 0; c < 3; ++c) {
         const double v = channel(static_cast<int>(c), n);
-        if (v < lowest[c]) {
-          lowest[c] = v;
-          at_low[c] = n;
-        }
-        if (v > highest[c]) {
-          highest[c] = v;
-          at_high[c] = n;
-        }
+        const bool below = v < lowest[c];
+        const bool above = v > highest[c];
+        lowest[c] = below ? v : lowest[c];
+        at_low[c] = below ? n : at_low[c];
+        highest[c] = above ? v : highest[c];
+        at_high[c] = above ? n : at_high[c];
       }
       const double q = channel(3, n);
-      if (q > largest_squared) {
-        largest_squared = q;
-        best_squared = n;
-      }
+      const bool larger = q > largest_squared;
+      largest_squared = larger ? q : largest_squared;
+      best_squared = larger ? n : best_squared;
     }
     for (std::size_t c = 0; c < 3; ++c) {
       auto value = [&](std::int64_t n) { return channel(static_cast<int>(c), n); };
