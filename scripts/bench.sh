@@ -88,19 +88,25 @@ print(f"{cpu}, one core, Release; C++ best of 3 repetitions (latency: the larges
 EOF
 # millwatchd itself over LCM (needs root for unshare -n; skipped, saying so, without it).
 if unshare -n true 2>/dev/null; then
-  echo "== millwatchd over LCM (scripts/daemon_load.sh)" >&2
-  scripts/daemon_load.sh --build "$build" >"$out/daemon_load.json"
-  /usr/bin/python3 - "$out/daemon_load.json" <<'EOF'
+  echo "== millwatchd over LCM (scripts/daemon_load.sh, three runs)" >&2
+  for run in 1 2 3; do  # the machine's noise shows most here: the median of three
+    scripts/daemon_load.sh --build "$build" --seconds 20
+  done >"$out/daemon_load.jsonl"
+  /usr/bin/python3 - "$out/daemon_load.jsonl" <<'EOF'
 import json, sys
-r = json.load(open(sys.argv[1]))
+runs = sorted((json.loads(l) for l in open(sys.argv[1])), key=lambda r: r["process_percent_of_a_core"])
+r = runs[len(runs) // 2]
 t = r["threads_percent_of_a_core"]
 share = lambda prefix: sum(v for k, v in t.items() if k.startswith(prefix))
-print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['seconds']:g} s): the process"
-      f" {r['process_percent_of_a_core']:.1f} % of a core (target < 5 %): the sample thread"
-      f" {share('mw-sample'):.1f} %, LCM's receive thread {share('mw-lcm-receive'):.1f} %, the"
-      f" publisher {share('mw-publish'):.1f} %, identification {share('mw-identify'):.1f} %"
-      f" ({r['windows_fitted']} window fitted, {r['windows_skipped_for_budget']} skipped for the"
-      f" budget); {r['dropped_samples']} samples dropped.")
+others = ", ".join(f"{x['process_percent_of_a_core']:.1f} %" for x in runs if x is not r)
+print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['seconds']:g} s, median of"
+      f" {len(runs)}): the process {r['process_percent_of_a_core']:.1f} % of a core between fits"
+      f" (the other runs {others}): the sample thread {share('mw-sample'):.1f} %, LCM's receive"
+      f" thread {share('mw-lcm-receive'):.1f} %, the publisher {share('mw-publish'):.1f} %,"
+      f" identification {share('mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
+      f" {r['windows_skipped_for_budget']} skipped for the budget); identification's budget adds"
+      f" about 1 % on average (cpu_budget 0.01); target < 5 % with it; {r['dropped_samples']}"
+      f" samples dropped.")
 EOF
 else
   echo "== millwatchd over LCM: skipped (unshare -n needs root)" >&2
