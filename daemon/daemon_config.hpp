@@ -29,9 +29,10 @@ struct SourceConfig {
   /// LCM: a raw block of more samples is dropped (and counted) before it is decoded;
   /// [1, BlockSlot::kMaxSamples].
   int max_block_samples = 4096;
-  /// LCM: the sample thread takes the blocks that came at most this often, not woken for each
-  /// one (a thousand a second at 333.3 kHz cost ~2 % of a core in wake-ups alone); each block
-  /// waits at most this long for its turn. 0: woken for every block. [0, 0.1] s.
+  /// LCM source: the sample thread takes the blocks in rounds about this far apart instead of
+  /// waking for each one (a thousand a second at 333.3 kHz cost ~2 % of a core in wake-ups
+  /// alone); a block waits about this long (plus the timer's slack) for its round. 0: woken for
+  /// every block. [0, 0.1] s. (A Comedi source's reader wakes the sample thread per block.)
   double wake_period_s = 0.005;
   std::array<signal::DaqChannelScaling, 3> channels{};  ///< fx, fy, fz
 };

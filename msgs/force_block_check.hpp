@@ -5,7 +5,7 @@
 // sizeof(double) · num_samples in int, so a large count wraps around the check and the decode
 // reads past the buffer; a negative count makes std::vector::resize throw; and it allocates
 // whatever the count asks for. Every force_block_t from a log or the network goes through
-// decode_force_block() instead.
+// decode_force_block() (into a message) or decode_force_block_into() (into arrays) instead.
 //
 // Layout (msgs/force_block_t.lcm as lcm-gen encodes it, big-endian, no padding):
 //   offset  0  int64   fingerprint (force_block_t::getHash())

@@ -101,8 +101,8 @@ TEST(LcmSource, TheMaximumIsAtMostASlot) {
 }
 
 // The channel name is longer than a std::string holds in place: the LCM C++ interface's
-// per-message std::string of it allocated; the C one, with the decoded message's arrays kept,
-// allocates nothing (LCM's own buffers are malloc'ed, not counted here).
+// per-message std::string of it allocated; the C one, with each block decoded straight into
+// the queue's slot, allocates nothing (LCM's own buffers are malloc'ed, not counted here).
 TEST(LcmSource, ABlockCostsNoAllocationInSteadyState) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
