@@ -13,14 +13,14 @@ const nlohmann::json& empty_object() {
   return empty;
 }
 
+}  // namespace
+
 std::string format_number(double v) {
   std::ostringstream out;
   out.precision(10);
   out << v;
   return out.str();
 }
-
-}  // namespace
 
 bool Range::contains(double v) const {
   const bool above = min_open ? v > min : v >= min;

@@ -105,6 +105,9 @@ class ObjectReader {
 /// Short description of a JSON value's type and content for messages: `string "two"`.
 std::string describe_json(const nlohmann::json& value);
 
+/// A number as the messages print it (10 significant digits): `0.25`, `-1`.
+std::string format_number(double v);
+
 /// Throws ConfigError(path, message) — for cross-field checks done after reading.
 [[noreturn]] void fail(const std::string& path, const std::string& message);
 

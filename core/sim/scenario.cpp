@@ -120,8 +120,16 @@ Scenario scenario_from_json(const nlohmann::json& j) {
   {
     auto c = r.object("runout_change");
     s.runout_change.enabled = c.boolean("enabled", s.runout_change.enabled);
-    s.runout_change.time_s =
-        c.number("time_s", s.runout_change.time_s, non_negative(s.duration_s, "s"));
+    // A change the recording ends before would never show: refused when enabled (given or by
+    // default). A disabled one's time is kept as it is, whatever the duration (the default
+    // 0.25 s outlasts a 0.1 s recording, and to_json() writes it back).
+    s.runout_change.time_s = c.number("time_s", s.runout_change.time_s, non_negative(1e6, "s"));
+    if (s.runout_change.enabled && s.runout_change.time_s > s.duration_s) {
+      config::fail(c.path_of("time_s"),
+                   "value " + config::format_number(s.runout_change.time_s) +
+                       " s is after the recording's end (recording.duration_s " +
+                       config::format_number(s.duration_s) + " s): the change would not show");
+    }
     const double radius_um = s.model.tool.diameter_mm * 500.0;
     s.runout_change.offset_um =
         c.number("offset_um", s.runout_change.offset_um, {0.0, 0.2 * radius_um, false, true, "um"});

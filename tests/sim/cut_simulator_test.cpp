@@ -481,7 +481,25 @@ TEST(Scenario, BadFieldsAreNamedWithValueAndRange) {
             "axis_map.y: channel \"fy\" is already mapped to another axis");
   EXPECT_NE(error_of({{"spindle", {{"profile", "ramp"}, {"ramp_end_s", 0.0}}}}).find("ramp_end_s"),
             std::string::npos);
+  EXPECT_EQ(error_of({{"recording", {{"duration_s", 0.1}}},
+                      {"runout_change", {{"enabled", true}, {"time_s", 0.2}}}}),
+            "runout_change.time_s: value 0.2 s is after the recording's end "
+            "(recording.duration_s 0.1 s): the change would not show");
+  // Enabled without a time: the default (0.25 s) is after a 0.1 s recording's end too.
+  EXPECT_NE(error_of({{"recording", {{"duration_s", 0.1}}}, {"runout_change", {{"enabled", true}}}})
+                .find("runout_change.time_s"),
+            std::string::npos);
   EXPECT_EQ(error_of(nlohmann::json::object()), "");
+}
+
+// Found by fuzz_scenario: a 0.1 s recording with the runout change disabled read well, but
+// to_json() wrote the default change time (0.25 s) back, which the reader then refused against
+// the duration. A disabled change's time is not checked against it.
+TEST(Scenario, AShortRecordingWithoutARunoutChangeWritesBackWhatItReads) {
+  const nlohmann::json j = {{"recording", {{"sample_rate_hz", 50000.0}, {"duration_s", 0.1}}}};
+  const nlohmann::json written = to_json(scenario_from_json(j));
+  EXPECT_EQ(written["runout_change"]["time_s"], 0.25);
+  EXPECT_EQ(to_json(scenario_from_json(written)), written);
 }
 
 TEST(Scenario, JsonRoundTrip) {
