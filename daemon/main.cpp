@@ -4,8 +4,8 @@
 // never publishes. An LCM source's blocks are dispatched in the sample thread itself: asleep on
 // LCM's notification pipe (LCM's own receive thread reads the socket), it decodes a block into the
 // queue's free slot and runs the pipeline on it — a thread between the two (it was) cost a second
-// wake-up per block, 2–2.5 % of a core at 1,000 blocks a second. It takes the blocks in rounds at
-// most source.wake_period_s apart (5 ms): woken for every block, it spent more on the wake-ups
+// wake-up per block, 2–2.5 % of a core at 1,000 blocks a second. It takes the blocks in rounds
+// about source.wake_period_s apart (5 ms): woken for every block, it spent more on the wake-ups
 // into cold caches than on the blocks. A Comedi source's reader thread
 // fills the queue, and the sample thread sleeps on the queue. The publisher thread
 // (messaging::LcmOutput) publishes every output, on lcm.output_url. The main thread waits for

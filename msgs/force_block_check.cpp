@@ -8,12 +8,27 @@
 namespace millwatch::messaging {
 namespace {
 
-std::uint64_t big_endian(const unsigned char* bytes, int n) {
+// LCM encodes big-endian: a load and a byte swap (one instruction) on a little-endian machine.
+std::uint64_t big_endian_u64(const unsigned char* bytes) {
   std::uint64_t v = 0;
-  for (int i = 0; i < n; ++i) {
-    v = (v << 8) | bytes[i];
+  std::memcpy(&v, bytes, sizeof v);
+  if constexpr (std::endian::native == std::endian::little) {
+    v = __builtin_bswap64(v);
   }
   return v;
+}
+
+std::uint32_t big_endian_u32(const unsigned char* bytes) {
+  std::uint32_t v = 0;
+  std::memcpy(&v, bytes, sizeof v);
+  if constexpr (std::endian::native == std::endian::little) {
+    v = __builtin_bswap32(v);
+  }
+  return v;
+}
+
+double big_endian_double(const unsigned char* bytes) {
+  return std::bit_cast<double>(big_endian_u64(bytes));
 }
 
 std::string hex(std::uint64_t v) {
@@ -34,8 +49,8 @@ ForceBlockCheck check_force_block(const void* data, std::size_t size_bytes,
     return c;
   }
   const auto* bytes = static_cast<const unsigned char*>(data);
-  c.fingerprint = big_endian(bytes, 8);
-  c.num_samples = static_cast<std::int32_t>(static_cast<std::uint32_t>(big_endian(bytes + 32, 4)));
+  c.fingerprint = big_endian_u64(bytes);
+  c.num_samples = static_cast<std::int32_t>(big_endian_u32(bytes + 32));
   if (c.fingerprint != static_cast<std::uint64_t>(force_block_t::getHash())) {
     c.problem = ForceBlockProblem::kWrongFingerprint;
   } else if (c.num_samples < 0) {
@@ -68,19 +83,6 @@ ForceBlockCheck decode_force_block(const void* data, std::size_t size_bytes,
   return c;
 }
 
-namespace {
-
-double big_endian_double(const unsigned char* bytes) {
-  std::uint64_t v = 0;
-  std::memcpy(&v, bytes, sizeof v);
-  if constexpr (std::endian::native == std::endian::little) {
-    v = __builtin_bswap64(v);  // one instruction (the compiler vectorises the loops below)
-  }
-  return std::bit_cast<double>(v);
-}
-
-}  // namespace
-
 ForceBlockCheck decode_force_block_into(const void* data, std::size_t size_bytes,
                                         std::int64_t max_samples, ForceBlockHeader& header,
                                         double* fx, double* fy, double* fz) {
@@ -89,8 +91,8 @@ ForceBlockCheck decode_force_block_into(const void* data, std::size_t size_bytes
     return c;
   }
   const auto* bytes = static_cast<const unsigned char*>(data);
-  header.utime = static_cast<std::int64_t>(big_endian(bytes + 8, 8));
-  header.seq = static_cast<std::int64_t>(big_endian(bytes + 16, 8));
+  header.utime = static_cast<std::int64_t>(big_endian_u64(bytes + 8));
+  header.seq = static_cast<std::int64_t>(big_endian_u64(bytes + 16));
   header.sample_rate_hz = big_endian_double(bytes + 24);
   header.num_samples = static_cast<std::size_t>(c.num_samples);
   const std::size_t n = header.num_samples;

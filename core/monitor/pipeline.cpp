@@ -394,8 +394,9 @@ bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
       resultant_.end_revolution();
       previous_turn = turn;
     }
-    sync_.add(a - kTwoPi * turn, {ring_.at(0, s), ring_.at(1, s), ring_.at(2, s)});
-    resultant_.add(a - kTwoPi * turn, {std::sqrt(ring_.at(kDetectChannel, s))});
+    const double within_turn = a - kTwoPi * turn;
+    sync_.add(within_turn, {ring_.at(0, s), ring_.at(1, s), ring_.at(2, s)});
+    resultant_.add(within_turn, {std::sqrt(ring_.at(kDetectChannel, s))});
   }
   sync_.end_revolution();
   resultant_.end_revolution();
