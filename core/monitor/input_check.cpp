@@ -12,9 +12,9 @@ namespace millwatch::monitor {
 
 InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
   for (auto& channel : out_) {
-    channel.resize(config_.max_block_samples);
+    channel = std::make_unique_for_overwrite<double[]>(config_.max_block_samples);
   }
-  flags_.resize(config_.max_block_samples);
+  flags_ = std::make_unique_for_overwrite<std::uint8_t[]>(config_.max_block_samples);
 }
 
 namespace {
@@ -142,8 +142,8 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     out.fx_N = block.fx_N;
     out.fy_N = block.fy_N;
     out.fz_N = block.fz_N;
-    std::fill(flags_.begin(), flags_.begin() + static_cast<std::ptrdiff_t>(n), std::uint8_t{0});
-    out.flags = {flags_.data(), n};
+    std::fill(flags_.get(), flags_.get() + n, std::uint8_t{0});
+    out.flags = {flags_.get(), n};
     next_sample_ += static_cast<std::int64_t>(n);
     return out;
   }
@@ -175,10 +175,10 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   counters_.samples_accepted += static_cast<std::int64_t>(n);
   out.verdict = BlockVerdict::kAccepted;
   out.first_sample = next_sample_;
-  out.fx_N = {out_[0].data(), n};
-  out.fy_N = {out_[1].data(), n};
-  out.fz_N = {out_[2].data(), n};
-  out.flags = {flags_.data(), n};
+  out.fx_N = {out_[0].get(), n};
+  out.fy_N = {out_[1].get(), n};
+  out.fz_N = {out_[2].get(), n};
+  out.flags = {flags_.get(), n};
   next_sample_ += static_cast<std::int64_t>(n);
   return out;
 }

@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -102,8 +103,10 @@ class InputCheck {
   std::int64_t next_sample_ = 0;
   std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
   std::array<double, 3> last_good_{};
-  std::array<std::vector<double>, 3> out_;
-  std::vector<std::uint8_t> flags_;
+  // max_block_samples each, left uninitialised: a page is touched (and faulted in) only when a
+  // block that long comes, not 1.5 MiB zeroed at construction for the default 65,536.
+  std::array<std::unique_ptr<double[]>, 3> out_;
+  std::unique_ptr<std::uint8_t[]> flags_;
 };
 
 }  // namespace millwatch::monitor

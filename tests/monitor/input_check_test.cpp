@@ -89,6 +89,38 @@ TEST(InputCheck, OneBadValueAnywhereIsFound) {
   }
 }
 
+// The hand-on buffers are left uninitialised at construction (only a block that long touches
+// them all): a block of max_block_samples with a bad sample last comes out whole, every sample
+// and flag written, and a clean block after it has no flag left over.
+TEST(InputCheck, ABlockOfTheMaximumLengthIsHandedOnWhole) {
+  InputCheckConfig c = config();
+  c.max_block_samples = 3000;
+  InputCheck check(c);
+  Block a = ramp(3000, -1500.0);
+  for (double& x : a.fx) {
+    x *= 0.05;  // within ±75 N: below saturation
+  }
+  a.fz.back() = std::numeric_limits<double>::quiet_NaN();
+  const auto ca = check.check(a.view(0));
+  ASSERT_EQ(ca.verdict, BlockVerdict::kAccepted);
+  ASSERT_EQ(ca.fx_N.size(), 3000U);
+  for (std::size_t i = 0; i < 3000; ++i) {
+    ASSERT_EQ(ca.fx_N[i], a.fx[i]) << i;
+    ASSERT_EQ(ca.fy_N[i], -1.0) << i;
+    ASSERT_EQ(ca.fz_N[i], 0.5) << i;  // the NaN last: the channel's last good value
+    ASSERT_EQ(ca.flags[i], i + 1 == 3000 ? kFlagNonFinite : 0) << i;
+  }
+  Block b = ramp(3000, -1500.0);
+  b.fx = a.fx;
+  const auto cb = check.check(b.view(60'000));
+  ASSERT_EQ(cb.verdict, BlockVerdict::kAccepted);
+  for (std::size_t i = 0; i < 3000; ++i) {
+    ASSERT_EQ(cb.flags[i], 0) << i;
+  }
+  EXPECT_EQ(check.check(ramp(3001).view(120'000)).verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(check.counters().samples_flagged, 1);
+}
+
 TEST(InputCheck, ImplausibleValuesAreTreatedLikeNonFiniteOnes) {
   InputCheck check(config());
   Block a = ramp(4);
