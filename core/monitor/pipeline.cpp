@@ -237,6 +237,14 @@ void Pipeline::process(const SampleBlock& block) {
 void Pipeline::finish() {
   conditioner_.flush(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
+  // The turns heard after the last window while cutting: up to a hop no window has counted yet.
+  if (was_cutting_) {
+    const double tail_s = static_cast<double>(tracker_.samples_since_update() *
+                                              static_cast<std::size_t>(decimation_)) /
+                          rate_hz_;
+    cutting_revolutions_ += tail_s * tracker_.estimate().spindle_hz;
+    was_cutting_ = false;  // counted once
+  }
   if (ever_locked_) {
     return;
   }

@@ -61,7 +61,7 @@ struct SpindleTrackerConfig {
   double commanded_rpm = 25000.0;
   double search_fraction = 0.15;  ///< search f within commanded·(1 ± this)
   double window_s = 0.0;         ///< analysis window; 0 = automatic (10 revolutions, 0.02–0.25 s)
-  double hop_s = 0.0;            ///< time between windows; 0 = automatic (a quarter window)
+  double hop_s = 0.0;            ///< time between windows; 0 = automatic (half a window)
   int max_harmonic = 0;          ///< highest harmonic used; 0 = automatic (4·flutes)
   double min_snr_db = 12.0;      ///< cutting when the harmonics stand this far above their floors
   double phase_gain = 0.5;       ///< fraction of each window's phase error corrected
@@ -129,6 +129,10 @@ class SpindleTracker {
   [[nodiscard]] std::size_t hop_samples() const { return hop_; }
   /// Samples process() takes from now until the one that starts the next update (≥ 1): a
   /// caller can hand over that many at once and act on the update after the last.
+  /// Samples taken since the last update (none before the first).
+  [[nodiscard]] std::size_t samples_since_update() const {
+    return estimate_.updates > 0 ? since_hop_ : 0;
+  }
   [[nodiscard]] std::size_t samples_to_update() const {
     const auto filled = static_cast<std::size_t>(next_sample_ - stream_start_);
     const std::size_t to_hop = since_hop_ < hop_ ? hop_ - since_hop_ : 0;

@@ -136,10 +136,14 @@ TEST(EveryRevolution, ShortSteadyCutsAreMeasuredFromTheirFirstRevolution) {
       test::replay(p, r, fs > 100000.0 ? 3333 : 1000);
       const int present = test::complete_cutting_revolutions(r);
       const auto measured = static_cast<int>(out.revolutions.size());
-      std::printf("steady %.1f s at %.1f kHz: %d of %d revolutions measured\n", duration,
-                  fs / 1000.0, measured, present);
+      std::printf("steady %.1f s at %.1f kHz: %d of %d revolutions measured; %.1f of %.1f heard\n",
+                  duration, fs / 1000.0, measured, present, p.status().cutting_revolutions,
+                  duration * 25252.0 / 60.0);
       EXPECT_GE(measured, static_cast<int>(std::ceil(0.9 * present))) << fs << " " << duration;
       EXPECT_LE(measured, present + 1);
+      // The turns heard while cutting (the summary's revolutions_cutting), to the record's end.
+      const double turned = duration * 25252.0 / 60.0;
+      EXPECT_NEAR(p.status().cutting_revolutions, turned, 2.0) << fs << " " << duration;
       // The first revolution measured starts within two revolutions of the record's start.
       ASSERT_FALSE(out.revolutions.empty());
       EXPECT_LT(out.revolutions.front().utime_us, std::llround(2.0 * 60.0 / 25252.0 * 1e6) + 200);

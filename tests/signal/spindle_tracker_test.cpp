@@ -212,11 +212,13 @@ TEST(SpindleTracker, DoesNotLockOnIrregularCutting) {
   std::exponential_distribution<double> interval(1.0 / tooth_s);
   std::uniform_real_distribution<double> size(0.2, 1.0);
   std::normal_distribution<double> noise(0.0, 0.05);
-  std::vector<double> x(static_cast<std::size_t>(4.0 * fs), 0.0);
+  // 8 s: more than 250 windows (a hop of half a window, 28.8 ms at 10,400 rpm), each a chance
+  // for a false lock.
+  std::vector<double> x(static_cast<std::size_t>(8.0 * fs), 0.0);
   for (double& v : x) {
     v = noise(rng);
   }
-  for (double t = interval(rng); t < 4.0; t += interval(rng)) {
+  for (double t = interval(rng); t < 8.0; t += interval(rng)) {
     const double a = size(rng);
     for (int k = -20; k <= 20; ++k) {
       const auto n = static_cast<std::int64_t>(std::llround(t * fs)) + k;
