@@ -8,12 +8,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 #include <vector>
 
 #include "bench/benchmark_cut.hpp"
 #include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
+#include "daemon/daemon_config.hpp"
 
 namespace {
 
@@ -146,16 +148,18 @@ double cpu_s(int who) {
          1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
-/// The daemon's load at 333.3 kHz with identification running, as live: blocks of 1 ms fed at
-/// real time (paced by the clock) to the pipeline with the identifier's worker attached (live
-/// hand-over) under identification.cpu_budget (arg 1: the configuration's default when 0, else
-/// per mille; 1000 = no budget), CPU time from getrusage, per second of signal (1 = a whole
-/// core): the sample thread alone, and the process (sample thread and worker), from 0.5 s on
-/// (after the lock and the model build) for arg 0 seconds of signal. A budget of b fits one
-/// window per t/b (t ≈ 0.4 s of CPU a fit): the run must span several such periods, so the
-/// recording's last ~2.5 s are fed again and again — at 25,250 rpm a revolution is 792 samples
-/// exactly, so the loop joins without a phase step and the spindle stays locked. Without the
-/// daemon's LCM receive and publish (a few per cent of the sample thread's work).
+/// The daemon's load at 333.3 kHz with identification running, as live: blocks of 1 ms arriving
+/// at real time (paced by the clock) and taken in millwatchd's rounds (an LCM source's
+/// source.wake_period_s, 5 ms by default: the blocks that arrived since the last round), fed to
+/// the pipeline with the identifier's worker attached (live hand-over) under
+/// identification.cpu_budget (arg 1: the configuration's default when 0, else per mille; 1000 =
+/// no budget). CPU time from getrusage, per second of signal (1 = a whole core): the sample
+/// thread alone, and the process (sample thread and worker), from 0.5 s on (after the lock and
+/// the model build) for arg 0 seconds of signal. A budget of b fits one window per t/b (t ≈ 0.4 s
+/// of CPU a fit): the run must span several such periods, so the recording's last ~2.5 s are fed
+/// again and again — at 25,250 rpm a revolution is 792 samples exactly, so the loop joins
+/// without a phase step and the spindle stays locked. Without the daemon's LCM receive and
+/// publisher threads (about as much again: scripts/daemon_load.sh measures millwatchd whole).
 void BM_DaemonLoadRealTime(benchmark::State& state) {
   const double fs = 333300.0;
   const std::size_t block = 333;
@@ -170,6 +174,7 @@ void BM_DaemonLoadRealTime(benchmark::State& state) {
   c.model.process.spindle_rpm = 25250.0;
   const double budget =
       state.range(1) == 0 ? c.identification.cpu_budget : static_cast<double>(state.range(1)) / 1e3;
+  const double wake_period_s = daemon::SourceConfig{}.wake_period_s;
   double signal_s = 0.0, process_s = 0.0, thread_s = 0.0;
   std::int64_t fitted = 0, dropped = 0, skipped = 0;
   std::vector<double> fx(block), fy(block), fz(block);
@@ -187,7 +192,11 @@ void BM_DaemonLoadRealTime(benchmark::State& state) {
     double process0 = 0.0, thread0 = 0.0;
     const auto start = std::chrono::steady_clock::now();
     for (std::size_t g = 0; g < total; g += block) {  // g: samples since the start
-      std::this_thread::sleep_until(start + std::chrono::duration<double>(g / fs));
+      // The round after the block's arrival (no sleep while a round's blocks are taken).
+      const double arrival_s = static_cast<double>(g + block) / fs;
+      std::this_thread::sleep_until(
+          start +
+          std::chrono::duration<double>(std::ceil(arrival_s / wake_period_s) * wake_period_s));
       if (g == steady) {
         process0 = cpu_s(RUSAGE_SELF);
         thread0 = cpu_s(RUSAGE_THREAD);
