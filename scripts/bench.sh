@@ -66,8 +66,9 @@ unbudgeted = [r for name, rs in runs.items() if name.startswith("BM_DaemonLoadRe
               for r in rs]
 median = lambda rs, key: sorted(r[key] for r in rs)[len(rs) // 2]
 if daemon:
-    print(f"\nDaemon at 333.3 kHz with identification running, fed at real time"
-          f" (`BM_DaemonLoadRealTime`, 60 s, median of {len(daemon)}), identification.cpu_budget"
+    print(f"\nDaemon at 333.3 kHz with identification running, fed at real time and taken in"
+          f" millwatchd's 5 ms rounds (`BM_DaemonLoadRealTime`, 60 s, median of {len(daemon)}),"
+          f" identification.cpu_budget"
           f" {median(daemon, 'budget'):g}: the sample thread {100 * median(daemon, 'sample_thread_of_a_core'):.1f} %"
           f" of a core, the process (sample thread and identification worker)"
           f" {100 * median(daemon, 'process_of_a_core'):.1f} % (target < 5 %); windows fitted"
