@@ -194,9 +194,10 @@ void BM_DaemonLoadRealTime(benchmark::State& state) {
     for (std::size_t g = 0; g < total; g += block) {  // g: samples since the start
       // The round after the block's arrival (no sleep while a round's blocks are taken).
       const double arrival_s = static_cast<double>(g + block) / fs;
-      std::this_thread::sleep_until(
-          start +
-          std::chrono::duration<double>(std::ceil(arrival_s / wake_period_s) * wake_period_s));
+      const double round_s = wake_period_s > 0.0
+                                 ? std::ceil(arrival_s / wake_period_s) * wake_period_s
+                                 : arrival_s;  // 0: woken for every block
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(round_s));
       if (g == steady) {
         process0 = cpu_s(RUSAGE_SELF);
         thread0 = cpu_s(RUSAGE_THREAD);

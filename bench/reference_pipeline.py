@@ -45,7 +45,10 @@ from numpy.lib.stride_tricks import sliding_window_view  # noqa: E402
 from scipy import fft, signal  # noqa: E402
 
 CUTOFF_HZ, ORDER = 3300.0, 4  # monitor defaults (core/monitor/monitor_config.hpp)
-WINDOW_S, HOP_S, SEARCH, MIN_SNR_DB = 0.25, 0.05, 0.15, 12.0  # SpindleTrackerConfig defaults
+# The tracker's window at its upper bound and a hop of a fifth of it (millwatch's automatic
+# window is 10 revolutions, 0.02–0.25 s: 24 ms at 25,252 rpm, hop half of it); its search range
+# and SNR threshold are SpindleTrackerConfig's defaults.
+WINDOW_S, HOP_S, SEARCH, MIN_SNR_DB = 0.25, 0.05, 0.15, 12.0
 # bench/pipeline_benchmark.cpp's make_recording(): sim::Scenario's defaults and these.
 BENCH_SCENARIO = {"spindle": {"actual_rpm": 25252.0}, "noise": {"enabled": True},
                   "quantisation": {"enabled": True}, "recording": {}}

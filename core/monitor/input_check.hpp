@@ -103,8 +103,9 @@ class InputCheck {
   std::int64_t next_sample_ = 0;
   std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
   std::array<double, 3> last_good_{};
-  // max_block_samples each, left uninitialised: a page is touched (and faulted in) only when a
-  // block that long comes, not 1.5 MiB zeroed at construction for the default 65,536.
+  // max_block_samples each, left uninitialised (not 1.5 MiB zeroed at construction for the
+  // default 65,536): a page is touched (faulted in) only when a block reaches it — flags_ by
+  // every block, out_ by a block with a sample to flag or replace.
   std::array<std::unique_ptr<double[]>, 3> out_;
   std::unique_ptr<std::uint8_t[]> flags_;
 };

@@ -165,6 +165,8 @@ void Pipeline::restart_stream(std::int64_t first_sample) {
   }
   stream_start_ = measuring_sample(first_sample);
   decimation_phase_ = 0;
+  cutting_revolutions_ += heard_since_update();  // the part-hop before the break
+  finished_tail_revolutions_ = 0.0;
   tracker_.restart(0);
   phase_.valid = false;
   was_cutting_ = false;
@@ -237,14 +239,7 @@ void Pipeline::process(const SampleBlock& block) {
 void Pipeline::finish() {
   conditioner_.flush(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
-  // The turns heard after the last window while cutting: up to a hop no window has counted yet.
-  if (was_cutting_) {
-    const double tail_s = static_cast<double>(tracker_.samples_since_update() *
-                                              static_cast<std::size_t>(decimation_)) /
-                          rate_hz_;
-    cutting_revolutions_ += tail_s * tracker_.estimate().spindle_hz;
-    was_cutting_ = false;  // counted once
-  }
+  finished_tail_revolutions_ = heard_since_update();  // the record's last part-hop
   if (ever_locked_) {
     return;
   }
@@ -335,6 +330,16 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
                      [this](const Alert& a) { sink_.on_alert(a); });
     next_health_check_ = last + static_cast<std::int64_t>(0.5 * rate_hz_);
   }
+}
+
+double Pipeline::heard_since_update() const {
+  if (!was_cutting_) {
+    return 0.0;
+  }
+  const double since_s =
+      static_cast<double>(tracker_.samples_since_update() * static_cast<std::size_t>(decimation_)) /
+      rate_hz_;
+  return since_s * tracker_.estimate().spindle_hz;
 }
 
 void Pipeline::on_tracker_update() {
@@ -598,7 +603,7 @@ PipelineStatus Pipeline::status() const {
   s.model_builds = model_builds_;
   s.identifications_taken = identifications_taken_;
   s.identifications_rejected = identifications_rejected_;
-  s.cutting_revolutions = cutting_revolutions_;
+  s.cutting_revolutions = cutting_revolutions_ + finished_tail_revolutions_;
   s.utime_us = input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1));
   const auto& e = tracker_.estimate();
   s.spindle_rpm = last_rpm_ > 0.0 ? last_rpm_ : (e.valid ? e.spindle_rpm : 0.0);

@@ -86,7 +86,8 @@ struct PipelineStatus {
   std::int64_t identifications_taken = 0;  ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
   /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
-  /// durations times their speeds) — what "every revolution" is measured against.
+  /// durations times their speeds, and the samples since its last window at the last speed) —
+  /// what "every revolution" is measured against.
   double cutting_revolutions = 0.0;
   std::int64_t utime_us = 0;  ///< newest sample
   double spindle_rpm = 0.0;   ///< last revolution's speed, else the tracker's (0: none)
@@ -115,8 +116,9 @@ class Pipeline {
 
   /// Processes one block from any source.
   void process(const SampleBlock& block);
-  /// End of the record: processes the samples still held (zero-phase filtering) and says what
-  /// the record was too short for.
+  /// End of the record: processes the samples still held (zero-phase filtering), counts the
+  /// turns heard since the tracker's last window, and says what the record was too short for.
+  /// The last call for a record.
   void finish();
 
   /// Identification (not owned; null: none). Every synchronous-average window goes to it, due
@@ -170,6 +172,8 @@ class Pipeline {
     return input_.utime_of(input_sample(m));
   }
   void on_tracker_update();
+  /// Turns heard while cutting since the tracker's last window, not counted by it yet.
+  [[nodiscard]] double heard_since_update() const;
   void start_events();
   bool build_template(std::int64_t anchor, ToothEventTemplate& out);
   void on_revolution(const RevolutionEvents& events);
@@ -218,6 +222,7 @@ class Pipeline {
   bool ever_locked_ = false;
   std::int64_t inconsistent_windows_ = 0;  // cutting windows that did not agree, since a lock
   double cutting_revolutions_ = 0.0;
+  double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;
   double last_rpm_ = 0.0;
   bool realigned_ = false;  // the model was aligned again on a full window of the average

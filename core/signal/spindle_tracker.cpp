@@ -103,9 +103,10 @@ TrackerTiming tracker_timing(const SpindleTrackerConfig& c) {
   TrackerTiming t;
   const double rev_s = c.commanded_rpm > 0.0 ? 60.0 / c.commanded_rpm : 0.0;
   t.window_s = c.window_s > 0.0 ? c.window_s : std::clamp(10.0 * rev_s, 0.02, 0.25);
-  // Hann windows overlapping by half: every sample weighs the same summed over the windows, and
-  // each window is nearly independent of the last (a quarter-window hop cost twice the CPU for
-  // estimates three-quarters shared).
+  // Hann windows overlapping by half (the sum of the windows still weighs every sample the
+  // same): a quarter-window hop computed twice the estimates, each sharing three quarters of its
+  // samples with the last, for twice the CPU. The ramp trend (the last 6 hops) spans ~2.5
+  // windows.
   t.hop_s = c.hop_s > 0.0 ? std::min(c.hop_s, t.window_s) : 0.5 * t.window_s;
   return t;
 }

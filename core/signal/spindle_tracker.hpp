@@ -127,12 +127,12 @@ class SpindleTracker {
   /// The resolved window and hop (samples).
   [[nodiscard]] std::size_t window_samples() const { return window_; }
   [[nodiscard]] std::size_t hop_samples() const { return hop_; }
-  /// Samples process() takes from now until the one that starts the next update (≥ 1): a
-  /// caller can hand over that many at once and act on the update after the last.
   /// Samples taken since the last update (none before the first).
   [[nodiscard]] std::size_t samples_since_update() const {
     return estimate_.updates > 0 ? since_hop_ : 0;
   }
+  /// Samples process() takes from now until the one that starts the next update (≥ 1): a
+  /// caller can hand over that many at once and act on the update after the last.
   [[nodiscard]] std::size_t samples_to_update() const {
     const auto filled = static_cast<std::size_t>(next_sample_ - stream_start_);
     const std::size_t to_hop = since_hop_ < hop_ ? hop_ - since_hop_ : 0;
