@@ -9,26 +9,23 @@ namespace millwatch::messaging {
 namespace {
 
 // LCM encodes big-endian: a load and a byte swap (one instruction) on a little-endian machine.
-std::uint64_t big_endian_u64(const unsigned char* bytes) {
-  std::uint64_t v = 0;
+template <class Unsigned>
+Unsigned big_endian(const unsigned char* bytes) {
+  static_assert(sizeof(Unsigned) == 4 || sizeof(Unsigned) == 8);
+  Unsigned v = 0;
   std::memcpy(&v, bytes, sizeof v);
   if constexpr (std::endian::native == std::endian::little) {
-    v = __builtin_bswap64(v);
-  }
-  return v;
-}
-
-std::uint32_t big_endian_u32(const unsigned char* bytes) {
-  std::uint32_t v = 0;
-  std::memcpy(&v, bytes, sizeof v);
-  if constexpr (std::endian::native == std::endian::little) {
-    v = __builtin_bswap32(v);
+    if constexpr (sizeof(Unsigned) == 8) {
+      v = __builtin_bswap64(v);
+    } else {
+      v = __builtin_bswap32(v);
+    }
   }
   return v;
 }
 
 double big_endian_double(const unsigned char* bytes) {
-  return std::bit_cast<double>(big_endian_u64(bytes));
+  return std::bit_cast<double>(big_endian<std::uint64_t>(bytes));
 }
 
 std::string hex(std::uint64_t v) {
@@ -49,8 +46,8 @@ ForceBlockCheck check_force_block(const void* data, std::size_t size_bytes,
     return c;
   }
   const auto* bytes = static_cast<const unsigned char*>(data);
-  c.fingerprint = big_endian_u64(bytes);
-  c.num_samples = static_cast<std::int32_t>(big_endian_u32(bytes + 32));
+  c.fingerprint = big_endian<std::uint64_t>(bytes);
+  c.num_samples = static_cast<std::int32_t>(big_endian<std::uint32_t>(bytes + 32));
   if (c.fingerprint != static_cast<std::uint64_t>(force_block_t::getHash())) {
     c.problem = ForceBlockProblem::kWrongFingerprint;
   } else if (c.num_samples < 0) {
@@ -91,8 +88,8 @@ ForceBlockCheck decode_force_block_into(const void* data, std::size_t size_bytes
     return c;
   }
   const auto* bytes = static_cast<const unsigned char*>(data);
-  header.utime = static_cast<std::int64_t>(big_endian_u64(bytes + 8));
-  header.seq = static_cast<std::int64_t>(big_endian_u64(bytes + 16));
+  header.utime = static_cast<std::int64_t>(big_endian<std::uint64_t>(bytes + 8));
+  header.seq = static_cast<std::int64_t>(big_endian<std::uint64_t>(bytes + 16));
   header.sample_rate_hz = big_endian_double(bytes + 24);
   header.num_samples = static_cast<std::size_t>(c.num_samples);
   const std::size_t n = header.num_samples;
