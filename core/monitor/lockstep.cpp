@@ -185,16 +185,17 @@ std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
 }
 
 void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t count,
-                              const std::array<double*, 3>& out, double* squared) const {
+                              double* rows) const {
   const std::size_t n = filtered_[0].size();
   const auto grid = static_cast<double>(n);
   if (!(step_rad >= 0.0 && step_rad < kTwoPi)) {
     for (std::size_t i = 0; i < count; ++i) {
       const auto f = force_at(angle0_rad + step_rad * static_cast<double>(i));
-      out[0][i] = f[0];
-      out[1][i] = f[1];
-      out[2][i] = f[2];
-      squared[i] = f[0] * f[0] + f[1] * f[1];
+      double* r = rows + 4 * i;
+      r[0] = f[0];
+      r[1] = f[1];
+      r[2] = f[2];
+      r[3] = f[0] * f[0] + f[1] * f[1];
     }
     return;
   }
@@ -202,22 +203,27 @@ void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t co
   const double start = (turns - std::floor(turns)) * grid;  // [0, n]
   const double step = step_rad / kTwoPi * grid;             // grid points per sample, < n
   double wrapped = 0.0;  // whole turns of the grid passed, in grid points
-  for (std::size_t i = 0; i < count; ++i) {
+  // Signed indices: a double converts to a signed integer in one instruction (to an unsigned one
+  // only through a test and two paths); positions are in [0, n], far below 2⁶³.
+  const auto last_point = static_cast<std::int64_t>(n) - 1;
+  const auto samples = static_cast<std::int64_t>(count);
+  for (std::int64_t i = 0; i < samples; ++i) {
     double pos = start + step * static_cast<double>(i) - wrapped;
     if (pos >= grid) {
       wrapped += grid;
       pos -= grid;
     }
-    const auto k0 = std::min(static_cast<std::size_t>(pos), n - 1);
+    const std::int64_t k0 = std::min(static_cast<std::int64_t>(pos), last_point);
     const double f = pos - static_cast<double>(k0);
     // w[k0] + f·(w[k0 + 1] − w[k0]) from one row of the line table.
-    const double* t = &line_table_[k0 * kLineRow];
+    const double* t = &line_table_[static_cast<std::size_t>(k0) * kLineRow];
     const double fx = t[0] + f * t[3];
     const double fy = t[1] + f * t[4];
-    out[0][i] = fx;
-    out[1][i] = fy;
-    out[2][i] = t[2] + f * t[5];
-    squared[i] = fx * fx + fy * fy;
+    double* r = rows + 4 * i;
+    r[0] = fx;
+    r[1] = fy;
+    r[2] = t[2] + f * t[5];
+    r[3] = fx * fx + fy * fy;
   }
 }
 

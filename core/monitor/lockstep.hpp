@@ -55,11 +55,10 @@ class Lockstep {
   /// The filtered model force (N, model frame) at a tracker angle (rad, any turn).
   [[nodiscard]] std::array<double, 3> force_at(double tracker_angle_rad) const;
   /// force_at() along a line of tracker angles, angle0_rad + i·step_rad for i < count (step_rad
-  /// ≥ 0, less than a turn): fx, fy, fz into out[0..2] and fx² + fy² into `squared`. The
-  /// position on the model's grid advances by a step per sample instead of a division and a
-  /// floor each.
-  void forces_on_line(double angle0_rad, double step_rad, std::size_t count,
-                      const std::array<double*, 3>& out, double* squared) const;
+  /// ≥ 0, less than a turn): row i of `rows` (4 doubles a row, as the sample ring's) takes fx,
+  /// fy, fz and fx² + fy². The position on the model's grid advances by a step per sample
+  /// instead of a division and a floor each.
+  void forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows) const;
   /// The spindle frequency the model was built for (Hz; 0 before the first build).
   [[nodiscard]] double spindle_hz() const { return spindle_hz_; }
 

@@ -302,21 +302,33 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
   // Valleys are sought on the squared in-plane force: near a valley the force is nearly
   // linear in time, so its square is a smooth parabola.
   const auto stride = static_cast<std::size_t>(stride_);
-  std::array<double, kRingChannels> v{};
-  bool updated = false;
-  for (std::size_t i = 0; i < count; ++i) {
+  ring_.push_run(n, count, [&](std::size_t i, double* row) {
     const std::size_t j = i * stride;
-    const double detect = fx[j] * fx[j] + fy[j] * fy[j];
-    v = {fx[j], fy[j], fz[j], detect};
-    ring_.push(n + static_cast<std::int64_t>(i), v.data());
-    if (decimation_phase_ == 0) {
-      decimation_phase_ = decimation_;
-      const double magnitude = std::sqrt(detect);
-      // run_limit(): only the run's last sample can start an update.
-      updated = tracker_.process({&magnitude, 1}) > 0 || updated;
+    row[0] = fx[j];
+    row[1] = fy[j];
+    row[2] = fz[j];
+    row[3] = fx[j] * fx[j] + fy[j] * fy[j];
+  });
+  // Every decimation_-th measuring sample's magnitude to the tracker, a batch per call
+  // (run_limit(): only the run's last sample can start an update).
+  bool updated = false;
+  std::array<double, 64> magnitudes{};
+  std::size_t batch = 0;
+  for (auto i = static_cast<std::size_t>(decimation_phase_); i < count;
+       i += static_cast<std::size_t>(decimation_)) {
+    const std::size_t j = i * stride;
+    magnitudes[batch++] = std::sqrt(fx[j] * fx[j] + fy[j] * fy[j]);
+    if (batch == magnitudes.size()) {
+      updated = tracker_.process({magnitudes.data(), batch}) > 0 || updated;
+      batch = 0;
     }
-    --decimation_phase_;
   }
+  updated = tracker_.process({magnitudes.data(), batch}) > 0 || updated;
+  // Measuring samples until the tracker's next one, after the run.
+  const auto phase =
+      static_cast<std::int64_t>(decimation_phase_) - static_cast<std::int64_t>(count);
+  decimation_phase_ =
+      static_cast<int>(phase >= 0 ? phase : ((phase % decimation_) + decimation_) % decimation_);
   // What the last sample needs (run_limit(): none of the others needs anything).
   const std::int64_t last = n + static_cast<std::int64_t>(count) - 1;
   if (updated) {

@@ -64,9 +64,7 @@ RevolutionAnalyzer::RevolutionAnalyzer(const MonitorConfig& config,
     : sample_rate_hz_(config.sample_rate_hz),
       search_fraction_(config.search_fraction_of_pitch),
       sectors_(std::clamp(config.residual_sectors, 1, kMaxSectors)) {
-  for (auto& s : scratch_) {
-    s.assign(max_revolution_samples, 0.0);
-  }
+  model_rows_.assign(kModelRow * max_revolution_samples, 0.0);
 }
 
 void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
@@ -80,7 +78,7 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   m.boundary_sample = events.boundary_sample;
   m.valid = events.valid;
   m.bounded = events.bounded;
-  measure_revolution([&](int c, std::int64_t s) { return ring.row(s)[c]; }, sample_rate_hz_, m);
+  measure_revolution([&](std::int64_t s) { return ring.row(s); }, sample_rate_hz_, m);
   out.spindle_rpm = events.period_samples > 0.0 ? 60.0 * sample_rate_hz_ / events.period_samples
                                                 : 60.0 / m.period_s;
 
@@ -131,17 +129,14 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
                std::floor(std::min(events.boundary_sample[0], events.event_sample[0]))) -
            pad;
   const std::int64_t last = static_cast<std::int64_t>(std::ceil(events.event_sample[n])) + pad;
-  if (last - first_ + 1 > static_cast<std::int64_t>(scratch_[0].size()) || !(span > 0.0)) {
+  if (last - first_ + 1 > static_cast<std::int64_t>(model_rows_.size() / kModelRow) ||
+      !(span > 0.0)) {
     return false;
   }
   model.forces_on_line(map.at(static_cast<double>(first_)), map.slope_rad_per_sample,
-                       static_cast<std::size_t>(last - first_ + 1),
-                       {scratch_[0].data(), scratch_[1].data(), scratch_[2].data()},
-                       scratch_[3].data());
-  const auto channel = [&](int c, std::int64_t s) {
-    return scratch_[static_cast<std::size_t>(c)][static_cast<std::size_t>(s - first_)];
-  };
-  const auto detect = [&](std::int64_t s) { return channel(3, s); };
+                       static_cast<std::size_t>(last - first_ + 1), model_rows_.data());
+  const auto row = [&](std::int64_t s) { return model_row(s); };
+  const auto detect = [&](std::int64_t s) { return model_row(s)[3]; };
   RevolutionMeasurement& mm = out.model;
   mm.flutes = flutes;
   mm.sequence = events.sequence;
@@ -164,9 +159,113 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
     mm.boundary_sample[uk] = mm.event_sample[uk] - lead;
     mm.valid = mm.valid && found;
   }
-  measure_revolution(channel, sample_rate_hz_, mm);
+  measure_revolution(row, sample_rate_hz_, mm);
   return true;
 }
+
+namespace {
+
+/// The residuals' angle sectors along a revolution: the sector of sample s is that of its angle
+/// within the turn, a(s) = (start + slope·(s − from)) − turns, where turns steps by 2π once a(s)
+/// reaches 2π, in [0, sectors). Within a turn a(s) never decreases (every rounding is
+/// monotonic), so the sector changes only where the angle crosses a sector's edge: runs() finds
+/// those samples from the edges' angles and checks them with the per-sample arithmetic itself,
+/// so every sample gets the sector a per-sample walk would give it.
+class SectorWalk {
+ public:
+  SectorWalk(double start_rad, double slope_rad, std::int64_t from, int sectors)
+      : start_(start_rad),
+        slope_(slope_rad),
+        samples_per_rad_(1.0 / slope_rad),
+        from_(from),
+        sectors_(sectors),
+        per_rad_(sectors / kTwoPi),
+        rad_per_sector_(kTwoPi / sectors) {}
+
+  /// Calls run(first, last, sector) for the runs of samples in [from, to] that share a sector,
+  /// in order. Sample by sample where the angle does not advance (slope ≤ 0, not finite) or
+  /// turns twice.
+  template <typename Run>
+  void runs(std::int64_t to, const Run& run) const {
+    if (!(slope_ > 0.0) || !std::isfinite(start_) || !std::isfinite(slope_)) {
+      walk_each(to, run);
+      return;
+    }
+    // The first sample whose raw angle reaches a turn (to + 1: none), then the turn after it.
+    std::int64_t wrap = estimate(from_, to, kTwoPi, 0.0);
+    while (wrap <= to && raw(wrap) < kTwoPi) {
+      ++wrap;
+    }
+    while (wrap > from_ && raw(wrap - 1) >= kTwoPi) {
+      --wrap;
+    }
+    if (wrap <= to && raw(to) - kTwoPi >= kTwoPi) {
+      walk_each(to, run);  // a second turn: more than a revolution's span
+      return;
+    }
+    segment(from_, std::min(wrap - 1, to), 0.0, run);
+    segment(wrap, to, kTwoPi, run);
+  }
+
+ private:
+  [[nodiscard]] double raw(std::int64_t s) const {
+    return start_ + slope_ * static_cast<double>(s - from_);
+  }
+  [[nodiscard]] int sector_of(double a) const {
+    return std::clamp(static_cast<int>(a * per_rad_), 0, sectors_ - 1);
+  }
+  [[nodiscard]] int sector(std::int64_t s, double turns_rad) const {
+    return sector_of(raw(s) - turns_rad);
+  }
+  /// About where, in [lo, hi + 1], the line's angle less turns reaches `angle` (to be checked).
+  [[nodiscard]] std::int64_t estimate(std::int64_t lo, std::int64_t hi, double angle,
+                                      double turns_rad) const {
+    const double samples =
+        std::clamp(std::ceil((angle + turns_rad - start_) * samples_per_rad_), -1.0, 1e15);
+    return std::clamp(from_ + static_cast<std::int64_t>(samples), lo, hi + 1);
+  }
+  template <typename Run>
+  void segment(std::int64_t lo, std::int64_t hi, double turns_rad, const Run& run) const {
+    std::int64_t s = lo;
+    while (s <= hi) {
+      const int k = sector(s, turns_rad);
+      // The run ends before the first sample of a later sector: from the edge's angle, then
+      // checked by the samples' own sectors.
+      std::int64_t end =
+          k + 1 < sectors_ ? estimate(s + 1, hi, (k + 1) * rad_per_sector_, turns_rad) : hi + 1;
+      while (end <= hi && sector(end, turns_rad) == k) {
+        ++end;
+      }
+      while (end - 1 > s && sector(end - 1, turns_rad) != k) {
+        --end;
+      }
+      run(s, end - 1, k);
+      s = end;
+    }
+  }
+  template <typename Run>
+  void walk_each(std::int64_t to, const Run& run) const {
+    double turns_rad = 0.0;
+    for (std::int64_t s = from_; s <= to; ++s) {
+      double a = raw(s) - turns_rad;
+      if (a >= kTwoPi) {
+        turns_rad += kTwoPi;
+        a -= kTwoPi;
+      }
+      run(s, s, sector_of(a));
+    }
+  }
+
+  double start_;
+  double slope_;
+  double samples_per_rad_;
+  std::int64_t from_;
+  int sectors_;
+  double per_rad_;
+  double rad_per_sector_;
+};
+
+}  // namespace
 
 void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleRing& ring,
                                    const AngleMap& map, RevolutionRecord& out) const {
@@ -183,56 +282,79 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   std::array<double, kMaxSectors> sector_sum{};
   std::array<int, kMaxSectors> sector_n{};
   std::size_t flute = 0;
-  const double sectors_per_rad = sectors_ / kTwoPi;
   // The angle within the turn, [0, 2π), from the first sample's on: the map is a line.
   double start_rad = map.at(static_cast<double>(from));
   start_rad -= kTwoPi * std::floor(start_rad / kTwoPi);
-  double turns_rad = 0.0;  // whole turns passed since `from`
   // A run of samples in one flute window and one sector is summed in registers, then added to
-  // its sums (adding to memory sample by sample would wait on each store).
+  // its sums (adding to memory sample by sample would wait on each store). The flute's and the
+  // sector's run sums are two sums of the same terms, reset at their own edges.
   std::size_t run_sector = 0;
   double run_sector_sum = 0.0;
   int run_sector_n = 0;
   double run_flute_sum = 0.0;
   int run_flute_n = 0;
-  for (std::int64_t s = from; s <= to; ++s) {
-    const auto i = static_cast<std::size_t>(s - first_);
-    const double* v = ring.row(s);
-    std::array<double, 3> d{};
-    for (std::size_t a = 0; a < 3; ++a) {
-      d[a] = v[a] - scratch_[a][i];
-      sum[a] += d[a] * d[a];
+  // Samples [first, last], all in one sector and one flute window.
+  const auto piece = [&](std::int64_t first, std::int64_t last) {
+    // In locals: the compiler cannot keep sums reached through the closure in registers while
+    // the loop reads doubles through pointers that might alias them.
+    double sx = sum[0], sy = sum[1], sz = sum[2], sm = measured_sum;
+    double sf = run_flute_sum, ss = run_sector_sum;
+    for (std::int64_t s = first; s <= last; ++s) {
+      const double* v = ring.row(s);
+      const double* model = model_row(s);
+      const double dx = v[0] - model[0];
+      const double dy = v[1] - model[1];
+      const double dz = v[2] - model[2];
+      const double dx2 = dx * dx;
+      const double dy2 = dy * dy;
+      sx += dx2;
+      sy += dy2;
+      sz += dz * dz;
+      sm += v[3];  // Fx² + Fy²
+      const double d_xy2 = dx2 + dy2;
+      sf += d_xy2;
+      ss += d_xy2;
     }
-    measured_sum += v[3];  // Fx² + Fy²
-    const double d_xy2 = d[0] * d[0] + d[1] * d[1];
-    if (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
-      flute_sum[flute] += run_flute_sum;
-      flute_n[flute] += run_flute_n;
-      run_flute_sum = 0.0;
-      run_flute_n = 0;
-      while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
-        ++flute;
-      }
-    }
-    run_flute_sum += d_xy2;
-    ++run_flute_n;
-    double a = start_rad + map.slope_rad_per_sample * static_cast<double>(s - from) - turns_rad;
-    if (a >= kTwoPi) {
-      turns_rad += kTwoPi;
-      a -= kTwoPi;
-    }
-    const auto sector = static_cast<std::size_t>(
-        std::clamp(static_cast<int>(a * sectors_per_rad), 0, sectors_ - 1));
-    if (sector != run_sector) {
-      sector_sum[run_sector] += run_sector_sum;
-      sector_n[run_sector] += run_sector_n;
-      run_sector = sector;
-      run_sector_sum = 0.0;
-      run_sector_n = 0;
-    }
-    run_sector_sum += d_xy2;
-    ++run_sector_n;
-  }
+    sum = {sx, sy, sz};
+    measured_sum = sm;
+    run_flute_sum = sf;
+    run_sector_sum = ss;
+    const auto count = static_cast<int>(last - first + 1);
+    run_flute_n += count;
+    run_sector_n += count;
+  };
+  SectorWalk(start_rad, map.slope_rad_per_sample, from, sectors_)
+      .runs(to, [&](std::int64_t first, std::int64_t last, int sector) {
+        const auto k = static_cast<std::size_t>(sector);
+        if (k != run_sector) {
+          sector_sum[run_sector] += run_sector_sum;
+          sector_n[run_sector] += run_sector_n;
+          run_sector = k;
+          run_sector_sum = 0.0;
+          run_sector_n = 0;
+        }
+        // The flute windows: flute j + 1's from the first sample at or after its boundary.
+        for (std::int64_t s = first; s <= last;) {
+          if (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
+            flute_sum[flute] += run_flute_sum;
+            flute_n[flute] += run_flute_n;
+            run_flute_sum = 0.0;
+            run_flute_n = 0;
+            while (flute + 1 < n_flutes && static_cast<double>(s) >= m.boundary_sample[flute + 1]) {
+              ++flute;
+            }
+          }
+          std::int64_t end = last;
+          if (flute + 1 < n_flutes) {
+            const double edge = std::ceil(m.boundary_sample[flute + 1]);
+            if (edge <= static_cast<double>(last)) {
+              end = std::max(s, static_cast<std::int64_t>(edge) - 1);
+            }
+          }
+          piece(s, end);
+          s = end + 1;
+        }
+      });
   flute_sum[flute] += run_flute_sum;
   flute_n[flute] += run_flute_n;
   sector_sum[run_sector] += run_sector_sum;

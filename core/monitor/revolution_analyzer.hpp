@@ -63,8 +63,15 @@ class RevolutionAnalyzer {
   double sample_rate_hz_ = 0.0;
   double search_fraction_ = 0.3;
   int sectors_ = 0;
-  // The model revolution, fx, fy, fz and the squared in-plane force, from sample first_.
-  std::array<std::vector<double>, 4> scratch_;
+  /// The model's row at absolute sample s (first_ ≤ s).
+  [[nodiscard]] const double* model_row(std::int64_t s) const {
+    return &model_rows_[kModelRow * static_cast<std::size_t>(s - first_)];
+  }
+
+  // The model revolution from sample first_, a row per sample as the ring holds them: fx, fy,
+  // fz and the squared in-plane force.
+  static constexpr std::size_t kModelRow = 4;
+  std::vector<double> model_rows_;
   std::int64_t first_ = 0;
 };
 

@@ -17,6 +17,10 @@
 
 #include "core/monitor/extremum.hpp"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace millwatch::monitor {
 
 inline constexpr int kMaxFlutes = 8;
@@ -49,13 +53,94 @@ struct RevolutionMeasurement {
   bool bounded = false;
 };
 
-/// Measures one revolution. `channel(c, n)` returns channel c (0 fx, 1 fy, 2 fz, 3 the squared
-/// in-plane force fx² + fy², as the pipeline's ring holds it) at absolute sample n for every n in
-/// [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the events, the boundaries and
-/// validity already; the periods and forces are filled in. One pass over each flute's window
-/// finds every channel's extremes.
-template <typename Channel>
-void measure_revolution(const Channel& channel, double sample_rate_hz, RevolutionMeasurement& m) {
+/// Extremes of the four channels of a row (fx, fy, fz, fx² + fy²) over samples [from, to].
+struct RowExtremes {
+  std::array<double, 4> lowest{};
+  std::array<double, 4> highest{};
+};
+
+/// `row(n)` returns the four channels of absolute sample n side by side. One pass of
+/// minimum/maximum (two channels per SSE2 register: the same comparisons as `v < lowest ? v :
+/// lowest`, so the same values, bit for bit).
+template <typename Rows>
+RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to) {
+  RowExtremes e;
+#if defined(__SSE2__)
+  const double* r = row(from);
+  __m128d low_xy = _mm_loadu_pd(r), high_xy = low_xy;
+  __m128d low_zq = _mm_loadu_pd(r + 2), high_zq = low_zq;
+  for (std::int64_t n = from + 1; n <= to; ++n) {
+    r = row(n);
+    const __m128d xy = _mm_loadu_pd(r);
+    const __m128d zq = _mm_loadu_pd(r + 2);
+    // minpd(v, low) is v < low ? v : low; maxpd(v, high) is v > high ? v : high.
+    low_xy = _mm_min_pd(xy, low_xy);
+    high_xy = _mm_max_pd(xy, high_xy);
+    low_zq = _mm_min_pd(zq, low_zq);
+    high_zq = _mm_max_pd(zq, high_zq);
+  }
+  _mm_storeu_pd(&e.lowest[0], low_xy);
+  _mm_storeu_pd(&e.lowest[2], low_zq);
+  _mm_storeu_pd(&e.highest[0], high_xy);
+  _mm_storeu_pd(&e.highest[2], high_zq);
+#else
+  const double* r = row(from);
+  for (std::size_t c = 0; c < 4; ++c) {
+    e.lowest[c] = e.highest[c] = r[c];
+  }
+  for (std::int64_t n = from + 1; n <= to; ++n) {
+    r = row(n);
+    for (std::size_t c = 0; c < 4; ++c) {
+      e.lowest[c] = r[c] < e.lowest[c] ? r[c] : e.lowest[c];
+      e.highest[c] = r[c] > e.highest[c] ? r[c] : e.highest[c];
+    }
+  }
+#endif
+  return e;
+}
+
+/// For each channel c, the first sample in [from, to] whose value equals target[c] (from if none:
+/// a NaN), in one pass that ends when all four are found.
+template <typename Rows>
+std::array<std::int64_t, 4> first_equal(const Rows& row, std::int64_t from, std::int64_t to,
+                                        const std::array<double, 4>& target) {
+  std::array<std::int64_t, 4> at{from, from, from, from};
+  unsigned found = 0;  // bit c: channel c's sample is known
+#if defined(__SSE2__)
+  const __m128d t_xy = _mm_loadu_pd(&target[0]);
+  const __m128d t_zq = _mm_loadu_pd(&target[2]);
+  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
+    const double* r = row(n);
+    const auto equal =
+        static_cast<unsigned>(_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r), t_xy)) |
+                              (_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r + 2), t_zq)) << 2));
+#else
+  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
+    const double* r = row(n);
+    unsigned equal = 0;
+    for (unsigned c = 0; c < 4; ++c) {
+      equal |= r[c] == target[c] ? 1U << c : 0U;
+    }
+#endif
+    unsigned fresh = equal & ~found;
+    found |= fresh;
+    for (std::size_t c = 0; fresh != 0; ++c, fresh >>= 1) {
+      if ((fresh & 1U) != 0) {
+        at[c] = n;
+      }
+    }
+  }
+  return at;
+}
+
+/// Measures one revolution. `row(n)` returns the four channels of absolute sample n side by side
+/// (fx, fy, fz and the squared in-plane force fx² + fy², as the pipeline's ring holds them) for
+/// every n in [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the events, the
+/// boundaries and validity already; the periods and forces are filled in. Per flute window one
+/// pass finds every channel's extremes, then a short scan the first sample at the extreme each
+/// peak is refined at (the sample a pass tracking strict new extremes would keep).
+template <typename Rows>
+void measure_revolution(const Rows& row, double sample_rate_hz, RevolutionMeasurement& m) {
   const int flutes = m.flutes;
   const double dt = 1.0 / sample_rate_hz;
   const auto ux = static_cast<std::size_t>(flutes);
@@ -65,35 +150,18 @@ void measure_revolution(const Channel& channel, double sample_rate_hz, Revolutio
     m.flute_period_s[uj] = (m.event_sample[uj + 1] - m.event_sample[uj]) * dt;
     const auto from = static_cast<std::int64_t>(std::ceil(m.boundary_sample[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(m.boundary_sample[uj + 1]));
-    // fx, fy, fz: the sample of largest magnitude and the range; the resultant's largest square.
-    std::array<double, 3> lowest{}, highest{};
-    std::array<std::int64_t, 3> at_low{from, from, from}, at_high{from, from, from};
+    const RowExtremes x = row_extremes(row, from, to);
+    // The sample each peak is refined at: fx, fy, fz's of largest magnitude, the resultant's
+    // largest square.
+    std::array<double, 4> extreme{};
     for (std::size_t c = 0; c < 3; ++c) {
-      lowest[c] = highest[c] = channel(static_cast<int>(c), from);
+      extreme[c] = std::fabs(x.lowest[c]) > std::fabs(x.highest[c]) ? x.lowest[c] : x.highest[c];
     }
-    std::int64_t best_squared = from;
-    double largest_squared = channel(3, from);
-    // Written as selects, not branches: a force rising or falling through a flute's window
-    // makes "a new extreme" true and false in runs the branch predictor keeps missing.
-    for (std::int64_t n = from + 1; n <= to; ++n) {
-      for (std::size_t c = 0; c < 3; ++c) {
-        const double v = channel(static_cast<int>(c), n);
-        const bool below = v < lowest[c];
-        const bool above = v > highest[c];
-        lowest[c] = below ? v : lowest[c];
-        at_low[c] = below ? n : at_low[c];
-        highest[c] = above ? v : highest[c];
-        at_high[c] = above ? n : at_high[c];
-      }
-      const double q = channel(3, n);
-      const bool larger = q > largest_squared;
-      largest_squared = larger ? q : largest_squared;
-      best_squared = larger ? n : best_squared;
-    }
+    extreme[3] = x.highest[3];
+    const std::array<std::int64_t, 4> at = first_equal(row, from, to, extreme);
     for (std::size_t c = 0; c < 3; ++c) {
-      auto value = [&](std::int64_t n) { return channel(static_cast<int>(c), n); };
-      const std::int64_t best =
-          std::fabs(lowest[c]) > std::fabs(highest[c]) ? at_low[c] : at_high[c];
+      auto value = [&](std::int64_t n) { return row(n)[c]; };
+      const std::int64_t best = at[c];
       double peak = value(best);
       if (best > from && best < to) {
         const Extremum e = refine_extremum(value, best, 1, peak < 0.0);
@@ -102,12 +170,13 @@ void measure_revolution(const Channel& channel, double sample_rate_hz, Revolutio
         }
       }
       m.peak_N[uj][c] = peak;
-      m.range_N[uj][c] = highest[c] - lowest[c];
+      m.range_N[uj][c] = x.highest[c] - x.lowest[c];
     }
     // The in-plane resultant √(fx² + fy²), searched on its square.
-    double peak = std::sqrt(largest_squared);
+    const std::int64_t best_squared = at[3];
+    double peak = std::sqrt(row(best_squared)[3]);
     if (best_squared > from && best_squared < to) {
-      const Extremum e = refine_extremum([&](std::int64_t n) { return std::sqrt(channel(3, n)); },
+      const Extremum e = refine_extremum([&](std::int64_t n) { return std::sqrt(row(n)[3]); },
                                          best_squared, 1, false);
       if (e.valid) {
         peak = e.value;

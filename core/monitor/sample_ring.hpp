@@ -36,6 +36,32 @@ class SampleRing {
       slot[c] = values[c];
     }
   }
+  /// push() of `count` samples from index `first` on: fill(i, slot) writes sample first + i's
+  /// channels into slot (rows in order, one test of the ring's end per row).
+  template <typename Fill>
+  void push_run(std::int64_t first, std::size_t count, const Fill& fill) {
+    if (count == 0) {
+      return;
+    }
+    if (first != newest_ + 1 || empty()) {
+      oldest_ = first;
+    }
+    newest_ = first + static_cast<std::int64_t>(count) - 1;
+    if (newest_ - oldest_ >= static_cast<std::int64_t>(capacity_)) {
+      oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
+    }
+    std::size_t at = static_cast<std::size_t>(first) & mask_;
+    double* slot = &data_[at * channels_];
+    for (std::size_t i = 0; i < count; ++i) {
+      fill(i, slot);
+      if (++at == capacity_) {
+        at = 0;
+        slot = data_.data();
+      } else {
+        slot += channels_;
+      }
+    }
+  }
   /// Value of channel c at absolute index n (oldest() ≤ n ≤ newest()).
   [[nodiscard]] double at(int channel, std::int64_t n) const {
     return row(n)[static_cast<std::size_t>(channel)];

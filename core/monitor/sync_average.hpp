@@ -17,6 +17,10 @@
 #include <numbers>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace millwatch::monitor {
 
 template <int Channels>
@@ -80,6 +84,12 @@ class SyncAverageOf {
       }
       return;
     }
+#if defined(__SSE2__)
+    if constexpr (Channels == 3) {
+      add_dense_sse2(count, position, values);
+      return;
+    }
+#endif
     int k0 = -1;
     Row lo{}, hi{};
     for (std::size_t i = 0; i < count; ++i) {
@@ -134,9 +144,15 @@ class SyncAverageOf {
       }
     }
   }
-  [[nodiscard]] int bins() const { return bins_; }
-  [[nodiscard]] int revolutions() const { return filled_; }
-  [[nodiscard]] int window() const { return window_; }
+  [[nodiscard]] int bins() const {
+    return bins_;
+  }
+  [[nodiscard]] int revolutions() const {
+    return filled_;
+  }
+  [[nodiscard]] int window() const {
+    return window_;
+  }
   void clear() {
     std::fill(sums_.begin(), sums_.end(), 0.0);
     slot_ = 0;
@@ -180,6 +196,48 @@ class SyncAverageOf {
       hi[c] = 0.0;
     }
   }
+#if defined(__SSE2__)
+  /// add_line()'s dense samples for three channels: a run's sums in four SSE2 registers, (c0, c1)
+  /// and (c2, weight) for the bin and the next; the weight's terms are (1 − w)·1 and w·1, exactly
+  /// 1 − w and w, so each lane adds what the scalar loop adds, bit for bit.
+  template <typename Position, typename ValuesOf>
+  void add_dense_sse2(std::size_t count, const Position& position, const ValuesOf& values) {
+    int k0 = -1;
+    __m128d lo01 = _mm_setzero_pd(), lo2w = _mm_setzero_pd();
+    __m128d hi01 = _mm_setzero_pd(), hi2w = _mm_setzero_pd();
+    const auto flush = [&] {
+      if (k0 < 0) {
+        return;
+      }
+      double* a = &sums_[index(slot_, k0)];
+      double* b = &sums_[index(slot_, k0 + 1 == bins_ ? 0 : k0 + 1)];
+      _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), lo01));
+      _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), lo2w));
+      _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), hi01));
+      _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), hi2w));
+      lo01 = lo2w = hi01 = hi2w = _mm_setzero_pd();
+    };
+    for (std::size_t i = 0; i < count; ++i) {
+      const double pos = position(i);
+      const int k = std::min(static_cast<int>(pos), bins_ - 1);
+      const double w = pos - k;
+      if (k != k0) {
+        flush();
+        k0 = k;
+      }
+      const Values v = values(i);
+      const __m128d v01 = _mm_loadu_pd(v.data());
+      const __m128d v2_one = _mm_set_pd(1.0, v[2]);
+      const __m128d wa = _mm_set1_pd(1.0 - w);
+      const __m128d wb = _mm_set1_pd(w);
+      lo01 = _mm_add_pd(lo01, _mm_mul_pd(wa, v01));
+      lo2w = _mm_add_pd(lo2w, _mm_mul_pd(wa, v2_one));
+      hi01 = _mm_add_pd(hi01, _mm_mul_pd(wb, v01));
+      hi2w = _mm_add_pd(hi2w, _mm_mul_pd(wb, v2_one));
+    }
+    flush();
+  }
+#endif
   /// Adds one sample at bin position pos ∈ [0, bins] to its two bins.
   void add_at(double pos, const Values& v) {
     const int k = std::min(static_cast<int>(pos), bins_ - 1);
@@ -189,6 +247,21 @@ class SyncAverageOf {
   void add_to(int k, double w, const Values& v) {
     double* a = &sums_[index(slot_, k)];
     double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
+#if defined(__SSE2__)
+    if constexpr (Channels == 3) {
+      // A row is two pairs, (c0, c1) and (c2, weight): the weight's term is (1 − w)·1, exactly
+      // 1 − w, so each lane computes what the loop below does, bit for bit.
+      const __m128d v01 = _mm_loadu_pd(v.data());
+      const __m128d v2_one = _mm_set_pd(1.0, v[2]);
+      const __m128d wa = _mm_set1_pd(1.0 - w);
+      const __m128d wb = _mm_set1_pd(w);
+      _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), _mm_mul_pd(wa, v01)));
+      _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), _mm_mul_pd(wa, v2_one)));
+      _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), _mm_mul_pd(wb, v01)));
+      _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), _mm_mul_pd(wb, v2_one)));
+      return;
+    }
+#endif
     for (std::size_t c = 0; c < kValues; ++c) {
       a[c] += (1.0 - w) * v[c];
       b[c] += w * v[c];
