@@ -11,6 +11,7 @@
 
 #include "core/monitor/input_check.hpp"
 #include "shell/decimal_number.hpp"
+#include "shell/decimal_row.hpp"
 #include "shell/out_of_range_number.hpp"
 
 namespace millwatch::shell {
@@ -145,10 +146,11 @@ bool CsvCutReader::fill() {
     next_ = 0;
     lines_end_ = 0;
     data_end_ = kept;
-    if (buffer_.size() < kept + read_bytes_ + 1) {
-      // Room for a read after a line of up to 4 KiB; a longer line doubles it.
-      buffer_.resize(
-          std::max(kept + read_bytes_ + 1, std::max(2 * buffer_.size(), read_bytes_ + 4096)));
+    // Room for a read and an end-of-line, and for read_decimal_row4() to look that far past.
+    const std::size_t needed = kept + read_bytes_ + 1 + kDecimalRowReach;
+    if (buffer_.size() < needed) {
+      // After a line of up to 4 KiB; a longer line doubles it.
+      buffer_.resize(std::max(needed, std::max(2 * buffer_.size(), read_bytes_ + 4096)));
     }
     if (at_end_) {
       if (kept == 0) {
@@ -198,7 +200,12 @@ bool CsvCutReader::parse_next(Row& row) {
     if (layout_.format == TextFormat::kMillwatch) {
       const char* from = buffer_.data() + next_;
       const char* p = from;
-      if (const char* problem = parse_row(p, buffer_.data() + lines_end_, v); problem != nullptr) {
+      // The usual row at once (fill() leaves kDecimalRowReach readable bytes past the data);
+      // any other, or a bad one, number by number.
+      if (const int length = read_decimal_row4(from, v); length > 0) {
+        p = from + length - 1;
+      } else if (const char* problem = parse_row(p, buffer_.data() + lines_end_, v);
+                 problem != nullptr) {
         take_line(line);
         if (!line.empty()) {  // an empty line is no row
           bad(line_, std::string(problem) + " in \"" + std::string(line.substr(0, 60)) + "\"");
