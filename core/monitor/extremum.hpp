@@ -2,6 +2,7 @@
 // Sub-sample location of a valley or peak from a least-squares polynomial through the 2h+1
 // samples around the discrete extreme (u in samples from it).
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 
@@ -13,6 +14,42 @@ struct Extremum {
   bool valid = false;     ///< false when the fit is not curved the right way
 };
 
+/// The centred fit's moments s_k = Σ u^k over u = −h..h and its normal equations' determinants.
+struct FitMoments {
+  double s0 = 0.0, s2 = 0.0, s4 = 0.0, s6 = 0.0;
+  double det_even = 0.0;  ///< s0·s4 − s2²
+  double det_odd = 0.0;   ///< s2·s6 − s4²
+};
+
+/// The moments in closed form (Faulhaber's sums, doubled): exact while they stay below 2⁵³ (h up
+/// to ~100), within rounding beyond, like the sums themselves.
+inline FitMoments fit_moments(int half_width) {
+  const auto h = static_cast<double>(half_width);
+  const double base = h * (h + 1.0) * (2.0 * h + 1.0);
+  FitMoments m;
+  m.s0 = 2.0 * h + 1.0;
+  m.s2 = base / 3.0;
+  m.s4 = base * (3.0 * h * h + 3.0 * h - 1.0) / 15.0;
+  m.s6 = base * (((3.0 * h + 6.0) * h * h - 3.0) * h + 1.0) / 21.0;
+  m.det_even = m.s0 * m.s4 - m.s2 * m.s2;
+  m.det_odd = m.s2 * m.s6 - m.s4 * m.s4;
+  return m;
+}
+
+/// fit_moments(h), from a table for the usual widths (the same values: computed by it once).
+inline FitMoments usual_fit_moments(int half_width) {
+  constexpr int kTabled = 64;
+  static const std::array<FitMoments, kTabled + 1> table = [] {
+    std::array<FitMoments, kTabled + 1> t{};
+    for (int h = 0; h <= kTabled; ++h) {
+      t[static_cast<std::size_t>(h)] = fit_moments(h);
+    }
+    return t;
+  }();
+  return half_width >= 0 && half_width <= kTabled ? table[static_cast<std::size_t>(half_width)]
+                                                  : fit_moments(half_width);
+}
+
 /// `signal(n)` returns the sample at absolute index n for n in [center − h, center + h].
 /// h = 1: three-point parabola. h ≥ 2: least-squares cubic a + b·u + c·u² + d·u³, whose
 /// stationary point nearest the centre is the extreme — the cubic term absorbs the asymmetry of
@@ -21,14 +58,8 @@ template <typename Signal>
 Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_width, bool minimum) {
   // Normal equations of the centred fit decouple (odd moments vanish by symmetry):
   //   [s0 s2; s2 s4]·[a c] = [y0 y2],  [s2 s4; s4 s6]·[b d] = [y1 y3].
-  // The moments s_k = Σ u^k over u = −h..h in closed form (Faulhaber's sums, doubled): exact
-  // while they stay below 2⁵³ (h up to ~100), within rounding beyond, like the sums themselves.
-  const auto h = static_cast<double>(half_width);
-  const double base = h * (h + 1.0) * (2.0 * h + 1.0);
-  const double s0 = 2.0 * h + 1.0;
-  const double s2 = base / 3.0;
-  const double s4 = base * (3.0 * h * h + 3.0 * h - 1.0) / 15.0;
-  const double s6 = base * (((3.0 * h + 6.0) * h * h - 3.0) * h + 1.0) / 21.0;
+  const FitMoments m = usual_fit_moments(half_width);
+  const double s0 = m.s0, s2 = m.s2, s4 = m.s4, s6 = m.s6;
   double y0 = 0.0, y1 = 0.0, y2 = 0.0, y3 = 0.0;
   for (int u = -half_width; u <= half_width; ++u) {
     const double y = signal(center + u);
@@ -39,13 +70,13 @@ Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_wid
     y2 += u2 * y;
     y3 += u2 * u1 * y;
   }
-  const double det_even = s0 * s4 - s2 * s2;
+  const double det_even = m.det_even;
   const double a = (s4 * y0 - s2 * y2) / det_even;
   const double c = (s0 * y2 - s2 * y0) / det_even;
   double b = y1 / s2;
   double d = 0.0;
   if (half_width >= 2) {
-    const double det_odd = s2 * s6 - s4 * s4;
+    const double det_odd = m.det_odd;
     b = (s6 * y1 - s4 * y3) / det_odd;
     d = (s2 * y3 - s4 * y1) / det_odd;
   }

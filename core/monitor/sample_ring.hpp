@@ -51,14 +51,14 @@ class SampleRing {
       oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
     }
     std::size_t at = static_cast<std::size_t>(first) & mask_;
-    double* slot = &data_[at * channels_];
+    double* slot = &data_[at << row_shift_];
     for (std::size_t i = 0; i < count; ++i) {
       fill(i, slot);
       if (++at == capacity_) {
         at = 0;
         slot = data_.data();
       } else {
-        slot += channels_;
+        slot += std::size_t{1} << row_shift_;
       }
     }
   }
@@ -68,7 +68,7 @@ class SampleRing {
   }
   /// Every channel of sample n, side by side (oldest() ≤ n ≤ newest()).
   [[nodiscard]] const double* row(std::int64_t n) const {
-    return &data_[(static_cast<std::size_t>(n) & mask_) * channels_];
+    return &data_[(static_cast<std::size_t>(n) & mask_) << row_shift_];
   }
   [[nodiscard]] bool empty() const { return newest_ < oldest_; }
   [[nodiscard]] std::int64_t oldest() const { return oldest_; }
@@ -79,10 +79,13 @@ class SampleRing {
 
  private:
   [[nodiscard]] double* row(std::int64_t n) {
-    return &data_[(static_cast<std::size_t>(n) & mask_) * channels_];
+    return &data_[(static_cast<std::size_t>(n) & mask_) << row_shift_];
   }
 
   std::size_t channels_ = 0;
+  // A row holds 2^row_shift_ doubles (the channels rounded up): a row's place is a shift, not a
+  // multiplication, in every access.
+  std::size_t row_shift_ = 0;
   std::size_t capacity_ = 0;
   std::size_t mask_ = 0;
   std::vector<double> data_;  // [sample slot][channel]

@@ -78,8 +78,11 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     return out;
   }
   std::int64_t best = center - half;
-  for (std::int64_t n = center - half; n <= center + half; ++n) {
-    if (detect(n) < detect(best)) {
+  double lowest = detect(best);
+  for (std::int64_t n = center - half + 1; n <= center + half; ++n) {
+    const double v = detect(n);
+    if (v < lowest) {
+      lowest = v;
       best = n;
     }
   }
