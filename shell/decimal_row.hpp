@@ -10,6 +10,7 @@
 // Where a row is read, every number is the double read_decimal() gives (the same mantissa and
 // decimals, one correctly rounded division by an exact power of ten).
 
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 
@@ -19,8 +20,17 @@
 
 namespace millwatch::shell {
 
-/// Bytes read_decimal_row4() may read from the row's start, whatever the row's length.
-inline constexpr std::size_t kDecimalRowReach = 64;
+/// Bytes read_decimal_row4() may read from the row's start, whatever the row's length: the 64 it
+/// scans, and eight from a field's start at byte 62 at most.
+inline constexpr std::size_t kDecimalRowReach = 72;
+
+/// Whether read_decimal_row4() reads rows here (it needs SSE2; without it, it leaves every row
+/// to the general reader).
+#if defined(__SSE2__)
+inline constexpr bool kDecimalRowsRead = true;
+#else
+inline constexpr bool kDecimalRowsRead = false;
+#endif
 
 namespace detail {
 

@@ -183,11 +183,12 @@ class SectorWalk {
         rad_per_sector_(kTwoPi / sectors) {}
 
   /// Calls run(first, last, sector) for the runs of samples in [from, to] that share a sector,
-  /// in order. Sample by sample where the angle does not advance (slope ≤ 0, not finite) or
-  /// turns twice.
+  /// in order. Sample by sample where the angle does not advance (slope ≤ 0, not finite, or so
+  /// small that its inverse is not) or turns twice.
   template <typename Run>
   void runs(std::int64_t to, const Run& run) const {
-    if (!(slope_ > 0.0) || !std::isfinite(start_) || !std::isfinite(slope_)) {
+    if (!(slope_ > 0.0) || !std::isfinite(start_) || !std::isfinite(slope_) ||
+        !std::isfinite(samples_per_rad_)) {  // a subnormal slope: its inverse is infinite
       walk_each(to, run);
       return;
     }
