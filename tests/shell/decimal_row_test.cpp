@@ -78,23 +78,30 @@ void expect_left_to_general_reader(const std::string& row) {
   }
 }
 
+/// A row of four random decimals printed with "%.*f": magnitudes 10^[lo, hi), either sign, 0 to
+/// max_decimals decimals.
+std::string random_row(std::mt19937_64& rng, double lo, double hi, int max_decimals) {
+  std::uniform_real_distribution<double> magnitude(lo, hi);
+  std::uniform_int_distribution<int> decimals(0, max_decimals);
+  std::string row;
+  for (int f = 0; f < 4; ++f) {
+    const double v = (rng() % 2 == 0 ? -1.0 : 1.0) * std::pow(10.0, magnitude(rng));
+    char field[64];
+    std::snprintf(field, sizeof field, "%.*f", decimals(rng), v);
+    row += field;
+    row += f < 3 ? ',' : '\n';
+  }
+  return row;
+}
+
 TEST(DecimalRow, SameAsNumberByNumberOnPlainRows) {
   if (!kDecimalRowsRead) {
     GTEST_SKIP() << "no SSE2: every row is left to the general reader";
   }
   // At most 4 + 11 digits a field: every mantissa below 2^53, every row read.
   std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> magnitude(-9.0, 3.9);
-  std::uniform_int_distribution<int> precision(0, 11);
   for (int i = 0; i < 100000; ++i) {
-    std::string row;
-    for (int f = 0; f < 4; ++f) {
-      const double v = (rng() % 2 == 0 ? -1.0 : 1.0) * std::pow(10.0, magnitude(rng));
-      char field[40];
-      std::snprintf(field, sizeof field, "%.*f", precision(rng), v);
-      row += field;
-      row += f < 3 ? ',' : '\n';
-    }
+    const std::string row = random_row(rng, -9.0, 3.9, 11);
     if (row.size() > 63) {
       expect_left_to_general_reader(row);  // beyond the reach
       continue;
@@ -109,18 +116,9 @@ TEST(DecimalRow, ReadRowsAreReadAsNumberByNumber) {
   }
   // Any lengths: a row is read (the same doubles) or left whole, never read otherwise.
   std::mt19937_64 rng(12);
-  std::uniform_real_distribution<double> magnitude(-12.0, 8.0);
-  std::uniform_int_distribution<int> precision(0, 22);
   int read = 0;
   for (int i = 0; i < 100000; ++i) {
-    std::string row;
-    for (int f = 0; f < 4; ++f) {
-      const double v = (rng() % 2 == 0 ? -1.0 : 1.0) * std::pow(10.0, magnitude(rng));
-      char field[64];
-      std::snprintf(field, sizeof field, "%.*f", precision(rng), v);
-      row += field;
-      row += f < 3 ? ',' : '\n';
-    }
+    const std::string row = random_row(rng, -12.0, 8.0, 22);
     const auto text = padded(row);
     double got[4] = {};
     const int length = read_decimal_row4(text.get(), got);
