@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "shell/decimal_number.hpp"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -110,26 +112,26 @@ struct DecimalField {
 [[gnu::always_inline]] inline DecimalField decimal_field(const char* p, int s, int e,
                                                          std::uint64_t points,
                                                          std::uint64_t minus) {
-  static constexpr std::uint64_t kPow10[] = {1ULL,
-                                             10ULL,
-                                             100ULL,
-                                             1000ULL,
-                                             10000ULL,
-                                             100000ULL,
-                                             1000000ULL,
-                                             10000000ULL,
-                                             100000000ULL,
-                                             1000000000ULL,
-                                             10000000000ULL,
-                                             100000000000ULL,
-                                             1000000000000ULL,
-                                             10000000000000ULL,
-                                             100000000000000ULL,
-                                             1000000000000000ULL,
-                                             10000000000000000ULL,
-                                             100000000000000000ULL,
-                                             1000000000000000000ULL,
-                                             10000000000000000000ULL};
+  static constexpr std::uint64_t kIntPow10[] = {1ULL,
+                                                10ULL,
+                                                100ULL,
+                                                1000ULL,
+                                                10000ULL,
+                                                100000ULL,
+                                                1000000ULL,
+                                                10000000ULL,
+                                                100000000ULL,
+                                                1000000000ULL,
+                                                10000000000ULL,
+                                                100000000000ULL,
+                                                1000000000000ULL,
+                                                10000000000000ULL,
+                                                100000000000000ULL,
+                                                1000000000000000ULL,
+                                                10000000000000000ULL,
+                                                100000000000000000ULL,
+                                                1000000000000000000ULL,
+                                                10000000000000000000ULL};
   DecimalField f;
   f.negative = ((minus >> s) & 1U) != 0;
   s += f.negative ? 1 : 0;
@@ -149,7 +151,8 @@ struct DecimalField {
     if ((point & (point - 1)) != 0 || (whole == 0 && f.decimals == 0) || whole + f.decimals > 19) {
       return f;
     }
-    f.mantissa = digit_run(p + s, whole) * kPow10[f.decimals] + digit_run(p + at + 1, f.decimals);
+    f.mantissa =
+        digit_run(p + s, whole) * kIntPow10[f.decimals] + digit_run(p + at + 1, f.decimals);
   }
   f.plain = f.mantissa <= (std::uint64_t{1} << 53);
   return f;
@@ -208,10 +211,8 @@ inline int read_decimal_row4(const char* p, double* v) {
   }
   // mantissa / 10^decimals, both exact (below 2⁵³; 10^k exact up to 10^22): the correctly
   // rounded quotient, as read_decimal() computes it.
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,
-                                      1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19};
   for (int i = 0; i < 4; ++i) {
-    const double x = static_cast<double>(f[i].mantissa) / kPow10[f[i].decimals];
+    const double x = static_cast<double>(f[i].mantissa) / detail::kPow10[f[i].decimals];
     v[i] = f[i].negative ? -x : x;
   }
   return end + 1;

@@ -197,45 +197,53 @@ class SyncAverageOf {
     }
   }
 #if defined(__SSE2__)
-  /// add_line()'s dense samples for three channels: a run's sums in four SSE2 registers, (c0, c1)
-  /// and (c2, weight) for the bin and the next; the weight's terms are (1 − w)·1 and w·1, exactly
-  /// 1 − w and w, so each lane adds what the scalar loop adds, bit for bit.
+  /// A three-channel row as two SSE2 pairs, (c0, c1) and (c2, weight): a bin's share and the
+  /// next bin's.
+  struct PairRows {
+    __m128d lo01, lo2w, hi01, hi2w;
+  };
+  /// One sample's shares: (1 − w)·v to the bin, w·v to the next; the weight's terms are (1 − w)·1
+  /// and w·1, exactly 1 − w and w, so each lane is what the scalar code computes, bit for bit.
+  static PairRows split_sample(double w, const Values& v) {
+    const __m128d v01 = _mm_loadu_pd(v.data());
+    const __m128d v2_one = _mm_set_pd(1.0, v[2]);
+    const __m128d wa = _mm_set1_pd(1.0 - w);
+    const __m128d wb = _mm_set1_pd(w);
+    return {_mm_mul_pd(wa, v01), _mm_mul_pd(wa, v2_one), _mm_mul_pd(wb, v01),
+            _mm_mul_pd(wb, v2_one)};
+  }
+  /// Adds `r` to bin k and the next one.
+  void add_pairs(int k, const PairRows& r) {
+    double* a = &sums_[index(slot_, k)];
+    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
+    _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), r.lo01));
+    _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), r.lo2w));
+    _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), r.hi01));
+    _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), r.hi2w));
+  }
+  /// add_line()'s dense samples for three channels: a run's sums held in SSE2 registers.
   template <typename Position, typename ValuesOf>
   void add_dense_sse2(std::size_t count, const Position& position, const ValuesOf& values) {
+    const __m128d zero = _mm_setzero_pd();
     int k0 = -1;
-    __m128d lo01 = _mm_setzero_pd(), lo2w = _mm_setzero_pd();
-    __m128d hi01 = _mm_setzero_pd(), hi2w = _mm_setzero_pd();
-    const auto flush = [&] {
-      if (k0 < 0) {
-        return;
-      }
-      double* a = &sums_[index(slot_, k0)];
-      double* b = &sums_[index(slot_, k0 + 1 == bins_ ? 0 : k0 + 1)];
-      _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), lo01));
-      _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), lo2w));
-      _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), hi01));
-      _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), hi2w));
-      lo01 = lo2w = hi01 = hi2w = _mm_setzero_pd();
-    };
+    PairRows run{zero, zero, zero, zero};
     for (std::size_t i = 0; i < count; ++i) {
       const double pos = position(i);
       const int k = std::min(static_cast<int>(pos), bins_ - 1);
-      const double w = pos - k;
       if (k != k0) {
-        flush();
+        if (k0 >= 0) {
+          add_pairs(k0, run);
+        }
+        run = {zero, zero, zero, zero};
         k0 = k;
       }
-      const Values v = values(i);
-      const __m128d v01 = _mm_loadu_pd(v.data());
-      const __m128d v2_one = _mm_set_pd(1.0, v[2]);
-      const __m128d wa = _mm_set1_pd(1.0 - w);
-      const __m128d wb = _mm_set1_pd(w);
-      lo01 = _mm_add_pd(lo01, _mm_mul_pd(wa, v01));
-      lo2w = _mm_add_pd(lo2w, _mm_mul_pd(wa, v2_one));
-      hi01 = _mm_add_pd(hi01, _mm_mul_pd(wb, v01));
-      hi2w = _mm_add_pd(hi2w, _mm_mul_pd(wb, v2_one));
+      const PairRows p = split_sample(pos - k, values(i));
+      run = {_mm_add_pd(run.lo01, p.lo01), _mm_add_pd(run.lo2w, p.lo2w),
+             _mm_add_pd(run.hi01, p.hi01), _mm_add_pd(run.hi2w, p.hi2w)};
     }
-    flush();
+    if (k0 >= 0) {
+      add_pairs(k0, run);
+    }
   }
 #endif
   /// Adds one sample at bin position pos ∈ [0, bins] to its two bins.
@@ -245,23 +253,14 @@ class SyncAverageOf {
   }
   /// Adds one sample to bin k with weight 1 − w and to the next bin with weight w.
   void add_to(int k, double w, const Values& v) {
-    double* a = &sums_[index(slot_, k)];
-    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
 #if defined(__SSE2__)
     if constexpr (Channels == 3) {
-      // A row is two pairs, (c0, c1) and (c2, weight): the weight's term is (1 − w)·1, exactly
-      // 1 − w, so each lane computes what the loop below does, bit for bit.
-      const __m128d v01 = _mm_loadu_pd(v.data());
-      const __m128d v2_one = _mm_set_pd(1.0, v[2]);
-      const __m128d wa = _mm_set1_pd(1.0 - w);
-      const __m128d wb = _mm_set1_pd(w);
-      _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), _mm_mul_pd(wa, v01)));
-      _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), _mm_mul_pd(wa, v2_one)));
-      _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), _mm_mul_pd(wb, v01)));
-      _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), _mm_mul_pd(wb, v2_one)));
+      add_pairs(k, split_sample(w, v));
       return;
     }
 #endif
+    double* a = &sums_[index(slot_, k)];
+    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
     for (std::size_t c = 0; c < kValues; ++c) {
       a[c] += (1.0 - w) * v[c];
       b[c] += w * v[c];
