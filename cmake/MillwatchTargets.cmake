@@ -31,6 +31,7 @@ function(millwatch_test source)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE millwatch::test_support GTest::gtest_main)
   millwatch_warnings(${name})
+  target_precompile_headers(${name} REUSE_FROM millwatch_test_support)  # tests/CMakeLists.txt
   # Multi-process LCM sessions (tests/daemon) run alone: on a busy 2-core machine the UDP
   # receivers of a paced session can fall behind.
   set(serial FALSE)

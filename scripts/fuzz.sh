@@ -31,7 +31,8 @@ export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 # Leaks in third-party code we cannot fix, each with its reason (HDF5 on a damaged v7.3 file).
 export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-for target in "${targets[@]}"; do
+fuzz_one() {  # target: runs it, leaves its exit status in $build/runs/<target>/status
+  local target=$1 dict runs
   case $target in
     csv_cut_reader) dict=tests/fuzz/dict/csv.dict ;;
     text_recording) dict=tests/fuzz/dict/text.dict ;;
@@ -41,15 +42,34 @@ for target in "${targets[@]}"; do
   esac
   runs="$build/runs/$target"
   mkdir -p "$runs/corpus"
-  echo "== fuzz_$target: ${seconds} s"
+  rm -f "$runs/status"
   # -rss_limit_mb: a reader must never allocate what a damaged input asks for.
+  local status=0
   "$build/tests/fuzz/fuzz_$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=1024 \
     -max_len=16384 -print_final_stats=1 -artifact_prefix="$runs/" ${dict:+-dict="$dict"} \
-    "$runs/corpus" "tests/fuzz/corpus/$target" 2>"$runs/log.txt" || {
+    "$runs/corpus" "tests/fuzz/corpus/$target" 2>"$runs/log.txt" || status=$?
+  echo "$status" >"$runs/status"
+}
+
+# One fuzzer per core at a time (each is single-threaded): the same time per target, in a
+# fraction of the wall-clock time.
+parallel=$(nproc)
+echo "== ${#targets[@]} fuzz targets, ${seconds} s each, $parallel at a time"
+for target in "${targets[@]}"; do
+  while (($(jobs -rp | wc -l) >= parallel)); do
+    wait -n || true
+  done
+  fuzz_one "$target" &
+done
+wait
+for target in "${targets[@]}"; do
+  runs="$build/runs/$target"
+  echo "== fuzz_$target: ${seconds} s"
+  if [ "$(cat "$runs/status" 2>/dev/null)" != 0 ]; then
     tail -n 60 "$runs/log.txt" >&2
     echo "fuzz_$target failed: the input is in $runs/ (crash-*, leak-*, timeout-*, oom-*)" >&2
     exit 1
-  }
+  fi
   grep -E '^stat::(number_of_executed_units|new_units_added|peak_rss_mb)' "$runs/log.txt" |
     tr '\n' ' '
   echo
