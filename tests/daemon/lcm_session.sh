@@ -47,7 +47,8 @@ stop_daemon() {  # [signal]
   sleep 0.5  # the last blocks are in
   kill -"$sig" "$daemon"
   # On SIGTERM the daemon first fits identification's last windows: a sanitized build on a busy
-  # 2-core machine once took more than 10 s.
+  # 2-core machine once took more than 10 s. 30 s is what systemd gives it (the unit's
+  # TimeoutStopSec, packaging/millwatchd.service.in).
   await_exit "$daemon" 300 "millwatchd did not stop within 30 s of SIG$sig"
   wait "$daemon"
   echo "daemon exit $?"
