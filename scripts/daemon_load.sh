@@ -2,14 +2,16 @@
 # millwatchd's CPU load at 333.3 kHz with identification running, fed over LCM at real time
 # (issue 10: under 5 % of a core). In a private network namespace (unshare -n: needs root; no
 # packet leaves the machine): bench/daemon_feeder publishes BM_DaemonLoadRealTime's simulated
-# cut in 333-sample blocks (1,000 a second) on udpm://239.255.76.67:7667, millwatchd monitors
+# cut in 333-sample blocks (1,000 a second; --block N: N samples, at most force_block_t's 2,000)
+# on udpm://239.255.76.67:7667, millwatchd monitors
 # it with the default identification.cpu_budget and publishes its results on its output URL
 # (default: the same group, port 7668). After a warm-up (lock, model build), the process's
 # utime+stime (/proc/PID/stat) and each thread's CPU time (/proc/PID/task/*/schedstat, ns) are
 # read at the start and the end of the measured span; the summary tells that every sample was
 # processed.
 #
-#   scripts/daemon_load.sh [--seconds 30] [--warmup 8] [--build build/release] [--same-url]
+#   scripts/daemon_load.sh [--seconds 30] [--warmup 8] [--block 333] [--build build/release]
+#                          [--same-url]
 #
 # --same-url publishes the results on the input URL (what millwatchd did before lcm.output_url):
 # its LCM receive thread then also reads the daemon's own outputs. Prints a human summary on
@@ -19,12 +21,14 @@ cd "$(dirname "$0")/.."
 
 seconds=30
 warmup=8
+block=333
 build=build/release
 same_url=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
     --warmup) warmup=$2; shift 2 ;;
+    --block) block=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
     *) echo "daemon_load.sh: unknown argument $1" >&2; exit 2 ;;
@@ -38,7 +42,7 @@ done
 
 if [ "${MW_DAEMON_LOAD_IN_NS:-}" != 1 ]; then
   exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" --seconds "$seconds" --warmup "$warmup" \
-    --build "$build" $([ "$same_url" = 1 ] && echo --same-url)
+    --block "$block" --build "$build" $([ "$same_url" = 1 ] && echo --same-url)
 fi
 
 ip link set lo up
@@ -67,7 +71,7 @@ output_option=(--lcm-output-url "$out_url")
 pid=$!
 sleep 0.5
 total=$(python3 -c "print($warmup + $seconds + 1)")
-"$feeder" --url "$in_url" --seconds "$total" --cache "$cache" 2>"$work/feeder.log" &
+"$feeder" --url "$in_url" --seconds "$total" --block "$block" --cache "$cache" 2>"$work/feeder.log" &
 feeder_pid=$!
 
 snapshot() {  # file: "process ticks", then "tid comm ns" per thread
@@ -88,9 +92,10 @@ sleep 0.5
 kill -TERM "$pid"
 wait "$pid" || { cat "$work/daemon.log" >&2; exit 3; }
 
-python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" <<'EOF'
+python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" <<'EOF'
 import json, sys
 work, seconds, same_url, hz = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4])
+block = int(sys.argv[5])
 def read(name):
     process, threads = 0, {}
     for line in open(f"{work}/{name}"):
@@ -111,6 +116,7 @@ for tid, (comm, ns) in sorted(t1.items()):
 fit = summary.get("fit", {})
 result = {
     "bench": "daemon_load", "sample_rate_hz": 333300.0, "seconds": seconds,
+    "block_samples": block,
     "outputs_on_input_url": same_url,
     "process_percent_of_a_core": round(100 * (p1 - p0) / hz / seconds, 2),
     "threads_percent_of_a_core": threads,
@@ -119,7 +125,7 @@ result = {
         fit.get("windows_skipped_for_budget"),
     "udp_rcvbuf_errors": int(udp[5]) if len(udp) > 5 else None,
 }
-print(f"millwatchd at 333.3 kHz, {seconds:g} s measured"
+print(f"millwatchd at 333.3 kHz in {block}-sample blocks, {seconds:g} s measured"
       f" ({'outputs on the input URL' if same_url else 'outputs on their own URL'}):"
       f" process {result['process_percent_of_a_core']:.2f} % of a core", file=sys.stderr)
 for name, pct in threads.items():
