@@ -8,6 +8,10 @@
 #include <string>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace millwatch::signal {
 namespace {
 
@@ -204,5 +208,85 @@ void filtfilt(const ButterworthDesign& design, std::span<const double> in, std::
   std::copy(work.begin() + static_cast<std::ptrdiff_t>(pad),
             work.begin() + static_cast<std::ptrdiff_t>(pad + n), out.begin());
 }
+
+bool LowPassFilter::cpu_has_avx() {
+#if defined(__x86_64__) || defined(__i386__)
+  // libgcc's CPU model: AVX counts only where the OS saves the YMM registers (XGETBV).
+  static const bool has_avx = __builtin_cpu_supports("avx") != 0;
+  return has_avx;
+#else
+  return false;
+#endif
+}
+
+#if defined(__SSE2__)
+namespace {
+
+using SectionStates = std::array<std::array<double, 2>, kMaxButterworthSections>;
+
+/// One biquad with numerator g·(1, 2, 1) on four lanes: y = b0·x + z0; z0 = (2·b0·x − a1·y) + z1;
+/// z1 = b0·x − a2·y (process_three_lowpass_sse2's section, operation for operation).
+__attribute__((target("avx"), always_inline)) inline __m256d lowpass_section_avx(
+    __m256d x, __m256d b, __m256d a1, __m256d a2, __m256d& z0, __m256d& z1) {
+  const __m256d bx = _mm256_mul_pd(b, x);
+  const __m256d y = _mm256_add_pd(bx, z0);
+  z0 = _mm256_add_pd(_mm256_sub_pd(_mm256_add_pd(bx, bx), _mm256_mul_pd(a1, y)), z1);
+  z1 = _mm256_sub_pd(bx, _mm256_mul_pd(a2, y));
+  return y;
+}
+
+/// One delay element of one section of the three channels as lanes (fx, fy, fz, fz).
+__attribute__((target("avx"), always_inline)) inline __m256d state_lanes(const SectionStates& a,
+                                                                         const SectionStates& b,
+                                                                         const SectionStates& c,
+                                                                         std::size_t section,
+                                                                         std::size_t k) {
+  return _mm256_set_pd(c[section][k], c[section][k], b[section][k], a[section][k]);
+}
+
+/// Lanes (fx, fy, fz, fz); states sa, sb, sc of fx, fy, fz. No FMA: target "avx" alone, so GCC
+/// contracts nothing and every lane rounds as step() does.
+__attribute__((target("avx"))) void lowpass_two_sections_avx(const Biquad& p, const Biquad& q,
+                                                             SectionStates& sa, SectionStates& sb,
+                                                             SectionStates& sc, double* xa,
+                                                             double* xb, double* xc,
+                                                             std::size_t count) {
+  const __m256d pb = _mm256_set1_pd(p.b0), pa1 = _mm256_set1_pd(p.a1), pa2 = _mm256_set1_pd(p.a2);
+  const __m256d qb = _mm256_set1_pd(q.b0), qa1 = _mm256_set1_pd(q.a1), qa2 = _mm256_set1_pd(q.a2);
+  __m256d u0 = state_lanes(sa, sb, sc, 0, 0), u1 = state_lanes(sa, sb, sc, 0, 1);
+  __m256d u2 = state_lanes(sa, sb, sc, 1, 0), u3 = state_lanes(sa, sb, sc, 1, 1);
+  for (std::size_t i = 0; i < count; ++i) {
+    const __m128d in_ab = _mm_loadh_pd(_mm_load_sd(xa + i), xb + i);
+    const __m256d in = _mm256_insertf128_pd(_mm256_castpd128_pd256(in_ab), _mm_load1_pd(xc + i), 1);
+    const __m256d out =
+        lowpass_section_avx(lowpass_section_avx(in, pb, pa1, pa2, u0, u1), qb, qa1, qa2, u2, u3);
+    const __m128d out_ab = _mm256_castpd256_pd128(out);
+    _mm_storel_pd(xa + i, out_ab);
+    _mm_storeh_pd(xb + i, out_ab);
+    _mm_storel_pd(xc + i, _mm256_extractf128_pd(out, 1));
+  }
+  alignas(32) std::array<double, 4> v0{}, v1{}, v2{}, v3{};
+  _mm256_store_pd(v0.data(), u0);
+  _mm256_store_pd(v1.data(), u1);
+  _mm256_store_pd(v2.data(), u2);
+  _mm256_store_pd(v3.data(), u3);
+  sa[0] = {v0[0], v1[0]};
+  sa[1] = {v2[0], v3[0]};
+  sb[0] = {v0[1], v1[1]};
+  sb[1] = {v2[1], v3[1]};
+  sc[0] = {v0[2], v1[2]};
+  sc[1] = {v2[2], v3[2]};
+}
+
+}  // namespace
+
+void LowPassFilter::process_three_lowpass_avx(std::array<LowPassFilter, 3>& filters,
+                                              const std::array<double*, 3>& data,
+                                              std::size_t count) {
+  lowpass_two_sections_avx(filters[0].design_.sos[0], filters[0].design_.sos[1],
+                           filters[0].state_.z, filters[1].state_.z, filters[2].state_.z, data[0],
+                           data[1], data[2], count);
+}
+#endif
 
 }  // namespace millwatch::signal

@@ -141,15 +141,24 @@ class LowPassFilter {
   /// @throws std::invalid_argument if the sizes differ (a programming error).
   void process(std::span<const double> in, std::span<double> out);
 
+  /// Which code filters three channels of the monitor's low-pass (order 4: two sections with
+  /// numerators g·(1, 2, 1)) at once: the fastest this CPU runs (kAuto: AVX where the CPU has it,
+  /// else SSE2), or one named (the tests compare them bit for bit). Every kernel gives what
+  /// step() gives; another design goes section by section whatever is asked.
+  enum class Kernel { kAuto, kScalar, kSse2, kAvx };
+  /// Whether this CPU (and its operating system) runs AVX code: Kernel::kAvx is then available.
+  [[nodiscard]] static bool cpu_has_avx();
+
   /// Filters three channels of `count` samples in place, each with its own filter (all three
   /// of the same design), exactly as step() would sample by sample: section by section over the
   /// block with the states in registers, the three channels in step (three independent
-  /// recursions in flight instead of one).
+  /// recursions in flight instead of one). `kernel`: see Kernel (kAvx on a CPU without AVX: SSE2).
   static void process_three(std::array<LowPassFilter, 3>& filters,
-                            const std::array<double*, 3>& data, std::size_t count) {
+                            const std::array<double*, 3>& data, std::size_t count,
+                            Kernel kernel = Kernel::kAuto) {
     const ButterworthDesign& d = filters[0].design_;
     if (d.sections == 2) {  // the monitor's order 4: both sections in one pass (six chains)
-      process_three_two_sections(filters, data, count);
+      process_three_two_sections(filters, data, count, kernel);
       return;
     }
     for (int s = 0; s < d.sections; ++s) {
@@ -240,19 +249,36 @@ class LowPassFilter {
   }
 #endif
 
+#if defined(__SSE2__)
+  /// process_three_lowpass_sse2() with AVX: fx, fy and fz side by side in one 256-bit register
+  /// (its fourth lane a copy of fz), the same operations in the same order on each lane, so the
+  /// same results bit for bit, in half the instructions of the two SSE2 registers. The kernel is
+  /// compiled for AVX alone (butterworth_lowpass.cpp): call this only where cpu_has_avx().
+  static void process_three_lowpass_avx(std::array<LowPassFilter, 3>& filters,
+                                        const std::array<double*, 3>& data, std::size_t count);
+#endif
+
   /// process_three() for two sections, sample by sample with every state in a local: the two
   /// sections' recursions of the three channels overlap (each waits only on its own last step).
   static void process_three_two_sections(std::array<LowPassFilter, 3>& filters,
-                                         const std::array<double*, 3>& data, std::size_t count) {
+                                         const std::array<double*, 3>& data, std::size_t count,
+                                         Kernel kernel) {
     const Biquad p = filters[0].design_.sos[0];
     const Biquad q = filters[0].design_.sos[1];
 #if defined(__SSE2__)
     // The low-pass sections' numerators are g·(1, 2, 1) (ButterworthDesign::lowpass): b1·x is
     // then exactly 2·(b0·x) and b2·x exactly b0·x, so three coefficients per section do.
-    if (p.b1 == 2.0 * p.b0 && p.b2 == p.b0 && q.b1 == 2.0 * q.b0 && q.b2 == q.b0) {
-      process_three_lowpass_sse2(filters, data, count);
+    if (kernel != Kernel::kScalar && p.b1 == 2.0 * p.b0 && p.b2 == p.b0 && q.b1 == 2.0 * q.b0 &&
+        q.b2 == q.b0) {
+      if (kernel != Kernel::kSse2 && cpu_has_avx()) {
+        process_three_lowpass_avx(filters, data, count);
+      } else {
+        process_three_lowpass_sse2(filters, data, count);
+      }
       return;
     }
+#else
+    static_cast<void>(kernel);
 #endif
     std::array<std::array<double, 4>, 3> z{};  // per channel: section 1's z0, z1, section 2's
     for (std::size_t a = 0; a < 3; ++a) {

@@ -524,8 +524,14 @@ TEST(ButterworthLowPass, BlockSizeDoesNotChangeTheOutput) {
 }
 
 // process_three() (the conditioner's: three channels in step, order 4 through its own two-section
-// path) gives what step() gives each channel alone, bit for bit, in blocks of any size.
+// path) gives what step() gives each channel alone, bit for bit, in blocks of any size, with
+// every kernel this CPU runs (scalar, SSE2, AVX) and the one it picks by itself.
 TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
+  using Kernel = LowPassFilter::Kernel;
+  std::vector<Kernel> kernels = {Kernel::kAuto, Kernel::kScalar, Kernel::kSse2};
+  if (LowPassFilter::cpu_has_avx()) {
+    kernels.push_back(Kernel::kAvx);
+  }
   for (int order : {2, 4, 5}) {
     const auto d = ButterworthDesign::lowpass(333300.0, kCutoffHz, order);
     const std::size_t n = 5000;
@@ -545,19 +551,30 @@ TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
         alone[a].push_back(f.step(v));
       }
     }
-    for (std::size_t block : {1u, 3u, 256u, 5000u}) {
-      std::array<LowPassFilter, 3> filters = {LowPassFilter(d), LowPassFilter(d), LowPassFilter(d)};
-      std::array<std::vector<double>, 3> y = x;
-      for (std::size_t a = 0; a < 3; ++a) {
-        filters[a].settle(x[a][0]);
-      }
-      for (std::size_t i = 0; i < n; i += block) {
-        const std::size_t m = std::min(block, n - i);
-        LowPassFilter::process_three(filters, {y[0].data() + i, y[1].data() + i, y[2].data() + i},
-                                     m);
-      }
-      for (std::size_t a = 0; a < 3; ++a) {
-        EXPECT_EQ(y[a], alone[a]) << "order " << order << " block " << block << " channel " << a;
+    for (const Kernel kernel : kernels) {
+      for (std::size_t block : {1u, 3u, 256u, 5000u}) {
+        std::array<LowPassFilter, 3> filters = {LowPassFilter(d), LowPassFilter(d),
+                                                LowPassFilter(d)};
+        std::array<std::vector<double>, 3> y = x;
+        for (std::size_t a = 0; a < 3; ++a) {
+          filters[a].settle(x[a][0]);
+        }
+        for (std::size_t i = 0; i < n; i += block) {
+          const std::size_t m = std::min(block, n - i);
+          LowPassFilter::process_three(filters, {y[0].data() + i, y[1].data() + i, y[2].data() + i},
+                                       m, kernel);
+        }
+        for (std::size_t a = 0; a < 3; ++a) {
+          EXPECT_EQ(y[a], alone[a]) << "order " << order << " kernel " << static_cast<int>(kernel)
+                                    << " block " << block << " channel " << a;
+          // The state carried to the next block is step()'s too.
+          LowPassFilter f(d);
+          f.settle(x[a][0]);
+          for (double v : x[a]) {
+            f.step(v);
+          }
+          EXPECT_EQ(filters[a].state().z, f.state().z) << "order " << order << " channel " << a;
+        }
       }
     }
   }
