@@ -1,5 +1,10 @@
 # Helpers shared by every millwatch target.
 
+# a·b + c is never fused into one FMA, whatever -march a packager adds: the results (and the
+# tests that compare code paths bit for bit, e.g. the low-pass's SSE2 and AVX kernels and
+# step()) do not depend on the build flags. GCC's default in C++ is -ffp-contract=fast.
+add_compile_options(-ffp-contract=off)
+
 # Warnings (as errors) for the project's own code only; third-party headers are SYSTEM.
 function(millwatch_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Werror -Wshadow
@@ -31,7 +36,7 @@ function(millwatch_test source)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE millwatch::test_support GTest::gtest_main)
   millwatch_warnings(${name})
-  target_precompile_headers(${name} REUSE_FROM millwatch_test_support)  # tests/CMakeLists.txt
+  target_precompile_headers(${name} REUSE_FROM millwatch_test_support)  # tests/support/
   # Multi-process LCM sessions (tests/daemon) run alone: on a busy 2-core machine the UDP
   # receivers of a paced session can fall behind.
   set(serial FALSE)

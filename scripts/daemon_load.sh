@@ -28,7 +28,12 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
     --warmup) warmup=$2; shift 2 ;;
-    --block) block=$2; shift 2 ;;
+    --block)
+      block=$2
+      shift 2
+      [[ $block =~ ^[0-9]+$ ]] && ((block >= 16 && block <= 2000)) ||
+        { echo "daemon_load.sh: --block takes 16 to 2000 samples (force_block_t), not $block" >&2; exit 2; }
+      ;;
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
     *) echo "daemon_load.sh: unknown argument $1" >&2; exit 2 ;;
@@ -87,7 +92,7 @@ snapshot "$work/before"
 sleep "$seconds"
 snapshot "$work/after"
 grep '^Udp:' /proc/net/snmp | tail -1 >"$work/udp"
-wait "$feeder_pid"
+wait "$feeder_pid" || { cat "$work/feeder.log" >&2; exit 3; }
 sleep 0.5
 kill -TERM "$pid"
 wait "$pid" || { cat "$work/daemon.log" >&2; exit 3; }

@@ -7,8 +7,8 @@
 #
 # The tests run once, in the sanitized build: running the same 408 tests in Release as well took
 # 10 of the command's 30 minutes (build 7.8, run 2.1). The tests check behaviour, which the
-# optimisation level does not change (x86-64's SSE2 arithmetic rounds the same at -O1 and -O2,
-# and GCC contracts nothing into FMAs without -mfma); `ctest --test-dir build/release` runs
+# optimisation level does not change (x86-64's SSE2 arithmetic rounds the same at -O1 and -O3,
+# and nothing is contracted into FMAs: -ffp-contract=off); `ctest --test-dir build/release` runs
 # them optimised, and the benchmarks run the optimised pipeline.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -573,7 +573,9 @@ TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
           for (double v : x[a]) {
             f.step(v);
           }
-          EXPECT_EQ(filters[a].state().z, f.state().z) << "order " << order << " channel " << a;
+          EXPECT_EQ(filters[a].state().z, f.state().z)
+              << "order " << order << " kernel " << static_cast<int>(kernel) << " block " << block
+              << " channel " << a;
         }
       }
     }
