@@ -25,7 +25,7 @@ tests/package/package_test.sh build/shipped build/shipped/package_scratch
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # -O1 (what AddressSanitizer's authors advise) and line tables only (-g1: enough for symbolized
 # reports): the sanitized build compiles in about half the time of -O2 -g (Ceres' templates in
-# core/identify/window_fit.cpp: 117 s → 55 s); the whole run takes about 24 min on a 2-core
+# core/identify/window_fit.cpp: 117 s → 55 s); the whole run takes 23–26 min on a 2-core
 # Intel Xeon (README).
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMILLWATCH_SANITIZE=ON \
   -DMILLWATCH_BUILD_BENCHMARKS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
