@@ -3,9 +3,9 @@
 # (issue 10: under 5 % of a core). In a private network namespace (unshare -n: needs root; no
 # packet leaves the machine): bench/daemon_feeder publishes BM_DaemonLoadRealTime's simulated
 # cut in 333-sample blocks (1,000 a second; --block N: N samples, at most force_block_t's 2,000)
-# on udpm://239.255.76.67:7667, millwatchd monitors
-# it with the default identification.cpu_budget and publishes its results on its output URL
-# (default: the same group, port 7668). After a warm-up (lock, model build), the process's
+# on udpm://239.255.76.67:7667, millwatchd monitors it with the default
+# identification.cpu_budget and publishes its results on its output URL (default: the same
+# group, port 7668). After a warm-up (lock, model build), the process's
 # utime+stime (/proc/PID/stat) and each thread's CPU time (/proc/PID/task/*/schedstat, ns) are
 # read at the start and the end of the measured span; the summary tells that every sample was
 # processed.

@@ -544,12 +544,14 @@ TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
       }
     }
     std::array<std::vector<double>, 3> alone;
+    std::array<ButterworthState, 3> alone_end;  // the state step() carries to the next block
     for (std::size_t a = 0; a < 3; ++a) {
       LowPassFilter f(d);
       f.settle(x[a][0]);
       for (double v : x[a]) {
         alone[a].push_back(f.step(v));
       }
+      alone_end[a] = f.state();
     }
     for (const Kernel kernel : kernels) {
       for (std::size_t block : {1u, 3u, 256u, 5000u}) {
@@ -567,13 +569,7 @@ TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
         for (std::size_t a = 0; a < 3; ++a) {
           EXPECT_EQ(y[a], alone[a]) << "order " << order << " kernel " << static_cast<int>(kernel)
                                     << " block " << block << " channel " << a;
-          // The state carried to the next block is step()'s too.
-          LowPassFilter f(d);
-          f.settle(x[a][0]);
-          for (double v : x[a]) {
-            f.step(v);
-          }
-          EXPECT_EQ(filters[a].state().z, f.state().z)
+          EXPECT_EQ(filters[a].state().z, alone_end[a].z)
               << "order " << order << " kernel " << static_cast<int>(kernel) << " block " << block
               << " channel " << a;
         }
