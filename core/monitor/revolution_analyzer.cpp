@@ -105,12 +105,13 @@ void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
   if (last >= first) {
     // The spindle angle within this turn, in bins: the map is a line.
     const double bins_per_rad = sync.bins() / kTwoPi;
-    sync.add_line(static_cast<std::size_t>(last - first + 1),
-                  (map.at(static_cast<double>(first)) - turn_rad) * bins_per_rad,
-                  map.slope_rad_per_sample * bins_per_rad, [&](std::size_t i) {
-                    const double* v = ring.row(first + static_cast<std::int64_t>(i));
-                    return SyncAverage::Values{v[0], v[1], v[2]};
-                  });
+    // The ring's rows: fx, fy, fz and fx² + fy².
+    sync.add_line_rows(static_cast<std::size_t>(last - first + 1),
+                       (map.at(static_cast<double>(first)) - turn_rad) * bins_per_rad,
+                       map.slope_rad_per_sample * bins_per_rad,
+                       [rows = ring.rows(), first](std::size_t i) {
+                         return rows.row(first + static_cast<std::int64_t>(i));
+                       });
   }
   sync.end_revolution();
 }

@@ -70,6 +70,17 @@ class SampleRing {
   [[nodiscard]] const double* row(std::int64_t n) const {
     return &data_[(static_cast<std::size_t>(n) & mask_) << row_shift_];
   }
+  /// The ring's rows by value, for a loop that stores through pointers the compiler must assume
+  /// alias anything (SIMD stores): its base, mask and shift then stay in registers.
+  struct Rows {
+    const double* data;
+    std::size_t mask;
+    std::size_t shift;
+    [[nodiscard]] const double* row(std::int64_t n) const {
+      return data + ((static_cast<std::size_t>(n) & mask) << shift);
+    }
+  };
+  [[nodiscard]] Rows rows() const { return {data_.data(), mask_, row_shift_}; }
   [[nodiscard]] bool empty() const { return newest_ < oldest_; }
   [[nodiscard]] std::int64_t oldest() const { return oldest_; }
   [[nodiscard]] std::int64_t newest() const { return newest_; }

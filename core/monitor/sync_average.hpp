@@ -17,8 +17,16 @@
 #include <numbers>
 #include <vector>
 
+#include "core/signal/cpu_features.hpp"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+// Three channels and their weight fill one 256-bit register: an AVX kernel, compiled for AVX
+// alone (target attribute) and run only where the CPU has it.
+#if defined(__SSE2__) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#define MILLWATCH_SYNC_AVERAGE_AVX 1
+#include <immintrin.h>
 #endif
 
 namespace millwatch::monitor {
@@ -36,6 +44,7 @@ class SyncAverageOf {
     sums_.assign(static_cast<std::size_t>(window_ + 1) * kRow * static_cast<std::size_t>(bins_),
                  0.0);
     totals_.assign(kRow * static_cast<std::size_t>(bins_), 0.0);
+    avx_ = signal::cpu_has_avx();
   }
 
   /// Adds one sample at spindle angle `angle_rad` (any real; taken modulo 2π) to the current
@@ -60,40 +69,27 @@ class SyncAverageOf {
   template <typename ValuesOf>
   void add_line(std::size_t count, double first_bin, double bins_per_sample,
                 const ValuesOf& values) {
-    const auto grid = static_cast<double>(bins_);
-    if (!(bins_per_sample >= 0.0 && bins_per_sample < grid)) {  // not a spindle's line: any
-      for (std::size_t i = 0; i < count; ++i) {
-        const double pos = first_bin + bins_per_sample * static_cast<double>(i);
-        add_at(pos - grid * std::floor(pos / grid), values(i));
-      }
+    if (!spindle_line(bins_per_sample)) {  // not a spindle's line: any
+      add_any_line(count, first_bin, bins_per_sample, values);
       return;
     }
-    const double start = first_bin - grid * std::floor(first_bin / grid);  // [0, bins]
-    double wrapped = 0.0;  // whole turns of the grid passed, in bins
-    const auto position = [&](std::size_t i) {
-      double pos = start + bins_per_sample * static_cast<double>(i) - wrapped;
-      if (pos >= grid) {
-        wrapped += grid;
-        pos -= grid;
-      }
-      return pos;
-    };
+    Line line(first_bin, bins_per_sample, bins_);
     if (bins_per_sample >= 1.0) {
       for (std::size_t i = 0; i < count; ++i) {
-        add_at(position(i), values(i));
+        add_at(line.at(i), values(i));
       }
       return;
     }
 #if defined(__SSE2__)
     if constexpr (Channels == 3) {
-      add_dense_sse2(count, position, values);
+      add_dense_sse2(count, line, values);
       return;
     }
 #endif
     int k0 = -1;
     Row lo{}, hi{};
     for (std::size_t i = 0; i < count; ++i) {
-      const double pos = position(i);
+      const double pos = line.at(i);
       const int k = std::min(static_cast<int>(pos), bins_ - 1);
       const double w = pos - k;
       if (k != k0) {
@@ -109,6 +105,39 @@ class SyncAverageOf {
       hi[kValues] += w;
     }
     flush_run(k0, lo, hi);
+  }
+  /// add_line() for three channels read from rows: rows(i) points at sample i's fx, fy, fz and
+  /// one more double, not read into the sums (the pipeline's ring holds fx² + fy² there). Where
+  /// the CPU has AVX (and set_avx() has not turned it off), a sample's row and a bin's sums,
+  /// three channels and the weight, each fill one 256-bit register: half the instructions of
+  /// the SSE2 pairs, the same operations on each lane, so the same sums, bit for bit.
+  template <typename RowsOf>
+  void add_line_rows(std::size_t count, double first_bin, double bins_per_sample,
+                     const RowsOf& rows) {
+    static_assert(Channels == 3, "rows of three channels and one more double");
+#if defined(MILLWATCH_SYNC_AVERAGE_AVX)
+    if (avx_ && spindle_line(bins_per_sample)) {
+      Line line(first_bin, bins_per_sample, bins_);
+      if (bins_per_sample >= 1.0) {
+        add_sparse_avx(count, line, rows);
+      } else {
+        add_dense_avx(count, line, rows);
+      }
+      return;
+    }
+#endif
+    add_line(count, first_bin, bins_per_sample, [&](std::size_t i) {
+      const double* r = rows(i);
+      return Values{r[0], r[1], r[2]};
+    });
+  }
+  /// Whether add_line_rows() may use its AVX kernel (on by default where the CPU has AVX; the
+  /// tests compare it with the SSE2 code).
+  void set_avx(bool allowed) {
+    avx_ = allowed && signal::cpu_has_avx();
+  }
+  [[nodiscard]] bool avx() const {
+    return avx_;
   }
   /// Closes the current revolution: it joins the window, the oldest leaves it.
   void end_revolution() {
@@ -164,6 +193,45 @@ class SyncAverageOf {
   static constexpr std::size_t kValues = static_cast<std::size_t>(Channels);
   static constexpr std::size_t kRow = kValues + 1;  // the channels' sums, then their weight
   using Row = std::array<double, kRow>;
+
+  /// The bin positions of a line of samples, sample i at first_bin + i·bins_per_sample, in
+  /// [0, bins]: advanced by a step and wrapped once a turn, not wrapped per sample. at() must be
+  /// called for i = 0, 1, 2, … in order.
+  class Line {
+   public:
+    Line(double first_bin, double bins_per_sample, int bins)
+        : grid_(static_cast<double>(bins)),
+          start_(first_bin - grid_ * std::floor(first_bin / grid_)),
+          step_(bins_per_sample) {}
+    double at(std::size_t i) {
+      double pos = start_ + step_ * static_cast<double>(i) - wrapped_;
+      if (pos >= grid_) {
+        wrapped_ += grid_;
+        pos -= grid_;
+      }
+      return pos;
+    }
+
+   private:
+    double grid_;
+    double start_;          // [0, bins]
+    double step_;           // bins per sample
+    double wrapped_ = 0.0;  // whole turns of the grid passed, in bins
+  };
+  /// A line a spindle makes: forwards, less than a turn a sample.
+  [[nodiscard]] bool spindle_line(double bins_per_sample) const {
+    return bins_per_sample >= 0.0 && bins_per_sample < static_cast<double>(bins_);
+  }
+  /// add_line() on any line: each sample's position wrapped on its own.
+  template <typename ValuesOf>
+  void add_any_line(std::size_t count, double first_bin, double bins_per_sample,
+                    const ValuesOf& values) {
+    const auto grid = static_cast<double>(bins_);
+    for (std::size_t i = 0; i < count; ++i) {
+      const double pos = first_bin + bins_per_sample * static_cast<double>(i);
+      add_at(pos - grid * std::floor(pos / grid), values(i));
+    }
+  }
 
   /// The window's sums per bin (totals_), from the closed revolutions' slots, when they changed.
   void sum_window() const {
@@ -222,13 +290,13 @@ class SyncAverageOf {
     _mm_storeu_pd(b + 2, _mm_add_pd(_mm_loadu_pd(b + 2), r.hi2w));
   }
   /// add_line()'s dense samples for three channels: a run's sums held in SSE2 registers.
-  template <typename Position, typename ValuesOf>
-  void add_dense_sse2(std::size_t count, const Position& position, const ValuesOf& values) {
+  template <typename ValuesOf>
+  void add_dense_sse2(std::size_t count, Line& line, const ValuesOf& values) {
     const __m128d zero = _mm_setzero_pd();
     int k0 = -1;
     PairRows run{zero, zero, zero, zero};
     for (std::size_t i = 0; i < count; ++i) {
-      const double pos = position(i);
+      const double pos = line.at(i);
       const int k = std::min(static_cast<int>(pos), bins_ - 1);
       if (k != k0) {
         if (k0 >= 0) {
@@ -243,6 +311,65 @@ class SyncAverageOf {
     }
     if (k0 >= 0) {
       add_pairs(k0, run);
+    }
+  }
+#endif
+#if defined(MILLWATCH_SYNC_AVERAGE_AVX)
+  /// Adds `lo` to bin k's row of `sums` (channels and weight) and `hi` to the next bin's (bin 0
+  /// after the last).
+  __attribute__((target("avx"))) static void add_two_rows_avx(double* sums, int k, int last,
+                                                              __m256d lo, __m256d hi) {
+    double* a = sums + static_cast<std::size_t>(k) * kRow;
+    double* b = k == last ? sums : a + kRow;
+    _mm256_storeu_pd(a, _mm256_add_pd(_mm256_loadu_pd(a), lo));
+    _mm256_storeu_pd(b, _mm256_add_pd(_mm256_loadu_pd(b), hi));
+  }
+  /// add_line_rows()'s samples sparser than the bins: each straight to its two bins. Everything
+  /// the loop reads is in locals (the line and `rows` by value): the compiler must assume that
+  /// a SIMD store may change any memory, and would read members again after every one.
+  template <typename RowsOf>
+  __attribute__((target("avx"))) void add_sparse_avx(std::size_t count, Line line,
+                                                     const RowsOf rows) {
+    double* const sums = &sums_[index(slot_, 0)];
+    const int last = bins_ - 1;
+    const __m256d one = _mm256_set1_pd(1.0);
+    for (std::size_t i = 0; i < count; ++i) {
+      const double pos = line.at(i);
+      const int k = std::min(static_cast<int>(pos), last);
+      const double w = pos - k;
+      const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(i)), one, 0x8);  // (c0, c1, c2, 1)
+      add_two_rows_avx(sums, k, last, _mm256_mul_pd(_mm256_set1_pd(1.0 - w), v),
+                       _mm256_mul_pd(_mm256_set1_pd(w), v));
+    }
+  }
+  /// add_line_rows()'s denser samples: a run's sums held in two registers until it moves on.
+  template <typename RowsOf>
+  __attribute__((target("avx"))) void add_dense_avx(std::size_t count, Line line,
+                                                    const RowsOf rows) {
+    double* const sums = &sums_[index(slot_, 0)];
+    const int last = bins_ - 1;
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d zero = _mm256_setzero_pd();
+    int k0 = -1;
+    __m256d lo = zero, hi = zero;
+    for (std::size_t i = 0; i < count; ++i) {
+      const double pos = line.at(i);
+      const int k = std::min(static_cast<int>(pos), last);
+      if (k != k0) {
+        if (k0 >= 0) {
+          add_two_rows_avx(sums, k0, last, lo, hi);
+        }
+        lo = zero;
+        hi = zero;
+        k0 = k;
+      }
+      const double w = pos - k;
+      const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(i)), one, 0x8);
+      lo = _mm256_add_pd(lo, _mm256_mul_pd(_mm256_set1_pd(1.0 - w), v));
+      hi = _mm256_add_pd(hi, _mm256_mul_pd(_mm256_set1_pd(w), v));
+    }
+    if (k0 >= 0) {
+      add_two_rows_avx(sums, k0, last, lo, hi);
     }
   }
 #endif
@@ -278,8 +405,9 @@ class SyncAverageOf {
   int bins_ = 0;
   double bins_per_rad_ = 0.0;
   int window_ = 0;
-  int slot_ = 0;    // ring slot of the revolution being filled
-  int filled_ = 0;  // closed revolutions in the window
+  int slot_ = 0;      // ring slot of the revolution being filled
+  int filled_ = 0;    // closed revolutions in the window
+  bool avx_ = false;  // add_line_rows() runs its AVX kernel
   // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled): the
   // channels' weighted sums and the weights, per bin.
   std::vector<double> sums_;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/signal/cpu_features.hpp"
+
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -210,13 +212,7 @@ void filtfilt(const ButterworthDesign& design, std::span<const double> in, std::
 }
 
 bool LowPassFilter::cpu_has_avx() {
-#if defined(__x86_64__) || defined(__i386__)
-  // libgcc's CPU model: AVX counts only where the OS saves the YMM registers (XGETBV).
-  static const bool has_avx = __builtin_cpu_supports("avx") != 0;
-  return has_avx;
-#else
-  return false;
-#endif
+  return signal::cpu_has_avx();
 }
 
 #if defined(__SSE2__)

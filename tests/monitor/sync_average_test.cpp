@@ -11,6 +11,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/signal/cpu_features.hpp"
 #include "tests/support/allocation_counter.hpp"
 
 namespace millwatch::monitor {
@@ -123,6 +124,53 @@ TEST(SyncAverage, ALineOfSamplesGivesTheSumsOfAddingThemOneByOne) {
       for (int k = 0; k < 256; ++k) {
         ASSERT_NEAR(line.average(c, k), one_by_one.average(c, k), 1e-9)
             << bins_per_sample << " channel " << c << " bin " << k;
+      }
+    }
+  }
+}
+
+// The pipeline's three channels read from rows of four (the ring's: fx, fy, fz, fx² + fy²):
+// add_line_rows() gives exactly add_line()'s sums, bit for bit, with its AVX kernel (where the
+// CPU has AVX) and without, on sparse and dense lines, lines crossing 2π and lines no spindle
+// makes, over several revolutions of a window.
+TEST(SyncAverage, RowsOfFourGiveTheSumsOfAddLineBitForBit) {
+  using Three = SyncAverageOf<3>;
+  for (const double bins_per_sample : {2.15, 0.97, 1.0, 0.31, 0.0, -0.8, 300.5}) {
+    for (const bool avx : {true, false}) {
+      Three rows(256, 3);
+      Three line(256, 3);
+      rows.set_avx(avx);
+      line.set_avx(false);
+      if (avx && !signal::cpu_has_avx()) {
+        EXPECT_FALSE(rows.avx());
+      }
+      std::vector<double> ring;  // rows of four; the fourth must not reach the sums
+      for (int r = 0; r < 5; ++r) {
+        const double first_bin = -3.7123 + 251.3 * r;
+        const auto count = std::max<std::size_t>(
+            40, static_cast<std::size_t>(std::ceil(260.0 / std::fabs(bins_per_sample + 1e-3))));
+        ring.assign(4 * count, 0.0);
+        for (std::size_t i = 0; i < count; ++i) {
+          const double x = 0.01 * static_cast<double>(i) + r;
+          ring[4 * i] = std::sin(x);
+          ring[4 * i + 1] = -std::cos(3.0 * x);
+          ring[4 * i + 2] = 1e-3 * x - 0.5;
+          ring[4 * i + 3] = 1e6 + x;
+        }
+        rows.add_line_rows(count, first_bin, bins_per_sample,
+                           [&](std::size_t i) { return &ring[4 * i]; });
+        line.add_line(count, first_bin, bins_per_sample, [&](std::size_t i) {
+          return Three::Values{ring[4 * i], ring[4 * i + 1], ring[4 * i + 2]};
+        });
+        rows.end_revolution();
+        line.end_revolution();
+        for (int c = 0; c < Three::kChannels; ++c) {
+          for (int k = 0; k < 256; ++k) {
+            ASSERT_EQ(rows.average(c, k), line.average(c, k))
+                << bins_per_sample << (avx ? " AVX" : " SSE2") << " revolution " << r << " channel "
+                << c << " bin " << k;
+          }
+        }
       }
     }
   }
