@@ -16,6 +16,7 @@
 #include "bench/benchmark_cut.hpp"
 #include "core/identify/identifier.hpp"
 #include "core/monitor/pipeline.hpp"
+#include "core/signal/cpu_features.hpp"
 #include "daemon/daemon_config.hpp"
 
 namespace {
@@ -241,7 +242,7 @@ BENCHMARK(BM_DaemonLoadRealTime)
 void BM_LowPassThree(benchmark::State& state) {
   using Kernel = signal::LowPassFilter::Kernel;
   const auto kernel = static_cast<Kernel>(state.range(0));
-  if (kernel == Kernel::kAvx && !signal::LowPassFilter::cpu_has_avx()) {
+  if (kernel == Kernel::kAvx && !signal::cpu_has_avx()) {
     state.SkipWithError("this CPU has no AVX");
     return;
   }

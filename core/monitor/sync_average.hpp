@@ -107,7 +107,8 @@ class SyncAverageOf {
     flush_run(k0, lo, hi);
   }
   /// add_line() for three channels read from rows: rows(i) points at sample i's fx, fy, fz and
-  /// one more double, not read into the sums (the pipeline's ring holds fx² + fy² there). Where
+  /// one more double, which must be readable (the AVX kernel loads all four) but does not reach
+  /// the sums (the pipeline's ring holds fx² + fy² there). Where
   /// the CPU has AVX (and set_avx() has not turned it off), a sample's row and a bin's sums,
   /// three channels and the weight, each fill one 256-bit register: half the instructions of
   /// the SSE2 pairs, the same operations on each lane, so the same sums, bit for bit.
@@ -136,6 +137,7 @@ class SyncAverageOf {
   void set_avx(bool allowed) {
     avx_ = allowed && signal::cpu_has_avx();
   }
+  /// Whether add_line_rows() runs its AVX kernel.
   [[nodiscard]] bool avx() const {
     return avx_;
   }
@@ -156,6 +158,15 @@ class SyncAverageOf {
     sum_window();
     const double* t = &totals_[static_cast<std::size_t>(bin) * kRow];
     return t[kValues] > 0.0 ? t[channel] / t[kValues] : 0.0;
+  }
+  /// The window's sums at bin k: each channel's weighted sum, then the weight (what average()
+  /// divides), as added up.
+  [[nodiscard]] std::array<double, static_cast<std::size_t>(Channels) + 1> window_sums(
+      int bin) const {
+    sum_window();
+    std::array<double, kRow> out{};
+    std::copy_n(&totals_[static_cast<std::size_t>(bin) * kRow], kRow, out.begin());
+    return out;
   }
   /// The average of a channel on the whole grid, into `out` (size bins()).
   void average(int channel, std::vector<double>& out) const {

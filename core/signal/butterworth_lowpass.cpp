@@ -8,8 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "core/signal/cpu_features.hpp"
-
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -209,10 +207,6 @@ void filtfilt(const ButterworthDesign& design, std::span<const double> in, std::
   std::reverse(work.begin(), work.end());
   std::copy(work.begin() + static_cast<std::ptrdiff_t>(pad),
             work.begin() + static_cast<std::ptrdiff_t>(pad + n), out.begin());
-}
-
-bool LowPassFilter::cpu_has_avx() {
-  return signal::cpu_has_avx();
 }
 
 #if defined(__SSE2__)

@@ -45,6 +45,8 @@
 #include <cstddef>
 #include <span>
 
+#include "core/signal/cpu_features.hpp"
+
 namespace millwatch::signal {
 
 /// Highest supported order; the design keeps its sections in fixed arrays of this size.
@@ -146,8 +148,6 @@ class LowPassFilter {
   /// else SSE2), or one named (the tests compare them bit for bit). Every kernel gives what
   /// step() gives; another design goes section by section whatever is asked.
   enum class Kernel { kAuto, kScalar, kSse2, kAvx };
-  /// Whether this CPU (and its operating system) runs AVX code: Kernel::kAvx is then available.
-  [[nodiscard]] static bool cpu_has_avx();
 
   /// Filters three channels of `count` samples in place, each with its own filter (all three
   /// of the same design), exactly as step() would sample by sample: section by section over the
@@ -253,7 +253,7 @@ class LowPassFilter {
   /// process_three_lowpass_sse2() with AVX: fx, fy and fz side by side in one 256-bit register
   /// (its fourth lane a copy of fz), the same operations in the same order on each lane, so the
   /// same results bit for bit, in half the instructions of the two SSE2 registers. The kernel is
-  /// compiled for AVX alone (butterworth_lowpass.cpp): call this only where cpu_has_avx().
+  /// compiled for AVX alone (butterworth_lowpass.cpp): call this only where signal::cpu_has_avx().
   static void process_three_lowpass_avx(std::array<LowPassFilter, 3>& filters,
                                         const std::array<double*, 3>& data, std::size_t count);
 #endif
@@ -270,7 +270,7 @@ class LowPassFilter {
     // then exactly 2·(b0·x) and b2·x exactly b0·x, so three coefficients per section do.
     if (kernel != Kernel::kScalar && p.b1 == 2.0 * p.b0 && p.b2 == p.b0 && q.b1 == 2.0 * q.b0 &&
         q.b2 == q.b0) {
-      if (kernel != Kernel::kSse2 && cpu_has_avx()) {
+      if (kernel != Kernel::kSse2 && signal::cpu_has_avx()) {
         process_three_lowpass_avx(filters, data, count);
       } else {
         process_three_lowpass_sse2(filters, data, count);

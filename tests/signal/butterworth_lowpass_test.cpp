@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/signal/cpu_features.hpp"
 #include "tests/support/allocation_counter.hpp"
 
 namespace millwatch::signal {
@@ -529,7 +530,7 @@ TEST(ButterworthLowPass, BlockSizeDoesNotChangeTheOutput) {
 TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
   using Kernel = LowPassFilter::Kernel;
   std::vector<Kernel> kernels = {Kernel::kAuto, Kernel::kScalar, Kernel::kSse2};
-  if (LowPassFilter::cpu_has_avx()) {
+  if (signal::cpu_has_avx()) {
     kernels.push_back(Kernel::kAvx);
   }
   for (int order : {2, 4, 5}) {
