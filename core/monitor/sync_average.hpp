@@ -108,10 +108,10 @@ class SyncAverageOf {
   }
   /// add_line() for three channels read from rows: rows(i) points at sample i's fx, fy, fz and
   /// one more double, which must be readable (the AVX kernel loads all four) but does not reach
-  /// the sums (the pipeline's ring holds fx² + fy² there). Where
-  /// the CPU has AVX (and set_avx() has not turned it off), a sample's row and a bin's sums,
-  /// three channels and the weight, each fill one 256-bit register: half the instructions of
-  /// the SSE2 pairs, the same operations on each lane, so the same sums, bit for bit.
+  /// the sums (the pipeline's ring holds fx² + fy² there). Where the CPU has AVX (and set_avx()
+  /// has not turned it off), a sample's row and a bin's sums, three channels and the weight,
+  /// each fill one 256-bit register: half the instructions of the SSE2 pairs, the same
+  /// operations on each lane, so the same sums, bit for bit.
   template <typename RowsOf>
   void add_line_rows(std::size_t count, double first_bin, double bins_per_sample,
                      const RowsOf& rows) {
