@@ -28,6 +28,11 @@ struct SourceCounters {
 
 class LcmSource {
  public:
+  /// The queue an LCM source needs when the thread that runs handle() processes each block
+  /// before it handles the next (millwatchd's sample thread): one block at a time, and one slot
+  /// of slack. LCM's subscription queue holds the backlog.
+  static constexpr std::size_t kQueueCapacity = 2;
+
   /// Subscribes on `lcm` (whose handle() the caller runs in its LCM thread); blocks of more
   /// than `max_block_samples` (at most BlockSlot::kMaxSamples) are dropped.
   LcmSource(lcm::LCM& lcm, const std::string& channel, std::int64_t max_block_samples,

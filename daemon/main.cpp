@@ -181,8 +181,11 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   std::unique_ptr<shell::MonitorRun> run = build_for(config_path, [&] {
     return std::make_unique<shell::MonitorRun>(config.monitor, run_options);
   });
-  // 64 slots of 98 KB: on the heap, not on the stack.
-  const auto queue_storage = std::make_unique<daemon::BlockQueue>();
+  // An LCM source decodes in the sample thread, which runs each block before the next: a few
+  // slots, kept in the cache. A Comedi reader thread needs room for a backlog.
+  const auto queue_storage = std::make_unique<daemon::BlockQueue>(
+      config.source.kind == daemon::SourceConfig::Kind::kLcm ? daemon::LcmSource::kQueueCapacity
+                                                             : daemon::BlockQueue::kCapacity);
   daemon::BlockQueue& queue = *queue_storage;
   std::atomic<bool> stop{false};
 

@@ -15,34 +15,43 @@ namespace millwatch::daemon {
 namespace {
 
 TEST(BlockQueue, BlocksAreFilledAndReadInPlaceInOrderAndAFullRingRefuses) {
-  auto q = std::make_unique<BlockQueue>();
-  EXPECT_TRUE(q->empty());
-  EXPECT_EQ(q->front(), nullptr);
-  for (std::size_t k = 0; k < BlockQueue::kCapacity; ++k) {
-    BlockSlot* s = q->claim();
-    ASSERT_NE(s, nullptr) << k;
-    const double x[] = {static_cast<double>(k), 1.0}, y[] = {2.0, 3.0}, z[] = {4.0, -5.0};
-    s->assign(static_cast<std::int64_t>(1000 * k), static_cast<std::int64_t>(k), 50000.0, x, y, z,
-              2);
-    q->publish();
-  }
-  EXPECT_EQ(q->claim(), nullptr);  // full: the source drops and counts the block
-  for (std::size_t k = 0; k < BlockQueue::kCapacity; ++k) {
-    const BlockSlot* s = q->front();
-    ASSERT_NE(s, nullptr) << k;
-    const monitor::SampleBlock b = s->view();
-    EXPECT_EQ(b.seq, static_cast<std::int64_t>(k));
-    EXPECT_EQ(b.utime_us, static_cast<std::int64_t>(1000 * k));
-    ASSERT_EQ(b.fx_N.size(), 2u);
-    EXPECT_EQ(b.fx_N[0], static_cast<double>(k));
-    EXPECT_EQ(b.fz_N[1], -5.0);
-    EXPECT_EQ(b.fx_N.data(), s->fx.data());  // the slot itself, not a copy
-    q->pop();
-    if (k == 0) {
-      EXPECT_NE(q->claim(), nullptr);  // one slot free again
+  // The reader thread's 64 slots, an LCM source's 2, and the least there can be; filled and
+  // drained three times, so that the ring wraps.
+  for (const std::size_t capacity : {BlockQueue::kCapacity, std::size_t{2}, std::size_t{1}}) {
+    auto q = std::make_unique<BlockQueue>(capacity);
+    ASSERT_EQ(q->capacity(), capacity);
+    std::int64_t seq = 0;
+    for (int round = 0; round < 3; ++round) {
+      EXPECT_TRUE(q->empty());
+      EXPECT_EQ(q->front(), nullptr);
+      for (std::size_t k = 0; k < capacity; ++k) {
+        BlockSlot* s = q->claim();
+        ASSERT_NE(s, nullptr) << capacity << " " << k;
+        const double x[] = {static_cast<double>(seq + static_cast<std::int64_t>(k)), 1.0};
+        const double y[] = {2.0, 3.0}, z[] = {4.0, -5.0};
+        s->assign(1000 * (seq + static_cast<std::int64_t>(k)), seq + static_cast<std::int64_t>(k),
+                  50000.0, x, y, z, 2);
+        q->publish();
+      }
+      EXPECT_EQ(q->claim(), nullptr) << capacity;  // full: the source drops and counts the block
+      for (std::size_t k = 0; k < capacity; ++k, ++seq) {
+        const BlockSlot* s = q->front();
+        ASSERT_NE(s, nullptr) << capacity << " " << k;
+        const monitor::SampleBlock b = s->view();
+        EXPECT_EQ(b.seq, seq);
+        EXPECT_EQ(b.utime_us, 1000 * seq);
+        ASSERT_EQ(b.fx_N.size(), 2u);
+        EXPECT_EQ(b.fx_N[0], static_cast<double>(seq));
+        EXPECT_EQ(b.fz_N[1], -5.0);
+        EXPECT_EQ(b.fx_N.data(), s->fx.data());  // the slot itself, not a copy
+        q->pop();
+        if (k == 0) {
+          EXPECT_NE(q->claim(), nullptr);  // one slot free again
+        }
+      }
     }
+    EXPECT_TRUE(q->empty());
   }
-  EXPECT_TRUE(q->empty());
 }
 
 TEST(BlockQueue, TheConsumerSleepsUntilABlockIsPublished) {

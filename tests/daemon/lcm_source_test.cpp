@@ -9,6 +9,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "msgs/lcm_convert.hpp"
@@ -130,6 +131,52 @@ TEST(LcmSource, ABlockCostsNoAllocationInSteadyState) {
   EXPECT_EQ(counter.allocations(), 0);
   EXPECT_EQ(counters.messages.load(), 20);
   EXPECT_EQ(counters.samples_dropped.load(), 0);
+}
+
+// millwatchd's sample thread handles one message and runs its block before the next: with an LCM
+// source's two slots, a burst waits in LCM's subscription queue, not in ours, and nothing is
+// lost; the blocks come in order through the same few slots. A queue left full counts the drop.
+TEST(LcmSource, TheDaemonsTwoSlotsTakeABurstWhenEachBlockIsRunBeforeTheNext) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  auto queue = std::make_unique<BlockQueue>(LcmSource::kQueueCapacity);
+  SourceCounters counters;
+  LcmSource source(lcm, "RAW", 4096, *queue, counters);
+  constexpr int kBurst = 300;
+  for (int k = 0; k < kBurst; ++k) {
+    const auto bytes = encoded(k, 333);
+    lcm.publish("RAW", bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  std::set<const BlockSlot*> slots;
+  std::int64_t expected = 0;
+  while (lcm.handleTimeout(0) > 0) {  // as millwatchd's loop: handle, then run what came
+    while (const BlockSlot* s = queue->front()) {
+      slots.insert(s);
+      EXPECT_EQ(s->seq, expected++);
+      EXPECT_EQ(s->count, 333u);
+      queue->pop();
+    }
+  }
+  EXPECT_EQ(expected, kBurst);
+  EXPECT_EQ(counters.messages.load(), kBurst);
+  EXPECT_EQ(counters.queue_full.load(), 0);
+  EXPECT_EQ(counters.samples_dropped.load(), 0);
+  EXPECT_LE(slots.size(), LcmSource::kQueueCapacity + 1);
+
+  // Handled without running the blocks: the third finds both slots taken.
+  for (int k = 0; k < 3; ++k) {
+    const auto bytes = encoded(kBurst + k, 100);
+    lcm.publish("RAW", bytes.data(), static_cast<unsigned>(bytes.size()));
+    ASSERT_EQ(lcm.handleTimeout(1000), 1);
+  }
+  EXPECT_EQ(counters.queue_full.load(), 1);
+  EXPECT_EQ(counters.samples_dropped.load(), 100);
+  auto slot = std::make_unique<BlockSlot>();
+  ASSERT_TRUE(queue->try_pop(*slot));
+  EXPECT_EQ(slot->seq, kBurst);
+  ASSERT_TRUE(queue->try_pop(*slot));
+  EXPECT_EQ(slot->seq, kBurst + 1);
+  EXPECT_FALSE(queue->try_pop(*slot));
 }
 
 }  // namespace
