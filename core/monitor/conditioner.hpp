@@ -86,30 +86,24 @@ class Conditioner {
                                                  in[static_cast<std::size_t>(axis_map_.source[2])]};
     for (std::size_t from = 0; from < count; from += kChunk) {
       const std::size_t n = std::min(kChunk, count - from);
-      for (std::size_t a = 0; a < 3; ++a) {
-        const double sign = axis_map_.sign[a];
-        const double* src = source[a] + from;
-        double* dst = chunk_[a].data();
-        for (std::size_t i = 0; i < n; ++i) {
-          dst[i] = sign * src[i];
-        }
-      }
       if (fresh_) {
         for (std::size_t a = 0; a < 3; ++a) {
           lowpass_[a].reset();
-          lowpass_[a].settle(chunk_[a][0]);
+          lowpass_[a].settle(axis_map_.sign[a] * source[a][from]);
         }
         fresh_ = false;
       }
+      // The axis map's signs are applied as the filters read the samples (no pass of their own).
       signal::LowPassFilter::process_three(
-          lowpass_, {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
+          lowpass_, {source[0] + from, source[1] + from, source[2] + from}, axis_map_.sign,
+          {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
       for (std::size_t i = 0; i < n;) {
         const std::int64_t at = first + static_cast<std::int64_t>(from + i);
         const std::size_t run = std::min(n - i, std::max<std::size_t>(1, run_limit(at)));
         double* x = chunk_[0].data() + i;
         double* y = chunk_[1].data() + i;
         double* z = chunk_[2].data() + i;
-        tare_run(x, y, z, run);
+        tare_run(at, x, y, z, run);
         out_run(at, run, x, y, z);
         i += run;
       }
@@ -132,6 +126,12 @@ class Conditioner {
   }
   [[nodiscard]] const std::array<double, 3>& tare_N() const { return tare_N_; }
 
+  /// The caller of push_block() reads only the samples whose number is a multiple of `stride`
+  /// (≥ 1) from out_run's arrays (the pipeline's measuring grid): while the tare stands, it is
+  /// subtracted from those alone; the others are left filtered, untared. The envelope, and so the
+  /// tare, still follow every sample.
+  void set_stride(int stride) { stride_ = std::max(1, stride); }
+
  private:
   template <typename Out>
   void drain(std::size_t ready, Out& out) {
@@ -142,8 +142,9 @@ class Conditioner {
     zero_phase_next_ += static_cast<std::int64_t>(ready);
   }
 
-  /// emit()'s tare over a run of samples, in place.
-  void tare_run(double* fx, double* fy, double* fz, std::size_t count) {
+  /// emit()'s tare over a run of samples from sample `first`, in place (while the tare stands,
+  /// subtracted from the samples the caller reads alone: set_stride()).
+  void tare_run(std::int64_t first, double* fx, double* fy, double* fz, std::size_t count) {
     if (quiet_ && typical_peak_N_ > 0.0) {  // the tare may move: sample by sample
       for (std::size_t i = 0; i < count; ++i) {
         emit(0, fx[i], fy[i], fz[i], [&](std::int64_t, double x, double y, double z) {
@@ -181,7 +182,10 @@ class Conditioner {
       envelope_sq = std::max(square(i), envelope_sq * envelope_decay_);
     }
     envelope_sq_ = envelope_sq;
-    for (std::size_t i = 0; i < count; ++i) {
+    // The first sample of the run on the caller's grid.
+    const auto step = static_cast<std::size_t>(stride_);
+    const auto behind = static_cast<std::size_t>((first % stride_ + stride_) % stride_);
+    for (std::size_t i = behind == 0 ? 0 : step - behind; i < count; i += step) {
       fx[i] -= tx;
       fy[i] -= ty;
       fz[i] -= tz;
@@ -219,6 +223,7 @@ class Conditioner {
   std::array<double, kChunk + 1> decay_power_{};  // envelope_decay_^k
   bool quiet_ = false;
   double typical_peak_N_ = 0.0;
+  int stride_ = 1;  // push_block()'s caller reads every stride_-th sample (set_stride)
 };
 
 }  // namespace millwatch::monitor

@@ -106,6 +106,7 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   filter_ = design(config_);
   conditioner_ = Conditioner(config_, filter_);
   stride_ = stride_for(config_);
+  conditioner_.set_stride(stride_);
   const MonitorConfig measuring = measuring_config(config_);
   rate_hz_ = measuring.sample_rate_hz;
   decimation_ = decimation_for(measuring);

@@ -236,24 +236,32 @@ __attribute__((target("avx"), always_inline)) inline __m256d state_lanes(const S
 
 /// Lanes (fx, fy, fz, fz); states sa, sb, sc of fx, fy, fz. No FMA: target "avx" alone, so GCC
 /// contracts nothing and every lane rounds as step() does.
-__attribute__((target("avx"))) void lowpass_two_sections_avx(const Biquad& p, const Biquad& q,
-                                                             SectionStates& sa, SectionStates& sb,
-                                                             SectionStates& sc, double* xa,
-                                                             double* xb, double* xc,
-                                                             std::size_t count) {
+__attribute__((target("avx"))) void lowpass_two_sections_avx(
+    const Biquad& p, const Biquad& q, SectionStates& sa, SectionStates& sb, SectionStates& sc,
+    const std::array<const double*, 3>& in, const std::array<double, 3>& sign,
+    const std::array<double*, 3>& out, std::size_t count) {
   const __m256d pb = _mm256_set1_pd(p.b0), pa1 = _mm256_set1_pd(p.a1), pa2 = _mm256_set1_pd(p.a2);
   const __m256d qb = _mm256_set1_pd(q.b0), qa1 = _mm256_set1_pd(q.a1), qa2 = _mm256_set1_pd(q.a2);
   __m256d u0 = state_lanes(sa, sb, sc, 0, 0), u1 = state_lanes(sa, sb, sc, 0, 1);
   __m256d u2 = state_lanes(sa, sb, sc, 1, 0), u3 = state_lanes(sa, sb, sc, 1, 1);
+  // The signs as the lanes hold the channels: the input is sign·x, as the axis map writes it.
+  const __m256d m = _mm256_set_pd(sign[2], sign[2], sign[1], sign[0]);
+  const double* ra = in[0];
+  const double* rb = in[1];
+  const double* rc = in[2];
+  double* xa = out[0];
+  double* xb = out[1];
+  double* xc = out[2];
   for (std::size_t i = 0; i < count; ++i) {
-    const __m128d in_ab = _mm_loadh_pd(_mm_load_sd(xa + i), xb + i);
-    const __m256d in = _mm256_insertf128_pd(_mm256_castpd128_pd256(in_ab), _mm_load1_pd(xc + i), 1);
-    const __m256d out =
-        lowpass_section_avx(lowpass_section_avx(in, pb, pa1, pa2, u0, u1), qb, qa1, qa2, u2, u3);
-    const __m128d out_ab = _mm256_castpd256_pd128(out);
-    _mm_storel_pd(xa + i, out_ab);
-    _mm_storeh_pd(xb + i, out_ab);
-    _mm_storel_pd(xc + i, _mm256_extractf128_pd(out, 1));
+    const __m128d x_ab = _mm_loadh_pd(_mm_load_sd(ra + i), rb + i);
+    const __m256d x = _mm256_mul_pd(
+        m, _mm256_insertf128_pd(_mm256_castpd128_pd256(x_ab), _mm_load1_pd(rc + i), 1));
+    const __m256d y =
+        lowpass_section_avx(lowpass_section_avx(x, pb, pa1, pa2, u0, u1), qb, qa1, qa2, u2, u3);
+    const __m128d y_ab = _mm256_castpd256_pd128(y);
+    _mm_storel_pd(xa + i, y_ab);
+    _mm_storeh_pd(xb + i, y_ab);
+    _mm_storel_pd(xc + i, _mm256_extractf128_pd(y, 1));
   }
   alignas(32) std::array<double, 4> v0{}, v1{}, v2{}, v3{};
   _mm256_store_pd(v0.data(), u0);
@@ -271,11 +279,13 @@ __attribute__((target("avx"))) void lowpass_two_sections_avx(const Biquad& p, co
 }  // namespace
 
 void LowPassFilter::process_three_lowpass_avx(std::array<LowPassFilter, 3>& filters,
-                                              const std::array<double*, 3>& data,
+                                              const std::array<const double*, 3>& in,
+                                              const std::array<double, 3>& sign,
+                                              const std::array<double*, 3>& out,
                                               std::size_t count) {
   lowpass_two_sections_avx(filters[0].design_.sos[0], filters[0].design_.sos[1],
-                           filters[0].state_.z, filters[1].state_.z, filters[2].state_.z, data[0],
-                           data[1], data[2], count);
+                           filters[0].state_.z, filters[1].state_.z, filters[2].state_.z, in, sign,
+                           out, count);
 }
 #endif
 

@@ -156,9 +156,19 @@ class LowPassFilter {
   static void process_three(std::array<LowPassFilter, 3>& filters,
                             const std::array<double*, 3>& data, std::size_t count,
                             Kernel kernel = Kernel::kAuto) {
+    process_three(filters, {data[0], data[1], data[2]}, {1.0, 1.0, 1.0}, data, count, kernel);
+  }
+
+  /// process_three() from `in` into `out` (the same memory, or apart), channel a's input taken
+  /// as sign[a]·in[a][i] — the axis map's ±1 (an exact product), applied as the kernel reads
+  /// the sample instead of in a pass of its own: the filter of sign[a]·x, bit for bit.
+  static void process_three(std::array<LowPassFilter, 3>& filters,
+                            const std::array<const double*, 3>& in,
+                            const std::array<double, 3>& sign, const std::array<double*, 3>& out,
+                            std::size_t count, Kernel kernel = Kernel::kAuto) {
     const ButterworthDesign& d = filters[0].design_;
     if (d.sections == 2) {  // the monitor's order 4: both sections in one pass (six chains)
-      process_three_two_sections(filters, data, count, kernel);
+      process_three_two_sections(filters, in, sign, out, count, kernel);
       return;
     }
     for (int s = 0; s < d.sections; ++s) {
@@ -168,11 +178,18 @@ class LowPassFilter {
       auto& zb = filters[1].state_.z[us];
       auto& zc = filters[2].state_.z[us];
       double a0 = za[0], a1 = za[1], b0 = zb[0], b1 = zb[1], c0 = zc[0], c1 = zc[1];
-      double* xa = data[0];
-      double* xb = data[1];
-      double* xc = data[2];
+      // The first section reads the input, with its signs; the others, the last one's output.
+      const double* ra = s == 0 ? in[0] : out[0];
+      const double* rb = s == 0 ? in[1] : out[1];
+      const double* rc = s == 0 ? in[2] : out[2];
+      const double ma = s == 0 ? sign[0] : 1.0;
+      const double mb = s == 0 ? sign[1] : 1.0;
+      const double mc = s == 0 ? sign[2] : 1.0;
+      double* xa = out[0];
+      double* xb = out[1];
+      double* xc = out[2];
       for (std::size_t i = 0; i < count; ++i) {
-        const double ia = xa[i], ib = xb[i], ic = xc[i];
+        const double ia = ma * ra[i], ib = mb * rb[i], ic = mc * rc[i];
         const double ya = c.b0 * ia + a0;
         const double yb = c.b0 * ib + b0;
         const double yc = c.b0 * ic + c0;
@@ -203,7 +220,9 @@ class LowPassFilter {
   /// states in memory, in the recursions' way). The same operations in the same order on each
   /// lane as step(): the same results, bit for bit.
   static void process_three_lowpass_sse2(std::array<LowPassFilter, 3>& filters,
-                                         const std::array<double*, 3>& data, std::size_t count) {
+                                         const std::array<const double*, 3>& in,
+                                         const std::array<double, 3>& sign,
+                                         const std::array<double*, 3>& out, std::size_t count) {
     const Biquad& p = filters[0].design_.sos[0];
     const Biquad& q = filters[0].design_.sos[1];
     const __m128d pb = _mm_set1_pd(p.b0), pa1 = _mm_set1_pd(p.a1), pa2 = _mm_set1_pd(p.a2);
@@ -216,9 +235,13 @@ class LowPassFilter {
     __m128d u2 = _mm_set_pd(sb[1][0], sa[1][0]), u3 = _mm_set_pd(sb[1][1], sa[1][1]);
     __m128d v0 = _mm_set1_pd(sc[0][0]), v1 = _mm_set1_pd(sc[0][1]);
     __m128d v2 = _mm_set1_pd(sc[1][0]), v3 = _mm_set1_pd(sc[1][1]);
-    double* xa = data[0];
-    double* xb = data[1];
-    double* xc = data[2];
+    const double* ra = in[0];
+    const double* rb = in[1];
+    const double* rc = in[2];
+    const __m128d m_ab = _mm_set_pd(sign[1], sign[0]), m_c = _mm_set1_pd(sign[2]);
+    double* xa = out[0];
+    double* xb = out[1];
+    double* xc = out[2];
     // One biquad on a pair of lanes: y = b0·x + z0; z0 = (2·b0·x − a1·y) + z1; z1 = b0·x − a2·y.
     const auto section = [](__m128d x, __m128d b, __m128d a1, __m128d a2, __m128d& z0,
                             __m128d& z1) {
@@ -229,8 +252,8 @@ class LowPassFilter {
       return y;
     };
     for (std::size_t i = 0; i < count; ++i) {
-      const __m128d in_ab = _mm_loadh_pd(_mm_load_sd(xa + i), xb + i);
-      const __m128d in_c = _mm_load1_pd(xc + i);
+      const __m128d in_ab = _mm_mul_pd(m_ab, _mm_loadh_pd(_mm_load_sd(ra + i), rb + i));
+      const __m128d in_c = _mm_mul_pd(m_c, _mm_load1_pd(rc + i));
       const __m128d out_ab = section(section(in_ab, pb, pa1, pa2, u0, u1), qb, qa1, qa2, u2, u3);
       const __m128d out_c = section(section(in_c, pb, pa1, pa2, v0, v1), qb, qa1, qa2, v2, v3);
       _mm_storel_pd(xa + i, out_ab);
@@ -255,13 +278,17 @@ class LowPassFilter {
   /// same results bit for bit, in half the instructions of the two SSE2 registers. The kernel is
   /// compiled for AVX alone (butterworth_lowpass.cpp): call this only where signal::cpu_has_avx().
   static void process_three_lowpass_avx(std::array<LowPassFilter, 3>& filters,
-                                        const std::array<double*, 3>& data, std::size_t count);
+                                        const std::array<const double*, 3>& in,
+                                        const std::array<double, 3>& sign,
+                                        const std::array<double*, 3>& out, std::size_t count);
 #endif
 
   /// process_three() for two sections, sample by sample with every state in a local: the two
   /// sections' recursions of the three channels overlap (each waits only on its own last step).
   static void process_three_two_sections(std::array<LowPassFilter, 3>& filters,
-                                         const std::array<double*, 3>& data, std::size_t count,
+                                         const std::array<const double*, 3>& in,
+                                         const std::array<double, 3>& sign,
+                                         const std::array<double*, 3>& out, std::size_t count,
                                          Kernel kernel) {
     const Biquad p = filters[0].design_.sos[0];
     const Biquad q = filters[0].design_.sos[1];
@@ -271,9 +298,9 @@ class LowPassFilter {
     if (kernel != Kernel::kScalar && p.b1 == 2.0 * p.b0 && p.b2 == p.b0 && q.b1 == 2.0 * q.b0 &&
         q.b2 == q.b0) {
       if (kernel != Kernel::kSse2 && signal::cpu_has_avx()) {
-        process_three_lowpass_avx(filters, data, count);
+        process_three_lowpass_avx(filters, in, sign, out, count);
       } else {
-        process_three_lowpass_sse2(filters, data, count);
+        process_three_lowpass_sse2(filters, in, sign, out, count);
       }
       return;
     }
@@ -285,22 +312,25 @@ class LowPassFilter {
       const auto& s = filters[a].state_.z;
       z[a] = {s[0][0], s[0][1], s[1][0], s[1][1]};
     }
-    double* xa = data[0];
-    double* xb = data[1];
-    double* xc = data[2];
-    const auto step = [&p, &q](double in, std::array<double, 4>& s) {
-      const double y = p.b0 * in + s[0];
-      s[0] = p.b1 * in - p.a1 * y + s[1];
-      s[1] = p.b2 * in - p.a2 * y;
-      const double out = q.b0 * y + s[2];
-      s[2] = q.b1 * y - q.a1 * out + s[3];
-      s[3] = q.b2 * y - q.a2 * out;
-      return out;
+    const double* ra = in[0];
+    const double* rb = in[1];
+    const double* rc = in[2];
+    double* xa = out[0];
+    double* xb = out[1];
+    double* xc = out[2];
+    const auto step = [&p, &q](double x, std::array<double, 4>& s) {
+      const double y = p.b0 * x + s[0];
+      s[0] = p.b1 * x - p.a1 * y + s[1];
+      s[1] = p.b2 * x - p.a2 * y;
+      const double y2 = q.b0 * y + s[2];
+      s[2] = q.b1 * y - q.a1 * y2 + s[3];
+      s[3] = q.b2 * y - q.a2 * y2;
+      return y2;
     };
     for (std::size_t i = 0; i < count; ++i) {
-      xa[i] = step(xa[i], z[0]);
-      xb[i] = step(xb[i], z[1]);
-      xc[i] = step(xc[i], z[2]);
+      xa[i] = step(sign[0] * ra[i], z[0]);
+      xb[i] = step(sign[1] * rb[i], z[1]);
+      xc[i] = step(sign[2] * rc[i], z[2]);
     }
     for (std::size_t a = 0; a < 3; ++a) {
       auto& s = filters[a].state_.z;

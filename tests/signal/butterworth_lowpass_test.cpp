@@ -579,6 +579,60 @@ TEST(ButterworthLowPass, ThreeChannelsInStepAreEachChannelAlone) {
   }
 }
 
+// The conditioner's axis map goes into the filters' reads: process_three() from one array into
+// another, each channel's input times its sign, gives bit for bit what the filters give in place
+// on the mapped samples (sign·x written first, as the axis map did), with every kernel and
+// order, in blocks of any size; the input is left as it was.
+TEST(ButterworthLowPass, ThreeChannelsReadWithTheirSignsAreTheMappedChannelsInPlace) {
+  using Kernel = LowPassFilter::Kernel;
+  std::vector<Kernel> kernels = {Kernel::kAuto, Kernel::kScalar, Kernel::kSse2};
+  if (signal::cpu_has_avx()) {
+    kernels.push_back(Kernel::kAvx);
+  }
+  const std::array<double, 3> sign = {-1.0, 1.0, -1.0};
+  for (int order : {3, 4}) {
+    const auto d = ButterworthDesign::lowpass(333300.0, kCutoffHz, order);
+    const std::size_t n = 3000;
+    std::array<std::vector<double>, 3> x, mapped;
+    for (std::size_t a = 0; a < 3; ++a) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const double k = static_cast<double>(i);
+        x[a].push_back(std::sin((0.013 + 0.005 * a) * k) + 0.2 * std::cos(0.9 * k) + 1.5 * a);
+        mapped[a].push_back(sign[a] * x[a].back());
+      }
+    }
+    const std::array<std::vector<double>, 3> input = x;
+    for (const Kernel kernel : kernels) {
+      for (std::size_t block : {1u, 7u, 333u}) {
+        std::array<LowPassFilter, 3> in_place = {LowPassFilter(d), LowPassFilter(d),
+                                                 LowPassFilter(d)};
+        std::array<LowPassFilter, 3> apart = in_place;
+        std::array<std::vector<double>, 3> y = mapped;
+        std::array<std::vector<double>, 3> z;
+        for (std::size_t a = 0; a < 3; ++a) {
+          in_place[a].settle(mapped[a][0]);
+          apart[a].settle(sign[a] * x[a][0]);
+          z[a].assign(n, 0.0);
+        }
+        for (std::size_t i = 0; i < n; i += block) {
+          const std::size_t m = std::min(block, n - i);
+          LowPassFilter::process_three(
+              in_place, {y[0].data() + i, y[1].data() + i, y[2].data() + i}, m, kernel);
+          LowPassFilter::process_three(apart, {x[0].data() + i, x[1].data() + i, x[2].data() + i},
+                                       sign, {z[0].data() + i, z[1].data() + i, z[2].data() + i}, m,
+                                       kernel);
+        }
+        for (std::size_t a = 0; a < 3; ++a) {
+          EXPECT_EQ(z[a], y[a]) << "order " << order << " kernel " << static_cast<int>(kernel)
+                                << " block " << block << " channel " << a;
+          EXPECT_EQ(apart[a].state().z, in_place[a].state().z);
+          EXPECT_EQ(x[a], input[a]);
+        }
+      }
+    }
+  }
+}
+
 TEST(ButterworthLowPass, SetupAndResetStartFromRest) {
   const auto d = ButterworthDesign::lowpass(50000.0, kCutoffHz, 6);
   const auto x = tone(700.0, 50000.0, 500, 1.0);
