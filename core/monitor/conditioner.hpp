@@ -17,6 +17,10 @@
 #include <cstdint>
 #include <span>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "core/monitor/monitor_config.hpp"
 #include "core/signal/axis_map.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
@@ -125,6 +129,8 @@ class Conditioner {
     typical_peak_N_ = typical_peak_N;
   }
   [[nodiscard]] const std::array<double, 3>& tare_N() const { return tare_N_; }
+  /// The decaying peak of the tared in-plane force's square (what says the tool is quiet), N².
+  [[nodiscard]] double envelope_sq_N2() const { return envelope_sq_; }
 
   /// The caller of push_block() reads only the samples whose number is a multiple of `stride`
   /// (≥ 1) from out_run's arrays (the pipeline's measuring grid): while the tare stands, it is
@@ -169,12 +175,32 @@ class Conditioner {
     if (whole > 0) {
       const double d4 = decay_power_[4];
       double e0 = 0.0, e1 = 0.0, e2 = 0.0, e3 = 0.0;
+#if defined(__SSE2__)
+      // The four recursions as two SSE2 pairs (e0, e1) and (e2, e3): maxpd(e·d⁴, x²) is
+      // (e·d⁴ > x²) ? e·d⁴ : x², which is std::max(x², e·d⁴), NaN and zeros alike.
+      const __m128d t_x = _mm_set1_pd(tx), t_y = _mm_set1_pd(ty), d = _mm_set1_pd(d4);
+      __m128d e01 = _mm_setzero_pd(), e23 = _mm_setzero_pd();
+      const auto pair = [&](std::size_t i) {
+        const __m128d ex = _mm_sub_pd(_mm_loadu_pd(fx + i), t_x);
+        const __m128d ey = _mm_sub_pd(_mm_loadu_pd(fy + i), t_y);
+        return _mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey));
+      };
+      for (std::size_t i = 0; i < whole; i += 4) {
+        e01 = _mm_max_pd(_mm_mul_pd(e01, d), pair(i));
+        e23 = _mm_max_pd(_mm_mul_pd(e23, d), pair(i + 2));
+      }
+      e0 = _mm_cvtsd_f64(e01);
+      e1 = _mm_cvtsd_f64(_mm_unpackhi_pd(e01, e01));
+      e2 = _mm_cvtsd_f64(e23);
+      e3 = _mm_cvtsd_f64(_mm_unpackhi_pd(e23, e23));
+#else
       for (std::size_t i = 0; i < whole; i += 4) {
         e0 = std::max(square(i), e0 * d4);
         e1 = std::max(square(i + 1), e1 * d4);
         e2 = std::max(square(i + 2), e2 * d4);
         e3 = std::max(square(i + 3), e3 * d4);
       }
+#endif
       envelope_sq = std::max(
           {envelope_sq, e0 * decay_power_[3], e1 * decay_power_[2], e2 * decay_power_[1], e3});
     }

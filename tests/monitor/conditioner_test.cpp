@@ -22,7 +22,8 @@ namespace {
 
 struct Output {
   std::vector<double> fx, fy, fz;
-  std::array<double, 3> tare_N{};  // at the end
+  std::array<double, 3> tare_N{};   // at the end
+  std::vector<double> envelope_sq;  // at the end of each block
 };
 
 constexpr double kRate_hz = 333300.0;
@@ -62,6 +63,9 @@ Output sample_by_sample() {
       o.fy.push_back(y);
       o.fz.push_back(z);
     });
+    if ((n + 1) % kBlock == 0) {
+      o.envelope_sq.push_back(c.envelope_sq_N2());
+    }
   }
   o.tare_N = c.tare_N();
   return o;
@@ -101,6 +105,7 @@ Output in_blocks(int stride, std::size_t run) {
             }
           }
         });
+    o.envelope_sq.push_back(c.envelope_sq_N2());
   }
   o.tare_N = c.tare_N();
   return o;
@@ -126,6 +131,26 @@ TEST(Conditioner, BlocksAndAStrideGiveTheSampleBySampleValuesOnTheGrid) {
       }
       EXPECT_EQ(compared, (kSamples - kCutStart + stride - 1) / stride);
       EXPECT_EQ(o.tare_N, truth.tare_N);
+    }
+  }
+}
+
+// During the cut the block path keeps the envelope as four interleaved recursions (SSE2 pairs
+// where the CPU has them) over each run: the same peak, sample by sample, as push()'s one
+// recursion e = max(x², e·d), up to the rounding of the powers of d (which depends on how the
+// samples fall into runs, not on the stride).
+TEST(Conditioner, TheEnvelopeInBlocksIsTheSampleBySampleOne) {
+  const Output truth = sample_by_sample();
+  for (const std::size_t run : {1U, 7U, 1000U}) {
+    const Output all = in_blocks(1, run);
+    const Output grid = in_blocks(3, run);
+    ASSERT_EQ(all.envelope_sq.size(), truth.envelope_sq.size());
+    for (std::size_t b = static_cast<std::size_t>(kCutStart / kBlock); b < all.envelope_sq.size();
+         ++b) {
+      EXPECT_GT(truth.envelope_sq[b], 100.0);  // a cut's (tens of newtons)², not the offset's
+      EXPECT_NEAR(all.envelope_sq[b], truth.envelope_sq[b], 1e-12 * truth.envelope_sq[b])
+          << "run " << run << " block " << b;
+      EXPECT_EQ(grid.envelope_sq[b], all.envelope_sq[b]) << "run " << run << " block " << b;
     }
   }
 }
