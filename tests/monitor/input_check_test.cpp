@@ -154,6 +154,36 @@ TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
   EXPECT_EQ(check.counters().saturated_samples, 1);
 }
 
+// Each channel is held to its own charge amplifier's range: 30 N is within x's (50 N) and y's
+// (200 N) but at z's (30 N) — flagged where it is z's sample, not where it is x's or y's — and
+// 60 N is saturation on x alone; at every position of blocks of odd and even lengths.
+TEST(InputCheck, EachChannelIsHeldToItsOwnRange) {
+  InputCheckConfig cfg = config();
+  cfg.saturation_N = {50.0, 200.0, 30.0};
+  for (std::size_t n = 2; n <= 5; ++n) {
+    for (std::size_t at = 0; at < n; ++at) {
+      for (std::size_t channel = 0; channel < 3; ++channel) {
+        for (const double value : {30.0, -60.0}) {
+          InputCheck check(cfg);
+          Block b;
+          b.fx.assign(n, 1.0);
+          b.fy.assign(n, 1.0);
+          b.fz.assign(n, 1.0);
+          (channel == 0 ? b.fx : channel == 1 ? b.fy : b.fz)[at] = value;
+          const auto c = check.check(b.view(0));
+          ASSERT_EQ(c.verdict, BlockVerdict::kAccepted);
+          const double range = cfg.saturation_N[channel];
+          const bool saturated = std::fabs(value) >= range;
+          EXPECT_EQ(c.flags[at], saturated ? kFlagSaturated : 0)
+              << n << " " << at << " " << channel << " " << value;
+          EXPECT_EQ(check.counters().saturated_samples, saturated ? 1 : 0);
+          EXPECT_EQ((channel == 0 ? c.fx_N : channel == 1 ? c.fy_N : c.fz_N)[at], value);
+        }
+      }
+    }
+  }
+}
+
 TEST(InputCheck, GapsAreCountedAsDroppedSamplesAndKeepTime) {
   InputCheck check(config());
   check.check(ramp(100).view(0));
