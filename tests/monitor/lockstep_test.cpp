@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -92,6 +93,45 @@ TEST(Lockstep, AlignmentFindsAKnownOffset) {
   ASSERT_TRUE(lockstep.align(avg));
   EXPECT_NEAR(std::remainder(lockstep.offset_rad() - shift_rad, kTwoPi), 0.0, 0.004);
   EXPECT_GT(lockstep.alignment_correlation(), 0.999);
+}
+
+// Along a line of angles (a revolution's samples: the angle a step per sample, over three turns
+// from an aligned offset), forces_on_line() gives force_at() at each angle — its grid position
+// advanced by a step per sample instead of a division and a floor, so equal to the rounding of
+// that position — and each row's fourth value is Fx² + Fy² of the row, exactly.
+TEST(Lockstep, ForcesOnALineAreTheForcesAtEachAngle) {
+  const double fs = 111100.0;
+  const auto filter = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
+  Lockstep lockstep(cut(), filter);
+  lockstep.set_spindle_hz(421.0);
+  SyncAverage avg(256, 2);
+  for (int r = 0; r < 2; ++r) {
+    for (int n = 0; n < 512; ++n) {
+      const double a = kTwoPi * (n + 0.5) / 512.0;
+      const auto f = lockstep.force_at(a + 0.8);
+      avg.add(a, {f[0], f[1], f[2]});
+    }
+    avg.end_revolution();
+  }
+  ASSERT_TRUE(lockstep.align(avg));
+  const double step_rad = kTwoPi * 421.0 / fs;
+  const auto count = static_cast<std::size_t>(3.0 * fs / 421.0);
+  for (const double angle0_rad : {0.3, -2.0, 40.0}) {
+    std::vector<double> rows(4 * count, -1.0);
+    lockstep.forces_on_line(angle0_rad, step_rad, count, rows.data());
+    double largest = 0.0, worst = 0.0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const double* r = &rows[4 * i];
+      const auto f = lockstep.force_at(angle0_rad + step_rad * static_cast<double>(i));
+      for (std::size_t a = 0; a < 3; ++a) {
+        largest = std::max(largest, std::fabs(f[a]));
+        worst = std::max(worst, std::fabs(r[a] - f[a]));
+      }
+      ASSERT_EQ(r[3], r[0] * r[0] + r[1] * r[1]) << i;
+    }
+    EXPECT_GT(largest, 1.0);  // newtons of a cut, not a flat line
+    EXPECT_LT(worst, 1e-9 * largest) << angle0_rad;
+  }
 }
 
 // Following a new speed re-evaluates the model without allocating.
