@@ -123,7 +123,7 @@ class BlockQueue {
  private:
   [[nodiscard]] std::size_t next(std::size_t i) const { return i + 1 == size_ ? 0 : i + 1; }
 
-  std::size_t size_;  // slots: the capacity and one kept free to tell full from empty
+  const std::size_t size_;  // slots: the capacity and one kept free to tell full from empty
   std::unique_ptr<BlockSlot[]> slots_;
   alignas(64) std::atomic<std::size_t> head_{0};
   alignas(64) std::atomic<std::size_t> tail_{0};

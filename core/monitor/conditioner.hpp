@@ -66,9 +66,11 @@ class Conditioner {
 
   /// A block of checked samples (instrument channels, N) from absolute sample index `first`,
   /// handed on in runs: the same output as push() sample by sample, as long as the caller
-  /// changes the conditioner's state (set_quiet) only between runs. `run_limit(n)` (≥ 1) is how
-  /// many samples from sample n on the caller takes in one run; `out_run(n, count, fx, fy, fz)`
-  /// receives them (model frame, tared; the arrays are the conditioner's scratch, writable).
+  /// changes the conditioner's state (set_quiet) only between runs — on the samples it reads
+  /// (set_stride: while the tare stands, the others are left untared). `run_limit(n)` (≥ 1) is
+  /// how many samples from sample n on the caller takes in one run; `out_run(n, count, fx, fy,
+  /// fz)` receives them (model frame, filtered, tared on the stride's grid; the arrays are the
+  /// conditioner's scratch, writable).
   /// The causal filters run over chunks of the block channel-wise
   /// (signal::LowPassFilter::process_three), the tare over each run.
   template <typename Limit, typename OutRun>

@@ -167,6 +167,14 @@ class LowPassFilter {
                             const std::array<double, 3>& sign, const std::array<double*, 3>& out,
                             std::size_t count, Kernel kernel = Kernel::kAuto) {
     const ButterworthDesign& d = filters[0].design_;
+    if (d.sections == 0) {  // no design yet: a pass-through, as step() is
+      for (std::size_t a = 0; a < 3; ++a) {
+        for (std::size_t i = 0; i < count; ++i) {
+          out[a][i] = sign[a] * in[a][i];
+        }
+      }
+      return;
+    }
     if (d.sections == 2) {  // the monitor's order 4: both sections in one pass (six chains)
       process_three_two_sections(filters, in, sign, out, count, kernel);
       return;

@@ -156,7 +156,8 @@ TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
 
 // Each channel is held to its own charge amplifier's range: 30 N is within x's (50 N) and y's
 // (200 N) but at z's (30 N) — flagged where it is z's sample, not where it is x's or y's — and
-// 60 N is saturation on x alone; at every position of blocks of odd and even lengths.
+// −60 N is beyond x's and z's ranges, within y's; at every position of blocks of odd and even
+// lengths.
 TEST(InputCheck, EachChannelIsHeldToItsOwnRange) {
   InputCheckConfig cfg = config();
   cfg.saturation_N = {50.0, 200.0, 30.0};

@@ -590,7 +590,7 @@ TEST(ButterworthLowPass, ThreeChannelsReadWithTheirSignsAreTheMappedChannelsInPl
     kernels.push_back(Kernel::kAvx);
   }
   const std::array<double, 3> sign = {-1.0, 1.0, -1.0};
-  for (int order : {3, 4}) {
+  for (int order : {2, 3, 4, 5}) {  // one section, the monitor's two in one pass, three
     const auto d = ButterworthDesign::lowpass(333300.0, kCutoffHz, order);
     const std::size_t n = 3000;
     std::array<std::vector<double>, 3> x, mapped;
@@ -631,6 +631,13 @@ TEST(ButterworthLowPass, ThreeChannelsReadWithTheirSignsAreTheMappedChannelsInPl
       }
     }
   }
+  // Without a design yet the filters pass the samples through, as step() does: with the signs.
+  std::array<LowPassFilter, 3> none;
+  const std::array<double, 3> in = {1.5, -2.0, 0.25};
+  std::array<double, 3> out{};
+  LowPassFilter::process_three(none, {&in[0], &in[1], &in[2]}, sign, {&out[0], &out[1], &out[2]},
+                               1);
+  EXPECT_EQ(out, (std::array<double, 3>{-1.5, -2.0, -0.25}));
 }
 
 TEST(ButterworthLowPass, SetupAndResetStartFromRest) {
