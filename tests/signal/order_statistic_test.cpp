@@ -27,7 +27,7 @@ TEST(OrderStatistic, AgreesWithNthElementOnEveryRank) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::exponential_distribution<double> spread(1.0);  // magnitudes of noise: a long tail
-  for (const std::size_t n : {1u, 2u, 3u, 15u, 16u, 17u, 100u, 701u}) {
+  for (const std::size_t n : {1u, 2u, 3u, 7u, 8u, 9u, 15u, 16u, 17u, 100u, 701u}) {
     std::vector<double> v(n);
     for (auto& x : v) {
       x = spread(rng);
