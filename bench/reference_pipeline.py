@@ -20,7 +20,8 @@ Whole process (--whole-s, default 10 s, when no CSV is given): on one simulated 
 processing once) against `millwatch replay --no-identify` of the same file (start, CSV parse, the
 whole pipeline with the lockstep model, summary). --no-identify: replay otherwise identifies
 runout and coefficients on every 30-revolution window and waits for the fits, work the reference
-does not do at all. Best of --whole-repeats; one JSON line {"bench": "whole_process", ...}.
+does not do at all. Best of --whole-repeats (10), the two alternating run by run; one JSON line
+{"bench": "whole_process", ...}.
 
   /usr/bin/python3 bench/reference_pipeline.py [--millwatch build/release/replay/millwatch]
   /usr/bin/python3 bench/reference_pipeline.py CUT.csv ...   # recordings with their sidecars
@@ -162,15 +163,16 @@ def whole_process(millwatch, scenario, duration_s, workdir, repeats):
     csv = simulate(millwatch, scenario, 50000.0, duration_s, workdir, "whole")
     runs = {"reference": [sys.executable, __file__, str(csv), "--repeats", "1"],
             "millwatch": [millwatch, "replay", "--no-identify", "--no-progress", str(csv)]}
-    best = {}
-    for name, command in runs.items():
-        times = []
-        for _ in range(repeats):
+    # The two alternate, run by run: on a shared machine whose speed drifts over minutes, each
+    # sees the same phases (run one after the other, one could be timed in a slow one).
+    times = {name: [] for name in runs}
+    for _ in range(repeats):
+        for name, command in runs.items():
             t0 = time.perf_counter()
             subprocess.run(command, check=True, stdout=subprocess.DEVNULL,
                            stderr=subprocess.DEVNULL)
-            times.append(time.perf_counter() - t0)
-        best[name] = min(times)
+            times[name].append(time.perf_counter() - t0)
+    best = {name: min(t) for name, t in times.items()}
     result = {"bench": "whole_process", "csv": str(csv), "sample_rate_hz": 50000.0,
               "duration_s": duration_s, "rows": round(duration_s * 50000.0),
               "reference_s": best["reference"], "millwatch_s": best["millwatch"],
@@ -192,7 +194,7 @@ def main():
     p.add_argument("--repeats", type=int, default=10)
     p.add_argument("--whole-s", type=float, default=10.0,
                    help="seconds of the whole-process comparison (0: none; not with CSVs given)")
-    p.add_argument("--whole-repeats", type=int, default=3)
+    p.add_argument("--whole-repeats", type=int, default=10)
     a = p.parse_args()
     csvs = a.csv or [simulate(a.millwatch, a.scenario, r, a.duration, a.workdir) for r in a.rates]
     versions = {"python": platform.python_version(), "numpy": np.__version__,
