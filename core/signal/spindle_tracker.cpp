@@ -287,8 +287,8 @@ void SpindleTracker::update() {
   // The magnitudes of the bins read below, no more: the speed found is at most the range's top
   // (f_lo where the range is empty), and nothing reads beyond its highest harmonic, the three
   // bins around that harmonic's peak and two spindle frequencies of floor past it ((H + 2)·f
-  // plus a few bins). The rest of the spectrum (at 50 kHz four fifths of it, at 333.3 kHz more)
-  // is not used.
+  // plus a few bins). The rest of the spectrum is not used (while locked, 65 of the 257 bins of
+  // the monitor's 512-point spectrum).
   const double top_bin = (harmonics_ + 2) * std::max(f_lo, f_hi) / bin_hz + 8.0;
   const std::size_t bins_read = top_bin < static_cast<double>(magnitude_.size())
                                     ? static_cast<std::size_t>(top_bin)
