@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "core/config/json_reader.hpp"
+#include "core/monitor/in_plane_force.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "replay/command_exit.hpp"
@@ -151,11 +152,8 @@ int replay_one(const ReplayOptions& o) {
   std::signal(SIGINT, on_stop);
   std::signal(SIGTERM, on_stop);
   ProgressLine progress(o.progress, 2.0, 0.25);
-  // The record's in-plane force √(Fx² + Fy²), in the model's frame and before any filter: what
-  // the record holds even where no revolution can be measured (a campaign's first, light cuts).
-  double in_plane_sum_sq = 0.0;
-  double in_plane_max_sq = 0.0;
-  std::int64_t in_plane_samples = 0;
+  // The record's in-plane force, in the model's frame and before any filter.
+  monitor::InPlaneForce in_plane;
   while (!g_stop) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
@@ -185,14 +183,7 @@ int replay_one(const ReplayOptions& o) {
           channel[static_cast<std::size_t>(config.axis_map.source[0])];
       const std::span<const double> y =
           channel[static_cast<std::size_t>(config.axis_map.source[1])];
-      for (std::size_t k = 0; k < x.size(); ++k) {
-        const double r2 = x[k] * x[k] + y[k] * y[k];
-        if (std::isfinite(r2)) {
-          in_plane_sum_sq += r2;
-          in_plane_max_sq = std::max(in_plane_max_sq, r2);  // √ once, at the end
-          ++in_plane_samples;
-        }
-      }
+      in_plane.add(x, y);
     }
     run.process(block);
     if (progress.due()) {
@@ -213,10 +204,8 @@ int replay_one(const ReplayOptions& o) {
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = source->bad_records();
   j["record_in_plane_force_N"] =
-      in_plane_samples > 0
-          ? nlohmann::json{{"rms",
-                            std::sqrt(in_plane_sum_sq / static_cast<double>(in_plane_samples))},
-                           {"max", std::sqrt(in_plane_max_sq)}}
+      in_plane.samples() > 0
+          ? nlohmann::json{{"rms", *in_plane.rms_N()}, {"max", *in_plane.max_N()}}
           : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
   if (recorder) {
     recorder->commit();
