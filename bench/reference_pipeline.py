@@ -195,7 +195,12 @@ def main():
     p.add_argument("--whole-s", type=float, default=10.0,
                    help="seconds of the whole-process comparison (0: none; not with CSVs given)")
     p.add_argument("--whole-repeats", type=int, default=10)
+    p.add_argument("--whole-only", action="store_true",
+                   help="the whole-process comparison alone (no per-rate timing)")
     a = p.parse_args()
+    if a.whole_only:
+        whole_process(a.millwatch, a.scenario, a.whole_s, a.workdir, a.whole_repeats)
+        return
     csvs = a.csv or [simulate(a.millwatch, a.scenario, r, a.duration, a.workdir) for r in a.rates]
     versions = {"python": platform.python_version(), "numpy": np.__version__,
                 "scipy": scipy.__version__}
