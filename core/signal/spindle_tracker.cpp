@@ -274,6 +274,9 @@ void SpindleTracker::update() {
   }
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
+  for (std::size_t k = 0; k < magnitude_.size(); ++k) {
+    magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
+  }
 
   // Coarse search over the commanded range, a quarter of a (padded) bin at a time.
   const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
@@ -283,18 +286,6 @@ void SpindleTracker::update() {
   if (locked_) {  // while locked, a narrow range around the last speed is enough (and cheaper)
     f_lo = std::max(f_lo, phase_.spindle_hz * (1.0 - kLockedSearch));
     f_hi = std::min(f_hi, phase_.spindle_hz * (1.0 + kLockedSearch));
-  }
-  // The magnitudes of the bins read below, no more: the speed found is at most the range's top
-  // (f_lo where the range is empty), and nothing reads beyond its highest harmonic, the three
-  // bins around that harmonic's peak and two spindle frequencies of floor past it ((H + 2)·f
-  // plus a few bins). The rest of the spectrum is not used (while locked, 65 of the 257 bins of
-  // the monitor's 512-point spectrum).
-  const double top_bin = (harmonics_ + 2) * std::max(f_lo, f_hi) / bin_hz + 8.0;
-  const std::size_t bins_read = top_bin < static_cast<double>(magnitude_.size())
-                                    ? static_cast<std::size_t>(top_bin)
-                                    : magnitude_.size();
-  for (std::size_t k = 0; k < bins_read; ++k) {
-    magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
   }
   double best_f = f_lo;
   double best_score = -1.0;
