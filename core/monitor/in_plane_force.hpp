@@ -11,7 +11,7 @@ namespace millwatch::monitor {
 
 class InPlaneForce {
  public:
-  /// Adds the samples x[k], y[k] (the model's x and y axes; equal lengths).
+  /// Adds the samples x[k], y[k] (the model's x and y axes), k below the shorter span's length.
   void add(std::span<const double> x_N, std::span<const double> y_N);
 
   [[nodiscard]] std::int64_t samples() const { return samples_; }
