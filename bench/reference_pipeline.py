@@ -21,7 +21,7 @@ processing once) against `millwatch replay --no-identify` of the same file (star
 whole pipeline with the lockstep model, summary). --no-identify: replay otherwise identifies
 runout and coefficients on every 30-revolution window and waits for the fits, work the reference
 does not do at all. Best of --whole-repeats (10), the two alternating run by run; one JSON line
-{"bench": "whole_process", ...}.
+{"bench": "whole_process", ...}. --whole-only: that comparison alone.
 
   /usr/bin/python3 bench/reference_pipeline.py [--millwatch build/release/replay/millwatch]
   /usr/bin/python3 bench/reference_pipeline.py CUT.csv ...   # recordings with their sidecars
@@ -199,6 +199,8 @@ def main():
                    help="the whole-process comparison alone (no per-rate timing)")
     a = p.parse_args()
     if a.whole_only:
+        if a.csv or a.whole_s <= 0:
+            p.error("--whole-only simulates its own recording: no CSV, and --whole-s above 0")
         whole_process(a.millwatch, a.scenario, a.whole_s, a.workdir, a.whole_repeats)
         return
     csvs = a.csv or [simulate(a.millwatch, a.scenario, r, a.duration, a.workdir) for r in a.rates]

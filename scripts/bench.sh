@@ -18,13 +18,15 @@ mkdir -p "$out"
 # one's best: on a shared machine whose speed drifts over minutes, both then see the same phases
 # (timed one after the other, a ratio could compare a fast phase with a slow one).
 rm -f "$out"/pipeline_round*.json "$out"/reference_round*.jsonl
+recordings=()  # simulated in the first round, read again in the others
 for round in 1 2 3; do
   echo "== pipeline_benchmark BM_Pipeline, round $round" >&2
   "$build/bench/pipeline_benchmark" --benchmark_filter='^BM_Pipeline/' --benchmark_repetitions=3 \
     --benchmark_out="$out/pipeline_round$round.json" --benchmark_out_format=json >&2
   echo "== NumPy/SciPy reference, round $round" >&2
   /usr/bin/python3 bench/reference_pipeline.py --millwatch "$build/replay/millwatch" \
-    --workdir "$out" --whole-s 0 >"$out/reference_round$round.jsonl"
+    --workdir "$out" --whole-s 0 "${recordings[@]}" >"$out/reference_round$round.jsonl"
+  recordings=("$out/reference_50000hz.csv" "$out/reference_333300hz.csv")
 done
 echo "== pipeline_benchmark, the rest" >&2
 "$build/bench/pipeline_benchmark" --benchmark_filter='-^BM_Pipeline/' --benchmark_repetitions=3 \
@@ -102,10 +104,11 @@ cpu = next((l.split(":")[1].strip() for l in open("/proc/cpuinfo") if l.startswi
 r = next(iter(ref.values()))
 print(f"\nFull model, one revolution (2 flutes, 10 discs, 0.5°, every effect on): {rev:.2f} ms"
       f" (target < 1 ms); model update after a runout change: {upd:.2f} ms.")
-print(f"{cpu}, one core, Release; the pipeline best of 9 repetitions and NumPy/SciPy best of"
-      f" 3 × {r['repeats']}, in three rounds taking turns (latency: the largest p99 and worst,"
-      f" and the mean; the rest best of 3) (Python {r['python']}, NumPy {r['numpy']},"
-      f" SciPy {r['scipy']}); × real time from CPU time, latency from the wall clock.")
+print(f"{cpu}, one core, Release; the pipeline best of {len(runs['BM_Pipeline/50000/50/1'])}"
+      f" repetitions and NumPy/SciPy best of 3 × {r['repeats']}, in three rounds taking turns"
+      f" (latency: the largest p99 and worst, and the mean; the rest best of 3) (Python"
+      f" {r['python']}, NumPy {r['numpy']}, SciPy {r['scipy']}); × real time from CPU time,"
+      f" latency from the wall clock.")
 EOF
 # millwatchd itself over LCM (needs root for unshare -n; skipped, saying so, without it).
 if unshare -n true 2>/dev/null; then
