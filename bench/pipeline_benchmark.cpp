@@ -2,6 +2,14 @@
 // recording of [000]'s cut (3 channels).
 //
 //   build/release/bench/pipeline_benchmark
+//
+// Profiling BM_Pipeline's timed part alone (the recording's simulation and the warm-up's lock
+// and model build take most of the process's time): with MW_PERF_CONTROL naming perf's control
+// FIFO, perf is switched on for each timed part and off after it.
+//
+//   cd build/release && mkfifo /tmp/perf.ctl && export MW_PERF_CONTROL=/tmp/perf.ctl
+//   perf record -D -1 --control fifo:/tmp/perf.ctl -e cpu-clock bench/pipeline_benchmark
+//   (one case: --benchmark_filter=BM_Pipeline/50000/50/1)
 
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -10,6 +18,9 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -40,6 +51,29 @@ struct LatencySink : monitor::PipelineSink {
   }
 };
 
+/// perf's control FIFO, named by MW_PERF_CONTROL (none: nothing to switch).
+class PerfControl {
+ public:
+  PerfControl() {
+    if (const char* path = std::getenv("MW_PERF_CONTROL")) {
+      path_ = path;
+    }
+  }
+  void enable() const { send("enable\n"); }
+  void disable() const { send("disable\n"); }
+
+ private:
+  void send(const char* command) const {
+    if (path_.empty()) {
+      return;
+    }
+    std::ofstream(path_) << command << std::flush;
+    // perf reads the FIFO in its own time: the switch must land before the work it bounds.
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  }
+  std::string path_;
+};
+
 /// Steady state: the first half second (lock, model build, valley template) is not timed.
 void BM_Pipeline(benchmark::State& state) {
   const double fs = static_cast<double>(state.range(0));
@@ -60,18 +94,22 @@ void BM_Pipeline(benchmark::State& state) {
                  std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
     }
   };
+  const PerfControl perf;
   for (auto _ : state) {
     state.PauseTiming();
+    perf.disable();  // the last iteration's timed part is over
     std::vector<double> warm_up_s;
     LatencySink sink;
     sink.latencies_s = &warm_up_s;
     monitor::Pipeline p(c, sink);
     feed(p, sink, 0, start);
     sink.latencies_s = &latencies_s;
+    perf.enable();
     state.ResumeTiming();
     feed(p, sink, start, r.t.size());
     processed_s += static_cast<double>(r.t.size() - start) / fs;
   }
+  perf.disable();
   state.counters["x_realtime"] = benchmark::Counter(processed_s, benchmark::Counter::kIsRate);
   // Wall-clock latencies: the worst includes whatever else the machine did (preemption); the
   // 99th percentile is the pipeline's own.
