@@ -5,21 +5,26 @@
 //
 // Profiling BM_Pipeline's timed part alone (the recording's simulation and the warm-up's lock
 // and model build take most of the process's time): with MW_PERF_CONTROL naming perf's control
-// FIFO, perf is switched on for each timed part and off after it.
+// and acknowledgement FIFOs, perf is switched on for each timed part and off after it.
 //
-//   cd build/release && mkfifo /tmp/perf.ctl && export MW_PERF_CONTROL=/tmp/perf.ctl
-//   perf record -D -1 --control fifo:/tmp/perf.ctl -e cpu-clock bench/pipeline_benchmark
+//   cd build/release && mkfifo /tmp/perf.ctl /tmp/perf.ack
+//   export MW_PERF_CONTROL=/tmp/perf.ctl,/tmp/perf.ack
+//   perf record -D -1 --control fifo:$MW_PERF_CONTROL -e cpu-clock bench/pipeline_benchmark
 //   (one case: --benchmark_filter=BM_Pipeline/50000/50/1)
 
 #include <benchmark/benchmark.h>
+#include <fcntl.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
-#include <fstream>
+#include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
@@ -51,27 +56,60 @@ struct LatencySink : monitor::PipelineSink {
   }
 };
 
-/// perf's control FIFO, named by MW_PERF_CONTROL (none: nothing to switch).
+/// perf's control FIFOs, named by MW_PERF_CONTROL as CTL[,ACK] (unset: nothing to switch).
+/// With ACK, each switch waits for perf's "ack"; without, 30 ms, which a loaded machine may
+/// outlast. A FIFO that cannot be opened (no perf reading it) is said and switches nothing.
 class PerfControl {
  public:
   PerfControl() {
-    if (const char* path = std::getenv("MW_PERF_CONTROL")) {
-      path_ = path;
+    const char* spec = std::getenv("MW_PERF_CONTROL");
+    if (spec == nullptr) {
+      return;
+    }
+    const std::string fifos(spec);
+    const std::size_t comma = fifos.find(',');
+    const std::string ctl = fifos.substr(0, comma);
+    ctl_ = ::open(ctl.c_str(), O_WRONLY | O_NONBLOCK);  // fails at once when nothing reads it
+    if (ctl_ < 0) {
+      std::fprintf(stderr, "MW_PERF_CONTROL: cannot write to %s (%s); perf is not switched\n",
+                   ctl.c_str(), std::strerror(errno));
+      return;
+    }
+    if (comma != std::string::npos) {
+      const std::string ack = fifos.substr(comma + 1);
+      ack_ = ::open(ack.c_str(), O_RDONLY);
+      if (ack_ < 0) {
+        std::fprintf(stderr, "MW_PERF_CONTROL: cannot read %s (%s); waiting 30 ms a switch\n",
+                     ack.c_str(), std::strerror(errno));
+      }
     }
   }
+  ~PerfControl() {
+    for (const int fd : {ctl_, ack_}) {
+      if (fd >= 0) {
+        ::close(fd);
+      }
+    }
+  }
+  PerfControl(const PerfControl&) = delete;
+  PerfControl& operator=(const PerfControl&) = delete;
+
   void enable() const { send("enable\n"); }
   void disable() const { send("disable\n"); }
 
  private:
   void send(const char* command) const {
-    if (path_.empty()) {
+    if (ctl_ < 0 || ::write(ctl_, command, std::strlen(command)) < 0) {
       return;
     }
-    std::ofstream(path_) << command << std::flush;
-    // perf reads the FIFO in its own time: the switch must land before the work it bounds.
-    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    std::array<char, 16> answer{};
+    if (ack_ < 0 || ::read(ack_, answer.data(), answer.size()) <= 0) {
+      // perf reads the FIFO in its own time: the switch must land before the work it bounds.
+      std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    }
   }
-  std::string path_;
+  int ctl_ = -1;
+  int ack_ = -1;
 };
 
 /// Steady state: the first half second (lock, model build, valley template) is not timed.
@@ -94,7 +132,7 @@ void BM_Pipeline(benchmark::State& state) {
                  std::span(r.fy).subspan(i, n), std::span(r.fz).subspan(i, n)});
     }
   };
-  const PerfControl perf;
+  static const PerfControl perf;  // once per process: the FIFOs stay open
   for (auto _ : state) {
     state.PauseTiming();
     perf.disable();  // the last iteration's timed part is over
