@@ -114,14 +114,14 @@ ForceLaw::NormalSlope ForceLaw::normal_with_slope(double h_um, double log_h_um, 
       const double k = p ? c.k_np_Nmm : c.k_nc_Nmm;
       const double a = p ? c.a_np : c.a_nc;
       const double f = k == 0.0 ? 0.0 : k * dz_mm * std::exp(a * log_h_mm);
-      return {f, a * f / h_um};
+      return {f, a * f, a * a * f};  // F = K·dz·e^{a·u}
     }
     case ForceLawKind::kKronenberg: {
       const auto& c = material_.kronenberg;
       const double e = 1.0 - 1.0 / c.m;
       const double f = c.radial_ratio * c.k_s0_N_per_mm2 * dz_mm *
                        std::exp(e * log_h_mm - std::log(axial_depth_mm_) / c.m);
-      return {f, e * f / h_um};
+      return {f, e * f, e * e * f};
     }
     case ForceLawKind::kLinearEdge:
       break;
@@ -129,9 +129,11 @@ ForceLaw::NormalSlope ForceLaw::normal_with_slope(double h_um, double log_h_um, 
   const auto& c = material_.linear_edge;
   const double f = normal_N(h_um, dz_mm, ploughed_area_mm2);
   if (!c.ploughing_area && ploughing(h_um) && c.a_n_Nmm != 0.0) {
-    return {f, c.b_n * f / h_um};
+    return {f, c.b_n * f, c.b_n * c.b_n * f};
   }
-  return {f, c.k_nc_N_per_mm2 * kMmPerUm * dz_mm};
+  // Linear in h, c·h + constant: dF/du = c·h = d²F/du².
+  const double d_du = c.k_nc_N_per_mm2 * kMmPerUm * dz_mm * h_um;
+  return {f, d_du, d_du};
 }
 
 }  // namespace millwatch::model

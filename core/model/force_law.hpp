@@ -45,11 +45,13 @@ class ForceLaw {
   /// Normal force only, same arguments; used by the deflection balance ([000] eq 22).
   [[nodiscard]] double normal_N(double h_um, double dz_mm, double ploughed_area_mm2 = 0.0) const;
 
-  /// Normal force and its slope dF_n/dh (N/µm) at h_um > 0 given also ln(h_um), for Newton on
-  /// [000] eq 22 in logarithmic chip coordinates.
+  /// Normal force and its first two derivatives in u = ln(h / 1 µm), at h_um > 0 given also
+  /// ln(h_um): Newton's or Halley's method on [000] eq 22 in logarithmic chip coordinates. For
+  /// F = K·h^a they are a·F and a²·F, with no division (dF/dh = (dF/du)/h).
   struct NormalSlope {
     double force_N = 0.0;
-    double slope_N_per_um = 0.0;
+    double d_du_N = 0.0;
+    double d2_du2_N = 0.0;
   };
   [[nodiscard]] NormalSlope normal_with_slope(double h_um, double log_h_um, double dz_mm,
                                               double ploughed_area_mm2 = 0.0) const;

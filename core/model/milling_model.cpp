@@ -274,7 +274,7 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
     } else {
       lo = u;
     }
-    const double step = g / (h + fs.slope_N_per_um * h / k);
+    const double step = g / (h + fs.d_du_N / k);
     const double next = u - step;
     if (next > lo && next < hi) {
       if (std::fabs(step) < 1e-4) {

@@ -136,7 +136,8 @@ struct SteadyStateWorkspace::Impl {
   int flutes = 0, steps = 0, discs = 1, passes = 1;
   double d_phi_rad = 0.0, dz_mm = 0.0, h_min_um = 0.0, disc_stiffness_N_per_um = 0.0;
   double normal_jump_N = 0.0;  // F_n(h_min) − F_n(h_min−) of one disc: the regime switch
-  double log_h_min_um = 0.0, log_below_h_min_um = 0.0;  // ln h_min, ln(h_min·(1 − 1e-12))
+  double log_h_min_um = 0.0, log_below_h_min_um = 0.0;         // ln h_min, ln(h_min·(1 − 1e-12))
+  double normal_at_h_min_N = 0.0, normal_below_h_min_N = 0.0;  // F_n there, without the area
   bool deflect = false, accumulate = false, area_law = false, memory = false;
   bool rigid_axis_discs = false;  // helix on and RunoutHelix::kRigidAxis
   bool dynamometer = false;
@@ -273,12 +274,12 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   material_coefficients.linear_edge = c.material.linear_edge;
   material_coefficients.kronenberg = c.material.kronenberg;
   disc_stiffness_N_per_um = e.deflection.stiffness_N_per_um / discs;
-  normal_jump_N =
-      h_min_um > 0.0 ? law.normal_N(h_min_um, dz_mm) - law.normal_N(h_min_um * (1.0 - 1e-12), dz_mm)
-                     : 0.0;
+  normal_at_h_min_N = h_min_um > 0.0 ? law.normal_N(h_min_um, dz_mm) : 0.0;
+  normal_below_h_min_N = h_min_um > 0.0 ? law.normal_N(h_min_um * (1.0 - 1e-12), dz_mm) : 0.0;
+  normal_jump_N = h_min_um > 0.0 ? normal_at_h_min_N - normal_below_h_min_N : 0.0;
   log_h_min_um = h_min_um > 0.0 ? std::log(h_min_um) : 0.0;
   log_below_h_min_um = h_min_um > 0.0 ? std::log(h_min_um * (1.0 - 1e-12)) : 0.0;
-  if (std::fabs(normal_jump_N) <= 1e-9 * std::fabs(law.normal_N(h_min_um, dz_mm))) {
+  if (std::fabs(normal_jump_N) <= 1e-9 * std::fabs(normal_at_h_min_N)) {
     normal_jump_N = 0.0;  // continuous at h_min (up to the 1e-12 step): one branch
   }
 
@@ -516,17 +517,23 @@ double SteadyStateWorkspace::Impl::area_input(int slot, int flute) const {
 // hold a root; the tool stops at the first balance it meets as it goes in, so the chip is the
 // smallest root, whatever any starting guess says (MillingModel takes whichever root its Newton
 // start, the neighbouring step, leads to). A rise can leave no root: the chip then stays at h_min.
-// Newton runs in u = ln h, where F_n ∝ h^a (a < 1) is well conditioned, inside the branch's
-// bracket (bisection when it would leave it), to |Δu| < 1e-9 (quadratic: ~1e-16 left).
+// Halley's method runs in u = ln h, where F_n ∝ h^a (a < 1) is well conditioned, inside the
+// branch's bracket (bisection when it would leave it), to |Δu| < 1e-7 (cubic: nothing left above
+// rounding). G' and G'' come with F_n at no further cost (d²F_n/du² = a²·F_n for a power law):
+// from the neighbouring pass's chip it needs two to three steps where Newton took three to four,
+// each with two exponentials.
 
 SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflection(
     double h_rigid, double wear_n, double area_mm2, double guess_log_um) const {
   Deflection d;
   const double k = disc_stiffness_N_per_um;
   const double inv_k = 1.0 / k;
-  auto excess = [&](double x) {
-    return x + (law.normal_N(x, dz_mm, area_mm2) + wear_n) * inv_k - h_rigid;
+  // G at x given F_n(x); F_n at h_min and just below it are known from configure() unless the
+  // ploughed area enters F_n.
+  auto excess_given = [&](double x, double normal) {
+    return x + (normal + wear_n) * inv_k - h_rigid;
   };
+  auto excess = [&](double x) { return excess_given(x, law.normal_N(x, dz_mm, area_mm2)); };
   if (wear_n >= k * h_rigid) {
     d.code = kPushedBack;  // the rubbing force alone pushes the tool back beyond this chip
     return d;
@@ -536,9 +543,11 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
   double hi = h_rigid;
   if (normal_jump_N != 0.0 && h_min_um > floor_um && h_min_um < h_rigid) {
     const double below = h_min_um * (1.0 - 1e-12);
-    if (excess(below) >= 0.0) {
+    const bool known = !area_law;
+    if ((known ? excess_given(below, normal_below_h_min_N) : excess(below)) >= 0.0) {
       hi = below;  // a root on the ploughing branch: the smallest
-    } else if (normal_jump_N < 0.0 || excess(h_min_um) <= 0.0) {
+    } else if (normal_jump_N < 0.0 ||
+               (known ? excess_given(h_min_um, normal_at_h_min_N) : excess(h_min_um)) <= 0.0) {
       lo = h_min_um;  // none below h_min: the cutting branch (certain after a fall)
     } else {
       d.h_um = h_min_um;  // the balance falls into F_n's rise at h_min
@@ -547,27 +556,41 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
       return d;
     }
   }
-  // G is convex in u (each term is a constant or K·e^{a·u}, a > 0): from a point above the root
-  // Newton descends monotonically, and from below one step lands above it. So: clamp to the
-  // bracket's top (where G ≥ 0) when a step overshoots, and stop when the step is below 1e-7
-  // (what is left is then ~1e-14).
+  // G is convex in u (each term is a constant or K·e^{a·u}, a > 0). Halley's step
+  // G·G'/(G'² − G·G''/2) is Newton's G/G' shortened below the root and lengthened above it;
+  // far above (G·G'' ≥ G'²) it is Newton's. Clamp to the bracket's top (where G ≥ 0) when a step
+  // from below overshoots it, bisect when one from above leaves the bracket, and stop when the
+  // step is below 1e-7 from either side (what is left is then ~1e-21).
   const double log_rigid = std::log(h_rigid);
   const double floor_log = log_rigid + kLogFloor;
   bool floor_checked = lo != floor_um;
   double ulo = lo == floor_um ? floor_log : log_h_min_um;
   double uhi = hi == h_rigid ? log_rigid : log_below_h_min_um;
   double u = guess_log_um > ulo && guess_log_um < uhi ? guess_log_um : uhi;
+  // The last step s (|s| < 1e-7) from u, where h = e^u: e^{u − s} = h·(1 − s + s²/2) within
+  // s³/6 < 2e-22, no exponential needed.
+  auto converged = [&](double u_at, double h, double s, const ForceLaw::NormalSlope& fs) {
+    d.h_um = h * (1.0 - s + 0.5 * s * s);
+    d.log_h_um = u_at - s;
+    d.dh_dhr = 1.0 / (1.0 + fs.d_du_N / h * inv_k);  // 1/(1 + F_n'(h)/k), F_n' at the last step
+    return d;
+  };
   for (int it = 0; it < 100; ++it) {
     const double hu = std::exp(u);
     const auto fs = law.normal_with_slope(hu, u, dz_mm, area_mm2);
     const double gap = hu + (fs.force_N + wear_n) * inv_k - h_rigid;
-    const double dg_du = hu * (1.0 + fs.slope_N_per_um * inv_k);
-    const double step = gap / dg_du;
+    const double dg_du = hu + fs.d_du_N * inv_k;
+    const double d2g_du2 = hu + fs.d2_du2_N * inv_k;
+    const double halley = dg_du * dg_du - 0.5 * gap * d2g_du2;
+    const double step =
+        halley > 0.5 * dg_du * dg_du ? gap * dg_du / halley : gap / dg_du;  // else Newton's
     double next = u - step;
     if (gap < 0.0) {
       ulo = u;
       if (next >= uhi) {
         next = uhi;
+      } else if (std::fabs(step) < 1e-7) {
+        return converged(u, hu, step, fs);
       }
     } else if (next <= ulo) {
       if (!floor_checked && ulo == floor_log) {
@@ -579,10 +602,7 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
       }
       next = 0.5 * (ulo + u);
     } else if (std::fabs(step) < 1e-7) {
-      d.h_um = std::exp(next);
-      d.log_h_um = next;
-      d.dh_dhr = 1.0 / (1.0 + fs.slope_N_per_um * inv_k);
-      return d;
+      return converged(u, hu, step, fs);
     }
     if (gap >= 0.0) {
       uhi = u;

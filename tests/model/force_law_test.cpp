@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "core/model/model_config.hpp"
+
 namespace millwatch::model {
 namespace {
 
@@ -66,18 +68,23 @@ TEST(ForceLaw, KronenbergScalesWithSectionToThePowerOneMinusInverseM) {
   EXPECT_NEAR(law.element(5.0, ap).normal_N, 0.5 * f1, 1e-12);
 }
 
-TEST(ForceLaw, NormalSlopeMatchesFiniteDifference) {
+TEST(ForceLaw, NormalDerivativesInLogChipMatchFiniteDifferences) {
   for (auto kind :
        {ForceLawKind::kPowerLaw, ForceLawKind::kLinearEdge, ForceLawKind::kKronenberg}) {
     Material m;
     m.law = kind;
     const ForceLaw law(m, 0.04, 0.2, true);
-    for (double h : {0.5, 2.0, 7.0}) {
-      const auto s = law.normal_with_slope(h, std::log(h), 0.004);
-      const double d = 1e-6;
-      const double fd = (law.normal_N(h + d, 0.004) - law.normal_N(h - d, 0.004)) / (2 * d);
-      EXPECT_NEAR(s.force_N, law.normal_N(h, 0.004), 1e-15);
-      EXPECT_NEAR(s.slope_N_per_um, fd, 1e-6 * std::fabs(fd) + 1e-12);
+    // h = 0.1 µm is below h_min = 0.2 µm (the ploughing regime), the others above.
+    for (double h : {0.1, 0.5, 2.0, 7.0}) {
+      const double u = std::log(h);
+      const auto s = law.normal_with_slope(h, u, 0.004);
+      const auto f = [&](double x) { return law.normal_N(std::exp(x), 0.004); };
+      const double d = 1e-4;
+      const double d1 = (f(u + d) - f(u - d)) / (2 * d);
+      const double d2 = (f(u + d) - 2 * f(u) + f(u - d)) / (d * d);
+      EXPECT_NEAR(s.force_N, law.normal_N(h, 0.004), 1e-15) << to_string(kind) << " h " << h;
+      EXPECT_NEAR(s.d_du_N, d1, 1e-6 * std::fabs(d1) + 1e-12) << to_string(kind) << " h " << h;
+      EXPECT_NEAR(s.d2_du2_N, d2, 1e-4 * std::fabs(d2) + 1e-9) << to_string(kind) << " h " << h;
     }
   }
 }
