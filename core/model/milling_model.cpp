@@ -10,6 +10,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kNoCut = std::numeric_limits<double>::infinity();
+const double kLogFloor = std::log(1e-6);  // the deflection solve's floor: 1e-6 of the rigid chip
 
 double wrap_2pi(double a) {
   a = std::fmod(a, 2.0 * kPi);
@@ -257,29 +258,32 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
   // Newton runs on u = ln h, where it is well conditioned; a bracket in u catches the jump of
   // F_n at h_min (bisection there).
   const double k = disc_stiffness_N_per_um_;
+  const double inv_k = 1.0 / k;
   if (wear_normal_N >= k * h_rigid_um) {
     return 0.0;  // the rubbing force alone pushes the tool back beyond this chip
   }
-  const double floor_log = std::log(1e-6 * h_rigid_um);
+  double hi = std::log(h_rigid_um);
+  const double floor_log = hi + kLogFloor;  // ln(1e-6·h_r)
   bool floor_checked = false;
   double lo = floor_log;
-  double hi = std::log(h_rigid_um);
   double u = std::log(std::clamp(guess_um, 1e-6 * h_rigid_um, h_rigid_um));
   for (int it = 0; it < 60; ++it) {
     const double h = std::exp(u);
     const auto fs = law_.normal_with_slope(h, u, dz_mm_, area_mm2);
-    const double g = h + (fs.force_N + wear_normal_N) / k - h_rigid_um;
+    const double g = h + (fs.force_N + wear_normal_N) * inv_k - h_rigid_um;
     if (g > 0.0) {
       hi = u;
     } else {
       lo = u;
     }
-    const double step = g / (h + fs.d_du_N / k);
+    const double step = g / (h + fs.d_du_N * inv_k);
     const double next = u - step;
     if (next > lo && next < hi) {
       if (std::fabs(step) < 1e-4) {
+        // Quadratic convergence: the relative error left is ~step². e^{u − s} from h = e^u to
+        // within s⁴/24 < 5e-18.
         *log_h_um = next;
-        return std::exp(next);  // quadratic convergence: the relative error left is ~step²
+        return h * (1.0 - step * (1.0 - step * (0.5 - step / 6.0)));
       }
       u = next;
     } else if (straddles_regime_jump(h_rigid_um, lo, hi, wear_normal_N, area_mm2)) {
@@ -342,8 +346,8 @@ void MillingModel::march_step(int k) {
       double h_rigid = 0.0;
       if (engaged) {
         h_rigid = kNoCut;
-        for (int n = 1; n <= passes_; ++n) {
-          const double deficit = ring[(head - (n - 1) + passes_) % passes_];
+        for (int n = 1, at = head; n <= passes_; ++n, at = at == 0 ? passes_ - 1 : at - 1) {
+          const double deficit = ring[at];  // pass n back: (head − (n − 1)) mod P
           if (deficit == kNoCut) {
             continue;
           }
@@ -409,7 +413,7 @@ void MillingModel::march_step(int k) {
         area_total_prev_mm2_[ij] = area_cut_mm2_[ij];
       }
 
-      const int next = (head + 1) % passes_;
+      const int next = head + 1 == passes_ ? 0 : head + 1;
       ring[next] = new_deficit;
       ring_head_[slot] = next;
       if (i == 0) {
