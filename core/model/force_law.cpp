@@ -33,6 +33,11 @@ ElementForce power_law(const PowerLaw& c, double log_h, double dz_mm, bool ploug
           power_log(c.k_ac_Nmm, c.a_ac, log_h) * dz_mm};
 }
 
+/// [002] eq 17's ploughing law below h_min is set (any of its coefficients).
+bool has_plough_law(const LinearEdge& c) {
+  return c.a_t_Nmm != 0.0 || c.a_n_Nmm != 0.0 || c.a_a_Nmm != 0.0;
+}
+
 ElementForce linear_edge(const LinearEdge& c, double h_mm, double dz_mm, bool ploughing,
                          double area_mm2) {
   if (c.ploughing_area) {
@@ -41,8 +46,7 @@ ElementForce linear_edge(const LinearEdge& c, double h_mm, double dz_mm, bool pl
             (c.k_nc_N_per_mm2 * h_mm + c.k_np_N_per_mm3 * area_mm2) * dz_mm,
             (c.k_ac_N_per_mm2 * h_mm + c.k_ap_N_per_mm3 * area_mm2) * dz_mm};
   }
-  const bool has_plough_law = c.a_t_Nmm != 0.0 || c.a_n_Nmm != 0.0 || c.a_a_Nmm != 0.0;
-  if (ploughing && has_plough_law) {
+  if (ploughing && has_plough_law(c)) {
     // [002] eq 17: elastic-plastic regime below the minimum chip thickness.
     return {power(c.a_t_Nmm, c.b_t, h_mm) * dz_mm, power(c.a_n_Nmm, c.b_n, h_mm) * dz_mm,
             power(c.a_a_Nmm, c.b_a, h_mm) * dz_mm};
@@ -114,7 +118,7 @@ ForceLaw::NormalSlope ForceLaw::normal_with_slope(double h_um, double log_h_um, 
       const double k = p ? c.k_np_Nmm : c.k_nc_Nmm;
       const double a = p ? c.a_np : c.a_nc;
       const double f = k == 0.0 ? 0.0 : k * dz_mm * std::exp(a * log_h_mm);
-      return {f, a * f, a * a * f};  // F = K·dz·e^{a·u}
+      return {f, a * f, a * a * f};  // F = K·dz·h_mm^a: dF/du = a·F, d²F/du² = a²·F
     }
     case ForceLawKind::kKronenberg: {
       const auto& c = material_.kronenberg;
@@ -128,8 +132,8 @@ ForceLaw::NormalSlope ForceLaw::normal_with_slope(double h_um, double log_h_um, 
   }
   const auto& c = material_.linear_edge;
   const double f = normal_N(h_um, dz_mm, ploughed_area_mm2);
-  if (!c.ploughing_area && ploughing(h_um) && c.a_n_Nmm != 0.0) {
-    return {f, c.b_n * f, c.b_n * c.b_n * f};
+  if (!c.ploughing_area && ploughing(h_um) && has_plough_law(c)) {
+    return {f, c.b_n * f, c.b_n * c.b_n * f};  // [002] eq 17, A_n·h^B_n (0 when A_n is)
   }
   // Linear in h, c·h + constant: dF/du = c·h = d²F/du².
   const double d_du = c.k_nc_N_per_mm2 * kMmPerUm * dz_mm * h_um;

@@ -266,7 +266,8 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
   const double floor_log = hi + kLogFloor;  // ln(1e-6·h_r)
   bool floor_checked = false;
   double lo = floor_log;
-  double u = std::log(std::clamp(guess_um, 1e-6 * h_rigid_um, h_rigid_um));
+  // In the bracket by its own ends (1e-6·h_r and ln of it may differ in the last bit).
+  double u = std::clamp(std::log(std::clamp(guess_um, 1e-6 * h_rigid_um, h_rigid_um)), lo, hi);
   for (int it = 0; it < 60; ++it) {
     const double h = std::exp(u);
     const auto fs = law_.normal_with_slope(h, u, dz_mm_, area_mm2);

@@ -135,9 +135,10 @@ struct SteadyStateWorkspace::Impl {
   // ---- the configuration, derived once per evaluation
   int flutes = 0, steps = 0, discs = 1, passes = 1;
   double d_phi_rad = 0.0, dz_mm = 0.0, h_min_um = 0.0, disc_stiffness_N_per_um = 0.0;
-  double normal_jump_N = 0.0;  // F_n(h_min) − F_n(h_min−) of one disc: the regime switch
+  double normal_jump_N = 0.0;   // F_n(h_min) − F_n(h_min−) of one disc: the regime switch
+  double below_h_min_um = 0.0;  // h_min·(1 − 1e-12)
   double log_h_min_um = 0.0, log_below_h_min_um = 0.0;         // ln h_min, ln(h_min·(1 − 1e-12))
-  double normal_at_h_min_N = 0.0, normal_below_h_min_N = 0.0;  // F_n there, without the area
+  double normal_at_h_min_N = 0.0, normal_below_h_min_N = 0.0;  // F_n there (no area: see below)
   bool deflect = false, accumulate = false, area_law = false, memory = false;
   bool rigid_axis_discs = false;  // helix on and RunoutHelix::kRigidAxis
   bool dynamometer = false;
@@ -274,11 +275,18 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   material_coefficients.linear_edge = c.material.linear_edge;
   material_coefficients.kronenberg = c.material.kronenberg;
   disc_stiffness_N_per_um = e.deflection.stiffness_N_per_um / discs;
-  normal_at_h_min_N = h_min_um > 0.0 ? law.normal_N(h_min_um, dz_mm) : 0.0;
-  normal_below_h_min_N = h_min_um > 0.0 ? law.normal_N(h_min_um * (1.0 - 1e-12), dz_mm) : 0.0;
-  normal_jump_N = h_min_um > 0.0 ? normal_at_h_min_N - normal_below_h_min_N : 0.0;
-  log_h_min_um = h_min_um > 0.0 ? std::log(h_min_um) : 0.0;
-  log_below_h_min_um = h_min_um > 0.0 ? std::log(h_min_um * (1.0 - 1e-12)) : 0.0;
+  below_h_min_um = normal_at_h_min_N = normal_below_h_min_N = normal_jump_N = 0.0;
+  log_h_min_um = log_below_h_min_um = 0.0;
+  if (h_min_um > 0.0) {
+    // The ploughed-area law is continuous at h_min: its jump is 0 whatever the area, so these
+    // are F_n at h_min± for every law whose balance meets the jump.
+    below_h_min_um = h_min_um * (1.0 - 1e-12);
+    normal_at_h_min_N = law.normal_N(h_min_um, dz_mm);
+    normal_below_h_min_N = law.normal_N(below_h_min_um, dz_mm);
+    normal_jump_N = normal_at_h_min_N - normal_below_h_min_N;
+    log_h_min_um = std::log(h_min_um);
+    log_below_h_min_um = std::log(below_h_min_um);
+  }
   if (std::fabs(normal_jump_N) <= 1e-9 * std::fabs(normal_at_h_min_N)) {
     normal_jump_N = 0.0;  // continuous at h_min (up to the 1e-12 step): one branch
   }
@@ -528,8 +536,7 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
   Deflection d;
   const double k = disc_stiffness_N_per_um;
   const double inv_k = 1.0 / k;
-  // G at x given F_n(x); F_n at h_min and just below it are known from configure() unless the
-  // ploughed area enters F_n.
+  // G at x given F_n(x) (at h_min± known from configure()).
   auto excess_given = [&](double x, double normal) {
     return x + (normal + wear_n) * inv_k - h_rigid;
   };
@@ -542,12 +549,9 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
   double lo = floor_um;
   double hi = h_rigid;
   if (normal_jump_N != 0.0 && h_min_um > floor_um && h_min_um < h_rigid) {
-    const double below = h_min_um * (1.0 - 1e-12);
-    const bool known = !area_law;
-    if ((known ? excess_given(below, normal_below_h_min_N) : excess(below)) >= 0.0) {
-      hi = below;  // a root on the ploughing branch: the smallest
-    } else if (normal_jump_N < 0.0 ||
-               (known ? excess_given(h_min_um, normal_at_h_min_N) : excess(h_min_um)) <= 0.0) {
+    if (excess_given(below_h_min_um, normal_below_h_min_N) >= 0.0) {
+      hi = below_h_min_um;  // a root on the ploughing branch: the smallest
+    } else if (normal_jump_N < 0.0 || excess_given(h_min_um, normal_at_h_min_N) <= 0.0) {
       lo = h_min_um;  // none below h_min: the cutting branch (certain after a fall)
     } else {
       d.h_um = h_min_um;  // the balance falls into F_n's rise at h_min
@@ -581,9 +585,9 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
     const double gap = hu + (fs.force_N + wear_n) * inv_k - h_rigid;
     const double dg_du = hu + fs.d_du_N * inv_k;
     const double d2g_du2 = hu + fs.d2_du2_N * inv_k;
-    const double halley = dg_du * dg_du - 0.5 * gap * d2g_du2;
-    const double step =
-        halley > 0.5 * dg_du * dg_du ? gap * dg_du / halley : gap / dg_du;  // else Newton's
+    const double dg_du_2 = dg_du * dg_du;
+    const double halley = dg_du_2 - 0.5 * gap * d2g_du2;
+    const double step = halley > 0.5 * dg_du_2 ? gap * dg_du / halley : gap / dg_du;  // or Newton
     double next = u - step;
     if (gap < 0.0) {
       ulo = u;

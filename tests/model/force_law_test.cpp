@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "core/model/model_config.hpp"
+#include <string>
+#include <vector>
 
 namespace millwatch::model {
 namespace {
@@ -69,22 +69,48 @@ TEST(ForceLaw, KronenbergScalesWithSectionToThePowerOneMinusInverseM) {
 }
 
 TEST(ForceLaw, NormalDerivativesInLogChipMatchFiniteDifferences) {
-  for (auto kind :
-       {ForceLawKind::kPowerLaw, ForceLawKind::kLinearEdge, ForceLawKind::kKronenberg}) {
-    Material m;
-    m.law = kind;
-    const ForceLaw law(m, 0.04, 0.2, true);
-    // h = 0.1 µm is below h_min = 0.2 µm (the ploughing regime), the others above.
+  struct Case {
+    const char* name;
+    Material material;
+    double area_mm2;
+  };
+  std::vector<Case> cases;
+  Material power;  // [000] Table 2: two regimes
+  cases.push_back({"power law", power, 0.0});
+  Material linear;
+  linear.law = ForceLawKind::kLinearEdge;
+  cases.push_back({"linear edge", linear, 0.0});
+  Material kronenberg;
+  kronenberg.law = ForceLawKind::kKronenberg;
+  cases.push_back({"kronenberg", kronenberg, 0.0});
+  Material plough;  // [002] eq 17 below h_min
+  plough.law = ForceLawKind::kLinearEdge;
+  plough.linear_edge.a_n_Nmm = 183.3;
+  plough.linear_edge.b_n = 0.5;
+  cases.push_back({"linear edge, plough law", plough, 0.0});
+  Material tangential_only = plough;  // F_n = 0 below h_min, whatever B_n
+  tangential_only.linear_edge.a_n_Nmm = 0.0;
+  tangential_only.linear_edge.a_t_Nmm = 114.7;
+  cases.push_back({"linear edge, tangential plough law only", tangential_only, 0.0});
+  Material area;  // [001] eqs 18-21
+  area.law = ForceLawKind::kLinearEdge;
+  area.linear_edge.ploughing_area = true;
+  area.linear_edge.k_np_N_per_mm3 = 6000.0;
+  cases.push_back({"linear edge, ploughed area", area, 2e-5});
+  for (const Case& c : cases) {
+    const ForceLaw law(c.material, 0.04, 0.2, true);
+    // h = 0.1 µm is below h_min = 0.2 µm: the ploughing regime of the laws that have one.
     for (double h : {0.1, 0.5, 2.0, 7.0}) {
+      SCOPED_TRACE(std::string(c.name) + ", h " + std::to_string(h));
       const double u = std::log(h);
-      const auto s = law.normal_with_slope(h, u, 0.004);
-      const auto f = [&](double x) { return law.normal_N(std::exp(x), 0.004); };
+      const auto s = law.normal_with_slope(h, u, 0.004, c.area_mm2);
+      const auto f = [&](double x) { return law.normal_N(std::exp(x), 0.004, c.area_mm2); };
       const double d = 1e-4;
       const double d1 = (f(u + d) - f(u - d)) / (2 * d);
       const double d2 = (f(u + d) - 2 * f(u) + f(u - d)) / (d * d);
-      EXPECT_NEAR(s.force_N, law.normal_N(h, 0.004), 1e-15) << to_string(kind) << " h " << h;
-      EXPECT_NEAR(s.d_du_N, d1, 1e-6 * std::fabs(d1) + 1e-12) << to_string(kind) << " h " << h;
-      EXPECT_NEAR(s.d2_du2_N, d2, 1e-4 * std::fabs(d2) + 1e-9) << to_string(kind) << " h " << h;
+      EXPECT_NEAR(s.force_N, f(u), 1e-15);
+      EXPECT_NEAR(s.d_du_N, d1, 1e-6 * std::fabs(d1) + 1e-12);
+      EXPECT_NEAR(s.d2_du2_N, d2, 1e-4 * std::fabs(d2) + 1e-9);
     }
   }
 }
