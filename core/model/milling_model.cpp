@@ -266,8 +266,9 @@ double MillingModel::solve_deflection(double h_rigid_um, double guess_um, double
   const double floor_log = hi + kLogFloor;  // ln(1e-6·h_r)
   bool floor_checked = false;
   double lo = floor_log;
-  // In the bracket by its own ends (1e-6·h_r and ln of it may differ in the last bit).
-  double u = std::clamp(std::log(std::clamp(guess_um, 1e-6 * h_rigid_um, h_rigid_um)), lo, hi);
+  // Clamped to the bracket in u, by its own ends (ln(1e-6·h_r) and lo may differ in the last
+  // bit); the floor in h keeps the logarithm's argument positive.
+  double u = std::clamp(std::log(std::max(guess_um, 1e-6 * h_rigid_um)), lo, hi);
   for (int it = 0; it < 60; ++it) {
     const double h = std::exp(u);
     const auto fs = law_.normal_with_slope(h, u, dz_mm_, area_mm2);

@@ -932,6 +932,9 @@ TEST(SteadyState, DeflectionTakesTheSmallestRootToRoundingForEachLaw) {
         near_h_min += hr > h_min && hr < 1.5 * h_min ? 1 : 0;
       }
     }
+    // [000]'s 4 µm/tooth: over 500 chips in contact; at 2 µm/tooth fewer passes cut.
+    EXPECT_GT(below + above,
+              c.process.feed_per_tooth_um == table2.process.feed_per_tooth_um ? 500 : 400);
     EXPECT_GT(below, 20);
     EXPECT_GT(above, 20);
     if (c.material.law == ForceLawKind::kPowerLaw) {
