@@ -10,12 +10,12 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <unsupported/Eigen/FFT>
 
 #include "core/model/dynamometer.hpp"
 #include "core/model/flute_positions.hpp"
 #include "core/model/parameter_map.hpp"
 #include "core/model/steady_state.hpp"
+#include "core/signal/real_spectrum.hpp"
 
 namespace millwatch::identify {
 namespace {
@@ -128,14 +128,28 @@ int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::Ve
 }  // namespace
 
 std::vector<std::complex<double>> revolution_harmonics(const std::vector<double>& x, int count) {
-  const auto b = static_cast<double>(x.size());
+  const std::size_t bins = x.size();
+  const auto b = static_cast<double>(bins);
+  // e^{−2πi·m/B} for m = 0..B−1: term n of harmonic k takes entry k·n mod B (no sine or cosine
+  // per term, and no argument reduction of a large angle).
+  std::vector<double> cos_table(bins), sin_table(bins);
+  for (std::size_t m = 0; m < bins; ++m) {
+    const double angle = -kTwoPi * static_cast<double>(m) / b;
+    cos_table[m] = std::cos(angle);
+    sin_table[m] = std::sin(angle);
+  }
   std::vector<std::complex<double>> out(static_cast<std::size_t>(count));
   for (int k = 1; k <= count; ++k) {
-    std::complex<double> sum = 0.0;
-    for (std::size_t n = 0; n < x.size(); ++n) {
-      sum += x[n] * std::polar(1.0, -kTwoPi * k * static_cast<double>(n) / b);
+    const auto step = static_cast<std::size_t>(k) % std::max<std::size_t>(bins, 1);
+    double re = 0.0, im = 0.0;
+    std::size_t m = 0;  // k·n mod B
+    for (std::size_t n = 0; n < bins; ++n) {
+      re += x[n] * cos_table[m];
+      im += x[n] * sin_table[m];
+      m += step;
+      m -= m >= bins ? bins : 0;
     }
-    out[static_cast<std::size_t>(k - 1)] = 2.0 / b * sum;
+    out[static_cast<std::size_t>(k - 1)] = 2.0 / b * std::complex<double>(re, im);
   }
   return out;
 }
@@ -214,8 +228,7 @@ struct WindowFitter::Impl {
     // Columns: harmonics of each basis column (and the offset, last) per axis, filtered.
     std::vector<std::array<std::vector<std::complex<double>>, 3>> columns;
     std::vector<std::string> column_names;
-    Eigen::FFT<double> fft;
-    std::vector<std::complex<double>> spectrum;
+    signal::RealSpectrum spectrum;                           // of a waveform on the model grid
     std::array<std::vector<std::complex<double>>, 3> gains;  // filter (× resonance) at k·f
     bool resonance = false;  // the dynamometer's resonance is in the gains
     std::vector<int> order;  // the spindle harmonic k of each entry (0: the mean)
@@ -309,11 +322,14 @@ struct WindowFitter::Impl {
     void harmonics_of(const std::vector<double>& w, std::size_t axis,
                       std::vector<std::complex<double>>& out) {
       const int s = setting.steps;
-      fft.fwd(spectrum, w);
+      if (spectrum.samples() != s) {
+        spectrum = signal::RealSpectrum(s);  // planned once per grid
+      }
+      spectrum.transform(w);
       out.resize(order.size());
       for (std::size_t e = 0; e < order.size(); ++e) {
-        const auto k = static_cast<std::size_t>(order[e]);
-        out[e] = (k == 0 ? 1.0 : 2.0) / s * spectrum[k] * gains[axis][e];
+        const int k = order[e];
+        out[e] = (k == 0 ? 1.0 : 2.0) / s * spectrum.bin(k) * gains[axis][e];
       }
     }
 
@@ -446,6 +462,11 @@ struct WindowFitter::Impl {
       }
       double best = 1e300, best_delta = 0.0;
       Eigen::VectorXd z(m);
+      // e^{−2πi·j/steps}: harmonic k at trial i turns by entry k·i mod steps.
+      std::vector<std::complex<double>> turn(static_cast<std::size_t>(steps));
+      for (int j = 0; j < steps; ++j) {
+        turn[static_cast<std::size_t>(j)] = std::polar(1.0, -kTwoPi * j / steps);
+      }
       for (int i = 0; i < steps; ++i) {
         const double delta = kTwoPi * i / steps;
         int row = 0;
@@ -454,8 +475,8 @@ struct WindowFitter::Impl {
             continue;
           }
           for (std::size_t e = 0; e < order.size(); ++e) {
-            const std::complex<double> v =
-                std::complex<double>(y0[row], y0[row + 1]) * std::polar(1.0, -order[e] * delta);
+            const auto j = static_cast<std::size_t>((static_cast<long>(order[e]) * i) % steps);
+            const std::complex<double> v = std::complex<double>(y0[row], y0[row + 1]) * turn[j];
             z[row] = v.real() - b0[row];
             z[row + 1] = v.imag() - b0[row + 1];
             row += 2;

@@ -194,21 +194,26 @@ void ChipGeometry::fill_rows(const PathGeometry& path, std::span<const double> p
   const double d_phi = 2.0 * std::numbers::pi / steps_;
   const double two_pi = 2.0 * std::numbers::pi;
   const double window_rad = window_to_rad - window_from_rad;
+  const double cpj = std::cos(psi_j);
+  const double spj = std::sin(psi_j);
   // What every disc's row shares: where the trochoid is wanted, and the circular chip's feed
-  // term v·Δψ_n·sin θ (the radii are added per disc).
+  // term v·Δψ_n·sin θ (the radii are added per disc), sin θ = sin(τ − ψ_j) from the grid's τ.
+  const double feed_um = path.feed_per_rad_um * back;
   for (int k = 0; k < steps_; ++k) {
-    const double immersion = k * d_phi - psi_j;
-    const double into_window =
-        std::fmod(std::fmod(immersion - window_from_rad, two_pi) + two_pi, two_pi);
-    const bool trochoid = trochoidal && into_window <= window_rad;
-    in_window_[static_cast<std::size_t>(k)] = trochoid ? 1 : 0;
-    circular_row_[static_cast<std::size_t>(k)] = path.feed_per_rad_um * back * std::sin(immersion);
+    const auto uk = static_cast<std::size_t>(k);
+    bool trochoid = false;
+    if (trochoidal) {
+      const double immersion = k * d_phi - psi_j;
+      const double into_window =
+          std::fmod(std::fmod(immersion - window_from_rad, two_pi) + two_pi, two_pi);
+      trochoid = into_window <= window_rad;
+    }
+    in_window_[uk] = trochoid ? 1 : 0;
+    circular_row_[uk] = feed_um * (sin_grid_[uk] * cpj - cos_grid_[uk] * spj);
   }
   // The earlier flute k sits at ψ_j − back (mod 2π) relative to flute j; the solver works with
   // ψ_k = ψ_j − back so that Δ ≈ −back needs no wrapping.
   const double psi_k = psi_j - back;
-  const double cpj = std::cos(psi_j);
-  const double spj = std::sin(psi_j);
   // The crossing is near u = τ − back: (sin, cos)(u) from the grid's τ turned by −back, then by
   // the guess's small offset from −back.
   const double sb = std::sin(-back);

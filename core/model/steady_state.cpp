@@ -174,6 +174,12 @@ struct SteadyStateWorkspace::Impl {
   int grid_steps = 0;
   std::vector<double> cos_theta, sin_theta;  // per (disc, flute, slot)
   std::vector<unsigned char> engaged;        // per (disc, flute, slot)
+  // What cos_theta, sin_theta and engaged were filled for: a fit changes runout and coefficients
+  // between evaluations, not the immersion grid.
+  bool immersion_valid = false;
+  int key_immersion_flutes = 0, key_immersion_steps = 0, key_immersion_discs = 0;
+  double key_beta = 0.0, key_engage_from = 0.0, key_engage_to = 0.0;
+  std::vector<double> key_immersion_frac;
   [[nodiscard]] std::size_t flute_slot(int disc, int flute, int b) const {
     return static_cast<std::size_t>((disc * flutes + flute) * steps + b);
   }
@@ -210,6 +216,10 @@ struct SteadyStateWorkspace::Impl {
 
   void configure(const ModelConfig& c, double rpm, int steps_per_rev);
   void size_storage();
+  /// cos θ, sin θ and engagement of flute `flute`'s slots on disc `disc`, its slot 0 `back_rad`
+  /// behind the spindle angle.
+  void fill_immersion(int disc, int flute, double back_rad, double engage_from_rad,
+                      double engage_to_rad);
   [[nodiscard]] int first_flute(int b) const;
   void fill_geometric_chips(int disc, int b);
   [[nodiscard]] double area_input(int slot, int flute) const;
@@ -347,6 +357,10 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     key_disc_angles = disc_angles;
   }
 
+  const bool same_immersion = immersion_valid && key_immersion_flutes == flutes &&
+                              key_immersion_steps == steps && key_immersion_discs == discs &&
+                              key_beta == beta && key_engage_from == engage_from &&
+                              key_engage_to == engage_to && key_immersion_frac == immersion_frac;
   for (int i = 0; i < discs; ++i) {
     const double lag = (i + 0.5) * beta / discs;
     const double lag_steps = lag / d_phi_rad;
@@ -360,21 +374,20 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
       const auto ij = static_cast<std::size_t>(i * flutes + j);
       table_offset[ij] = land_steps[uj] + static_cast<int>(whole);
       table_frac[ij] = shift - whole;
-      const double back = lag + immersion_frac[uj] * d_phi_rad;
-      const double cl = std::cos(back);
-      const double sl = std::sin(back);
-      for (int b = 0; b < steps; ++b) {
-        const std::size_t fs = flute_slot(i, j, b);
-        const auto ub = static_cast<std::size_t>(b);
-        cos_theta[fs] = cos_grid[ub] * cl + sin_grid[ub] * sl;
-        sin_theta[fs] = sin_grid[ub] * cl - cos_grid[ub] * sl;
-        double theta = b * d_phi_rad - back;  // back ∈ [0, 2π): one wrap at most
-        if (theta < 0.0) {
-          theta += 2.0 * kPi;
-        }
-        engaged[fs] = theta >= engage_from && theta <= engage_to ? 1 : 0;
+      if (!same_immersion) {
+        fill_immersion(i, j, lag + immersion_frac[uj] * d_phi_rad, engage_from, engage_to);
       }
     }
+  }
+  if (!same_immersion) {
+    immersion_valid = true;
+    key_immersion_flutes = flutes;
+    key_immersion_steps = steps;
+    key_immersion_discs = discs;
+    key_beta = beta;
+    key_engage_from = engage_from;
+    key_engage_to = engage_to;
+    key_immersion_frac = immersion_frac;  // same size after the first time: no allocation
   }
 
   for (int j = 0; j < flutes; ++j) {
@@ -391,6 +404,26 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
       radius_mm[static_cast<std::size_t>(i * flutes + j)] =
           1e-3 * geometry.flutes_at(i)[uj].radius_um;
     }
+  }
+}
+
+void SteadyStateWorkspace::Impl::fill_immersion(int disc, int flute, double back_rad,
+                                                double engage_from_rad, double engage_to_rad) {
+  const double cl = std::cos(back_rad);
+  const double sl = std::sin(back_rad);
+  const std::size_t first = flute_slot(disc, flute, 0);
+  double* cos_out = &cos_theta[first];
+  double* sin_out = &sin_theta[first];
+  unsigned char* engaged_out = &engaged[first];
+  for (int b = 0; b < steps; ++b) {
+    const auto ub = static_cast<std::size_t>(b);
+    cos_out[ub] = cos_grid[ub] * cl + sin_grid[ub] * sl;
+    sin_out[ub] = sin_grid[ub] * cl - cos_grid[ub] * sl;
+    double theta = b * d_phi_rad - back_rad;  // back ∈ [0, 2π): one wrap at most
+    if (theta < 0.0) {
+      theta += 2.0 * kPi;
+    }
+    engaged_out[ub] = theta >= engage_from_rad && theta <= engage_to_rad ? 1 : 0;
   }
 }
 

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
@@ -170,6 +172,28 @@ Outcome identify_case(const Case& k) {
     }
   }
   return o;
+}
+
+// x(φ) = mean + Σ_k a_k·cos(kφ + φ_k) on B bins gives X[k] = a_k·e^{iφ_k} for k < B/2, up to
+// high harmonics where k·b is many turns (720 bins, harmonics up to 359).
+TEST(WindowFit, RevolutionHarmonicsAreTheWaveformsAmplitudesAndPhases) {
+  const int bins = 720;
+  const std::vector<int> present = {1, 2, 3, 7, 40, 199, 358, 359};
+  std::vector<double> x(static_cast<std::size_t>(bins), 3.0);
+  for (int b = 0; b < bins; ++b) {
+    const double phi = 2.0 * kPi * b / bins;
+    for (const int k : present) {
+      x[static_cast<std::size_t>(b)] += (1.0 + 0.01 * k) * std::cos(k * phi + 0.1 * k);
+    }
+  }
+  const auto h = revolution_harmonics(x, bins / 2 - 1);
+  ASSERT_EQ(h.size(), static_cast<std::size_t>(bins / 2 - 1));
+  for (int k = 1; k < bins / 2; ++k) {
+    const bool is_present = std::find(present.begin(), present.end(), k) != present.end();
+    const std::complex<double> want =
+        is_present ? std::polar(1.0 + 0.01 * k, 0.1 * k) : std::complex<double>(0.0, 0.0);
+    EXPECT_LT(std::abs(h[static_cast<std::size_t>(k - 1)] - want), 1e-12) << "harmonic " << k;
+  }
 }
 
 TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {

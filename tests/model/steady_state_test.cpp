@@ -1055,6 +1055,32 @@ TEST(SteadyState, ResultDependsOnTheArgumentsOnly) {
   evaluate_steady_state(a, 26000.0, 720, used);
   const ForceWaveform again = evaluate_steady_state(a, 25000.0, 360, used).mean;
   EXPECT_EQ(max_difference(first, again), 0.0);
+
+  // A workspace keeps the immersion tables across evaluations while only the runout or the
+  // coefficients change (a fit); a change of anything they depend on — the engaged arc, the
+  // helix, the flutes' pitch, pass memory — must remake them.
+  std::vector<ModelConfig> variants(6, a);
+  variants[0].process.operation = Operation::kDownMilling;
+  variants[0].process.radial_depth_mm = 0.1;
+  variants[1].process.operation = Operation::kUpMilling;
+  variants[1].process.radial_depth_mm = 0.2;
+  variants[2].effects.helix_lag.enabled = false;
+  variants[3].tool.pitch_deg = {170.3, 189.7};
+  variants[4].tool.pitch_deg = {170.3, 189.7};  // without pass memory: its own immersion grid
+  variants[4].effects.deflection.enabled = false;
+  variants[4].effects.accumulation.enabled = false;
+  variants[5].tool.helix_deg = 45.0;  // the same discs, a longer lag
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    SCOPED_TRACE("variant " + std::to_string(v));
+    SteadyStateWorkspace alone;
+    const ForceWaveform expected = evaluate_steady_state(variants[v], 25000.0, 360, alone).mean;
+    evaluate_steady_state(a, 25000.0, 360, used);
+    const ForceWaveform after_a = evaluate_steady_state(variants[v], 25000.0, 360, used).mean;
+    EXPECT_EQ(max_difference(expected, after_a), 0.0);
+    EXPECT_GT(max_difference(expected, first), 1e-3 * peak_of(first));  // a real change
+    const ForceWaveform a_again = evaluate_steady_state(a, 25000.0, 360, used).mean;
+    EXPECT_EQ(max_difference(first, a_again), 0.0);
+  }
 }
 
 TEST(SteadyState, FeedRateStaysFixedAtTheActualSpeed) {
