@@ -241,6 +241,8 @@ struct SteadyStateWorkspace::Impl {
   void compute_areas();
   void accumulate_forces(bool with_cycle);
   void accumulate_basis();
+  /// accumulate_basis() for the linear edge law without the ploughed area.
+  void accumulate_linear_edge_basis(bool has_plough_law);
   void assemble(std::span<const double> per_flute, int revolutions, int m,
                 std::span<double> out) const;
   void apply_dynamometer(std::span<double> waveform, int axis, int revolutions);
@@ -758,10 +760,15 @@ void SteadyStateWorkspace::Impl::store_cycle(int slot, const PassRecord* passes_
   period[us] = p;
   records.resize(records.size() + static_cast<std::size_t>(p) * n);
   PassRecord* out = &records[static_cast<std::size_t>(record_offset[us])];
-  for (int q = 0; q < p * flutes; ++q) {
-    const int c = q / flutes;
-    const int j = (first + q % flutes) % flutes;
-    out[static_cast<std::size_t>(c * flutes + j)] = passes_in_order[q];
+  for (int c = 0; c < p; ++c) {
+    // Pass q = c·N + i of the slot is flute (first + i) mod N's.
+    const PassRecord* in = passes_in_order + static_cast<std::ptrdiff_t>(c) * flutes;
+    PassRecord* revolution = out + static_cast<std::ptrdiff_t>(c) * flutes;
+    int j = first;
+    for (int i = 0; i < flutes; ++i) {
+      revolution[j] = in[i];
+      j = j + 1 == flutes ? 0 : j + 1;
+    }
   }
 }
 
@@ -1442,12 +1449,10 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
                            static_cast<std::size_t>(m % area_cycle)]
                     : 0.0;
   };
-  const bool linear_fast = law_kind == ForceLawKind::kLinearEdge && !area_law;
-  const std::size_t stride = n * s;  // one column of basis_flute[axis]
-  const std::size_t offset_col = static_cast<std::size_t>(columns) * stride;
-  double* fx = basis_flute[0].data();
-  double* fy = basis_flute[1].data();
-  double* fz = basis_flute[2].data();
+  if (law_kind == ForceLawKind::kLinearEdge && !area_law) {
+    accumulate_linear_edge_basis(has_plough_law);
+    return;
+  }
   for (int i = 0; i < discs; ++i) {
     for (int b = 0; b < steps; ++b) {
       const auto us = static_cast<std::size_t>(i * steps + b);
@@ -1464,43 +1469,6 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
         const double st = sin_theta[el];
         const auto uj = static_cast<std::size_t>(j);
         const double weight = 1.0 / evaluations;
-        if (linear_fast) {
-          // The common case, written out: each column sees one direction of one element.
-          for (int e = 0; e < evaluations; ++e) {
-            const PassRecord& r = rec[static_cast<std::size_t>(e) * n + uj];
-            if (r.contact == 0) {
-              continue;
-            }
-            const std::size_t at = uj * s + static_cast<std::size_t>(b);
-            const double wt = wear_t_N[uj] * weight;
-            const double wn = wear_n_N[uj] * weight;
-            fx[offset_col + at] += -wt * ct - wn * st;
-            fy[offset_col + at] += wt * st - wn * ct;
-            if (r.h_um <= 0.0) {
-              continue;
-            }
-            if (has_plough_law && law.ploughing(r.h_um)) {
-              const ElementForce f = law.element(r.h_um, dz_mm);  // [002] eq 17
-              fx[offset_col + at] += weight * (-f.tangential_N * ct - f.normal_N * st);
-              fy[offset_col + at] += weight * (f.tangential_N * st - f.normal_N * ct);
-              fz[offset_col + at] += weight * f.axial_N;
-              continue;
-            }
-            const double cut = r.h_um * kMmPerUm * dz_mm * weight;  // K_tc, K_nc, K_ac
-            const double edge = dz_mm * weight;                     // K_te, K_ne, K_ae
-            fx[at] += -cut * ct;
-            fy[at] += cut * st;
-            fx[stride + at] += -cut * st;
-            fy[stride + at] += -cut * ct;
-            fz[2 * stride + at] += cut;
-            fx[3 * stride + at] += -edge * ct;
-            fy[3 * stride + at] += edge * st;
-            fx[4 * stride + at] += -edge * st;
-            fy[4 * stride + at] += -edge * ct;
-            fz[5 * stride + at] += edge;
-          }
-          continue;
-        }
         for (int e = 0; e < evaluations; ++e) {
           const int c = area_law ? positive_mod(e - phase[us], p) : e;
           element(rec[static_cast<std::size_t>(c) * n + uj], j, area_of(us, uj, e));
@@ -1518,6 +1486,87 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
           }
         }
       }
+    }
+  }
+}
+
+void SteadyStateWorkspace::Impl::accumulate_linear_edge_basis(bool has_plough_law) {
+  // The common case, written out: each column sees one direction of one element. Entry (j, b)
+  // of a column sums its discs' elements over their cycles, in registers and in the order the
+  // general loop adds them to memory (disc, then revolution): the same sums, bit for bit.
+  constexpr double kMmPerUm = 1e-3;
+  const auto n = static_cast<std::size_t>(flutes);
+  const auto s = static_cast<std::size_t>(steps);
+  const std::size_t stride = n * s;  // one column of basis_flute[axis]
+  const std::size_t offset_col = 6 * stride;
+  double* fx = basis_flute[0].data();
+  double* fy = basis_flute[1].data();
+  double* fz = basis_flute[2].data();
+  for (int b = 0; b < steps; ++b) {
+    for (int j = 0; j < flutes; ++j) {
+      const auto uj = static_cast<std::size_t>(j);
+      // Columns K_tc, K_nc, K_ac (cut), K_te, K_ne, K_ae (edge) and the offset (o).
+      double tc_x = 0.0, tc_y = 0.0, nc_x = 0.0, nc_y = 0.0, ac_z = 0.0;
+      double te_x = 0.0, te_y = 0.0, ne_x = 0.0, ne_y = 0.0, ae_z = 0.0;
+      double o_x = 0.0, o_y = 0.0, o_z = 0.0;
+      for (int i = 0; i < discs; ++i) {
+        const std::size_t el = flute_slot(i, j, b);
+        if (engaged[el] == 0) {
+          continue;
+        }
+        const auto us = static_cast<std::size_t>(i * steps + b);
+        const int p = period[us];
+        const PassRecord* rec = &records[static_cast<std::size_t>(record_offset[us])];
+        const double ct = cos_theta[el];
+        const double st = sin_theta[el];
+        const double weight = 1.0 / p;  // the mean over the slot's own cycle
+        for (int e = 0; e < p; ++e) {
+          const PassRecord& r = rec[static_cast<std::size_t>(e) * n + uj];
+          if (r.contact == 0) {
+            continue;
+          }
+          const double wt = wear_t_N[uj] * weight;
+          const double wn = wear_n_N[uj] * weight;
+          o_x += -wt * ct - wn * st;
+          o_y += wt * st - wn * ct;
+          if (r.h_um <= 0.0) {
+            continue;
+          }
+          if (has_plough_law && law.ploughing(r.h_um)) {
+            const ElementForce f = law.element(r.h_um, dz_mm);  // [002] eq 17
+            o_x += weight * (-f.tangential_N * ct - f.normal_N * st);
+            o_y += weight * (f.tangential_N * st - f.normal_N * ct);
+            o_z += weight * f.axial_N;
+            continue;
+          }
+          const double cut = r.h_um * kMmPerUm * dz_mm * weight;  // K_tc, K_nc, K_ac
+          const double edge = dz_mm * weight;                     // K_te, K_ne, K_ae
+          tc_x += -cut * ct;
+          tc_y += cut * st;
+          nc_x += -cut * st;
+          nc_y += -cut * ct;
+          ac_z += cut;
+          te_x += -edge * ct;
+          te_y += edge * st;
+          ne_x += -edge * st;
+          ne_y += -edge * ct;
+          ae_z += edge;
+        }
+      }
+      const std::size_t at = uj * s + static_cast<std::size_t>(b);
+      fx[at] = tc_x;
+      fy[at] = tc_y;
+      fx[stride + at] = nc_x;
+      fy[stride + at] = nc_y;
+      fz[2 * stride + at] = ac_z;
+      fx[3 * stride + at] = te_x;
+      fy[3 * stride + at] = te_y;
+      fx[4 * stride + at] = ne_x;
+      fy[4 * stride + at] = ne_y;
+      fz[5 * stride + at] = ae_z;
+      fx[offset_col + at] = o_x;
+      fy[offset_col + at] = o_y;
+      fz[offset_col + at] = o_z;
     }
   }
 }
