@@ -56,8 +56,9 @@ void steady_state(
   millwatch::model::SteadyStateWorkspace ws(c, kSteps);
   double rpm = 25000.0;
   for (auto _ : state) {
-    // A new speed each time: the chip tables are remade (the immersion grid, which the speed
-    // does not move, is kept, as in the lockstep's rebuild and a fitter's trials).
+    // A new speed each time: the slots are solved afresh; the chip tables and the immersion
+    // grid, which the speed alone does not move, are kept (the lockstep's rebuild also rescales
+    // the feed per tooth, which remakes the chip tables: BM_LockstepRebuild*).
     rpm = rpm == 25000.0 ? 25001.0 : 25000.0;
     const auto& s = millwatch::model::evaluate_steady_state(c, rpm, kSteps, ws, output);
     benchmark::DoNotOptimize(s.mean.fx_N.data());

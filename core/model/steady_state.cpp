@@ -7,6 +7,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/model/chip_geometry.hpp"
 #include "core/model/dynamometer.hpp"
@@ -27,6 +28,7 @@ constexpr double kDeficitTolerance_um = 1e-12;
 constexpr double kAreaTolerance = 1e-9;
 /// ψ/Δφ within this of an integer is that integer: rounding of π·k, not a pitch off the grid.
 constexpr double kOnGrid = 1e-9;
+constexpr double kMmPerUm = 1e-3;
 /// ln 1e-6: chips below 10⁻⁶ of the rigid chip count as pushed back (as MillingModel).
 const double kLogFloor = std::log(1e-6);
 
@@ -241,8 +243,9 @@ struct SteadyStateWorkspace::Impl {
   void compute_areas();
   void accumulate_forces(bool with_cycle);
   void accumulate_basis();
-  /// accumulate_basis() for the linear edge law without the ploughed area.
-  void accumulate_linear_edge_basis(bool has_plough_law);
+  /// accumulate_basis() for the linear edge law without the ploughed area (columns K_tc, K_nc,
+  /// K_ac, K_te, K_ne, K_ae, then the offset at `offset_column`), into zeroed basis_flute.
+  void accumulate_linear_edge_basis(std::size_t offset_column, bool has_plough_law);
   void assemble(std::span<const double> per_flute, int revolutions, int m,
                 std::span<double> out) const;
   void apply_dynamometer(std::span<double> waveform, int axis, int revolutions);
@@ -303,6 +306,10 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     normal_jump_N = 0.0;  // continuous at h_min (up to the 1e-12 step): one branch
   }
 
+  // The kept chip tables and immersion grid count again only once this set-up is whole: an
+  // exception on the way (a failed allocation) leaves them to be remade.
+  const bool geometry_was_valid = std::exchange(geometry_valid, false);
+  const bool immersion_was_valid = std::exchange(immersion_valid, false);
   size_storage();
 
   // Pitch: exact. ψ_j/Δφ within rounding of an integer is that integer.
@@ -341,14 +348,13 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   const double from = engage_from - margin;
   const double to = engage_to + beta + margin;
   const bool same_geometry =
-      geometry_valid && key_path.radius_um == path.radius_um &&
+      geometry_was_valid && key_path.radius_um == path.radius_um &&
       key_path.feed_per_rad_um == path.feed_per_rad_um && key_path.offset_um == path.offset_um &&
       key_path.offset_angle_rad == path.offset_angle_rad &&
       key_trochoidal == e.trochoidal.enabled && key_passes == passes && key_steps == steps &&
       key_from == from && key_to == to && key_pitch == pitch_rad && key_disc_angles == disc_angles;
   if (!same_geometry) {
     geometry.configure(path, pitch_rad, passes, steps, e.trochoidal.enabled, from, to, disc_angles);
-    geometry_valid = true;
     key_path = path;
     key_trochoidal = e.trochoidal.enabled;
     key_passes = passes;
@@ -358,8 +364,9 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     key_pitch = pitch_rad;  // same size after the first time: no allocation
     key_disc_angles = disc_angles;
   }
+  geometry_valid = true;
 
-  const bool same_immersion = immersion_valid && key_immersion_flutes == flutes &&
+  const bool same_immersion = immersion_was_valid && key_immersion_flutes == flutes &&
                               key_immersion_steps == steps && key_immersion_discs == discs &&
                               key_beta == beta && key_engage_from == engage_from &&
                               key_engage_to == engage_to && key_immersion_frac == immersion_frac;
@@ -382,7 +389,6 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     }
   }
   if (!same_immersion) {
-    immersion_valid = true;
     key_immersion_flutes = flutes;
     key_immersion_steps = steps;
     key_immersion_discs = discs;
@@ -391,6 +397,7 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     key_engage_to = engage_to;
     key_immersion_frac = immersion_frac;  // same size after the first time: no allocation
   }
+  immersion_valid = true;
 
   for (int j = 0; j < flutes; ++j) {
     const auto uj = static_cast<std::size_t>(j);
@@ -1380,7 +1387,6 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
   }
   const int cyc = result.cycle_revolutions;
   const bool has_plough_law = le.a_t_Nmm != 0.0 || le.a_n_Nmm != 0.0 || le.a_a_Nmm != 0.0;
-  constexpr double kMmPerUm = 1e-3;
   // Per element: tangential, normal, axial force of each unit coefficient (column c) and of
   // the offset (column `columns`).
   double tna[kMaxBasisColumns + 1][3];
@@ -1450,7 +1456,7 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
                     : 0.0;
   };
   if (law_kind == ForceLawKind::kLinearEdge && !area_law) {
-    accumulate_linear_edge_basis(has_plough_law);
+    accumulate_linear_edge_basis(static_cast<std::size_t>(columns), has_plough_law);
     return;
   }
   for (int i = 0; i < discs; ++i) {
@@ -1490,15 +1496,16 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
   }
 }
 
-void SteadyStateWorkspace::Impl::accumulate_linear_edge_basis(bool has_plough_law) {
+void SteadyStateWorkspace::Impl::accumulate_linear_edge_basis(std::size_t offset_column,
+                                                              bool has_plough_law) {
   // The common case, written out: each column sees one direction of one element. Entry (j, b)
   // of a column sums its discs' elements over their cycles, in registers and in the order the
-  // general loop adds them to memory (disc, then revolution): the same sums, bit for bit.
-  constexpr double kMmPerUm = 1e-3;
+  // general loop adds them to memory (disc, then revolution): the same sums, bit for bit. The
+  // axes a column never sees (fz of K_tc, fx of K_ac, …) keep the caller's zeros.
   const auto n = static_cast<std::size_t>(flutes);
   const auto s = static_cast<std::size_t>(steps);
   const std::size_t stride = n * s;  // one column of basis_flute[axis]
-  const std::size_t offset_col = 6 * stride;
+  const std::size_t offset_col = offset_column * stride;
   double* fx = basis_flute[0].data();
   double* fy = basis_flute[1].data();
   double* fz = basis_flute[2].data();

@@ -76,7 +76,11 @@
 // (a) the first time a cycle of a given length L > 1 meets the dynamometer (its FFT plan is made
 // then and kept), (b) when the slots' cycles together outgrow the record pool reserved for them
 // (accumulation with long cycles; the pool keeps its capacity). Configurations without pass
-// memory never hit either.
+// memory never hit either. What only the configuration's shape and grid fix is kept between
+// evaluations: the chip tables while the path (feed, runout, pitch, window) is the same, and the
+// immersion grid (cos θ, sin θ and engagement of every disc, flute and slot) while the flutes'
+// offsets, the helix lag and the engaged arc are — a fit's trials change runout and
+// coefficients, a lockstep rebuild the speed, and neither remakes it.
 
 #include <array>
 #include <memory>

@@ -83,6 +83,10 @@ std::span<const std::complex<double>> RealSpectrum::transform(std::span<const do
 }
 
 std::complex<double> RealSpectrum::bin(int k) const {
+  if (samples_ == 0 || k < 0) {
+    throw std::invalid_argument("RealSpectrum::bin: bin " + std::to_string(k) + " of " +
+                                std::to_string(samples_) + " samples");
+  }
   const int r = k % samples_;
   return r <= samples_ / 2 ? spectrum_[r] : std::conj(spectrum_[samples_ - r]);
 }

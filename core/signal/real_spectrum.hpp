@@ -34,7 +34,8 @@ class RealSpectrum {
   std::span<const std::complex<double>> transform(std::span<const double> x);
 
   /// X[k] for any k ≥ 0 after transform(): the bins above N/2 by conjugate symmetry, k ≥ N
-  /// aliased to k mod N (what a full complex DFT of the real x gives).
+  /// aliased to k mod N (what a full complex DFT of the real x gives). std::invalid_argument for
+  /// k < 0 or no length.
   [[nodiscard]] std::complex<double> bin(int k) const;
 
  private:

@@ -1052,7 +1052,9 @@ TEST(SteadyState, ResultDependsOnTheArgumentsOnly) {
   const ForceWaveform first = evaluate_steady_state(a, 25000.0, 360, fresh).mean;
   SteadyStateWorkspace used;
   evaluate_steady_state(b, 24000.0, 360, used);
-  evaluate_steady_state(a, 26000.0, 720, used);
+  const ForceWaveform fine = evaluate_steady_state(a, 26000.0, 720, used).mean;
+  SteadyStateWorkspace fine_alone;
+  EXPECT_EQ(max_difference(evaluate_steady_state(a, 26000.0, 720, fine_alone).mean, fine), 0.0);
   const ForceWaveform again = evaluate_steady_state(a, 25000.0, 360, used).mean;
   EXPECT_EQ(max_difference(first, again), 0.0);
 

@@ -6,6 +6,7 @@
 #include <complex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -57,6 +58,7 @@ TEST(RealSpectrum, AWrongLengthOrNoPlanIsRefusedAndAMovedPlanWorks) {
   RealSpectrum none;
   const std::vector<double> four(4, 1.0);
   EXPECT_THROW(none.transform(four), std::invalid_argument);
+  EXPECT_THROW(static_cast<void>(none.bin(0)), std::invalid_argument);
   RealSpectrum spectrum(5);
   EXPECT_THROW(spectrum.transform(four), std::invalid_argument);
   RealSpectrum moved(std::move(spectrum));
@@ -64,6 +66,7 @@ TEST(RealSpectrum, AWrongLengthOrNoPlanIsRefusedAndAMovedPlanWorks) {
   EXPECT_EQ(moved.samples(), 4 + 1);
   const std::vector<double> five(5, 1.0);
   EXPECT_LT(std::abs(moved.transform(five)[0] - std::complex<double>(5.0, 0.0)), 1e-15);
+  EXPECT_THROW(static_cast<void>(moved.bin(-1)), std::invalid_argument);
   none = std::move(moved);
   EXPECT_LT(std::abs(none.transform(five)[0] - std::complex<double>(5.0, 0.0)), 1e-15);
 }
