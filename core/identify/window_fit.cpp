@@ -23,6 +23,16 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kTwoPi = 2.0 * kPi;
 
+/// e^{−2πi·m/n} for m = 0..n−1: the turns of a DFT of n points, for sums that take entry k·t mod
+/// n instead of a sine and a cosine per term.
+std::vector<std::complex<double>> unit_turns(std::size_t n) {
+  std::vector<std::complex<double>> turn(n);
+  for (std::size_t m = 0; m < n; ++m) {
+    turn[m] = std::polar(1.0, -kTwoPi * static_cast<double>(m) / static_cast<double>(n));
+  }
+  return turn;
+}
+
 double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
@@ -130,22 +140,17 @@ int levenberg_marquardt(Residual&& residual, Eigen::VectorXd& x, const Eigen::Ve
 std::vector<std::complex<double>> revolution_harmonics(const std::vector<double>& x, int count) {
   const std::size_t bins = x.size();
   const auto b = static_cast<double>(bins);
-  // e^{−2πi·m/B} for m = 0..B−1: term n of harmonic k takes entry k·n mod B (no sine or cosine
-  // per term, and no argument reduction of a large angle).
-  std::vector<double> cos_table(bins), sin_table(bins);
-  for (std::size_t m = 0; m < bins; ++m) {
-    const double angle = -kTwoPi * static_cast<double>(m) / b;
-    cos_table[m] = std::cos(angle);
-    sin_table[m] = std::sin(angle);
-  }
+  // Term n of harmonic k turns by entry k·n mod B of the table (no sine or cosine per term, and
+  // no argument reduction of a large angle).
+  const std::vector<std::complex<double>> turn = unit_turns(bins);
   std::vector<std::complex<double>> out(static_cast<std::size_t>(count));
   for (int k = 1; k <= count; ++k) {
     const auto step = static_cast<std::size_t>(k) % std::max<std::size_t>(bins, 1);
     double re = 0.0, im = 0.0;
     std::size_t m = 0;  // k·n mod B
     for (std::size_t n = 0; n < bins; ++n) {
-      re += x[n] * cos_table[m];
-      im += x[n] * sin_table[m];
+      re += x[n] * turn[m].real();
+      im += x[n] * turn[m].imag();
       m += step;
       m -= m >= bins ? bins : 0;
     }
@@ -462,11 +467,8 @@ struct WindowFitter::Impl {
       }
       double best = 1e300, best_delta = 0.0;
       Eigen::VectorXd z(m);
-      // e^{−2πi·j/steps}: harmonic k at trial i turns by entry k·i mod steps.
-      std::vector<std::complex<double>> turn(static_cast<std::size_t>(steps));
-      for (int j = 0; j < steps; ++j) {
-        turn[static_cast<std::size_t>(j)] = std::polar(1.0, -kTwoPi * j / steps);
-      }
+      // Harmonic k at trial i turns by entry k·i mod steps of the table.
+      const std::vector<std::complex<double>> turn = unit_turns(static_cast<std::size_t>(steps));
       for (int i = 0; i < steps; ++i) {
         const double delta = kTwoPi * i / steps;
         int row = 0;

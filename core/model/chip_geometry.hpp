@@ -37,6 +37,7 @@ struct PathGeometry {
   double feed_per_rad_um = 0.0;   ///< v = f_t·N_z/(2π): feed advance per radian of spindle turn
   double offset_um = 0.0;         ///< ρ, runout offset
   double offset_angle_rad = 0.0;  ///< γ, runout angle
+  bool operator==(const PathGeometry&) const = default;
 };
 
 struct TrochoidChip {

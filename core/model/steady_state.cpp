@@ -152,11 +152,16 @@ struct SteadyStateWorkspace::Impl {
   bool min_chip = false;
 
   ChipGeometry geometry;
+  // What the chip tables were made for (with the pitch and the discs' angles).
+  struct GeometryKey {
+    PathGeometry path;
+    bool trochoidal = false;
+    int passes = 0, steps = 0;
+    double from_rad = 0.0, to_rad = 0.0;  // the trochoid's window
+    bool operator==(const GeometryKey&) const = default;
+  };
   bool geometry_valid = false;
-  PathGeometry key_path;
-  bool key_trochoidal = false;
-  int key_passes = 0, key_steps = 0;
-  double key_from = 0.0, key_to = 0.0;
+  GeometryKey geometry_key;
   std::vector<double> key_pitch;
   std::vector<double> key_disc_angles;
 
@@ -178,10 +183,14 @@ struct SteadyStateWorkspace::Impl {
   std::vector<unsigned char> engaged;        // per (disc, flute, slot)
   // What cos_theta, sin_theta and engaged were filled for: a fit changes runout and coefficients
   // between evaluations, not the immersion grid.
+  struct ImmersionKey {
+    int flutes = 0, steps = 0, discs = 0;
+    double beta_rad = 0.0, engage_from_rad = 0.0, engage_to_rad = 0.0;
+    bool operator==(const ImmersionKey&) const = default;
+  };
   bool immersion_valid = false;
-  int key_immersion_flutes = 0, key_immersion_steps = 0, key_immersion_discs = 0;
-  double key_beta = 0.0, key_engage_from = 0.0, key_engage_to = 0.0;
-  std::vector<double> key_immersion_frac;
+  ImmersionKey immersion_key;
+  std::vector<double> key_immersion_frac;  // with immersion_key
   [[nodiscard]] std::size_t flute_slot(int disc, int flute, int b) const {
     return static_cast<std::size_t>((disc * flutes + flute) * steps + b);
   }
@@ -347,29 +356,20 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   const double margin = 4.0 * d_phi_rad;
   const double from = engage_from - margin;
   const double to = engage_to + beta + margin;
-  const bool same_geometry =
-      geometry_was_valid && key_path.radius_um == path.radius_um &&
-      key_path.feed_per_rad_um == path.feed_per_rad_um && key_path.offset_um == path.offset_um &&
-      key_path.offset_angle_rad == path.offset_angle_rad &&
-      key_trochoidal == e.trochoidal.enabled && key_passes == passes && key_steps == steps &&
-      key_from == from && key_to == to && key_pitch == pitch_rad && key_disc_angles == disc_angles;
+  const GeometryKey g_key{path, e.trochoidal.enabled, passes, steps, from, to};
+  const bool same_geometry = geometry_was_valid && g_key == geometry_key &&
+                             key_pitch == pitch_rad && key_disc_angles == disc_angles;
   if (!same_geometry) {
     geometry.configure(path, pitch_rad, passes, steps, e.trochoidal.enabled, from, to, disc_angles);
-    key_path = path;
-    key_trochoidal = e.trochoidal.enabled;
-    key_passes = passes;
-    key_steps = steps;
-    key_from = from;
-    key_to = to;
+    geometry_key = g_key;
     key_pitch = pitch_rad;  // same size after the first time: no allocation
     key_disc_angles = disc_angles;
   }
   geometry_valid = true;
 
-  const bool same_immersion = immersion_was_valid && key_immersion_flutes == flutes &&
-                              key_immersion_steps == steps && key_immersion_discs == discs &&
-                              key_beta == beta && key_engage_from == engage_from &&
-                              key_engage_to == engage_to && key_immersion_frac == immersion_frac;
+  const ImmersionKey i_key{flutes, steps, discs, beta, engage_from, engage_to};
+  const bool same_immersion =
+      immersion_was_valid && i_key == immersion_key && key_immersion_frac == immersion_frac;
   for (int i = 0; i < discs; ++i) {
     const double lag = (i + 0.5) * beta / discs;
     const double lag_steps = lag / d_phi_rad;
@@ -389,12 +389,7 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
     }
   }
   if (!same_immersion) {
-    key_immersion_flutes = flutes;
-    key_immersion_steps = steps;
-    key_immersion_discs = discs;
-    key_beta = beta;
-    key_engage_from = engage_from;
-    key_engage_to = engage_to;
+    immersion_key = i_key;
     key_immersion_frac = immersion_frac;  // same size after the first time: no allocation
   }
   immersion_valid = true;
