@@ -33,11 +33,6 @@ ElementForce power_law(const PowerLaw& c, double log_h, double dz_mm, bool ploug
           power_log(c.k_ac_Nmm, c.a_ac, log_h) * dz_mm};
 }
 
-/// [002] eq 17's ploughing law below h_min is set (any of its coefficients).
-bool has_plough_law(const LinearEdge& c) {
-  return c.a_t_Nmm != 0.0 || c.a_n_Nmm != 0.0 || c.a_a_Nmm != 0.0;
-}
-
 ElementForce linear_edge(const LinearEdge& c, double h_mm, double dz_mm, bool ploughing,
                          double area_mm2) {
   if (c.ploughing_area) {
@@ -66,6 +61,10 @@ ElementForce kronenberg(const Kronenberg& c, double h_mm, double dz_mm, double a
 }
 
 }  // namespace
+
+bool has_plough_law(const LinearEdge& c) {
+  return c.a_t_Nmm != 0.0 || c.a_n_Nmm != 0.0 || c.a_a_Nmm != 0.0;
+}
 
 ForceLaw::ForceLaw(const Material& material, double axial_depth_mm, double h_min_um, bool regimes)
     : material_{material.law, material.power_law, material.linear_edge, material.kronenberg},

@@ -20,6 +20,10 @@ struct ElementForce {
   double axial_N = 0.0;
 };
 
+/// [002] eq 17's ploughing law below h_min is set (any of its coefficients): the linear edge
+/// law then takes it there instead of the shearing law.
+[[nodiscard]] bool has_plough_law(const LinearEdge& c);
+
 /// Evaluates the material's force law for one element. Precomputes what does not depend on h.
 class ForceLaw {
  public:

@@ -254,7 +254,7 @@ struct SteadyStateWorkspace::Impl {
   void accumulate_basis();
   /// accumulate_basis() for the linear edge law without the ploughed area (columns K_tc, K_nc,
   /// K_ac, K_te, K_ne, K_ae, then the offset at `offset_column`), into zeroed basis_flute.
-  void accumulate_linear_edge_basis(std::size_t offset_column, bool has_plough_law);
+  void accumulate_linear_edge_basis(std::size_t offset_column, bool plough_law);
   void assemble(std::span<const double> per_flute, int revolutions, int m,
                 std::span<double> out) const;
   void apply_dynamometer(std::span<double> waveform, int axis, int revolutions);
@@ -1381,7 +1381,7 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
     std::fill(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(ncol * n * s), 0.0);
   }
   const int cyc = result.cycle_revolutions;
-  const bool has_plough_law = le.a_t_Nmm != 0.0 || le.a_n_Nmm != 0.0 || le.a_a_Nmm != 0.0;
+  const bool plough_law = has_plough_law(le);
   // Per element: tangential, normal, axial force of each unit coefficient (column c) and of
   // the offset (column `columns`).
   double tna[kMaxBasisColumns + 1][3];
@@ -1410,7 +1410,7 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
           tna[3][0] = area_mm2 * dz_mm;
           tna[4][1] = area_mm2 * dz_mm;
           tna[5][2] = area_mm2 * dz_mm;
-        } else if (plough && has_plough_law) {
+        } else if (plough && plough_law) {
           const ElementForce f = law.element(h, dz_mm);  // [002] eq 17: no listed coefficient
           tna[off][0] += f.tangential_N;
           tna[off][1] += f.normal_N;
@@ -1451,7 +1451,7 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
                     : 0.0;
   };
   if (law_kind == ForceLawKind::kLinearEdge && !area_law) {
-    accumulate_linear_edge_basis(static_cast<std::size_t>(columns), has_plough_law);
+    accumulate_linear_edge_basis(static_cast<std::size_t>(columns), plough_law);
     return;
   }
   for (int i = 0; i < discs; ++i) {
@@ -1492,7 +1492,7 @@ void SteadyStateWorkspace::Impl::accumulate_basis() {
 }
 
 void SteadyStateWorkspace::Impl::accumulate_linear_edge_basis(std::size_t offset_column,
-                                                              bool has_plough_law) {
+                                                              bool plough_law) {
   // The common case, written out: each column sees one direction of one element. Entry (j, b)
   // of a column sums its discs' elements over their cycles, in registers and in the order the
   // general loop adds them to memory (disc, then revolution): the same sums, bit for bit. The
@@ -1534,7 +1534,7 @@ void SteadyStateWorkspace::Impl::accumulate_linear_edge_basis(std::size_t offset
           if (r.h_um <= 0.0) {
             continue;
           }
-          if (has_plough_law && law.ploughing(r.h_um)) {
+          if (plough_law && law.ploughing(r.h_um)) {
             const ElementForce f = law.element(r.h_um, dz_mm);  // [002] eq 17
             o_x += weight * (-f.tangential_N * ct - f.normal_N * st);
             o_y += weight * (f.tangential_N * st - f.normal_N * ct);
