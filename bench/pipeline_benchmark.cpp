@@ -343,6 +343,43 @@ void BM_LowPassThree(benchmark::State& state) {
 }
 BENCHMARK(BM_LowPassThree)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
 
+/// The machine's own latency: a fixed job of about a revolution's work (a chain of 5,000
+/// dependent multiply-adds, ~10 µs) run back to back for `seconds`, timed by the wall clock as
+/// BM_Pipeline times a revolution. Its worst is what the machine (preemption, the hypervisor's
+/// other tenants, interrupts) adds to any job of that size: a pipeline's worst latency beyond it
+/// would be the pipeline's own. Counters: job_mean_us, job_p99_us, job_worst_us.
+void BM_MachineJitter(benchmark::State& state) {
+  const auto seconds = static_cast<double>(state.range(0));
+  std::vector<double> jobs_s;
+  jobs_s.reserve(1 << 21);
+  double x = 1.0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    auto now = start;
+    while (std::chrono::duration<double>(now - start).count() < seconds &&
+           jobs_s.size() < jobs_s.capacity()) {
+      for (int k = 0; k < 5000; ++k) {
+        x = x * 0.999999 + 1e-6;  // stays near 1: no subnormals, no overflow
+      }
+      benchmark::DoNotOptimize(x);
+      const auto end = std::chrono::steady_clock::now();
+      jobs_s.push_back(std::chrono::duration<double>(end - now).count());
+      now = end;
+    }
+  }
+  std::sort(jobs_s.begin(), jobs_s.end());
+  const auto n = jobs_s.size();
+  double sum_s = 0.0;
+  for (const double j : jobs_s) {
+    sum_s += j;
+  }
+  state.counters["job_mean_us"] = n > 0 ? 1e6 * sum_s / static_cast<double>(n) : 0.0;
+  state.counters["job_p99_us"] = n > 0 ? 1e6 * jobs_s[n * 99 / 100] : 0.0;
+  state.counters["job_worst_us"] = n > 0 ? 1e6 * jobs_s.back() : 0.0;
+}
+// As long as BM_Pipeline's timed parts at 333.3 kHz in a round (about 10 s of wall clock).
+BENCHMARK(BM_MachineJitter)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+
 /// What a new lock costs once: building the lockstep model at the measured speed.
 void BM_LockstepModelBuild(benchmark::State& state) {
   monitor::MonitorConfig c;

@@ -75,6 +75,13 @@ for rate, label, block, target in ((50000, "50 kHz", 50, 600), (333300, "333.3 k
           f" | {reference:.0f}× real time"
           f" | {best(sim, 'x_realtime'):.1f}× real time ({best(sim, 'items_per_second') / 1e6:.2f}"
           " M samples/s) |")
+jitter = runs.get("BM_MachineJitter/10/iterations:1/real_time", [])
+if jitter:
+    print(f"\nThe machine alone (`BM_MachineJitter`: a fixed job of"
+          f" {sum(r['job_mean_us'] for r in jitter) / len(jitter):.1f} µs run back to back for"
+          f" {len(jitter)} × 10 s, wall clock): p99 {max(r['job_p99_us'] for r in jitter):.0f} µs,"
+          f" worst {max(r['job_worst_us'] for r in jitter) / 1e3:.2f} ms — what preemption adds to"
+          " any job; a worst latency above that would be the pipeline's own.")
 rev = min(r["real_time"] for r in runs["BM_FullModelRevolution"]) / 1e3
 upd = min(r["real_time"] for r in runs["BM_ModelUpdateAfterRunoutChange"]) / 1e3
 if whole:
