@@ -45,6 +45,21 @@ Recording make_recording(double sample_rate_hz, double duration_s, double rpm = 
   return bench::simulate_benchmark_cut(sample_rate_hz, duration_s, rpm);
 }
 
+/// The mean, 99th percentile and worst of `durations_s` (sorted in place) as the counters
+/// <prefix>_mean_us, <prefix>_p99_us and <prefix>_worst_us (0 when there are none).
+void count_durations(benchmark::State& state, const std::string& prefix,
+                     std::vector<double>& durations_s) {
+  std::sort(durations_s.begin(), durations_s.end());
+  const auto n = durations_s.size();
+  double sum_s = 0.0;
+  for (const double d : durations_s) {
+    sum_s += d;
+  }
+  state.counters[prefix + "_mean_us"] = n > 0 ? 1e6 * sum_s / static_cast<double>(n) : 0.0;
+  state.counters[prefix + "_p99_us"] = n > 0 ? 1e6 * durations_s[n * 99 / 100] : 0.0;
+  state.counters[prefix + "_worst_us"] = n > 0 ? 1e6 * durations_s.back() : 0.0;
+}
+
 /// Measures the time from the last sample of a revolution (the block that completes it) to the
 /// revolution's record.
 struct LatencySink : monitor::PipelineSink {
@@ -151,15 +166,7 @@ void BM_Pipeline(benchmark::State& state) {
   state.counters["x_realtime"] = benchmark::Counter(processed_s, benchmark::Counter::kIsRate);
   // Wall-clock latencies: the worst includes whatever else the machine did (preemption); the
   // 99th percentile is the pipeline's own.
-  std::sort(latencies_s.begin(), latencies_s.end());
-  const auto n = latencies_s.size();
-  double sum_s = 0.0;
-  for (const double l : latencies_s) {
-    sum_s += l;
-  }
-  state.counters["latency_mean_us"] = n > 0 ? 1e6 * sum_s / static_cast<double>(n) : 0.0;
-  state.counters["latency_p99_us"] = n > 0 ? 1e6 * latencies_s[n * 99 / 100] : 0.0;
-  state.counters["latency_worst_us"] = n > 0 ? 1e6 * latencies_s.back() : 0.0;
+  count_durations(state, "latency", latencies_s);
   state.SetItemsProcessed(static_cast<std::int64_t>(r.t.size() - start) * state.iterations());
 }
 // Blocks of 1 ms at each rate (a DAQ bridge's typical message); lockstep model on (1) or off (0:
@@ -367,15 +374,7 @@ void BM_MachineJitter(benchmark::State& state) {
       now = end;
     }
   }
-  std::sort(jobs_s.begin(), jobs_s.end());
-  const auto n = jobs_s.size();
-  double sum_s = 0.0;
-  for (const double j : jobs_s) {
-    sum_s += j;
-  }
-  state.counters["job_mean_us"] = n > 0 ? 1e6 * sum_s / static_cast<double>(n) : 0.0;
-  state.counters["job_p99_us"] = n > 0 ? 1e6 * jobs_s[n * 99 / 100] : 0.0;
-  state.counters["job_worst_us"] = n > 0 ? 1e6 * jobs_s.back() : 0.0;
+  count_durations(state, "job", jobs_s);
 }
 // As long as BM_Pipeline's timed parts at 333.3 kHz in a round (about 10 s of wall clock).
 BENCHMARK(BM_MachineJitter)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
