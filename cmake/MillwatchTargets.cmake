@@ -36,7 +36,13 @@ function(millwatch_test source)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE millwatch::test_support GTest::gtest_main)
   millwatch_warnings(${name})
-  target_precompile_headers(${name} REUSE_FROM millwatch_test_support)  # tests/support/
+  target_precompile_headers(${name} REUSE_FROM millwatch_test_pch)  # tests/support/
+  # Sanitized, a test's own code (set-up and assertions) is compiled without optimisation: the
+  # code under test, in the libraries, keeps the build's -O1. The test executables then compile
+  # in about 60 % of the time, and the suite runs about 5 % longer.
+  if(MILLWATCH_SANITIZE)
+    target_compile_options(${name} PRIVATE -O0)
+  endif()
   # Multi-process LCM sessions (tests/daemon) run alone: on a busy 2-core machine the UDP
   # receivers of a paced session can fall behind.
   set(serial FALSE)
