@@ -18,7 +18,6 @@
 #include "core/monitor/monitor_config.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
-#include "replay/command_exit.hpp"
 #include "shell/column_map.hpp"
 #include "shell/json_file.hpp"
 #include "shell/material_preset.hpp"
@@ -32,18 +31,6 @@ namespace millwatch::shell {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct CalibrateOptions {
-  std::vector<std::string> inputs;
-  std::string config;
-  std::vector<double> feeds_um;
-  std::string output;
-  std::string columns;
-  std::string name;
-  bool tared = false;
-  bool json = false;
-  bool progress = true;
-};
 
 /// The shell's log of a cut (lock, bad input) without its alerts: a calibration is not
 /// monitoring, and a feed sweep with runout raises the flute-imbalance alert on every cut.
@@ -243,6 +230,8 @@ std::string utc_now() {
   return text;
 }
 
+}  // namespace
+
 int run_calibrate(const CalibrateOptions& o) {
   if (!o.feeds_um.empty() && o.feeds_um.size() != o.inputs.size()) {
     throw std::runtime_error(
@@ -301,36 +290,6 @@ int run_calibrate(const CalibrateOptions& o) {
   }
   std::fflush(stdout);
   return 0;
-}
-
-}  // namespace
-
-void add_calibrate_command(CLI::App& app) {
-  auto o = std::make_shared<CalibrateOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "calibrate",
-      "Fit one set of force-law coefficients and one runout across recorded cuts of a feed "
-      "sweep (one tool, one clamping); write a material preset");
-  cmd->add_option("cuts", o->inputs,
-                  "Recorded cuts (any format the replay reads; a CUT.json sidecar beside a file "
-                  "describes its cut)")
-      ->required();
-  cmd->add_option("--config", o->config,
-                  "Monitor configuration JSON (or a daemon configuration), merged over each "
-                  "cut's sidecar");
-  cmd->add_option("--feeds-um", o->feeds_um,
-                  "Feed per tooth of each cut (um), in the order of the cuts (default: each "
-                  "cut's sidecar)")
-      ->delimiter(',');
-  cmd->add_option("-o,--output", o->output, "Write the material preset to this JSON file");
-  cmd->add_option("--name", o->name, "The preset's material name");
-  cmd->add_flag("--tared", o->tared,
-                "The channels were tared before each cut: fit the mean force too");
-  cmd->add_option("--columns", o->columns,
-                  "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
-  cmd->add_flag("--json", o->json, "Print the calibration as JSON");
-  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
-  cmd->callback([o] { run_subcommand([&o] { return run_calibrate(*o); }); });
 }
 
 }  // namespace millwatch::shell

@@ -9,10 +9,25 @@
 // order) or from its sidecar, and the two must agree where both are given. Each recording runs
 // through the monitor (lockstep off) and its synchronous-average windows are kept.
 
-#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
 
 namespace millwatch::shell {
 
-void add_calibrate_command(CLI::App& app);
+/// Its command-line options (replay/main.cpp).
+struct CalibrateOptions {
+  std::vector<std::string> inputs;
+  std::string config;
+  std::vector<double> feeds_um;
+  std::string output;
+  std::string columns;
+  std::string name;
+  bool tared = false;
+  bool json = false;
+  bool progress = true;
+};
+
+/// Runs the subcommand: its exit code (errors are logged).
+int run_calibrate(const CalibrateOptions& o);
 
 }  // namespace millwatch::shell

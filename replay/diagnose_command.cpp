@@ -16,7 +16,6 @@
 #include "core/diagnose/across_feeds.hpp"
 #include "core/diagnose/diagnosis.hpp"
 #include "core/monitor/monitor_config.hpp"
-#include "replay/command_exit.hpp"
 #include "shell/diagnosis_report.hpp"
 #include "shell/monitor_config_file.hpp"
 #include "shell/output_file.hpp"
@@ -27,22 +26,6 @@ namespace millwatch::shell {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct DiagnoseCliOptions {
-  std::vector<std::string> inputs;
-  std::string config;
-  std::string sidecar;
-  std::string report;
-  std::string start = "plain";
-  std::string candidates;
-  std::vector<double> feeds_um;
-  double band_hz = 0.0;
-  double from_s = 0.0;
-  double to_s = 0.0;
-  int max_steps = 5;
-  bool plots = true;
-  bool progress = true;
-};
 
 std::vector<std::string> split_names(const std::string& list) {
   std::vector<std::string> out;
@@ -192,6 +175,8 @@ void print_steps(const diagnose::Diagnosis& d) {
   }
 }
 
+}  // namespace
+
 int run_diagnose(const DiagnoseCliOptions& o) {
   if (o.start != "plain" && o.start != "configured") {
     throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");
@@ -267,42 +252,6 @@ int run_diagnose(const DiagnoseCliOptions& o) {
   }
   std::printf("  report: %s\n", (fs::path(o.report) / "report.md").string().c_str());
   return 0;
-}
-
-}  // namespace
-
-void add_diagnose_command(CLI::App& app) {
-  auto o = std::make_shared<DiagnoseCliOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "diagnose",
-      "Where model and measurement disagree: name the missing effect, add it, show the gap "
-      "shrink (several cuts: also across their feeds)");
-  cmd->add_option("cuts", o->inputs,
-                  "Recorded cut(s) (any format the replay reads); several: one tool and material "
-                  "at different feeds")
-      ->required();
-  cmd->add_option("--config", o->config,
-                  "Monitor configuration JSON (the cut as commanded), merged over each sidecar");
-  cmd->add_option("--sidecar", o->sidecar,
-                  "The recording's sidecar (one cut; default: CUT.json if there)");
-  cmd->add_option("--feeds-um", o->feeds_um,
-                  "Feed per tooth of each cut (um), in the order of the cuts (default: each "
-                  "cut's sidecar)")
-      ->delimiter(',');
-  cmd->add_option("--report", o->report,
-                  "Folder for report.md, report.html, report.json, plots (several cuts: one "
-                  "folder per cut inside, and the comparison across feeds)")
-      ->required();
-  cmd->add_option("--start", o->start,
-                  "Starting model: 'plain' (no effects, default) or 'configured'");
-  cmd->add_option("--band", o->band_hz, "Upper end of the compared band, Hz (default 0.4·fs)");
-  cmd->add_option("--from-s", o->from_s, "Diagnose from this time on (s; skip the entry)");
-  cmd->add_option("--to-s", o->to_s, "Diagnose up to this time (s)");
-  cmd->add_option("--candidates", o->candidates, "Comma-separated candidates (default: all)");
-  cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 5)");
-  cmd->add_flag("!--no-plots", o->plots, "Do not draw the plots");
-  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
-  cmd->callback([o]() { run_subcommand([&]() { return run_diagnose(*o); }); });
 }
 
 }  // namespace millwatch::shell

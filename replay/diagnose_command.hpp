@@ -11,10 +11,29 @@
 // report in DIR/<stem>/, then compared across feeds (core/diagnose/across_feeds.hpp) in
 // DIR/report.md, report.html, report.json and residual_vs_feed.png.
 
-#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
 
 namespace millwatch::shell {
 
-void add_diagnose_command(CLI::App& app);
+/// Its command-line options (replay/main.cpp).
+struct DiagnoseCliOptions {
+  std::vector<std::string> inputs;
+  std::string config;
+  std::string sidecar;
+  std::string report;
+  std::string start = "plain";
+  std::string candidates;
+  std::vector<double> feeds_um;
+  double band_hz = 0.0;
+  double from_s = 0.0;
+  double to_s = 0.0;
+  int max_steps = 5;
+  bool plots = true;
+  bool progress = true;
+};
+
+/// Runs the subcommand: its exit code (errors are logged).
+int run_diagnose(const DiagnoseCliOptions& o);
 
 }  // namespace millwatch::shell

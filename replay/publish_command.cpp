@@ -12,24 +12,12 @@
 #include "core/config/json_reader.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "msgs/lcm_convert.hpp"
-#include "replay/command_exit.hpp"
 #include "shell/csv_cut_reader.hpp"
 #include "shell/json_file.hpp"
 
 namespace millwatch::shell {
-namespace {
 
 namespace fs = std::filesystem;
-
-struct PublishOptions {
-  std::string input;
-  std::string url = "udpm://239.255.76.67:7667?ttl=0";
-  std::string channel = "MILLWATCH_FORCE_RAW";
-  double speed = 1.0;
-  int block_samples = 1000;
-  double duration_s = 0.0;
-  double start_utime_s = 0.0;
-};
 
 int run_publish(const PublishOptions& o) {
   lcm::LCM lcm(o.url);
@@ -98,29 +86,6 @@ int run_publish(const PublishOptions& o) {
   }
   spdlog::info("published {} blocks, {} samples on {}", seq, samples, o.channel);
   return 0;
-}
-
-}  // namespace
-
-void add_publish_command(CLI::App& app) {
-  auto o = std::make_shared<PublishOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "publish",
-      "Publish raw sample blocks on LCM like a DAQ bridge (from a CSV cut or a scenario)");
-  cmd->add_option("input", o->input, "CUT.csv (sidecar beside it) or a scenario JSON to simulate")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--url", o->url, "LCM URL");
-  cmd->add_option("--channel", o->channel, "Channel of the raw blocks");
-  cmd->add_option("--speed", o->speed, "Pace: k times real time, 0 as fast as possible")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--block", o->block_samples,
-                  "Samples per message (at most 2000 keeps it under 64 KiB)")
-      ->check(CLI::Range(1, 2000));
-  cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--start-utime", o->start_utime_s, "Add this many seconds to every utime");
-  cmd->callback([o] { run_subcommand([&o] { return run_publish(*o); }); });
 }
 
 }  // namespace millwatch::shell

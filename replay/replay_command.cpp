@@ -30,7 +30,6 @@
 #include "core/monitor/in_plane_force.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
-#include "replay/command_exit.hpp"
 #include "shell/column_map.hpp"
 #include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
@@ -55,28 +54,6 @@ std::atomic<bool> g_stop{false};
 extern "C" void on_stop(int /*signal*/) {
   g_stop = true;
 }
-
-struct ReplayOptions {
-  std::vector<std::string> inputs;
-  std::string sidecar;
-  std::string config;
-  std::string columns;
-  std::string summary;
-  std::string revolutions;
-  std::string plot;
-  std::string table;
-  std::string publish_url;
-  std::string raw_channel = "MILLWATCH_FORCE_RAW";
-  double speed = 0.0;  // 0: as fast as possible
-  int jobs = 1;
-  bool json = false;
-  bool realtime = false;
-  bool publish_raw = false;
-  bool zero_phase = false;
-  bool progress = true;
-  bool identify = true;
-  int block_samples = 1000;
-};
 
 std::string progress_text(double fraction, double sample_time_s, double wall_s) {
   const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
@@ -364,63 +341,13 @@ int replay_many(const ReplayOptions& o) {
   return failed || g_stop ? 1 : 0;
 }
 
+}  // namespace
+
 int run_replay(const ReplayOptions& o) {
   if (o.inputs.size() > 1 || !o.table.empty()) {
     return replay_many(o);
   }
   return replay_one(o);
-}
-
-}  // namespace
-
-void add_replay_command(CLI::App& app) {
-  auto o = std::make_shared<ReplayOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "replay",
-      "Replay recorded cuts (millwatch CSV, DynoWare export, delimited text, MATLAB .mat, LCM "
-      "log) through the monitor");
-  cmd->add_option("input", o->inputs,
-                  "Recorded cut(s): the format is found from the content (a CUT.json sidecar "
-                  "beside a file describes its cut)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--sidecar", o->sidecar, "JSON describing the cut (default: beside the file)");
-  cmd->add_option(
-      "--config", o->config,
-      "Monitor configuration JSON (or a daemon configuration), merged over the sidecar");
-  cmd->add_option("--columns", o->columns,
-                  "Which columns (or .mat variables) hold time and forces: "
-                  "t=Time,fx=Fx,fy=Fy,fz=Fz (names or 1-based indices, optional *scale; .mat: "
-                  "fx=F(:,1), fs=rate variable)");
-  cmd->add_option("--summary", o->summary,
-                  "Write the summary JSON to this file (several cuts: a folder, one per cut)");
-  cmd->add_flag("--json", o->json, "Print the summary JSON instead of the readable summary");
-  cmd->add_option("--revolutions", o->revolutions,
-                  "Write one row per revolution to this file: CSV, or JSON Lines for .jsonl "
-                  "(several cuts: a folder, one CSV per cut)");
-  cmd->add_option(
-      "--plot", o->plot,
-      "Draw PNG plots with gnuplot into this folder (several cuts: one folder per cut)");
-  cmd->add_option("--table", o->table, "Several cuts: write one row per cut to this CSV file");
-  cmd->add_option("-j,--jobs", o->jobs, "Several cuts: replay this many at once (0: one per core)")
-      ->check(CLI::Range(0, 256));
-  cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
-  cmd->add_flag("!--no-identify", o->identify,
-                "No identification of runout and coefficients (the model in lockstep keeps the "
-                "configured parameters; faster)");
-  cmd->add_option("--speed", o->speed, "Pace: k times real time (default: as fast as possible)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)");
-  cmd->add_option("--publish", o->publish_url,
-                  "Publish the results on LCM at this URL (e.g. udpm://239.255.76.67:7667?ttl=0)");
-  cmd->add_flag("--publish-raw", o->publish_raw, "Also publish the raw sample blocks");
-  cmd->add_flag("--zero-phase", o->zero_phase,
-                "Filter forwards and backwards (no phase, no delay; same -3 dB cut-off) instead "
-                "of causally (= \"filter\": {\"mode\": \"zero_phase\"} in --config)");
-  cmd->add_option("--channel", o->raw_channel, "LCM channel of the raw samples in a log");
-  cmd->add_option("--block", o->block_samples, "Samples per block (text and .mat files)")
-      ->check(CLI::Range(1, 65536));
-  cmd->callback([o] { run_subcommand([&o] { return run_replay(*o); }); });
 }
 
 }  // namespace millwatch::shell

@@ -8,10 +8,35 @@
 // terminal. Several cuts (or --table): each replayed by a child process, N at a time (-j), one
 // row per cut in the table (--table cuts.csv) and on stdout.
 
-#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
 
 namespace millwatch::shell {
 
-void add_replay_command(CLI::App& app);
+/// Its command-line options (replay/main.cpp).
+struct ReplayOptions {
+  std::vector<std::string> inputs;
+  std::string sidecar;
+  std::string config;
+  std::string columns;
+  std::string summary;
+  std::string revolutions;
+  std::string plot;
+  std::string table;
+  std::string publish_url;
+  std::string raw_channel = "MILLWATCH_FORCE_RAW";
+  double speed = 0.0;  // 0: as fast as possible
+  int jobs = 1;
+  bool json = false;
+  bool realtime = false;
+  bool publish_raw = false;
+  bool zero_phase = false;
+  bool progress = true;
+  bool identify = true;
+  int block_samples = 1000;
+};
+
+/// Runs the subcommand: its exit code (errors are logged).
+int run_replay(const ReplayOptions& o);
 
 }  // namespace millwatch::shell

@@ -29,14 +29,6 @@ extern "C" void on_interrupt(int /*signal*/) {
   g_interrupted = true;
 }
 
-struct SimulateOptions {
-  std::string scenario_path;
-  std::string output_csv;
-  double duration_s = 0.0;
-  long long seed = -1;
-  std::string truth_json;  ///< "": beside the CSV, CUT.truth.json
-};
-
 nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simulator) {
   nlohmann::json rev;
   std::vector<double> start, rpm, ft, offset, angle;
@@ -142,6 +134,8 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
               csv_path.c_str(), sidecar_path.c_str(), truth_path.c_str());
 }
 
+}  // namespace
+
 int run_simulate(const SimulateOptions& o) {
   sim::Scenario scenario;
   try {
@@ -222,34 +216,6 @@ int run_simulate(const SimulateOptions& o) {
     return 1;
   }
   return 0;
-}
-
-}  // namespace
-
-void add_simulate_command(CLI::App& app) {
-  auto options = std::make_shared<SimulateOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "simulate",
-      "Simulate a dynamometer recording of a cut with known truth (CSV + JSON sidecar)");
-  cmd->add_option("scenario", options->scenario_path, "Scenario JSON (see config/presets)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--output", options->output_csv,
-                  "Output CSV; the sidecar is written beside it")
-      ->required();
-  cmd->add_option("--duration", options->duration_s, "Override the recording's duration (s)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", options->seed, "Override the noise seed")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--truth-json", options->truth_json,
-                  "Where the truth (per revolution: speed, chip load, runout, wear) goes "
-                  "(default: beside the CSV, CUT.truth.json)");
-  cmd->callback([options] {
-    const int rc = run_simulate(*options);
-    if (rc != 0) {
-      throw CLI::RuntimeError(rc);
-    }
-  });
 }
 
 }  // namespace millwatch::shell

@@ -2,11 +2,20 @@
 // `millwatch simulate SCENARIO.json -o CUT.csv`: writes a simulated dynamometer recording (CSV)
 // and its JSON sidecar (CUT.json), then prints a summary.
 
-#include <CLI/CLI.hpp>
+#include <string>
 
 namespace millwatch::shell {
 
-/// Adds the subcommand to `app`.
-void add_simulate_command(CLI::App& app);
+/// Its command-line options (replay/main.cpp).
+struct SimulateOptions {
+  std::string scenario_path;
+  std::string output_csv;
+  double duration_s = 0.0;
+  long long seed = -1;
+  std::string truth_json;  ///< "": beside the CSV, CUT.truth.json
+};
+
+/// Runs the subcommand: its exit code (errors are logged).
+int run_simulate(const SimulateOptions& o);
 
 }  // namespace millwatch::shell
