@@ -5,7 +5,7 @@
 # (scripts/fuzz.sh, MILLWATCH_FUZZ_SECONDS per target, default 20). Needs the packages of
 # scripts/install-deps.sh.
 #
-# The tests run once, in the sanitized build: running the same 408 tests in Release as well took
+# The tests run once, in the sanitized build: running the same tests in Release as well took
 # 10 of the command's 30 minutes (build 7.8, run 2.1). The tests check behaviour, which the
 # optimisation level does not change (x86-64's SSE2 arithmetic rounds the same at -O1 and -O3,
 # and nothing is contracted into FMAs: -ffp-contract=off); `ctest --test-dir build/release` runs
@@ -25,8 +25,9 @@ tests/package/package_test.sh build/shipped build/shipped/package_scratch
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # -O1 (what AddressSanitizer's authors advise) and line tables only (-g1: enough for symbolized
 # reports): the sanitized build compiles in about half the time of -O2 -g (Ceres' templates in
-# core/identify/window_fit.cpp: 117 s → 55 s); the whole run takes 23–26 min on a 2-core
-# Intel Xeon (README).
+# core/identify/window_fit.cpp: 117 s → 55 s), and the tests' own code at -O0
+# (cmake/MillwatchTargets.cmake); the whole run takes about 23 min on a 2-core AMD EPYC VM
+# (README).
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMILLWATCH_SANITIZE=ON \
   -DMILLWATCH_BUILD_BENCHMARKS=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
   "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" >/dev/null
