@@ -92,6 +92,9 @@ class ChipGeometry {
   [[nodiscard]] const double* row(int flute, int pass_back, int disc = 0) const {
     return row_of(flute, pass_back, disc);
   }
+  /// How far apart the rows of consecutive passes are: row(flute, n + 1, disc) is
+  /// row(flute, n, disc) + pass_stride().
+  [[nodiscard]] std::ptrdiff_t pass_stride() const { return steps_; }
   /// Table value at a grid index.
   [[nodiscard]] double at(int flute, int pass_back, int step, int disc = 0) const {
     return row_of(flute, pass_back, disc)[step];

@@ -325,10 +325,8 @@ void MillingModel::march_step(int k) {
     }
     const int k1 = k0 + 1 == steps_ ? 0 : k0 + 1;
     const double w = lag_frac_[static_cast<std::size_t>(i)];
-    auto table_chip = [&](int flute, int n) {
-      const double* row = geometry_.row(flute, n, i);
-      return row[k0] + w * (row[k1] - row[k0]);
-    };
+    auto table_chip = [&](const double* row) { return row[k0] + w * (row[k1] - row[k0]); };
+    const std::ptrdiff_t stride = geometry_.pass_stride();
     for (int j = 0; j < flutes_; ++j) {
       const auto ij = static_cast<std::size_t>(i * flutes_ + j);
       const auto uj = static_cast<std::size_t>(j);
@@ -348,15 +346,15 @@ void MillingModel::march_step(int k) {
       double h_rigid = 0.0;
       if (engaged) {
         h_rigid = kNoCut;
-        for (int n = 1, at = head; n <= passes_; ++n, at = at == 0 ? passes_ - 1 : at - 1) {
-          const double deficit = ring[at];  // pass n back: (head − (n − 1)) mod P
-          if (deficit == kNoCut) {
-            continue;
-          }
-          h_rigid = std::min(h_rigid, table_chip(j, n) + deficit);
+        const double* row = geometry_.row(j, 1, i);  // pass n back: row + (n − 1)·stride
+        for (int n = 1, at = head; n <= passes_;
+             ++n, at = at == 0 ? passes_ - 1 : at - 1, row += stride) {
+          // Pass n back: (head − (n − 1)) mod P. A pass that removed nothing left kNoCut (+∞),
+          // which the minimum passes over without a branch.
+          h_rigid = std::min(h_rigid, table_chip(row) + ring[at]);
         }
         if (h_rigid == kNoCut) {  // no pass in the window removed material: take the oldest
-          h_rigid = table_chip(j, passes_);
+          h_rigid = table_chip(geometry_.row(j, passes_, i));
         }
         h_rigid = std::max(h_rigid, 0.0);
       }
