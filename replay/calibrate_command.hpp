@@ -27,7 +27,8 @@ struct CalibrateOptions {
   bool progress = true;
 };
 
-/// Runs the subcommand: its exit code (errors are logged).
+/// Runs the subcommand and returns its exit code; an error it throws, replay/main.cpp logs
+/// and exits with 2.
 int run_calibrate(const CalibrateOptions& o);
 
 }  // namespace millwatch::shell

@@ -33,7 +33,8 @@ struct DiagnoseCliOptions {
   bool progress = true;
 };
 
-/// Runs the subcommand: its exit code (errors are logged).
+/// Runs the subcommand and returns its exit code; an error it throws, replay/main.cpp logs
+/// and exits with 2.
 int run_diagnose(const DiagnoseCliOptions& o);
 
 }  // namespace millwatch::shell

@@ -18,7 +18,8 @@ struct PublishOptions {
   double start_utime_s = 0.0;
 };
 
-/// Runs the subcommand: its exit code (errors are logged).
+/// Runs the subcommand and returns its exit code; an error it throws, replay/main.cpp logs
+/// and exits with 2.
 int run_publish(const PublishOptions& o);
 
 }  // namespace millwatch::shell

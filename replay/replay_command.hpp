@@ -36,7 +36,8 @@ struct ReplayOptions {
   int block_samples = 1000;
 };
 
-/// Runs the subcommand: its exit code (errors are logged).
+/// Runs the subcommand and returns its exit code; an error it throws, replay/main.cpp logs
+/// and exits with 2.
 int run_replay(const ReplayOptions& o);
 
 }  // namespace millwatch::shell

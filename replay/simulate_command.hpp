@@ -15,7 +15,8 @@ struct SimulateOptions {
   std::string truth_json;  ///< "": beside the CSV, CUT.truth.json
 };
 
-/// Runs the subcommand: its exit code (errors are logged).
+/// Runs the subcommand and returns its exit code; an error it throws, replay/main.cpp logs
+/// and exits with 2.
 int run_simulate(const SimulateOptions& o);
 
 }  // namespace millwatch::shell
