@@ -3,9 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
