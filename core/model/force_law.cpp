@@ -6,7 +6,6 @@ namespace millwatch::model {
 namespace {
 
 constexpr double kMmPerUm = 1e-3;
-const double kLogMmPerUm = std::log(kMmPerUm);
 
 /// K·h^a with h in mm; 0 for K = 0 or h ≤ 0.
 double power(double k, double a, double h_mm) {
@@ -107,18 +106,12 @@ double ForceLaw::normal_N(double h_um, double dz_mm, double ploughed_area_mm2) c
   return element(h_um, dz_mm, ploughed_area_mm2).normal_N;
 }
 
-ForceLaw::NormalSlope ForceLaw::normal_with_slope(double h_um, double log_h_um, double dz_mm,
-                                                  double ploughed_area_mm2) const {
+ForceLaw::NormalSlope ForceLaw::normal_with_slope_other(double h_um, double log_h_um, double dz_mm,
+                                                        double ploughed_area_mm2) const {
   const double log_h_mm = log_h_um + kLogMmPerUm;
   switch (material_.law) {
-    case ForceLawKind::kPowerLaw: {
-      const auto& c = material_.power_law;
-      const bool p = ploughing(h_um);
-      const double k = p ? c.k_np_Nmm : c.k_nc_Nmm;
-      const double a = p ? c.a_np : c.a_nc;
-      const double f = k == 0.0 ? 0.0 : k * dz_mm * std::exp(a * log_h_mm);
-      return {f, a * f, a * a * f};  // F = K·dz·h_mm^a: dF/du = a·F, d²F/du² = a²·F
-    }
+    case ForceLawKind::kPowerLaw:
+      return normal_with_slope(h_um, log_h_um, dz_mm, ploughed_area_mm2);
     case ForceLawKind::kKronenberg: {
       const auto& c = material_.kronenberg;
       const double e = 1.0 - 1.0 / c.m;

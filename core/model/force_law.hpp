@@ -9,6 +9,8 @@
 // Tangential opposes the cutting velocity, normal points from the edge towards the tool axis
 // (both as forces on the tool; see model_config.hpp for the projection, [000] eq 7).
 
+#include <cmath>
+
 #include "core/model/model_config.hpp"
 
 namespace millwatch::model {
@@ -58,13 +60,28 @@ class ForceLaw {
     double d2_du2_N = 0.0;
   };
   [[nodiscard]] NormalSlope normal_with_slope(double h_um, double log_h_um, double dz_mm,
-                                              double ploughed_area_mm2 = 0.0) const;
+                                              double ploughed_area_mm2 = 0.0) const {
+    if (material_.law != ForceLawKind::kPowerLaw) {
+      return normal_with_slope_other(h_um, log_h_um, dz_mm, ploughed_area_mm2);
+    }
+    // Inline: the deflection balance's Newton step calls it at every iteration.
+    const auto& c = material_.power_law;
+    const bool p = ploughing(h_um);
+    const double k = p ? c.k_np_Nmm : c.k_nc_Nmm;
+    const double a = p ? c.a_np : c.a_nc;
+    const double f = k == 0.0 ? 0.0 : k * dz_mm * std::exp(a * (log_h_um + kLogMmPerUm));
+    return {f, a * f, a * a * f};  // F = K·dz·h_mm^a: dF/du = a·F, d²F/du² = a²·F
+  }
 
   [[nodiscard]] bool uses_ploughed_area() const {
     return material_.law == ForceLawKind::kLinearEdge && material_.linear_edge.ploughing_area;
   }
 
  private:
+  static constexpr double kLogMmPerUm = -6.907755278982137;  // ln(1e-3), as std::log gives it
+  /// normal_with_slope() of the linear-edge and Kronenberg laws.
+  [[nodiscard]] NormalSlope normal_with_slope_other(double h_um, double log_h_um, double dz_mm,
+                                                    double ploughed_area_mm2) const;
   /// The coefficients of Material without its name, so that copying allocates nothing.
   struct Coefficients {
     ForceLawKind law = ForceLawKind::kPowerLaw;
