@@ -211,8 +211,8 @@ inline int read_decimal_row4(const char* p, double* v) {
     return 0;
   }
   // mantissa / 10^decimals, both exact (below 2⁵³; 10^k exact up to 10^22): the correctly
-  // rounded quotient, as read_decimal() computes it.
-  // The sign by its bit, not a branch: a row's signs follow no pattern a predictor could learn.
+  // rounded quotient, as read_decimal() computes it. The sign goes in by its bit, not by a
+  // branch: a row's signs follow no pattern a branch predictor could learn.
   for (int i = 0; i < 4; ++i) {
     const double x = static_cast<double>(f[i].mantissa) / detail::kPow10[f[i].decimals];
     v[i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) ^
