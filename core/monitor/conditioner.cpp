@@ -1,5 +1,7 @@
 #include "core/monitor/conditioner.hpp"
 
+#include <cmath>
+
 namespace millwatch::monitor {
 namespace {
 
@@ -23,6 +25,18 @@ Conditioner::Conditioner(const MonitorConfig& config, const signal::ButterworthD
   for (std::size_t k = 1; k < decay_power_.size(); ++k) {
     decay_power_[k] = decay_power_[k - 1] * envelope_decay_;
   }
+}
+
+void Conditioner::set_stride(int stride) {
+  stride_ = std::max(1, stride);
+  const signal::ButterworthDesign& design = lowpass_[0].design();
+  on_grid_ = stride_ > 1 && !zero_phase_on_ && signal::GridLowPass::supports(design, stride_);
+  if (on_grid_) {
+    grid_ = signal::GridLowPass(design, stride_, axis_map_.sign);
+  }
+  grid_decay_ = std::pow(envelope_decay_, stride_);
+  grid_tare_gain_ = 1.0 - std::pow(1.0 - tare_gain_, stride_);
+  fresh_ = true;
 }
 
 }  // namespace millwatch::monitor

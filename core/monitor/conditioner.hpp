@@ -24,6 +24,7 @@
 #include "core/monitor/monitor_config.hpp"
 #include "core/signal/axis_map.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
+#include "core/signal/grid_lowpass.hpp"
 #include "core/signal/zero_phase_filter.hpp"
 
 namespace millwatch::monitor {
@@ -90,6 +91,10 @@ class Conditioner {
     const std::array<const double*, 3> source = {in[static_cast<std::size_t>(axis_map_.source[0])],
                                                  in[static_cast<std::size_t>(axis_map_.source[1])],
                                                  in[static_cast<std::size_t>(axis_map_.source[2])]};
+    if (on_grid_) {
+      push_block_on_grid(first, source, count, run_limit, out_run);
+      return;
+    }
     for (std::size_t from = 0; from < count; from += kChunk) {
       const std::size_t n = std::min(kChunk, count - from);
       if (fresh_) {
@@ -103,16 +108,7 @@ class Conditioner {
       signal::LowPassFilter::process_three(
           lowpass_, {source[0] + from, source[1] + from, source[2] + from}, axis_map_.sign,
           {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
-      for (std::size_t i = 0; i < n;) {
-        const std::int64_t at = first + static_cast<std::int64_t>(from + i);
-        const std::size_t run = std::min(n - i, std::max<std::size_t>(1, run_limit(at)));
-        double* x = chunk_[0].data() + i;
-        double* y = chunk_[1].data() + i;
-        double* z = chunk_[2].data() + i;
-        tare_run(at, x, y, z, run);
-        out_run(at, run, x, y, z);
-        i += run;
-      }
+      hand_on(first + static_cast<std::int64_t>(from), n, run_limit, out_run);
     }
   }
 
@@ -135,12 +131,89 @@ class Conditioner {
   [[nodiscard]] double envelope_sq_N2() const { return envelope_sq_; }
 
   /// The caller of push_block() reads only the samples whose number is a multiple of `stride`
-  /// (≥ 1) from out_run's arrays (the pipeline's measuring grid): while the tare stands, it is
-  /// subtracted from those alone; the others are left filtered, untared. The envelope, and so the
-  /// tare, still follow every sample.
-  void set_stride(int stride) { stride_ = std::max(1, stride); }
+  /// (≥ 1) from out_run's arrays (the pipeline's measuring grid). The causal filters then
+  /// compute those samples alone (signal::GridLowPass; the filter's values to rounding), and
+  /// the envelope and the tare follow them: the envelope decays over the samples between, the
+  /// tare's gain is the same time constant's a grid step. out_run's arrays hold nothing else.
+  /// (A design GridLowPass does not run, or zero-phase filtering, filters every sample: the
+  /// tare is then subtracted on the grid alone, and the envelope follows every sample.)
+  /// Call it before the first push_block(), not between: push() filters every sample.
+  void set_stride(int stride);
 
  private:
+  template <typename Limit, typename OutRun>
+  void push_block_on_grid(std::int64_t first, const std::array<const double*, 3>& source,
+                          std::size_t count, Limit& run_limit, OutRun& out_run) {
+    // Chunks end on the grid, so that the filter's strides do not straddle them.
+    for (std::size_t from = 0, n = 0; from < count; from += n) {
+      const std::int64_t at_chunk = first + static_cast<std::int64_t>(from);
+      const std::int64_t end = (at_chunk + static_cast<std::int64_t>(kChunk)) / stride_ * stride_;
+      n = std::min(count - from, static_cast<std::size_t>(end - at_chunk));
+      if (fresh_) {
+        grid_.settle(at_chunk, {source[0][from], source[1][from], source[2][from]});
+        fresh_ = false;
+      }
+      grid_.process({source[0] + from, source[1] + from, source[2] + from},
+                    {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
+      hand_on(at_chunk, n, run_limit, out_run);
+    }
+  }
+
+  /// The chunk's `n` filtered samples from sample `at_chunk`, tared and handed on in runs.
+  template <typename Limit, typename OutRun>
+  void hand_on(std::int64_t at_chunk, std::size_t n, Limit& run_limit, OutRun& out_run) {
+    for (std::size_t i = 0; i < n;) {
+      const std::int64_t at = at_chunk + static_cast<std::int64_t>(i);
+      const std::size_t run = std::min(n - i, std::max<std::size_t>(1, run_limit(at)));
+      double* x = chunk_[0].data() + i;
+      double* y = chunk_[1].data() + i;
+      double* z = chunk_[2].data() + i;
+      if (on_grid_) {
+        tare_run_on_grid(at, x, y, z, run);
+      } else {
+        tare_run(at, x, y, z, run);
+      }
+      out_run(at, run, x, y, z);
+      i += run;
+    }
+  }
+
+  /// tare_run() for a run filtered on the grid: only its grid samples hold values. The envelope
+  /// is e = max(x², e·d) on those, decaying by d a sample over the others (which add nothing);
+  /// while quiet, the tare moves at each grid sample by the gain of a grid step.
+  void tare_run_on_grid(std::int64_t first, double* fx, double* fy, double* fz, std::size_t count) {
+    const auto step = static_cast<std::size_t>(stride_);
+    const auto behind = static_cast<std::size_t>((first % stride_ + stride_) % stride_);
+    const std::size_t start = behind == 0 ? 0 : step - behind;
+    if (start >= count) {
+      envelope_sq_ *= decay_power_[count];
+      return;
+    }
+    const bool may_move = quiet_ && typical_peak_N_ > 0.0;
+    const double idle = kIdleFraction * typical_peak_N_;
+    double tx = tare_N_[0], ty = tare_N_[1], tz = tare_N_[2];
+    double e = envelope_sq_;                 // at the sample before the run
+    double decay = decay_power_[start + 1];  // from there to the run's first grid sample
+    std::size_t last = start;
+    for (std::size_t i = start; i < count; i += step) {
+      const double ex = fx[i] - tx;
+      const double ey = fy[i] - ty;
+      e = std::max(ex * ex + ey * ey, e * decay);
+      decay = grid_decay_;
+      if (may_move && e < idle * idle) {
+        tx += grid_tare_gain_ * (fx[i] - tx);
+        ty += grid_tare_gain_ * (fy[i] - ty);
+        tz += grid_tare_gain_ * (fz[i] - tz);
+      }
+      fx[i] -= tx;
+      fy[i] -= ty;
+      fz[i] -= tz;
+      last = i;
+    }
+    envelope_sq_ = e * decay_power_[count - 1 - last];
+    tare_N_ = {tx, ty, tz};
+  }
+
   template <typename Out>
   void drain(std::size_t ready, Out& out) {
     for (std::size_t k = 0; k < ready; ++k) {
@@ -251,7 +324,11 @@ class Conditioner {
   std::array<double, kChunk + 1> decay_power_{};  // envelope_decay_^k
   bool quiet_ = false;
   double typical_peak_N_ = 0.0;
-  int stride_ = 1;  // push_block()'s caller reads every stride_-th sample (set_stride)
+  int stride_ = 1;            // push_block()'s caller reads every stride_-th sample (set_stride)
+  signal::GridLowPass grid_;  // push_block()'s filters on the grid (set_stride)
+  bool on_grid_ = false;
+  double grid_decay_ = 1.0;      // envelope_decay_^stride_
+  double grid_tare_gain_ = 0.0;  // 1 − (1 − tare_gain_)^stride_
 };
 
 }  // namespace millwatch::monitor

@@ -1,0 +1,87 @@
+#pragma once
+// The causal low-pass of three force channels, read only on a grid: every stride-th sample (the
+// monitor's measuring grid, every third at 333.3 kHz). The stages after the low-pass read no
+// other sample, so this filter computes no other: it advances the state a stride at a time by
+// the look-ahead of the filter's state-space form,
+//
+//   z(g + k) = A^k·z(g) + Σ_{j<k} A^(k−1−j)·B·x(g + j),   y(g) = C·z(g) + D·x(g),
+//
+// where z holds the delay elements of the cascade's sections (direct form II transposed, the
+// same state LowPassFilter keeps), and A, B, C, D are read off one step of that cascade. The
+// chain of dependent operations is then a multiply and three adds a stride instead of a
+// multiply and three adds a sample and section, which is what bounds LowPassFilter::step (its
+// recursion's latency); the work per grid sample is what k samples cost there.
+//
+// The values on the grid are the filter's, up to rounding (they are summed in another order:
+// within ~1e-13 of the signal's peak, tests/signal/grid_lowpass_test.cpp), and they do not depend
+// on how the stream is cut into blocks, bit for bit: the state always advances by whole strides
+// from a grid sample, the inputs of a stride that a block leaves unfinished wait for the next
+// block. The AVX kernel (three channels side by side in one register, compiled for AVX alone,
+// run only where the CPU has it) does the same operations in the same order as the scalar one:
+// the same results, bit for bit.
+//
+// Designs with at most two sections (orders 1–4; the monitor's is order 4) and strides up to
+// kMaxGridStride; supports() says which. Set up once; settle() and process() allocate nothing.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "core/signal/butterworth_lowpass.hpp"
+
+namespace millwatch::signal {
+
+inline constexpr int kMaxGridStride = 16;
+
+class GridLowPass {
+ public:
+  /// The scalar kernel, or the fastest this CPU runs (AVX where it has it); the same results.
+  enum class Kernel { kAuto, kScalar };
+
+  /// Four delay elements: section 1's z0, z1, then section 2's.
+  using State = std::array<double, 4>;
+
+  GridLowPass() = default;
+
+  /// @param design at most two sections (supports())
+  /// @param stride 1..kMaxGridStride: the grid is every sample whose number is a multiple of it
+  /// @param sign each channel's input is taken as sign[a]·x (the axis map's ±1, exact)
+  /// @throws std::invalid_argument if the design or the stride is not supported.
+  GridLowPass(const ButterworthDesign& design, int stride, const std::array<double, 3>& sign);
+
+  /// Whether a design and a stride can run on a grid.
+  [[nodiscard]] static bool supports(const ButterworthDesign& design, int stride);
+
+  /// Starts a stretch at sample `n`: each channel as if its input had been `raw[a]` for ever
+  /// (LowPassFilter::settle of sign[a]·raw[a]: no start-up transient).
+  void settle(std::int64_t n, const std::array<double, 3>& raw);
+
+  /// Filters the next `count` samples (from the settled one, or after the last processed):
+  /// out[a][i] = the filter's output for every i whose sample number is a multiple of the stride;
+  /// out[a] is not written elsewhere. `in` and `out` may not overlap.
+  void process(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
+               std::size_t count, Kernel kernel = Kernel::kAuto);
+
+  [[nodiscard]] int stride() const { return stride_; }
+
+  /// Look-ahead coefficients (row-major A^k; column j of the input gain A^(k−1−j)·B; C; D).
+  struct LookAhead {
+    std::array<std::array<double, 4>, 4> power{};
+    std::array<State, kMaxGridStride> input{};
+    State output{};
+    double direct = 0.0;
+  };
+
+ private:
+  void advance_pending();
+
+  ButterworthDesign design_;
+  LookAhead look_{};
+  int stride_ = 1;
+  std::array<double, 3> sign_{1.0, 1.0, 1.0};
+  std::array<State, 3> z_{};  // per channel, at the grid sample of pending_'s first input
+  std::array<std::array<double, kMaxGridStride>, 3> pending_{};  // raw inputs of a part-stride
+  int pending_count_ = 0;
+};
+
+}  // namespace millwatch::signal
