@@ -10,7 +10,8 @@
 // same state LowPassFilter keeps), and A, B, C, D are read off one step of that cascade. The
 // chain of dependent operations is then a multiply and three adds a stride instead of a
 // multiply and three adds a sample and section, which is what bounds LowPassFilter::step (its
-// recursion's latency); the work per grid sample is what k samples cost there.
+// recursion's latency), for about the work k samples take there (at k = 3, 29 multiplies and 24
+// adds against 18 and 30).
 //
 // The values on the grid are the filter's, up to rounding (they are summed in another order:
 // within ~1e-13 of the signal's peak, tests/signal/grid_lowpass_test.cpp), and they do not depend
