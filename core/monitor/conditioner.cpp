@@ -34,7 +34,7 @@ void Conditioner::set_stride(int stride) {
   if (on_grid_) {
     grid_ = signal::GridLowPass(design, stride_, axis_map_.sign);
   }
-  grid_decay_ = std::pow(envelope_decay_, stride_);
+  grid_decay_ = on_grid_ ? decay_power_[static_cast<std::size_t>(stride_)] : 1.0;
   grid_tare_gain_ = 1.0 - std::pow(1.0 - tare_gain_, stride_);
   fresh_ = true;
 }

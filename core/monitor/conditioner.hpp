@@ -43,37 +43,33 @@ class Conditioner {
     fresh_ = true;
   }
 
-  /// One checked sample (instrument channels, N) at absolute sample index n.
+  /// One checked sample (instrument channels, N) at absolute sample index n. On a grid
+  /// (set_stride) it is a block of one sample, and out() hears the grid's samples alone.
   template <typename Out>
   void push(std::int64_t n, const std::array<double, 3>& reading, Out&& out) {
-    const auto f = axis_map_.to_model(reading);
-    if (zero_phase_on_) {
-      if (fresh_) {
-        zero_phase_next_ = n;
-        fresh_ = false;
-      }
-      drain(zero_phase_.push(f), out);
+    if (on_grid_) {
+      const auto one = [](std::int64_t) { return std::size_t{1}; };
+      push_block(n, {&reading[0], 1}, {&reading[1], 1}, {&reading[2], 1}, one,
+                 [this, &out](std::int64_t s, std::size_t, const double* x, const double* y,
+                              const double* z) {
+                   if (s % stride_ == 0) {
+                     out(s, *x, *y, *z);
+                   }
+                 });
       return;
     }
-    if (fresh_) {
-      for (std::size_t a = 0; a < 3; ++a) {
-        lowpass_[a].reset();
-        lowpass_[a].settle(f[a]);
-      }
-      fresh_ = false;
-    }
-    emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
+    push_every(n, reading, out);
   }
 
   /// A block of checked samples (instrument channels, N) from absolute sample index `first`,
   /// handed on in runs: the same output as push() sample by sample, as long as the caller
-  /// changes the conditioner's state (set_quiet) only between runs — on the samples it reads
-  /// (set_stride: while the tare stands, the others are left untared). `run_limit(n)` (≥ 1) is
-  /// how many samples from sample n on the caller takes in one run; `out_run(n, count, fx, fy,
-  /// fz)` receives them (model frame, filtered, tared on the stride's grid; the arrays are the
-  /// conditioner's scratch, writable).
+  /// changes the conditioner's state (set_quiet) only between runs. `run_limit(n)` (≥ 1) is how
+  /// many samples from sample n on the caller takes in one run; `out_run(n, count, fx, fy, fz)`
+  /// receives them (model frame, filtered, tared; the arrays are the conditioner's scratch,
+  /// writable). With a stride (set_stride) only the grid's samples hold values.
   /// The causal filters run over chunks of the block channel-wise
-  /// (signal::LowPassFilter::process_three), the tare over each run.
+  /// (signal::LowPassFilter::process_three, or signal::GridLowPass on a grid), the tare over
+  /// each run.
   template <typename Limit, typename OutRun>
   void push_block(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
                   std::span<const double> fz, Limit&& run_limit, OutRun&& out_run) {
@@ -83,7 +79,7 @@ class Conditioner {
         out_run(n, std::size_t{1}, &x, &y, &z);
       };
       for (std::size_t i = 0; i < count; ++i) {
-        push(first + static_cast<std::int64_t>(i), {fx[i], fy[i], fz[i]}, out);
+        push_every(first + static_cast<std::int64_t>(i), {fx[i], fy[i], fz[i]}, out);
       }
       return;
     }
@@ -130,24 +126,46 @@ class Conditioner {
   /// The decaying peak of the tared in-plane force's square (what says the tool is quiet), N².
   [[nodiscard]] double envelope_sq_N2() const { return envelope_sq_; }
 
-  /// The caller of push_block() reads only the samples whose number is a multiple of `stride`
-  /// (≥ 1) from out_run's arrays (the pipeline's measuring grid). The causal filters then
-  /// compute those samples alone (signal::GridLowPass; the filter's values to rounding), and
-  /// the envelope and the tare follow them: the envelope decays over the samples between, the
-  /// tare's gain is the same time constant's a grid step. out_run's arrays hold nothing else.
-  /// (A design GridLowPass does not run, or zero-phase filtering, filters every sample: the
-  /// tare is then subtracted on the grid alone, and the envelope follows every sample.)
-  /// Call it before the first push_block(), not between: push() filters every sample.
+  /// The caller reads only the samples whose number is a multiple of `stride` (≥ 1): the
+  /// pipeline's measuring grid. The causal filters then compute those samples alone
+  /// (signal::GridLowPass: the filter's values to rounding), and the envelope and the tare
+  /// follow them: the envelope decays over the samples between, the tare's gain is the same
+  /// time constant's a grid step. out_run's arrays hold nothing else. (A design GridLowPass
+  /// does not run, or zero-phase filtering, filters every sample: while the tare stands, it is
+  /// then subtracted on the grid alone.) Call it before the first sample: it starts a stretch.
   void set_stride(int stride);
 
  private:
+  /// push() filtering every sample (the causal filters, or the zero-phase one).
+  template <typename Out>
+  void push_every(std::int64_t n, const std::array<double, 3>& reading, Out&& out) {
+    const auto f = axis_map_.to_model(reading);
+    if (zero_phase_on_) {
+      if (fresh_) {
+        zero_phase_next_ = n;
+        fresh_ = false;
+      }
+      drain(zero_phase_.push(f), out);
+      return;
+    }
+    if (fresh_) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        lowpass_[a].reset();
+        lowpass_[a].settle(f[a]);
+      }
+      fresh_ = false;
+    }
+    emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
+  }
+
   template <typename Limit, typename OutRun>
   void push_block_on_grid(std::int64_t first, const std::array<const double*, 3>& source,
                           std::size_t count, Limit& run_limit, OutRun& out_run) {
     // Chunks end on the grid, so that the filter's strides do not straddle them.
     for (std::size_t from = 0, n = 0; from < count; from += n) {
       const std::int64_t at_chunk = first + static_cast<std::int64_t>(from);
-      const std::int64_t end = (at_chunk + static_cast<std::int64_t>(kChunk)) / stride_ * stride_;
+      const std::int64_t past = at_chunk + static_cast<std::int64_t>(kChunk);
+      const std::int64_t end = past - ((past % stride_) + stride_) % stride_;  // the floor
       n = std::min(count - from, static_cast<std::size_t>(end - at_chunk));
       if (fresh_) {
         grid_.settle(at_chunk, {source[0][from], source[1][from], source[2][from]});
@@ -309,6 +327,8 @@ class Conditioner {
 
   static constexpr double kIdleFraction = 0.2;  // of the usual peak: a quiet envelope
   static constexpr std::size_t kChunk = 256;    // samples filtered at a time by push_block()
+  // A chunk on a grid ends on it, and decay_power_ holds a grid step's decay.
+  static_assert(kChunk >= static_cast<std::size_t>(signal::kMaxGridStride));
 
   signal::AxisMap axis_map_;
   std::array<signal::LowPassFilter, 3> lowpass_;
