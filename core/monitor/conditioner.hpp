@@ -196,13 +196,18 @@ class Conditioner {
     }
   }
 
+  /// How many samples from sample `first` the first one on the grid (a multiple of stride_) is.
+  [[nodiscard]] std::size_t first_on_grid(std::int64_t first) const {
+    const auto behind = static_cast<std::size_t>((first % stride_ + stride_) % stride_);
+    return behind == 0 ? 0 : static_cast<std::size_t>(stride_) - behind;
+  }
+
   /// tare_run() for a run filtered on the grid: only its grid samples hold values. The envelope
   /// is e = max(x², e·d) on those, decaying by d a sample over the others (which add nothing);
   /// while quiet, the tare moves at each grid sample by the gain of a grid step.
   void tare_run_on_grid(std::int64_t first, double* fx, double* fy, double* fz, std::size_t count) {
     const auto step = static_cast<std::size_t>(stride_);
-    const auto behind = static_cast<std::size_t>((first % stride_ + stride_) % stride_);
-    const std::size_t start = behind == 0 ? 0 : step - behind;
+    const std::size_t start = first_on_grid(first);
     if (start >= count) {
       envelope_sq_ *= decay_power_[count];
       return;
@@ -303,8 +308,7 @@ class Conditioner {
     envelope_sq_ = envelope_sq;
     // The first sample of the run on the caller's grid.
     const auto step = static_cast<std::size_t>(stride_);
-    const auto behind = static_cast<std::size_t>((first % stride_ + stride_) % stride_);
-    for (std::size_t i = behind == 0 ? 0 : step - behind; i < count; i += step) {
+    for (std::size_t i = first_on_grid(first); i < count; i += step) {
       fx[i] -= tx;
       fy[i] -= ty;
       fz[i] -= tz;

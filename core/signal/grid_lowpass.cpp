@@ -1,5 +1,6 @@
 #include "core/signal/grid_lowpass.hpp"
 
+#include <Eigen/Core>
 #include <stdexcept>
 #include <string>
 
@@ -15,16 +16,16 @@ namespace {
 using LookAhead = GridLowPass::LookAhead;
 using State = GridLowPass::State;
 using Wide = long double;  // the look-ahead's powers are formed in extended precision
-using WideMatrix = std::array<std::array<Wide, 4>, 4>;
-using WideVector = std::array<Wide, 4>;
+using WideMatrix = Eigen::Matrix<Wide, 4, 4>;
+using WideVector = Eigen::Matrix<Wide, 4, 1>;
 
 /// One step of the cascade (LowPassFilter::step's operations), in extended precision; a design
 /// with one section gets a pass-through second section, whose delay elements stay zero.
 Wide cascade_step(const ButterworthDesign& d, WideVector& z, Wide x) {
-  for (std::size_t s = 0; s < 2; ++s) {
-    const Biquad c = static_cast<int>(s) < d.sections ? d.sos[s] : Biquad{};
-    Wide& z0 = z[2 * s];
-    Wide& z1 = z[2 * s + 1];
+  for (int s = 0; s < 2; ++s) {
+    const Biquad c = s < d.sections ? d.sos[static_cast<std::size_t>(s)] : Biquad{};
+    Wide& z0 = z(2 * s);
+    Wide& z1 = z(2 * s + 1);
     const Wide y = c.b0 * x + z0;
     z0 = c.b1 * x - c.a1 * y + z1;
     z1 = c.b2 * x - c.a2 * y;
@@ -33,66 +34,35 @@ Wide cascade_step(const ButterworthDesign& d, WideVector& z, Wide x) {
   return x;
 }
 
-WideMatrix times(const WideMatrix& a, const WideMatrix& b) {
-  WideMatrix r{};
-  for (std::size_t i = 0; i < 4; ++i) {
-    for (std::size_t j = 0; j < 4; ++j) {
-      for (std::size_t m = 0; m < 4; ++m) {
-        r[i][j] += a[i][m] * b[m][j];
-      }
-    }
-  }
-  return r;
-}
-
-WideVector times(const WideMatrix& a, const WideVector& v) {
-  WideVector r{};
-  for (std::size_t i = 0; i < 4; ++i) {
-    for (std::size_t m = 0; m < 4; ++m) {
-      r[i] += a[i][m] * v[m];
-    }
-  }
-  return r;
-}
-
 /// A, B, C, D read off the cascade's step (it is linear: a unit state or a unit input at a
 /// time), then A^k and A^(k−1−j)·B.
 LookAhead look_ahead(const ButterworthDesign& d, int stride) {
-  WideMatrix a{};
-  WideVector b{}, c{};
-  for (std::size_t m = 0; m < 4; ++m) {
-    WideVector z{};
-    z[m] = 1.0L;
-    c[m] = cascade_step(d, z, 0.0L);
-    for (std::size_t i = 0; i < 4; ++i) {
-      a[i][m] = z[i];
-    }
+  WideMatrix a;
+  WideVector c;
+  for (int m = 0; m < 4; ++m) {
+    WideVector z = WideVector::Unit(m);
+    c(m) = cascade_step(d, z, 0.0L);
+    a.col(m) = z;
   }
-  Wide direct = 0.0L;
-  {
-    WideVector z{};
-    direct = cascade_step(d, z, 1.0L);
-    b = z;
-  }
+  WideVector b = WideVector::Zero();
+  const Wide direct = cascade_step(d, b, 1.0L);
   LookAhead l;
-  WideMatrix power{};  // A^0
-  for (std::size_t i = 0; i < 4; ++i) {
-    power[i][i] = 1.0L;
-  }
+  WideMatrix power = WideMatrix::Identity();
   // Column j of the input gain is A^(k−1−j)·B: the last input's is B, each earlier one A times
   // the next.
   for (int j = stride - 1; j >= 0; --j) {
-    const WideVector g = times(power, b);
-    for (std::size_t i = 0; i < 4; ++i) {
-      l.input[static_cast<std::size_t>(j)][i] = static_cast<double>(g[i]);
+    const WideVector g = power * b;
+    for (int i = 0; i < 4; ++i) {
+      l.input[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = static_cast<double>(g(i));
     }
-    power = times(a, power);
+    power = a * power;
   }
-  for (std::size_t i = 0; i < 4; ++i) {
-    for (std::size_t m = 0; m < 4; ++m) {
-      l.power[i][m] = static_cast<double>(power[i][m]);
+  for (int i = 0; i < 4; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    for (int m = 0; m < 4; ++m) {
+      l.power[ui][static_cast<std::size_t>(m)] = static_cast<double>(power(i, m));
     }
-    l.output[i] = static_cast<double>(c[i]);
+    l.output[ui] = static_cast<double>(c(i));
   }
   l.direct = static_cast<double>(direct);
   return l;
@@ -201,7 +171,7 @@ __attribute__((target("avx"))) void strides_avx(const LookAhead& l, int stride,
   const __m256d ds = _mm256_mul_pd(_mm256_set1_pd(l.direct), m);
   __m256d z0 = state_lanes(z, 0), z1 = state_lanes(z, 1), z2 = state_lanes(z, 2),
           z3 = state_lanes(z, 3);
-  const auto k = static_cast<std::size_t>(kStride > 0 ? kStride : stride);
+  const auto k = static_cast<std::size_t>(stride);
   for (std::size_t s = 0; s < strides; ++s) {
     const std::size_t at = s * k;
     const __m256d x0 = sample_lanes(in, at);

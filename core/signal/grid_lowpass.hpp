@@ -63,8 +63,6 @@ class GridLowPass {
   void process(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
                std::size_t count, Kernel kernel = Kernel::kAuto);
 
-  [[nodiscard]] int stride() const { return stride_; }
-
   /// Look-ahead coefficients (row-major A^k; column j of the input gain A^(k−1−j)·B; C; D).
   struct LookAhead {
     std::array<std::array<double, 4>, 4> power{};
