@@ -61,7 +61,8 @@ struct EventSearch {
 
 /// A valley of `detect` (callable on absolute sample n ∈ [oldest, newest]) within ± half
 /// samples of `predicted`, refined by a cubic over ± fit_half samples. Found only when the
-/// smallest sample is interior to the search window and the fit is curved upwards.
+/// smallest sample is interior to the search window and the fit is curved upwards. Reads
+/// `detect` within [oldest, newest] only.
 template <typename Signal>
 EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t newest,
                         double predicted, std::int64_t half, int fit_half) {
@@ -104,6 +105,13 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
   }
   for (int i = 0; i < 3 && e.valid && std::llround(e.position) != fit_center; ++i) {
     fit_center = std::llround(e.position);
+    // Each step moves the window by up to fit_half: the checks above leave room for two such
+    // steps and the blend's window a sample over (below). A vertex that walks further is no
+    // valley of this search, and its fit would read samples the caller does not have.
+    if (fit_center - fit_half - 1 < oldest || fit_center + fit_half + 1 > newest) {
+      e.valid = false;
+      break;
+    }
     e = refine_extremum(detect, fit_center, fit_half, true);
   }
   if (retry && e.valid && std::fabs(e.position - static_cast<double>(best)) > fit_half) {

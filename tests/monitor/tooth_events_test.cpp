@@ -1,0 +1,93 @@
+// find_valley, the search behind every tooth event (the measured ring's and the lockstep model's
+// rows): it finds a clean valley anywhere in its window, and reads its signal only within the
+// samples the caller has.
+
+#include "core/monitor/tooth_events.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+
+namespace millwatch::monitor {
+namespace {
+
+// An asymmetric valley, (u − v)²·(1 + (u − v)/400) around vertex v, given only the samples the
+// search asks for (center ± (half + 3·fit)): found at its vertex wherever it sits in the window.
+TEST(FindValley, FindsACleanValleyAnywhereInItsWindow) {
+  const std::int64_t center = 5000;
+  for (const int fit : {2, 5, 9, 17}) {
+    for (const std::int64_t half : {3, 12, 30}) {
+      const std::int64_t oldest = center - half - 3 * fit;
+      const std::int64_t newest = center + half + 3 * fit;
+      for (double offset = -static_cast<double>(half) + 1.0;
+           offset <= static_cast<double>(half) - 1.0; offset += 0.37) {
+        const double vertex = static_cast<double>(center) + offset;
+        const auto valley = [&](std::int64_t n) {
+          const double u = static_cast<double>(n) - vertex;
+          return 1.0 + u * u * (1.0 + u / 400.0);
+        };
+        const EventSearch e =
+            find_valley(valley, oldest, newest, static_cast<double>(center), half, fit);
+        ASSERT_EQ(e.status, EventSearch::Status::kFound) << fit << " " << half << " " << offset;
+        EXPECT_NEAR(e.position, vertex, 1e-6) << fit << " " << half << " " << offset;
+      }
+    }
+  }
+}
+
+// Signals with ripples, a slope, a slow wave and noise (a fixed seed): the fit re-centres on
+// its vertex up to three times, a fit's width each, and a vertex that kept walking used to take
+// the fit past the samples the search was given — up to a fit's width beyond them, on about one
+// signal in 7,000 (the lockstep model's rows hold no more: a read before them was outside their
+// buffer). Every read stays within [oldest, newest], and so does a valley found.
+TEST(FindValley, ReadsOnlyTheSamplesItIsGiven) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const std::int64_t center = 1000;
+  int outside = 0, found = 0;
+  for (int trial = 0; trial < 100000; ++trial) {
+    const int fit = 2 + static_cast<int>(rng() % 18);
+    const auto half = static_cast<std::int64_t>(1 + rng() % 40);
+    const std::int64_t oldest = center - half - 3 * fit;
+    const std::int64_t newest = center + half + 3 * fit;
+    const double ripple = 2.0 + uniform(rng) * 3.0 * fit;
+    const double wave = 2.0 + uniform(rng) * 6.0 * fit;
+    const double phase1 = uniform(rng) * 6.3, phase2 = uniform(rng) * 6.3;
+    const double noise = uniform(rng) * 0.5, slope = (uniform(rng) - 0.5) * 0.2;
+    const double wave_amplitude = uniform(rng);
+    const double predicted = static_cast<double>(center) + uniform(rng) - 0.5;
+    std::int64_t lo = center, hi = center;
+    const auto signal = [&](std::int64_t n) {
+      lo = std::min(lo, n);
+      hi = std::max(hi, n);
+      const double u = static_cast<double>(n - center);
+      const auto hash = static_cast<std::uint64_t>(n) * 0x9E3779B97F4A7C15ULL;
+      return 3.0 + std::cos(2.0 * std::numbers::pi * u / ripple + phase1) +
+             wave_amplitude * std::cos(2.0 * std::numbers::pi * u / wave + phase2) + slope * u +
+             noise * static_cast<double>(hash >> 40) / 16777216.0;
+    };
+    const EventSearch e = find_valley(signal, oldest, newest, predicted, half, fit);
+    if (lo < oldest || hi > newest) {
+      ++outside;
+      ADD_FAILURE() << "trial " << trial << " (fit " << fit << ", half " << half << ") read [" << lo
+                    << ", " << hi << "] of [" << oldest << ", " << newest << "]";
+    }
+    if (e.status == EventSearch::Status::kFound) {
+      ++found;
+      EXPECT_GE(e.position, static_cast<double>(oldest)) << "trial " << trial;
+      EXPECT_LE(e.position, static_cast<double>(newest)) << "trial " << trial;
+    }
+    if (outside > 5) {
+      break;
+    }
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(found, 10000);  // the sweep is not all noise: many of its valleys are found
+}
+
+}  // namespace
+}  // namespace millwatch::monitor
