@@ -544,11 +544,14 @@ void Pipeline::take_identification() {
 }
 
 void Pipeline::on_revolution(const RevolutionEvents& ev) {
-  if (ev.no_data) {
-    return;  // inside a gap in the samples (counted with the gap)
+  const auto n = static_cast<std::size_t>(ev.flutes);
+  // A revolution that a gap in the samples cut into (counted with the gap) is not measured: the
+  // ring holds the samples since the gap only, and the rows before them are a lap old.
+  if (ev.no_data || std::ceil(ev.boundary_sample[0]) < static_cast<double>(ring_.oldest()) ||
+      std::floor(ev.boundary_sample[n]) > static_cast<double>(ring_.newest())) {
+    return;
   }
   take_identification();
-  const auto n = static_cast<std::size_t>(ev.flutes);
   const auto first = static_cast<std::int64_t>(std::llround(ev.event_sample[0]));
   // The model follows the filtered revolution period, not one revolution's jitter.
   follow_speed(rate_hz_ / events_.samples_per_revolution());

@@ -160,6 +160,12 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
     mm.boundary_sample[uk] = mm.event_sample[uk] - lead;
     mm.valid = mm.valid && found;
   }
+  // A pulse's window opens its lead before the centroid: a model pulse far earlier than the
+  // measured one would open it before the rows computed (none of the measured revolution's).
+  if (std::ceil(mm.boundary_sample[0]) < static_cast<double>(first_) ||
+      std::floor(mm.boundary_sample[n]) > static_cast<double>(last)) {
+    return false;
+  }
   measure_revolution(row, sample_rate_hz_, mm);
   return true;
 }
