@@ -29,6 +29,14 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.idle_revolutions += s.idle_revolutions;
 }
 
+/// Why identification does not run (empty: it runs).
+std::string identification_off(bool requested, const monitor::MonitorConfig& c) {
+  if (!requested) {
+    return "--no-identify";
+  }
+  return c.identification.enabled ? "" : "identification.enabled is false";
+}
+
 identify::FitOptions fit_options(const monitor::MonitorConfig& c) {
   identify::FitOptions o;
   o.extra_parameters = c.identification.extra_parameters;
@@ -49,6 +57,7 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
         std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);
   }
   pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
+  summary_.set_identification_off(identification_off(options_.identify, config));
   if (options_.identify && config.identification.enabled) {
     start_identifier(config);
   }
@@ -121,6 +130,7 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carry(carried_, pipeline_->status());
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
   old->attach_identifier(nullptr);
+  summary_.set_identification_off(identification_off(options_.identify, pipeline_->config()));
   if (options_.identify && pipeline_->config().identification.enabled) {
     start_identifier(pipeline_->config());  // the new configuration's model
   }  // else the identifier stays idle: no pipeline hands it windows

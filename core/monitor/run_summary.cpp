@@ -184,7 +184,10 @@ nlohmann::json RunSummary::to_json() const {
                              " revolutions, fewer than tooth_periods.window_revolutions (" +
                              std::to_string(config_.alpha_window_revolutions) + ")");
   }
-  if (identification_.is_null()) {
+  if (identification_.is_null() && !identification_off_.empty()) {
+    warn("no identification", "identification is off (" + identification_off_ +
+                                  "): runout and coefficients are not estimated");
+  } else if (identification_.is_null()) {
     warn("no identification",
          "no window of revolutions was fitted (runout and coefficients "
          "need one full synchronous-average window of measured revolutions)");

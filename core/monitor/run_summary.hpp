@@ -36,6 +36,10 @@ class RunSummary {
     identification_ = std::move(identification);
   }
 
+  /// Identification does not run, and why (e.g. "--no-identify"; empty: it runs): the summary
+  /// then says it was off, not that the record was too short for a window.
+  void set_identification_off(std::string why) { identification_off_ = std::move(why); }
+
   [[nodiscard]] nlohmann::json to_json() const;
   [[nodiscard]] std::int64_t valid_revolutions() const { return valid_; }
   [[nodiscard]] const MonitorConfig& config() const { return config_; }
@@ -79,6 +83,7 @@ class RunSummary {
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted
+  std::string identification_off_;
 };
 
 }  // namespace millwatch::monitor

@@ -3,12 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/sim/scenario.hpp"
@@ -84,6 +86,34 @@ TEST(ReplayCommand, SummarisesASimulatedCutWithTheIssuesKeys) {
   EXPECT_TRUE(j["warnings"].empty());
   // The sidecar's model is the true cut: the residual is measurement noise only.
   EXPECT_LT(j["residual_rms_N"]["fx"].get<double>(), 0.02);
+}
+
+// Identification turned off (--no-identify, or identification.enabled false in the
+// configuration): the summary says so, not that the record lacked a full window of revolutions
+// (this one has five).
+TEST(ReplayCommand, SaysIdentificationWasTurnedOff) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const fs::path config = dir / "off.json";
+  std::ofstream(config) << R"({"identification": {"enabled": false}})";
+  const std::array<std::pair<ReplayRun, std::string>, 2> runs{
+      std::pair{replay(csv.string(), dir / "flag.json"), std::string("(--no-identify)")},
+      std::pair{replay(csv.string() + " --config " + config.string(), dir / "config.json", true),
+                std::string("(identification.enabled is false)")}};
+  for (const auto& [r, why] : runs) {
+    ASSERT_EQ(r.exit_code, 0) << r.log;
+    EXPECT_GT(r.summary["revolutions"].get<int>(), 150);
+    int said = 0;
+    for (const auto& w : r.summary["warnings"]) {
+      if (w["kind"] == "no identification") {
+        ++said;
+        const auto detail = w["detail"].get<std::string>();
+        EXPECT_NE(detail.find("identification is off " + why), std::string::npos) << detail;
+        EXPECT_EQ(detail.find("need one full"), std::string::npos) << detail;
+      }
+    }
+    EXPECT_EQ(said, 1) << why << ": " << r.summary["warnings"].dump();
+  }
 }
 
 TEST(ReplayCommand, ZeroPhaseOptionMeasuresTheSameAlphaAsTheCausalFilter) {
