@@ -1226,16 +1226,17 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   const bool trouble = fraction > config_.sensor_bad_fraction || new_gaps > 0;
   if (trouble && !sensor_.active) {
     sensor_.active = true;
-    write_message(emit(AlertKind::kSensor, AlertSeverity::kWarning, true, 0, utime_us, fraction,
-                       config_.sensor_bad_fraction, "bad_sample_fraction"),
+    // The revolution the alert comes at: the last one reported (0: none yet).
+    write_message(emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_,
+                       utime_us, fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
                   "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
                   "%.3f %%), %lld new gaps",
                   percent(fraction), percent(config_.sensor_bad_fraction),
                   static_cast<long long>(new_gaps));
   } else if (!trouble && sensor_.active && new_samples > 0) {
     sensor_.active = false;
-    write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, 0, utime_us, fraction,
-                       config_.sensor_bad_fraction, "bad_sample_fraction"),
+    write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, last_revolution_, utime_us,
+                       fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
                   "sensor trouble cleared: %.3f %% bad samples, no new gaps", percent(fraction));
   }
 }

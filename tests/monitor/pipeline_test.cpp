@@ -431,12 +431,59 @@ TEST(Pipeline, BadSamplesGapsAndBadBlocksAreCountedAndSurvived) {
   EXPECT_EQ(out.count(PipelineEventKind::kLockLost), 0);
   bool sensor_alert = false;
   for (const auto& a : out.alerts) {
-    sensor_alert = sensor_alert || (a.kind == AlertKind::kSensor && a.active);
+    if (a.kind != AlertKind::kSensor) {
+      continue;
+    }
+    sensor_alert = sensor_alert || a.active;
+    // Its revolution is the last one reported before it (not a placeholder): the last that
+    // started before it, or one or two before that (still open when it came).
+    const RevolutionRecord* before = nullptr;
+    for (const auto& rev : out.revolutions) {
+      before = rev.utime_us <= a.utime_us ? &rev : before;
+    }
+    const std::int64_t last = before != nullptr ? before->revolution : 0;  // 0: none yet
+    EXPECT_LE(a.revolution, last) << a.utime_us;
+    EXPECT_GE(a.revolution, std::max<std::int64_t>(last - 2, 0)) << a.utime_us;
   }
   EXPECT_TRUE(sensor_alert);
   // Revolutions are measured again after the last gap (block 41 = 0.82 s).
   ASSERT_FALSE(out.revolutions.empty());
   EXPECT_GT(out.revolutions.back().utime_us, 900000);
+}
+
+// A sensor alert raised mid-cut (a lost block) names the revolution it came at — the last one
+// reported — as every other alert does, and clears at the next clean health check.
+TEST(Pipeline, ASensorAlertNamesTheRevolutionItCameAt) {
+  sim::Scenario s = cut_at_50khz(true);
+  s.duration_s = 1.6;  // health checks every 0.5 s: the one at 1 s raises, at 1.5 s clears
+  const Recording r = record(s);
+  Collector out;
+  Pipeline p(monitor_for(s), out);
+  replay(p, r, 1000, [](std::int64_t seq, SampleBlock&) { return seq != 30; });
+  ASSERT_EQ(out.count(PipelineEventKind::kGap), 1);
+  const Alert* raised = nullptr;
+  const Alert* cleared = nullptr;
+  for (const auto& a : out.alerts) {
+    if (a.kind == AlertKind::kSensor) {
+      (a.active ? raised : cleared) = &a;
+    }
+  }
+  ASSERT_NE(raised, nullptr);
+  ASSERT_NE(cleared, nullptr);
+  for (const Alert* a : {raised, cleared}) {
+    const RevolutionRecord* before = nullptr;  // the last revolution that started before it
+    for (const auto& rev : out.revolutions) {
+      before = rev.utime_us <= a->utime_us ? &rev : before;
+    }
+    ASSERT_NE(before, nullptr);
+    EXPECT_GT(a->revolution, 200);  // the gap comes 0.6 s into the cut
+    EXPECT_LE(a->revolution, before->revolution) << a->utime_us;
+    // A revolution is reported once the samples after its end have come (its closing event's
+    // search), and its time is the filter-delay-corrected one of its start: one or two that
+    // started before the alert may still be open.
+    EXPECT_GE(a->revolution, before->revolution - 2) << a->utime_us;
+  }
+  EXPECT_GT(cleared->revolution, raised->revolution);
 }
 
 // At 333.3 kHz (measured on every third sample) a lost block of 1001 samples — not a whole
