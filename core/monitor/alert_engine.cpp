@@ -514,7 +514,7 @@ void AlertEngine::check_runout_change(const Block& b, std::int64_t rev, std::int
                   "runout change: flute imbalance %.2f %% → %.2f %% (baseline %.2f ± %.2f %%; "
                   "flute %d %+.2f %% → %+.2f %% of the mean flute force; over %d revolutions)",
                   percent(before), percent(after), percent(before),
-                  percent(2.0 * base.share_sigma[j]), q, percent(base.share[j]),
+                  percent(2.0 * base.share_sigma[j]), q + 1, percent(base.share[j]),
                   percent(now.share[j]), blocks_after * block);
   }
 }
@@ -588,14 +588,14 @@ void AlertEngine::check_runout_step(const Flutes& f, bool collapsing, std::int64
                     "runout change: flute imbalance %.2f %% → %.2f %% (flute %d %+.2f %% → %+.2f "
                     "%% of the mean flute force, limit ± %.2f %%; %d revolutions); identified "
                     "before: r_CE1 − r_CE2 %.3f ± %.3f µm",
-                    percent(before), percent(now), q, percent(base.share[j]), percent(after[j]),
+                    percent(before), percent(now), q + 1, percent(base.share[j]), percent(after[j]),
                     percent(base.step_limit[j]), persist, -estimate_base_.radius_difference_um[1],
                     estimate_base_.radius_total_sigma_um[1]);
     } else {
       write_message(a,
                     "runout change: flute imbalance %.2f %% → %.2f %% (flute %d %+.2f %% → %+.2f "
                     "%% of the mean flute force, limit ± %.2f %%; %d revolutions)",
-                    percent(before), percent(now), q, percent(base.share[j]), percent(after[j]),
+                    percent(before), percent(now), q + 1, percent(base.share[j]), percent(after[j]),
                     percent(base.step_limit[j]), persist);
     }
     return;
@@ -678,7 +678,7 @@ bool AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
                base.breakage_limit[w], "flute_strength_fraction_of_baseline"),
           "breakage: flute %d cuts %.1f %% of the strongest flute's force (baseline %.1f %%), "
           "%.1f %% of its baseline strength (limit %.1f %%, %d revolutions)",
-          weakest, percent(f.force_N[w] / strongest), percent(base.strength[w]), percent(q[w]),
+          weakest + 1, percent(f.force_N[w] / strongest), percent(base.strength[w]), percent(q[w]),
           percent(base.breakage_limit[w]), persist);
     }
     return weakest_margin < 0.0;
@@ -692,7 +692,7 @@ bool AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
                        base.breakage_limit[b], "flute_strength_fraction_of_baseline"),
                   "breakage cleared: flute %d back at %.1f %% of its baseline strength (above "
                   "%.1f %% for %d revolutions)",
-                  breakage_flute_, percent(q[b]),
+                  breakage_flute_ + 1, percent(q[b]),
                   percent(base.breakage_limit[b] / config_.hysteresis), persist);
   }
   return weakest_margin < 0.0;
