@@ -67,17 +67,21 @@ std::string summary_text(const json& j) {
   } else {
     s += fmt::format("  speed         not measured ({:.0f} rpm commanded)\n", commanded);
   }
-  s += fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting",
-                   num(j, "revolutions"), num(j, "revolutions_cutting"));
-  if (has_number(j, "revolutions_measured") &&
-      num(j, "revolutions_measured") != num(j, "revolutions")) {
-    s += fmt::format(" ({:.0f} seen, some without all their tooth events)",
-                     num(j, "revolutions_measured"));
+  // Measured as the JSON and the warnings count them: every revolution reported; "revolutions"
+  // (α and the periods) only those with all their tooth events.
+  const double measured = has_number(j, "revolutions_measured") ? num(j, "revolutions_measured")
+                                                                : num(j, "revolutions");
+  s += fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting", measured,
+                   num(j, "revolutions_cutting"));
+  if (measured != num(j, "revolutions")) {
+    s += fmt::format(" ({:.0f} with all their tooth events)", num(j, "revolutions"));
   }
   s += "\n";
   const json& alpha = j.value("alpha_deg", json::object());
   if (has_number(alpha, "mean")) {
-    s += fmt::format("  alpha         {:.2f}° ± {:.2f}°", num(alpha, "mean"), num(alpha, "std"));
+    s += fmt::format("  alpha         {:.2f}°", num(alpha, "mean"));
+    s += has_number(alpha, "std") ? fmt::format(" ± {:.2f}°", num(alpha, "std"))
+                                  : std::string(" (one revolution: no spread)");
     const json& model = j.value("model", json::object());
     if (has_number(model, "alpha_deg")) {
       s += fmt::format("   (model {:.2f}°)", num(model, "alpha_deg"));

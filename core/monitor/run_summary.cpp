@@ -229,7 +229,8 @@ nlohmann::json RunSummary::to_json() const {
             "flute 0 = CE1, the flute whose period holds the largest force (no "
             "once-per-revolution reference)"},
            {"alpha_deg",
-            {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
+            {{"mean", number_or_null(alpha_.mean())},
+             {"std", number_or_null(alpha_.n > 1 ? alpha_.stddev() : std::nan(""))}}},
            {"tooth_period_s", periods},
            {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
            {"delta_fy_N", number_or_null(delta_fy_.mean())},

@@ -1,0 +1,48 @@
+// The summary as a person reads it says what the JSON says: the revolutions measured as the JSON
+// (revolutions_measured) and the "revolutions missed" warning count them, and how many of them
+// had all their tooth events (revolutions: those α and the periods come from).
+
+#include "shell/summary_text.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace millwatch::shell {
+namespace {
+
+nlohmann::json summary(int with_all_events, int measured) {
+  return {{"input", "cut.csv"},
+          {"spindle_rpm_commanded", 25000.0},
+          {"revolutions", with_all_events},
+          {"revolutions_measured", measured},
+          {"revolutions_cutting", 101.0}};
+}
+
+TEST(SummaryText, CountsTheRevolutionsMeasuredAsTheJsonDoes) {
+  const std::string some = summary_text(summary(37, 41));
+  EXPECT_NE(
+      some.find("revolutions   41 measured of ~101 turned while cutting (37 with all their tooth "
+                "events)\n"),
+      std::string::npos)
+      << some;
+  const std::string all = summary_text(summary(41, 41));
+  EXPECT_NE(all.find("revolutions   41 measured of ~101 turned while cutting\n"), std::string::npos)
+      << all;
+}
+
+// α from one revolution has no spread to state (the JSON's std is null): not "± 0.00°".
+TEST(SummaryText, AlphaFromOneRevolutionHasNoSpread) {
+  nlohmann::json one = summary(1, 1);
+  one["alpha_deg"] = {{"mean", 157.29}, {"std", nullptr}};
+  const std::string text = summary_text(one);
+  EXPECT_NE(text.find("alpha         157.29° (one revolution: no spread)"), std::string::npos)
+      << text;
+  nlohmann::json many = summary(41, 41);
+  many["alpha_deg"] = {{"mean", 157.29}, {"std", 0.15}};
+  EXPECT_NE(summary_text(many).find("alpha         157.29° ± 0.15°"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace millwatch::shell
