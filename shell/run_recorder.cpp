@@ -234,8 +234,9 @@ void RunRecorder::on_alert(const monitor::Alert& a) {
 void RunRecorder::on_event(const monitor::PipelineEvent& e) {
   if (e.kind == monitor::PipelineEventKind::kCuttingStopped) {
     cutting_ = false;
-  } else if (e.kind == monitor::PipelineEventKind::kCuttingResumed) {
-    cutting_ = true;
+  } else if (e.kind == monitor::PipelineEventKind::kCuttingResumed ||
+             e.kind == monitor::PipelineEventKind::kLockAcquired) {
+    cutting_ = true;  // a lock needs a cutting force: the pipeline is no longer idle after it
   }
 }
 

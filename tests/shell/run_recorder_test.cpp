@@ -97,6 +97,44 @@ TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
   EXPECT_FALSE(rec.rows()[2].bounded);
 }
 
+// The cutting column follows the pipeline's idle state: off from "cutting stopped", on again
+// from "cutting resumed" or from a new lock (after "lock lost" the pipeline resumes there,
+// without a "cutting resumed" of its own).
+TEST(RunRecorder, CuttingAgainFromTheNextLock) {
+  const fs::path path = test::fresh_temp_dir() / "revolutions.csv";
+  RunRecorder rec(2, path, false);
+  const auto event = [&](monitor::PipelineEventKind kind) {
+    monitor::PipelineEvent e;
+    e.kind = kind;
+    rec.on_event(e);
+  };
+  rec.on_revolution(revolution(0, true, true));
+  event(monitor::PipelineEventKind::kCuttingStopped);
+  rec.on_revolution(revolution(1, false, false));
+  event(monitor::PipelineEventKind::kLockLost);
+  event(monitor::PipelineEventKind::kLockAcquired);
+  rec.on_revolution(revolution(2, true, true));
+  event(monitor::PipelineEventKind::kCuttingStopped);
+  rec.on_revolution(revolution(3, false, false));
+  event(monitor::PipelineEventKind::kCuttingResumed);
+  rec.on_revolution(revolution(4, true, true));
+  rec.commit();
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = fields(line);
+  std::size_t cutting = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    cutting = header[i] == "cutting" ? i : cutting;
+  }
+  ASSERT_LT(cutting, header.size()) << line;
+  std::string column;
+  while (std::getline(in, line)) {
+    column += fields(line)[cutting];
+  }
+  EXPECT_EQ(column, "10101");
+}
+
 TEST(RunRecorder, ABinNoSampleReachedTakesItsNeighboursMean) {
   // 8 bins, one revolution with a sample at each bin's angle but bin 3's: bin 3 reads the mean
   // of bins 2 and 4, not 0 (which drew a spike to zero in sync_average.png).
