@@ -232,7 +232,8 @@ void Pipeline::process(const SampleBlock& block) {
   if (sync_revolutions_since_report_ >= config_.sync_window_revolutions) {
     sync_revolutions_since_report_ = 0;
     submit_window();
-    sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, revolutions_,
+    // Named by its last revolution (as identification names the window), not the next one.
+    sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, revolutions_ - 1,
                           utime_at(ring_.newest()));
   }
 }

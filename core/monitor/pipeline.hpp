@@ -102,7 +102,8 @@ class PipelineSink {
   virtual ~PipelineSink() = default;
   virtual void on_revolution(const RevolutionRecord& /*record*/) {}
   virtual void on_spindle(const SpindleUpdate& /*update*/) {}
-  /// Every sync-average window of revolutions: the measured average and the model (may be null).
+  /// Every sync-average window of revolutions: the measured average and the model (may be
+  /// null), named by the last revolution reported in it.
   virtual void on_sync_average(const SyncAverage& /*measured*/, const Lockstep* /*model*/,
                                std::int64_t /*revolution*/, std::int64_t /*utime_us*/) {}
   virtual void on_alert(const Alert& /*alert*/) {}

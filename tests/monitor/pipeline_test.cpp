@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "core/model/periodic_response.hpp"
@@ -484,6 +485,25 @@ TEST(Pipeline, ASensorAlertNamesTheRevolutionItCameAt) {
     EXPECT_GE(a->revolution, before->revolution - 2) << a->utime_us;
   }
   EXPECT_GT(cleared->revolution, raised->revolution);
+}
+
+// A synchronous-average window is named by its last revolution, as identification names it
+// (runout_estimate_t and sync_average2_t agree): the revolution reported last before it.
+TEST(Pipeline, ASyncAverageIsNamedByItsLastRevolution) {
+  struct Sink : test::Collector {
+    std::vector<std::pair<std::int64_t, std::int64_t>> named;  // (its revolution, last reported)
+    void on_sync_average(const SyncAverage&, const Lockstep*, std::int64_t revolution,
+                         std::int64_t) override {
+      named.emplace_back(revolution, revolutions.empty() ? -1 : revolutions.back().revolution);
+    }
+  } out;
+  const sim::Scenario s = cut_at_50khz(true);
+  Pipeline p(monitor_for(s), out);
+  replay(p, record(s), 1000);
+  ASSERT_GE(out.named.size(), 5u);
+  for (const auto& [revolution, last] : out.named) {
+    EXPECT_EQ(revolution, last);
+  }
 }
 
 // At 333.3 kHz (measured on every third sample) a lost block of 1001 samples — not a whole

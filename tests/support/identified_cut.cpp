@@ -46,7 +46,7 @@ class FittingSink : public monitor::PipelineSink {
     }
     w.fit = fitter_.fit(window_, previous);
     w.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    w.revolution = revolution - 1;  // `revolution` counts the revolutions reported
+    w.revolution = revolution;  // the window's last revolution
     w.utime_us = utime_us;
     w.window_revolutions = s.revolutions();
     out_.fit_seconds += w.fit_seconds;
