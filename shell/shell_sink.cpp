@@ -43,7 +43,7 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
       if (n == 1) {  // then every window: the first says it happens
         spdlog::info(
             "{}: the model in lockstep takes the identified parameters (window ending at "
-            "revolution {}, {:.1f} % unexplained)",
+            "revolution {}, {:.1f} % of the force's variance unexplained)",
             source_, e.count, 100.0 * e.value);
       }
       return;

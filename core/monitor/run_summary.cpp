@@ -194,11 +194,16 @@ nlohmann::json RunSummary::to_json() const {
   } else if (!identification_.contains("runout")) {
     warn("no identification", "the fit of the last window failed: " +
                                   identification_["fit"].value("reason", std::string("?")));
-  } else if (const double u = identification_["fit"].value("unexplained_fraction", 1.0); u > 0.2) {
+  } else if (const double u = identification_["fit"].value("unexplained_fraction", 1.0);
+             u * u > config_.identification.max_unexplained) {
+    // The model in lockstep's test (Pipeline::take_identification): the variance unexplained.
     warn("model does not fit",
          "the identified model leaves " + std::to_string(std::lround(100.0 * u)) +
-             " % of the measured force unexplained: runout and coefficients describe this cut "
-             "poorly");
+             " % of the measured force unexplained (RMS; " +
+             std::to_string(std::lround(100.0 * u * u)) + " % of its variance, above " +
+             "identification.max_unexplained " +
+             std::to_string(std::lround(100.0 * config_.identification.max_unexplained)) +
+             " %): runout and coefficients describe this cut poorly");
   }
   json warnings = json::array();
   for (const std::vector<Warning>* list :
