@@ -157,11 +157,9 @@ std::string summary_text(const json& j) {
   } else {
     s += fmt::format("  warnings      {}\n", warnings.size());
     for (const auto& w : warnings) {
-      std::string detail = w.value("detail", std::string());
-      if (detail.size() > 160) {
-        detail = detail.substr(0, 157) + "...";
-      }
-      s += fmt::format("    {}: {}", w.value("kind", std::string()), detail);
+      // Whole: a warning's reason comes last (cut short, it lost it, or split a character).
+      s += fmt::format("    {}: {}", w.value("kind", std::string()),
+                       w.value("detail", std::string()));
       if (w.value("occurrences", std::int64_t{1}) > 1) {
         s += fmt::format(" (×{})", w.value("occurrences", std::int64_t{1}));
       }

@@ -44,5 +44,17 @@ TEST(SummaryText, AlphaFromOneRevolutionHasNoSpread) {
   EXPECT_NE(summary_text(many).find("alpha         157.29° ± 0.15°"), std::string::npos);
 }
 
+// A warning is printed whole: its reason comes last.
+TEST(SummaryText, PrintsAWarningWhole) {
+  nlohmann::json j = summary(41, 41);
+  const std::string detail =
+      "the identified model leaves 77 % of the measured force unexplained (RMS; 59 % of its "
+      "variance, above identification.max_unexplained 20 %): runout and coefficients describe "
+      "this cut poorly";
+  j["warnings"] = {{{"kind", "model does not fit"}, {"detail", detail}, {"occurrences", 1}}};
+  EXPECT_NE(summary_text(j).find("    model does not fit: " + detail + "\n"), std::string::npos)
+      << summary_text(j);
+}
+
 }  // namespace
 }  // namespace millwatch::shell
