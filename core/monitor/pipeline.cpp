@@ -159,6 +159,11 @@ void Pipeline::event(PipelineEventKind kind, std::int64_t sample, std::int64_t c
 }
 
 void Pipeline::restart_stream(std::int64_t first_sample) {
+  if (last_sample_ >= 0) {  // a break ends a stretch: the tracker starts afresh after it
+    longest_stretch_ = std::max(longest_stretch_, last_sample_ - stretch_first_ + 1);
+    stream_broken_ = true;
+  }
+  stretch_first_ = first_sample;
   conditioner_.restart(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
   if (events_.active()) {
@@ -253,10 +258,16 @@ void Pipeline::finish() {
   if (samples == 0) {
     return;  // nothing came: nothing to say about it
   }
-  if (static_cast<double>(samples) < needed_s * config_.sample_rate_hz) {
-    event(PipelineEventKind::kRecordTooShort, at, samples, needed_s,
-          "the spindle tracker locks on two windows (spindle.window_s) of steady cutting that "
-          "agree");
+  // The tracker starts afresh after each break in the stream: what counts is the longest
+  // stretch between breaks, not the record's samples.
+  const std::int64_t longest = std::max(longest_stretch_, last_sample_ - stretch_first_ + 1);
+  if (static_cast<double>(longest) < needed_s * config_.sample_rate_hz) {
+    event(PipelineEventKind::kRecordTooShort, at, longest, needed_s,
+          stream_broken_
+              ? "the longest stretch between breaks in the stream; the spindle tracker locks on "
+                "two windows (spindle.window_s) of steady cutting that agree"
+              : "the spindle tracker locks on two windows (spindle.window_s) of steady cutting "
+                "that agree");
   } else if (inconsistent_windows_ > 0) {
     event(PipelineEventKind::kNoSteadySignal, at, inconsistent_windows_, 0.0,
           "weak or irregular cutting: tooth-passing lines came and went, but no two windows a "

@@ -60,7 +60,8 @@ enum class PipelineEventKind {
   kModelUpdated,    ///< identified parameters taken by the model; value: unexplained fraction
   kCuttingStopped,  ///< value: the revolution's peak force, N
   kCuttingResumed,  ///< value: the revolution's peak force, N
-  kRecordTooShort,  ///< value: seconds the configured windows need; count: samples there were
+  kRecordTooShort,  ///< value: seconds the configured windows need; count: samples of the
+                    ///< longest stretch between breaks in the stream
   kNoSteadySignal,  ///< cutting seen, but no two successive windows agreed (count: windows)
   kNoTemplate       ///< locked, but the revolution's tooth events could not be told apart
 };
@@ -213,6 +214,9 @@ class Pipeline {
 
   std::int64_t stream_start_ = 0;
   std::int64_t last_sample_ = -1;
+  std::int64_t stretch_first_ = 0;    // first input sample since the last break in the stream
+  std::int64_t longest_stretch_ = 0;  // input samples of the longest stretch before it
+  bool stream_broken_ = false;
   std::int64_t measured_until_ = INT64_MIN;  // end of the last revolution measured
   std::int64_t revolutions_ = 0;
   std::int64_t model_builds_ = 0;

@@ -112,7 +112,12 @@ void RunSummary::add(const PipelineEvent& e) {
     std::snprintf(text, sizeof text, "%.4f s of samples, %.4f s needed: ",
                   static_cast<double>(e.count) / config_.sample_rate_hz, e.value);
     detail = text + detail;
+  } else if (e.kind == PipelineEventKind::kNoSteadySignal && e.count > 0) {
+    detail = std::to_string(e.count) + " tracker windows: " + detail;
   }
+  // The warning's samples: events that count samples (a lost block, a gap, bad samples, a short
+  // record), not windows.
+  const bool counts_samples = e.kind != PipelineEventKind::kNoSteadySignal;
   auto it = std::find_if(warnings_.begin(), warnings_.end(),
                          [&](const Warning& w) { return w.kind == kind; });
   if (it == warnings_.end()) {
@@ -120,7 +125,7 @@ void RunSummary::add(const PipelineEvent& e) {
     it = warnings_.end() - 1;
   }
   ++it->occurrences;
-  it->samples += e.count;
+  it->samples += counts_samples ? e.count : 0;
 }
 
 void RunSummary::finish(const PipelineStatus& status) {

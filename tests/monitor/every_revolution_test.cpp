@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "core/signal/butterworth_lowpass.hpp"
@@ -183,6 +184,25 @@ TEST(EveryRevolution, ARecordTooShortSaysWhatItNeeds) {
   EXPECT_EQ(e->count, 750);
   // Two windows of 10 revolutions at 25,000 rpm: 2 × 0.024 s.
   EXPECT_NEAR(e->value, 0.048, 1e-9);
+}
+
+// A record broken into stretches shorter than the tracker needs (40 ms kept, 80 ms lost: each
+// break too long to bridge, so the tracker starts afresh) is too short where it counts, though
+// its samples add up to far more: it says so, with its longest stretch, not "no steady signal".
+TEST(EveryRevolution, ARecordOfShortStretchesSaysItsLongestStretchIsTooShort) {
+  const sim::Scenario s = slot(50000.0, 1.0);
+  const Recording r = test::record(s);
+  Collector out;
+  Pipeline p(test::monitor_for(s), out);
+  test::replay(p, r, 1000, [](std::int64_t seq, SampleBlock&) { return seq % 6 < 2; });
+  EXPECT_TRUE(out.revolutions.empty());
+  EXPECT_EQ(out.count(PipelineEventKind::kNoSteadySignal), 0);
+  const PipelineEvent* e = out.first(PipelineEventKind::kRecordTooShort);
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->count, 2000);
+  EXPECT_NEAR(e->value, 0.048, 1e-9);
+  EXPECT_NE(std::string(e->detail).find("the longest stretch between breaks"), std::string::npos)
+      << e->detail;
 }
 
 // Issue 6 §10: during a feed hold (the spindle decelerates to rest, dwells, restarts) nothing

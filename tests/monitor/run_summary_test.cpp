@@ -47,5 +47,21 @@ TEST(RunSummary, CallsAFitPoorOnlyWhereTheModelInLockstepRefusesIt) {
   }
 }
 
+// A warning's samples are samples: "no steady tooth-passing signal" counts tracker windows,
+// which go into its text instead.
+TEST(RunSummary, AWarningCountsSamplesNotWindows) {
+  MonitorConfig config;
+  RunSummary summary(config);
+  PipelineEvent e;
+  e.kind = PipelineEventKind::kNoSteadySignal;
+  e.count = 20;  // windows
+  e.detail = "weak or irregular cutting";
+  summary.add(e);
+  const nlohmann::json w = summary.to_json()["warnings"];
+  ASSERT_EQ(w.size(), 2u) << w.dump();  // and "no identification"
+  EXPECT_EQ(w[0]["samples"], 0);
+  EXPECT_EQ(w[0]["detail"], "20 tracker windows: weak or irregular cutting");
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
