@@ -174,7 +174,7 @@ runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w) {
   m.angle_sigma_rad = f.gamma_rad.sigma;
   m.r_ce1_um = f.cutting_radius_um.empty() ? 0.0 : f.cutting_radius_um[0].value;
   m.r_ce2_um = f.cutting_radius_um.size() < 2 ? 0.0 : f.cutting_radius_um[1].value;
-  m.alpha_deg = 0.0;  // not part of the fit
+  m.alpha_deg = f.alpha_deg.value;  // the geometric α (0 for one flute: none)
   return m;
 }
 

@@ -60,16 +60,20 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
     from_ce1.push_back(number(e.value));
     from_ce1_std.push_back(number(e.sigma));
   }
-  const nlohmann::json runout = {{"rho_um", number(f.rho_um.value)},
-                                 {"rho_std_um", number(f.rho_um.sigma)},
-                                 {"gamma_deg", number(f.gamma_rad.value * kDegPerRad)},
-                                 {"gamma_std_deg", number(f.gamma_rad.sigma * kDegPerRad)},
-                                 {"r_ce_um", radii},
-                                 {"r_ce_std_um", radii_std},
-                                 {"r_minus_r_ce1_um", from_ce1},
-                                 {"r_minus_r_ce1_std_um", from_ce1_std},
-                                 {"alignment_deg", number(f.alignment_rad.value * kDegPerRad)},
-                                 {"flute_labelling", f.flute_labelling}};
+  nlohmann::json runout = {{"rho_um", number(f.rho_um.value)},
+                           {"rho_std_um", number(f.rho_um.sigma)},
+                           {"gamma_deg", number(f.gamma_rad.value * kDegPerRad)},
+                           {"gamma_std_deg", number(f.gamma_rad.sigma * kDegPerRad)},
+                           {"r_ce_um", radii},
+                           {"r_ce_std_um", radii_std},
+                           {"r_minus_r_ce1_um", from_ce1},
+                           {"r_minus_r_ce1_std_um", from_ce1_std},
+                           {"alignment_deg", number(f.alignment_rad.value * kDegPerRad)},
+                           {"flute_labelling", f.flute_labelling}};
+  if (f.config.tool.flutes >= 2) {  // the geometric α: one flute has none
+    runout["alpha_deg"] = number(f.alpha_deg.value);
+    runout["alpha_std_deg"] = number(f.alpha_deg.sigma);
+  }
   nlohmann::json coefficients = nlohmann::json::object();
   for (const Estimate& e : f.coefficients) {
     if (e.sigma > 0.0) {  // a coefficient no compared axis sees was not fitted: left out

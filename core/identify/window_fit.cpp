@@ -1316,6 +1316,24 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     d.sigma = std::hypot(d.sigma_stat, d.sigma_sys);
     out.radius_from_ce1_um.push_back(d);
   }
+  if (flutes >= 2) {
+    // The geometric cutting-edge phase angle: how far the edge after CE2 follows CE2, in degrees
+    // of rotation — what α = 360°·T₂/T measures of the cut ([001] eq 36), without the force.
+    auto alpha = [&](double uu, double vv) {
+      const auto pos =
+          model::flute_positions(radius, pitch, std::hypot(uu, vv), std::atan2(vv, uu));
+      return model::flute_spacing_rad(pitch, pos, 1, 2 % flutes) * 180.0 / kPi;
+    };
+    const double a0 = alpha(u, v);
+    const Eigen::RowVector2d da((alpha(u + h, v) - a0) / h, (alpha(u, v + h) - a0) / h);
+    Estimate e;
+    e.name = "alpha_deg";
+    e.value = a0;
+    e.sigma_stat = std::sqrt(std::max(0.0, (da * cov.topLeftCorner(2, 2) * da.transpose())(0, 0)));
+    e.sigma_sys = std::sqrt(std::max(0.0, (da.cwiseAbs2() * sys2.head(2))(0, 0)));
+    e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+    out.alpha_deg = e;
+  }
 
   // Residual and measured RMS per axis over the harmonics compared: √(Σ|X_k|²/2), per cut and
   // (the mean square over the cuts) for all of them.

@@ -116,6 +116,9 @@ struct FitResult {
   /// Each flute's cutting radius r_j = |O→edge j| (µm) and r_j − r_0, with σ.
   std::vector<Estimate> cutting_radius_um;
   std::vector<Estimate> radius_from_ce1_um;
+  /// The geometric cutting-edge phase angle: the rotation (deg) by which the edge after CE2
+  /// follows CE2 ([001]'s α, 360°·T₂/T without the force), with σ; 0 and σ 0 for one flute.
+  Estimate alpha_deg;
   std::vector<Estimate> coefficients;  ///< force-law coefficients fitted (parameter_map names)
   std::vector<Estimate> extra;         ///< extra nonlinear parameters
   std::vector<std::pair<std::string, std::string>> correlated;  ///< |correlation| > 0.9

@@ -73,6 +73,7 @@ struct Outcome {
   double radius_error_um = 0.0;  // worst |Δr_j fit − Δr_j truth| over the flutes, best labelling
   double rho_error_um = 0.0;
   double gamma_error_rad = 0.0;  // modulo the labelling
+  double alpha_error_deg = 0.0;  // the geometric α (the edge after CE2 behind CE2), labelled
   double worst_coefficient = 0.0;
   // Two flutes: r_CE1 − r_CE2 (µm) as it is, as the fit says and as [001] eq 29 says from the
   // monitor's α and ΔF_y (K_ts the true K_tc, the commanded feed rate, the measured speed).
@@ -153,6 +154,11 @@ Outcome identify_case(const Case& k) {
     in.spindle_speed_rad_per_s = w.measured.spindle_rpm * 2.0 * kPi / 60.0;
     o.abeni_difference_um = 1e3 * model::abeni_radius_difference_mm(in);
   }
+  // The fit's CE2 is the truth's flute 1 + shift, and the edge after it the truth's 2 + shift.
+  const double truth_alpha_deg =
+      model::flute_spacing_rad(pitch, truth_pos, (1 + shift) % k.flutes, (2 + shift) % k.flutes) *
+      180.0 / kPi;
+  o.alpha_error_deg = std::fabs(o.fit.alpha_deg.value - truth_alpha_deg);
   o.rho_error_um = std::fabs(o.fit.rho_um.value - k.rho_um);
   o.gamma_error_rad = std::fabs(
       wrap_pi(o.fit.gamma_rad.value - (k.gamma_rad + pitch[static_cast<std::size_t>(shift)])));
@@ -247,6 +253,11 @@ TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {
     if (k.feed_um >= 2.0) {
       EXPECT_LT(o.radius_error_um, 0.1) << k.name;
     }
+    // The geometric α with its σ: within 3σ (and a hundredth of a degree) of the truth's.
+    std::printf("    geometric alpha %.4f ± %.4f deg (error %.4f)\n", o.fit.alpha_deg.value,
+                o.fit.alpha_deg.sigma, o.alpha_error_deg);
+    EXPECT_LT(o.alpha_error_deg, 3.0 * o.fit.alpha_deg.sigma + 0.01) << k.name;
+    EXPECT_GT(o.fit.alpha_deg.sigma, 0.0) << k.name;
     EXPECT_LT(o.worst_coefficient, 0.05) << k.name;
     const bool pinned = k.rho_um >= 1.0 && std::fabs(std::cos(k.gamma_rad)) >= 0.5;
     if (pinned && o.fit.rho_um.sigma < 0.1) {  // where the fit says the force pins them

@@ -1,0 +1,50 @@
+// A window's identified runout on LCM (runout_estimate_t): every field from the fit, the
+// geometric α included (it was a fixed 0), and a failed fit says why instead of numbers.
+
+#include "msgs/lcm_convert.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace millwatch::messaging {
+namespace {
+
+identify::IdentifiedWindow window() {
+  identify::IdentifiedWindow w;
+  w.revolution = 59;
+  w.utime_us = 140000;
+  w.window_revolutions = 30;
+  w.fit.ok = true;
+  w.fit.config.tool.flutes = 3;
+  w.fit.rho_um = {"rho_um", 0.8, 0.015};
+  w.fit.gamma_rad = {"gamma_rad", -0.7, 0.02};
+  w.fit.cutting_radius_um = {{"r_ce1_um", 250.6, 0.01}, {"r_ce2_um", 249.9, 0.01}};
+  w.fit.alpha_deg = {"alpha_deg", 120.24, 0.006};
+  return w;
+}
+
+TEST(LcmConvert, ARunoutEstimateCarriesTheFitsGeometricAlpha) {
+  const runout_estimate_t m = runout_estimate(window());
+  EXPECT_TRUE(m.valid);
+  EXPECT_EQ(m.revolution, 59);
+  EXPECT_EQ(m.window_revolutions, 30);
+  EXPECT_EQ(m.offset_um, 0.8);
+  EXPECT_EQ(m.angle_rad, -0.7);
+  EXPECT_EQ(m.r_ce1_um, 250.6);
+  EXPECT_EQ(m.r_ce2_um, 249.9);
+  EXPECT_EQ(m.alpha_deg, 120.24);
+}
+
+TEST(LcmConvert, AFailedFitSaysWhy) {
+  identify::IdentifiedWindow w = window();
+  w.fit.ok = false;
+  w.fit.message = "too few harmonics";
+  const runout_estimate_t m = runout_estimate(w);
+  EXPECT_FALSE(m.valid);
+  EXPECT_EQ(m.method, "window fit failed: too few harmonics");
+  EXPECT_EQ(m.alpha_deg, 0.0);
+}
+
+}  // namespace
+}  // namespace millwatch::messaging
