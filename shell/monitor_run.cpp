@@ -27,6 +27,8 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.revolutions += s.revolutions;
   total.valid_revolutions += s.valid_revolutions;
   total.idle_revolutions += s.idle_revolutions;
+  total.model_builds += s.model_builds;
+  total.cutting_revolutions += s.cutting_revolutions;
 }
 
 /// Why identification does not run (empty: it runs).

@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <span>
 #include <vector>
 
 #include "core/model/flute_positions.hpp"
+#include "core/sim/scenario.hpp"
 #include "millwatch/force_coefficients_t.hpp"
 #include "millwatch/pipeline_status2_t.hpp"
 #include "millwatch/runout_estimate_t.hpp"
@@ -101,6 +103,47 @@ TEST(MonitorRun, ReplacedPipelinesAndSourceLossesAreCounted) {
   EXPECT_EQ(j["samples"], 20000);
   EXPECT_EQ(j["dropped_samples"], 1007);
   EXPECT_EQ(j["counters"]["blocks_rejected"], 3);
+}
+
+// A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
+// revolutions turned while cutting and the model builds too, not only the samples.
+TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
+  sim::Scenario s;
+  s.sample_rate_hz = kRate_hz;
+  s.duration_s = 1.0;
+  s.spindle.actual_rpm = 25252.0;
+  const test::Recording r = test::record(s);
+  MonitorRun::Options options;
+  options.identify = false;
+  MonitorRun run(test::monitor_for(s), options);
+  const auto block = [&](std::size_t k) {
+    const std::span<const double> fx(r.fx), fy(r.fy), fz(r.fz);
+    return monitor::SampleBlock{static_cast<std::int64_t>(k) * 20'000,
+                                static_cast<std::int64_t>(k),
+                                kRate_hz,
+                                fx.subspan(k * kBlock, kBlock),
+                                fy.subspan(k * kBlock, kBlock),
+                                fz.subspan(k * kBlock, kBlock)};
+  };
+  for (std::size_t k = 0; k < 25; ++k) {
+    run.process(block(k));
+  }
+  auto next = std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink());
+  const monitor::Pipeline& second = *next;
+  const auto old = run.replace_pipeline(std::move(next));
+  const monitor::PipelineStatus before = old->status();  // finished: the tail heard counted
+  ASSERT_GT(before.cutting_revolutions, 150.0);
+  ASSERT_GT(before.model_builds, 0);
+  for (std::size_t k = 25; k < 50; ++k) {
+    run.process(block(k));
+  }
+  const monitor::PipelineStatus after = run.status();
+  const monitor::PipelineStatus last = second.status();
+  EXPECT_EQ(after.model_builds, before.model_builds + last.model_builds);
+  EXPECT_NEAR(after.cutting_revolutions, before.cutting_revolutions + last.cutting_revolutions,
+              1e-9);
+  // The whole second heard cutting, within the revolutions a restarted tracker needs to hear.
+  EXPECT_NEAR(after.cutting_revolutions, 25252.0 / 60.0, 5.0);
 }
 
 struct IdentityLog {
