@@ -634,7 +634,9 @@ PipelineStatus Pipeline::status() const {
   s.cutting_revolutions = cutting_revolutions_ + finished_tail_revolutions_;
   s.utime_us = input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1));
   const auto& e = tracker_.estimate();
-  s.spindle_rpm = last_rpm_ > 0.0 ? last_rpm_ : (e.valid ? e.spindle_rpm : 0.0);
+  // The last revolution's speed only while revolutions are measured: after the lock is lost the
+  // spindle may have stopped.
+  s.spindle_rpm = events_.active() && last_rpm_ > 0.0 ? last_rpm_ : (e.valid ? e.spindle_rpm : 0.0);
   s.cutting = e.cutting || events_.active();
   s.state = events_.active()              ? "measuring"
             : e.valid                     ? "tracking"

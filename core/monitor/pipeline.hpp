@@ -91,7 +91,8 @@ struct PipelineStatus {
   /// what "every revolution" is measured against.
   double cutting_revolutions = 0.0;
   std::int64_t utime_us = 0;  ///< newest sample
-  double spindle_rpm = 0.0;   ///< last revolution's speed, else the tracker's (0: none)
+  /// While measuring, the last revolution's speed; else the tracker's (0: none).
+  double spindle_rpm = 0.0;
   bool cutting = false;
   std::string_view state = "acquiring";
   std::string_view event_kind = "valley";  ///< tooth event of the current template

@@ -223,6 +223,8 @@ TEST(EveryRevolution, AFeedHoldIsNotMeasuredAndTheRestartIsReacquiredQuickly) {
   test::replay(p, r, 1000, [&](std::int64_t, SampleBlock& b) {
     if (b.utime_us > 650000 && b.utime_us < 740000 && p.status().state == "no cutting") {
       said_no_cutting = true;
+      // The spindle stands: no speed is stated (not the last revolution's 25,252 rpm).
+      EXPECT_EQ(p.status().spindle_rpm, 0.0) << b.utime_us;
     }
     next = b.utime_us;
     return true;
