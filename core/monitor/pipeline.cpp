@@ -170,6 +170,11 @@ void Pipeline::restart_stream(std::int64_t first_sample) {
     event(PipelineEventKind::kLockLost, first_sample, 0, 0.0, "stream restarted");
   }
   stream_start_ = measuring_sample(first_sample);
+  if (last_sample_ < 0) {
+    // The first health check after half a second, as every later one: over the first block
+    // alone, a few bad samples would read as a large fraction.
+    next_health_check_ = stream_start_ + static_cast<std::int64_t>(0.5 * rate_hz_);
+  }
   decimation_phase_ = 0;
   cutting_revolutions_ += heard_since_update();  // the part-hop before the break
   finished_tail_revolutions_ = 0.0;
@@ -247,6 +252,11 @@ void Pipeline::finish() {
   conditioner_.flush(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
   finished_tail_revolutions_ = heard_since_update();  // the record's last part-hop
+  // The input since the last health check (up to half a second: a gap there is a sensor
+  // alert too).
+  alerts_.on_input(input_.counters(),
+                   input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1)),
+                   [this](const Alert& a) { sink_.on_alert(a); });
   if (ever_locked_) {
     return;
   }

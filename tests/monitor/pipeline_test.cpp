@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -485,6 +486,35 @@ TEST(Pipeline, ASensorAlertNamesTheRevolutionItCameAt) {
     EXPECT_GE(a->revolution, before->revolution - 2) << a->utime_us;
   }
   EXPECT_GT(cleared->revolution, raised->revolution);
+}
+
+// The health checks cover half a second each, the first one too, and the last part of a record
+// is checked at its end: ten bad samples in the first block are 0.04 % of the first half second
+// (under the 0.1 % limit: no alert; checked over the block alone they read 1 %), and a block
+// lost in the last half second raises the sensor alert at the end.
+TEST(Pipeline, HealthChecksCoverHalfASecondFromTheStartToTheEnd) {
+  const sim::Scenario s = cut_at_50khz(true);
+  Recording r = record(s);
+  for (int i = 100; i < 110; ++i) {
+    r.fx[static_cast<std::size_t>(i)] = std::numeric_limits<double>::quiet_NaN();
+  }
+  Collector early, late;
+  Pipeline pe(monitor_for(s), early);
+  replay(pe, r, 1000);
+  EXPECT_EQ(pe.status().input.nonfinite_samples, 10);
+  for (const auto& a : early.alerts) {
+    EXPECT_NE(a.kind, AlertKind::kSensor) << a.message.data();
+  }
+  Pipeline pl(monitor_for(s), late);
+  replay(pl, record(s), 1000, [](std::int64_t seq, SampleBlock&) { return seq != 45; });
+  const Alert* raised = nullptr;
+  for (const auto& a : late.alerts) {
+    raised = a.kind == AlertKind::kSensor && a.active ? &a : raised;
+  }
+  ASSERT_NE(raised, nullptr);
+  EXPECT_GT(raised->utime_us, 920000);  // at the end of the record, after the lost block
+  EXPECT_NE(std::string(raised->message.data()).find("1 new gaps"), std::string::npos)
+      << raised->message.data();
 }
 
 // A synchronous-average window is named by its last revolution, as identification names it
