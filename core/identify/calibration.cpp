@@ -23,15 +23,6 @@ nlohmann::json numbers(const std::array<double, 3>& v) {
   return {number(v[0]), number(v[1]), number(v[2])};
 }
 
-double unexplained(const std::array<double, 3>& residual, const std::array<double, 3>& measured) {
-  double r2 = 0.0, m2 = 0.0;
-  for (std::size_t a = 0; a < 3; ++a) {
-    r2 += residual[a] * residual[a];
-    m2 += measured[a] * measured[a];
-  }
-  return m2 > 0.0 ? std::sqrt(r2 / m2) : 1.0;
-}
-
 /// x rotated by δ: x'(φ) = x(φ + δ) through its harmonics (k < B/2).
 std::vector<double> rotated(const std::vector<double>& x, double delta) {
   const auto b = static_cast<int>(x.size());
@@ -278,7 +269,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
                     {"residual_rms_N", numbers(c.fit.residual_rms_N)},
                     {"measured_rms_N", numbers(c.fit.measured_rms_N)},
                     {"unexplained_fraction",
-                     number(unexplained(c.fit.residual_rms_N, c.fit.measured_rms_N))}});
+                     number(unexplained_fraction(c.fit.residual_rms_N, c.fit.measured_rms_N))}});
   }
   j["cuts"] = cuts;
   nlohmann::json classic = {

@@ -38,15 +38,8 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
     pairs.push_back({a, b});
   }
   fit["correlated"] = pairs;
-  double residual2 = 0.0, measured2 = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    residual2 += f.residual_rms_N[static_cast<std::size_t>(a)] *
-                 f.residual_rms_N[static_cast<std::size_t>(a)];
-    measured2 += f.measured_rms_N[static_cast<std::size_t>(a)] *
-                 f.measured_rms_N[static_cast<std::size_t>(a)];
-  }
   // The share of the measured (harmonic) force the model leaves unexplained.
-  fit["unexplained_fraction"] = number(measured2 > 0.0 ? std::sqrt(residual2 / measured2) : 1.0);
+  fit["unexplained_fraction"] = number(unexplained_fraction(f.residual_rms_N, f.measured_rms_N));
 
   nlohmann::json radii = nlohmann::json::array();
   nlohmann::json radii_std = nlohmann::json::array();

@@ -1411,4 +1411,14 @@ JointFitResult fit_cuts(const std::vector<FitCut>& cuts, const FitOptions& optio
   return impl.fit(measured, nullptr);
 }
 
+double unexplained_variance(const std::array<double, 3>& residual_rms_N,
+                            const std::array<double, 3>& measured_rms_N) {
+  double residual2 = 0.0, measured2 = 0.0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    residual2 += residual_rms_N[a] * residual_rms_N[a];
+    measured2 += measured_rms_N[a] * measured_rms_N[a];
+  }
+  return measured2 > 0.0 ? residual2 / measured2 : 1.0;
+}
+
 }  // namespace millwatch::identify

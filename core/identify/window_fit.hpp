@@ -46,6 +46,7 @@
 // Runs in a worker thread (allocates; not for the sample path). One fitter per thread.
 
 #include <array>
+#include <cmath>
 #include <complex>
 #include <functional>
 #include <memory>
@@ -131,6 +132,19 @@ struct FitResult {
   std::string flute_labelling =
       "flute 0 = CE1, the flute with the largest cut (no once-per-revolution reference)";
 };
+
+/// The share of the measured force's variance a fit leaves unexplained, over the harmonics
+/// compared: Σ residual² / Σ measured² over the axes (1 when nothing was measured). What the
+/// model in lockstep tests against identification.max_unexplained.
+double unexplained_variance(const std::array<double, 3>& residual_rms_N,
+                            const std::array<double, 3>& measured_rms_N);
+
+/// The same as a share of the force's RMS: √unexplained_variance (the summaries'
+/// "unexplained_fraction").
+inline double unexplained_fraction(const std::array<double, 3>& residual_rms_N,
+                                   const std::array<double, 3>& measured_rms_N) {
+  return std::sqrt(unexplained_variance(residual_rms_N, measured_rms_N));
+}
 
 /// One cut of a joint fit (fit_cuts): the cut as commanded (its own feed per tooth, speed and
 /// engagement; the tool, the force law and the effects shared with the other cuts), the filter

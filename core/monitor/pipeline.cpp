@@ -537,12 +537,7 @@ void Pipeline::take_identification() {
     return;
   }
   const identify::FitResult& fit = w->fit;
-  double residual2 = 0.0, measured2 = 0.0;
-  for (std::size_t a = 0; a < 3; ++a) {
-    residual2 += fit.residual_rms_N[a] * fit.residual_rms_N[a];
-    measured2 += fit.measured_rms_N[a] * fit.measured_rms_N[a];
-  }
-  const double unexplained = measured2 > 0.0 ? residual2 / measured2 : 1.0;
+  const double unexplained = identify::unexplained_variance(fit.residual_rms_N, fit.measured_rms_N);
   if (!fit.ok || !(unexplained <= config_.identification.max_unexplained)) {
     ++identifications_rejected_;
     return;  // a model that does not fit the cut says nothing reliable about it
