@@ -21,7 +21,7 @@ double RunSummary::Running::mean() const {
 
 double RunSummary::Running::stddev() const {
   if (n < 2) {
-    return n == 1 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    return std::numeric_limits<double>::quiet_NaN();  // one value has no spread to state
   }
   const double m = mean();
   return std::sqrt(
@@ -231,7 +231,7 @@ nlohmann::json RunSummary::to_json() const {
            {"revolutions_measured", revolutions_},
            {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
            {"spindle_rpm", number_or_null(rpm)},
-           {"spindle_rpm_std", number_or_null(rpm_.n > 1 ? rpm_.stddev() : std::nan(""))},
+           {"spindle_rpm_std", number_or_null(rpm_.stddev())},
            {"spindle_rpm_source", rpm_source},
            {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
            {"tooth_event", std::string(status_.event_kind)},
@@ -239,8 +239,7 @@ nlohmann::json RunSummary::to_json() const {
             "flute 0 = CE1, the flute whose period holds the largest force (no "
             "once-per-revolution reference)"},
            {"alpha_deg",
-            {{"mean", number_or_null(alpha_.mean())},
-             {"std", number_or_null(alpha_.n > 1 ? alpha_.stddev() : std::nan(""))}}},
+            {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
            {"tooth_period_s", periods},
            {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
            {"delta_fy_N", number_or_null(delta_fy_.mean())},
