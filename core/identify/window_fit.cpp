@@ -1299,6 +1299,16 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   dr.col(1) = (radii(u, v + h) - r0) / h;
   const Eigen::MatrixXd cov_r = dr * cov.topLeftCorner(2, 2) * dr.transpose();
   const Eigen::VectorXd sys_r = (dr.cwiseAbs2() * sys2.head(2));
+  // A quantity of the runout alone, with σ through its gradient in (u, v).
+  auto through_runout = [&](std::string name, double value, const Eigen::RowVectorXd& g) {
+    Estimate e;
+    e.name = std::move(name);
+    e.value = value;
+    e.sigma_stat = std::sqrt(std::max(0.0, (g * cov.topLeftCorner(2, 2) * g.transpose())(0, 0)));
+    e.sigma_sys = std::sqrt(std::max(0.0, (g.cwiseAbs2() * sys2.head(2))(0, 0)));
+    e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
+    return e;
+  };
   for (int jf2 = 0; jf2 < flutes; ++jf2) {
     Estimate e;
     e.name = "r_ce" + std::to_string(jf2 + 1) + "_um";
@@ -1307,14 +1317,9 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     e.sigma_sys = std::sqrt(std::max(0.0, sys_r[jf2]));
     e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
     out.cutting_radius_um.push_back(e);
-    Eigen::RowVectorXd g = dr.row(jf2) - dr.row(0);
-    Estimate d;
-    d.name = "r_ce" + std::to_string(jf2 + 1) + "_minus_r_ce1_um";
-    d.value = r0[jf2] - r0[0];
-    d.sigma_stat = std::sqrt(std::max(0.0, (g * cov.topLeftCorner(2, 2) * g.transpose())(0, 0)));
-    d.sigma_sys = std::sqrt(std::max(0.0, (g.cwiseAbs2() * sys2.head(2))(0, 0)));
-    d.sigma = std::hypot(d.sigma_stat, d.sigma_sys);
-    out.radius_from_ce1_um.push_back(d);
+    out.radius_from_ce1_um.push_back(
+        through_runout("r_ce" + std::to_string(jf2 + 1) + "_minus_r_ce1_um", r0[jf2] - r0[0],
+                       dr.row(jf2) - dr.row(0)));
   }
   if (flutes >= 2) {
     // The geometric cutting-edge phase angle: how far the edge after CE2 follows CE2, in degrees
@@ -1325,14 +1330,9 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       return model::flute_spacing_rad(pitch, pos, 1, 2 % flutes) * 180.0 / kPi;
     };
     const double a0 = alpha(u, v);
-    const Eigen::RowVector2d da((alpha(u + h, v) - a0) / h, (alpha(u, v + h) - a0) / h);
-    Estimate e;
-    e.name = "alpha_deg";
-    e.value = a0;
-    e.sigma_stat = std::sqrt(std::max(0.0, (da * cov.topLeftCorner(2, 2) * da.transpose())(0, 0)));
-    e.sigma_sys = std::sqrt(std::max(0.0, (da.cwiseAbs2() * sys2.head(2))(0, 0)));
-    e.sigma = std::hypot(e.sigma_stat, e.sigma_sys);
-    out.alpha_deg = e;
+    Eigen::RowVectorXd da(2);
+    da << (alpha(u + h, v) - a0) / h, (alpha(u, v + h) - a0) / h;
+    out.alpha_deg = through_runout("alpha_deg", a0, da);
   }
 
   // Residual and measured RMS per axis over the harmonics compared: √(Σ|X_k|²/2), per cut and
