@@ -59,10 +59,11 @@ MonitorRun::MonitorRun(const monitor::MonitorConfig& config, Options options)
         std::make_unique<messaging::LcmOutput>(*options_.lcm, options_.channels, &shell_sink_);
   }
   pipeline_ = std::make_unique<monitor::Pipeline>(config, sink());
-  summary_.set_identification_off(identification_off(options_.identify, config));
-  if (options_.identify && config.identification.enabled) {
+  std::string off = identification_off(options_.identify, config);
+  if (off.empty()) {
     start_identifier(config);
   }
+  summary_.set_identification_off(std::move(off));
 }
 
 void MonitorRun::start_identifier(const monitor::MonitorConfig& config) {
@@ -132,10 +133,11 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carry(carried_, pipeline_->status());
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
   old->attach_identifier(nullptr);
-  summary_.set_identification_off(identification_off(options_.identify, pipeline_->config()));
-  if (options_.identify && pipeline_->config().identification.enabled) {
+  std::string off = identification_off(options_.identify, pipeline_->config());
+  if (off.empty()) {
     start_identifier(pipeline_->config());  // the new configuration's model
   }  // else the identifier stays idle: no pipeline hands it windows
+  summary_.set_identification_off(std::move(off));
   return old;
 }
 
