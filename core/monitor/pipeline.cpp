@@ -161,7 +161,6 @@ void Pipeline::event(PipelineEventKind kind, std::int64_t sample, std::int64_t c
 void Pipeline::restart_stream(std::int64_t first_sample) {
   if (last_sample_ >= 0) {  // a break ends a stretch: the tracker starts afresh after it
     longest_stretch_ = std::max(longest_stretch_, last_sample_ - stretch_first_ + 1);
-    stream_broken_ = true;
   }
   stretch_first_ = first_sample;
   conditioner_.restart(
@@ -273,7 +272,7 @@ void Pipeline::finish() {
   const std::int64_t longest = std::max(longest_stretch_, last_sample_ - stretch_first_ + 1);
   if (static_cast<double>(longest) < needed_s * config_.sample_rate_hz) {
     event(PipelineEventKind::kRecordTooShort, at, longest, needed_s,
-          stream_broken_
+          longest_stretch_ > 0  // a stretch ended at a break
               ? "the longest stretch between breaks in the stream; the spindle tracker locks on "
                 "two windows (spindle.window_s) of steady cutting that agree"
               : "the spindle tracker locks on two windows (spindle.window_s) of steady cutting "

@@ -216,8 +216,7 @@ class Pipeline {
   std::int64_t stream_start_ = 0;
   std::int64_t last_sample_ = -1;
   std::int64_t stretch_first_ = 0;    // first input sample since the last break in the stream
-  std::int64_t longest_stretch_ = 0;  // input samples of the longest stretch before it
-  bool stream_broken_ = false;
+  std::int64_t longest_stretch_ = 0;  // input samples of the longest stretch before it (0: none)
   std::int64_t measured_until_ = INT64_MIN;  // end of the last revolution measured
   std::int64_t revolutions_ = 0;
   std::int64_t model_builds_ = 0;
