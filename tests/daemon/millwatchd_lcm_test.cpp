@@ -248,6 +248,7 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   const auto residuals = decode_all<model_residual_t>(events(log, "MILLWATCH_RESIDUAL"));
   ASSERT_GE(residuals.size(), static_cast<std::size_t>(0.9 * revolutions));
   double fx_sq = 0.0;
+  double fx_sq_max = 0.0;
   for (std::size_t i = 0; i < residuals.size(); ++i) {
     if (i > 0) {
       EXPECT_GT(residuals[i].revolution, residuals[i - 1].revolution);
@@ -257,10 +258,17 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
     EXPECT_TRUE(std::isfinite(residuals[i].rms_fx_N));
     EXPECT_LT(residuals[i].rms_fx_N, residuals[i].measured_rms_N);  // the model explains the cut
     fx_sq += residuals[i].rms_fx_N * residuals[i].rms_fx_N;
+    fx_sq_max = std::max(fx_sq_max, residuals[i].rms_fx_N * residuals[i].rms_fx_N);
   }
-  EXPECT_NEAR(std::sqrt(fx_sq / static_cast<double>(residuals.size())),
-              live["residual_rms_N"]["fx"].get<double>(),
-              0.02 * live["residual_rms_N"]["fx"].get<double>());
+  // The summary's Fx residual is the RMS over every revolution; the recorded messages' squares
+  // sum to it within 4 % (2 % in RMS). The logger can lose a few messages of the burst when
+  // measuring starts (revolutions still on the nominal model, with 10× the later residual): the
+  // lost revolutions may then account for the rest, up to the largest recorded square each.
+  const double all_fx_sq = std::pow(live["residual_rms_N"]["fx"].get<double>(), 2) * revolutions;
+  const auto lost = static_cast<double>(revolutions) - static_cast<double>(residuals.size());
+  EXPECT_LE(fx_sq, 1.04 * all_fx_sq);
+  EXPECT_GE(fx_sq + 1.04 * lost * fx_sq_max, 0.96 * all_fx_sq)
+      << lost << " residual messages lost by the logger";
 
   // The synchronous average every 30 revolutions, measured and model on 256 bins.
   const auto sync = decode_all<sync_average2_t>(events(log, "MILLWATCH_SYNC_AVERAGE"));
