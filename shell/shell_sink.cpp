@@ -17,8 +17,10 @@ void ShellSink::on_alert(const monitor::Alert& a) {
     observer_->on_alert(a);
   }
   if (a.active) {
-    spdlog::warn("{}: ALERT {} at revolution {}: {}", source_, monitor::to_string(a.kind),
-                 a.revolution, a.message.data());
+    spdlog::warn("{}: ALERT {} {}: {}", source_, monitor::to_string(a.kind),
+                 a.revolution < 0 ? std::string("before the first revolution")
+                                  : fmt::format("at revolution {}", a.revolution),
+                 a.message.data());
   } else {
     spdlog::info("{}: {}", source_, a.message.data());
   }

@@ -146,9 +146,12 @@ std::string summary_text(const json& j) {
   } else {
     s += fmt::format("  alerts        {}\n", alerts.size());
     for (const auto& a : alerts) {
-      s += fmt::format("    rev {:>6}  {} {}\n", a.value("revolution", std::int64_t{0}),
-                       a.value("active", true) ? "RAISED " : "cleared",
-                       a.value("message", std::string()));
+      // Revolution −1: a sensor alert before the first revolution.
+      const auto revolution = a.value("revolution", std::int64_t{0});
+      s += fmt::format(
+          "    {}  {} {}\n",
+          revolution < 0 ? std::string("before rev 0") : fmt::format("rev {:>8}", revolution),
+          a.value("active", true) ? "RAISED " : "cleared", a.value("message", std::string()));
     }
   }
   const json& warnings = j.value("warnings", json::array());

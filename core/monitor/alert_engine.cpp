@@ -216,6 +216,9 @@ Alert* AlertEngine::emit(AlertKind kind, AlertSeverity severity, bool active,
   alert.threshold = threshold;
   alert.quantity = quantity;
   alert.message[0] = '\0';
+  if (active) {
+    raised_[static_cast<std::size_t>(kind)] = Raised{value, threshold, quantity};
+  }
   return &alert;
 }
 
@@ -700,26 +703,26 @@ bool AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
 
 void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t) {
   rebaselined_ = false;
+  // The new baseline has no value to compare yet: the clear repeats what the alert was raised on.
+  const auto clear = [&](AlertKind kind, const char* what) {
+    const Raised& r = raised_[static_cast<std::size_t>(kind)];
+    write_message(emit(kind, AlertSeverity::kInfo, false, rev, t, r.value, r.threshold, r.quantity),
+                  "%s cleared: new baseline (raised on %.*s %.4g against %.4g)", what,
+                  static_cast<int>(r.quantity.size()), r.quantity.data(), r.value, r.threshold);
+  };
   if (change_active_) {
     change_active_ = false;
     change_identify_ = false;
-    write_message(emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, false, rev, t, 0.0, 0.0,
-                       "flute_imbalance"),
-                  "runout change cleared: new baseline");
+    clear(AlertKind::kRunoutChange, "runout change");
   }
   if (wear_active_) {
     wear_active_ = false;
-    write_message(emit(AlertKind::kWearDrift, AlertSeverity::kInfo, false, rev, t, 0.0,
-                       wear_from_estimates_ ? config_.coefficient_increase : config_.wear_increase,
-                       wear_from_estimates_ ? "coefficient_rise" : "flute_force_rise"),
-                  "wear drift cleared: new baseline");
+    clear(AlertKind::kWearDrift, "wear drift");
   }
   if (breakage_.active) {
     breakage_.active = false;
     breakage_.streak = 0;
-    write_message(emit(AlertKind::kBreakage, AlertSeverity::kInfo, false, rev, t, 0.0, 0.0,
-                       "flute_strength_fraction_of_baseline"),
-                  "breakage cleared: new baseline");
+    clear(AlertKind::kBreakage, "breakage");
   }
 }
 

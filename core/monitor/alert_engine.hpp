@@ -144,8 +144,8 @@ std::string_view to_string(AlertKind kind);
 struct Alert {
   AlertKind kind = AlertKind::kSensor;
   AlertSeverity severity = AlertSeverity::kWarning;
-  bool active = true;  ///< raised (true) or cleared (false)
-  std::int64_t revolution = 0;
+  bool active = true;           ///< raised (true) or cleared (false)
+  std::int64_t revolution = 0;  ///< at detection; −1: before the first revolution (a sensor alert)
   std::int64_t utime_us = 0;
   double value = 0.0;
   double threshold = 0.0;
@@ -271,6 +271,12 @@ class AlertEngine {
     bool active = false;
     int streak = 0;
   };
+  /// What an alert was raised on: a clear by a new baseline reports it (there is no new value).
+  struct Raised {
+    double value = 0.0;
+    double threshold = 0.0;
+    std::string_view quantity;
+  };
   struct Flutes {
     int count = 0;
     std::array<double, kMaxFlutes> force_N{};
@@ -352,6 +358,7 @@ class AlertEngine {
   std::vector<double> baseline_force_N_;
   std::vector<double> series_, scratch_, block_medians_;
   bool rebaselined_ = false;
+  std::array<Raised, 6> raised_{};  // by AlertKind: the newest raise of each kind
 
   // The block being filled: shares [flute·B + i] and mean force [kMaxFlutes·B + i].
   std::vector<double> block_values_;
@@ -384,7 +391,7 @@ class AlertEngine {
   bool estimates_expected_ = false;
   [[nodiscard]] bool follow_estimates() const { return estimates_ || estimates_expected_; }
   std::int64_t last_window_ = -1;
-  std::int64_t last_revolution_ = 0, last_utime_us_ = 0;
+  std::int64_t last_revolution_ = -1, last_utime_us_ = 0;  // −1: no revolution yet
   std::array<double, kRecentRevolutions> recent_rpm_{};
   std::array<std::int64_t, kRecentRevolutions> recent_rpm_revolution_{};
   EstimateBaseline estimate_base_;

@@ -383,6 +383,30 @@ TEST(AlertEngine, CollapsingFluteRaisesBreakageWithinItsPersistence) {
   EXPECT_EQ(chipped.count(AlertKind::kRunoutChange, true), 1);
 }
 
+// A new baseline (another tool, a re-lock) while a flute is broken clears the breakage, with the
+// figures it was raised on: the new tool has none yet.
+TEST(AlertEngine, BreakageClearedByANewBaselineKeepsItsFigures) {
+  Feed run({}, 43);
+  run.noisy(2000, 3, {1.0, 0.9, 0.8}, 0.02);
+  run.noisy(100, 3, {1.0, 0.045, 0.8}, 0.02);
+  ASSERT_EQ(run.count(AlertKind::kBreakage, true), 1);
+  run.engine.rebaseline();
+  run.noisy(1, 3, {1.0, 0.9, 0.8}, 0.02);
+  ASSERT_EQ(run.count(AlertKind::kBreakage, false), 1);
+  const Alert& raised = *run.first(AlertKind::kBreakage, true);
+  const Alert& cleared = *run.first(AlertKind::kBreakage, false);
+  EXPECT_EQ(cleared.revolution, 2100);
+  EXPECT_EQ(cleared.quantity, "flute_strength_fraction_of_baseline");
+  EXPECT_NEAR(cleared.value, 0.05, 0.01);
+  EXPECT_EQ(cleared.threshold, 0.3);
+  EXPECT_EQ(cleared.value, raised.value);
+  EXPECT_NE(std::string(cleared.message.data())
+                .find("breakage cleared: new baseline (raised on flute_strength_fraction_of_"
+                      "baseline 0.0"),
+            std::string::npos)
+      << cleared.message.data();
+}
+
 /// A revolution measured from samples as the revolution meter does: each flute's force pulse
 /// F_j·sin(πu) along a direction, plus channel offsets and white noise; peaks are the samples
 /// of largest magnitude, ranges max − min.
@@ -479,8 +503,15 @@ TEST(AlertEngine, RebaselineClearsChangeAlertsAndAcceptsTheNewLevel) {
   run.engine.rebaseline();
   run.noisy(1, 2, {1.08, 0.92}, 0.01);
   ASSERT_EQ(run.count(AlertKind::kRunoutChange, false), 1);
-  EXPECT_NE(std::string(run.first(AlertKind::kRunoutChange, false)->message.data()).find("new"),
-            std::string::npos);
+  // The new baseline has no figure yet: the clear repeats what the alert was raised on, not 0.
+  const Alert& raised = *run.first(AlertKind::kRunoutChange, true);
+  const Alert& cleared = *run.first(AlertKind::kRunoutChange, false);
+  EXPECT_NE(std::string(cleared.message.data()).find("cleared: new baseline"), std::string::npos)
+      << cleared.message.data();
+  EXPECT_EQ(cleared.quantity, raised.quantity);
+  EXPECT_EQ(cleared.value, raised.value);
+  EXPECT_EQ(cleared.threshold, raised.threshold);
+  EXPECT_NEAR(cleared.value, 0.16, 0.03);  // the imbalance 8 % − (−8 %) it was raised on
   run.noisy(20000, 2, {1.08, 0.92}, 0.01);
   EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
   EXPECT_NEAR(run.engine.baseline().share[0], 0.08, 0.003);
@@ -501,6 +532,9 @@ TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
   engine.on_input(c, 1000000, sink);
   ASSERT_EQ(alerts.size(), 2u);
   EXPECT_TRUE(alerts[0].active);
+  // Before any revolution: not revolution 0, which is the first revolution's number.
+  EXPECT_EQ(alerts[0].revolution, -1);
+  EXPECT_EQ(alerts[0].utime_us, 500000);
   EXPECT_NE(std::string(alerts[0].message.data()).find("0.400 % of recent samples"),
             std::string::npos)
       << alerts[0].message.data();

@@ -56,5 +56,16 @@ TEST(SummaryText, PrintsAWarningWhole) {
       << summary_text(j);
 }
 
+// A sensor alert before the first revolution (revolution −1) says so, not "rev -1" or "rev 0".
+TEST(SummaryText, AlertsSayTheirRevolutionOrThatTheyCameBeforeTheFirst) {
+  nlohmann::json j = summary(41, 41);
+  j["alerts"] = {{{"revolution", -1}, {"active", true}, {"message", "sensor trouble: a"}},
+                 {{"revolution", 412}, {"active", false}, {"message", "sensor trouble cleared"}}};
+  const std::string text = summary_text(j);
+  EXPECT_NE(text.find("    before rev 0  RAISED  sensor trouble: a\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("    rev      412  cleared sensor trouble cleared\n"), std::string::npos)
+      << text;
+}
+
 }  // namespace
 }  // namespace millwatch::shell
