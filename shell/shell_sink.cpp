@@ -66,6 +66,14 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
     case monitor::PipelineEventKind::kNoSteadySignal:
       spdlog::warn("{}: no steady tooth-passing signal, no speed stated: {}", source_, e.detail);
       return;
+    case monitor::PipelineEventKind::kNoTemplate:  // no sample count: the lock's speed instead
+      if (n <= 10) {
+        spdlog::warn(
+            "{}: tooth events not found at t = {:.3f} s (sample {}, locked at {:.1f} "
+            "rpm): {}",
+            source_, t_s, e.sample, e.value, e.detail);
+      }
+      return;
     default:
       break;
   }
