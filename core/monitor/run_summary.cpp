@@ -184,7 +184,10 @@ nlohmann::json RunSummary::to_json() const {
     warn("no model residuals",
          "the lockstep model was never aligned with the measured revolutions");
   }
-  if (valid_ > 0 && valid_ < config_.alpha_window_revolutions) {
+  if (flutes_ < 2) {
+    // With one flute α is 360° and ΔFy 0 by definition [000]: they say nothing of the cut.
+    warn("no alpha", "one flute: α and ΔFy compare two cutting edges");
+  } else if (valid_ > 0 && valid_ < config_.alpha_window_revolutions) {
     warn("short window", "α and ΔFy are averaged over " + std::to_string(valid_) +
                              " revolutions, fewer than tooth_periods.window_revolutions (" +
                              std::to_string(config_.alpha_window_revolutions) + ")");
@@ -225,6 +228,9 @@ nlohmann::json RunSummary::to_json() const {
                    {"fy", number_or_null(residual_[1].rms())},
                    {"fz", number_or_null(residual_[2].rms())},
                    {"measured", number_or_null(measured_rms_.rms())}};
+  const bool two_edges = flutes_ >= 2;
+  const json alpha = {{"mean", two_edges ? number_or_null(alpha_.mean()) : json(nullptr)},
+                      {"std", two_edges ? number_or_null(alpha_.stddev()) : json(nullptr)}};
   json out{{"samples", samples},
            {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
            {"revolutions", valid_},
@@ -238,15 +244,14 @@ nlohmann::json RunSummary::to_json() const {
            {"flute_labelling",
             "flute 0 = CE1, the flute whose period holds the largest force (no "
             "once-per-revolution reference)"},
-           {"alpha_deg",
-            {{"mean", number_or_null(alpha_.mean())}, {"std", number_or_null(alpha_.stddev())}}},
+           {"alpha_deg", alpha},
            {"tooth_period_s", periods},
            {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
-           {"delta_fy_N", number_or_null(delta_fy_.mean())},
+           {"delta_fy_N", two_edges ? number_or_null(delta_fy_.mean()) : json(nullptr)},
            {"residual_rms_N", residual},
            {"model",
-            {{"alpha_deg", number_or_null(model_alpha_.mean())},
-             {"delta_fy_N", number_or_null(model_delta_fy_.mean())},
+            {{"alpha_deg", two_edges ? number_or_null(model_alpha_.mean()) : json(nullptr)},
+             {"delta_fy_N", two_edges ? number_or_null(model_delta_fy_.mean()) : json(nullptr)},
              {"lockstep", config_.lockstep},
              {"builds", status_.model_builds},
              // Identified parameters the model in lockstep took (and fits it did not take).

@@ -63,5 +63,54 @@ TEST(RunSummary, AWarningCountsSamplesNotWindows) {
   EXPECT_EQ(w[0]["detail"], "20 tracker windows: weak or irregular cutting");
 }
 
+/// A summary of `count` valid revolutions of a `flutes`-flute tool whose flutes share the turn.
+nlohmann::json valid_revolutions(int flutes, int count) {
+  MonitorConfig config;
+  config.model.tool.flutes = flutes;
+  RunSummary summary(config);
+  for (int n = 0; n < count; ++n) {
+    RevolutionRecord r;
+    r.revolution = n;
+    r.spindle_rpm = 25000.0;
+    r.measured.flutes = flutes;
+    r.measured.bounded = true;
+    r.measured.valid = true;
+    r.measured.alpha_deg = 360.0 / flutes + (n % 2 == 0 ? 0.5 : -0.5);
+    r.measured.delta_fy_N = flutes > 1 ? 0.1 : 0.0;
+    for (int j = 0; j < flutes; ++j) {
+      r.measured.flute_period_s[static_cast<std::size_t>(j)] = 60.0 / 25000.0 / flutes;
+    }
+    summary.add(r);
+  }
+  return summary.to_json();
+}
+
+// α and ΔFy compare two cutting edges: for a one-flute tool they are 360° and 0 by definition
+// and tell nothing; the summary gives none, with the reason (a warning, as every null has), and
+// no "short window" for them.
+TEST(RunSummary, AOneFluteToolHasNoAlphaOrDeltaFyAndSaysWhy) {
+  const nlohmann::json one = valid_revolutions(1, 5);
+  EXPECT_TRUE(one["alpha_deg"]["mean"].is_null()) << one["alpha_deg"];
+  EXPECT_TRUE(one["alpha_deg"]["std"].is_null()) << one["alpha_deg"];
+  EXPECT_TRUE(one["delta_fy_N"].is_null());
+  EXPECT_TRUE(one["model"]["alpha_deg"].is_null());
+  EXPECT_NEAR(one["tooth_period_s"][0].get<double>(), 60.0 / 25000.0, 1e-12);  // still measured
+  int no_alpha = 0;
+  for (const auto& w : one["warnings"]) {  // every null with its reason
+    EXPECT_NE(w["kind"], "short window") << w.dump();
+    if (w["kind"] == "no alpha") {
+      ++no_alpha;
+      EXPECT_EQ(w["detail"], "one flute: α and ΔFy compare two cutting edges");
+    }
+  }
+  EXPECT_EQ(no_alpha, 1) << one["warnings"].dump();
+  const nlohmann::json two = valid_revolutions(2, 5);
+  EXPECT_NEAR(two["alpha_deg"]["mean"].get<double>(), 180.1, 1e-9);
+  for (const auto& w : two["warnings"]) {
+    EXPECT_NE(w["kind"], "no alpha") << w.dump();
+  }
+  EXPECT_NEAR(two["delta_fy_N"].get<double>(), 0.1, 1e-12);
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
