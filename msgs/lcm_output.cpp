@@ -128,7 +128,9 @@ bool LcmOutput::send(const std::string& channel, const Message& message) {
 void LcmOutput::publish(const Item& item) {
   if (const auto* r = std::get_if<monitor::RevolutionRecord>(&item)) {
     send(channels_.tooth_periods, tooth_periods(*r));
-    send(channels_.flute_peaks, flute_peaks(*r));
+    if (r->measured.bounded) {  // flute windows known; otherwise no peak was measured
+      send(channels_.flute_peaks, flute_peaks(*r));
+    }
     if (r->model_valid) {
       send(channels_.residual, model_residual(*r));
     }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -96,7 +97,10 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   }
   ASSERT_FALSE(direct.records.empty());
   ASSERT_EQ(rx.periods.size(), direct.records.size());
-  ASSERT_EQ(rx.peaks.size(), direct.records.size());
+  const auto bounded = std::count_if(direct.records.begin(), direct.records.end(),
+                                     [](const auto& r) { return r.measured.bounded; });
+  ASSERT_EQ(static_cast<std::ptrdiff_t>(rx.peaks.size()), bounded);
+  ASSERT_EQ(rx.peaks.size(), direct.records.size());  // a steady cut: every revolution bounded
   for (std::size_t i = 0; i < direct.records.size(); ++i) {
     const auto& r = direct.records[i];
     EXPECT_EQ(rx.periods[i].revolution, r.revolution);
@@ -153,6 +157,45 @@ TEST(LcmConvert, ForceBlockRoundTripKeepsEverySample) {
   EXPECT_EQ(v.utime_us, 123456);
   EXPECT_EQ(v.seq, 7);
   EXPECT_EQ(std::vector<double>(v.fy_N.begin(), v.fy_N.end()), fy);
+}
+
+// Flute peaks are published where they were measured: a revolution whose CE1 events were not
+// both found has no flute windows (its peaks would be zeros); one whose CE1 events bound it has
+// them even when a flute between left no event (a broken flute: valid false, its low peak kept).
+TEST(LcmOutput, FlutePeaksOnlyForRevolutionsWhoseFluteWindowsAreKnown) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  Received rx;
+  const ChannelNames ch;
+  lcm.subscribe(ch.tooth_periods, &Received::on_periods, &rx)->setQueueCapacity(100);
+  lcm.subscribe(ch.flute_peaks, &Received::on_peaks, &rx)->setQueueCapacity(100);
+  {
+    LcmOutput out(lcm, ch);
+    monitor::RevolutionRecord r;
+    r.measured.flutes = 2;
+    r.spindle_rpm = 25000.0;
+    r.revolution = 0;  // not bounded: nothing measured
+    out.on_revolution(r);
+    r.revolution = 1;  // bounded, flute 2 left no event
+    r.measured.bounded = true;
+    r.measured.peak_resultant_N = {1.2, 0.05};
+    out.on_revolution(r);
+    r.revolution = 2;  // every event found
+    r.measured.valid = true;
+    r.measured.peak_resultant_N = {1.2, 1.1};
+    out.on_revolution(r);
+    ASSERT_TRUE(out.drain());
+  }
+  while (lcm.handleTimeout(10) > 0) {
+  }
+  ASSERT_EQ(rx.periods.size(), 3u);  // every revolution
+  EXPECT_FALSE(rx.periods[0].valid);
+  ASSERT_EQ(rx.peaks.size(), 2u);
+  EXPECT_EQ(rx.peaks[0].revolution, 1);
+  EXPECT_FALSE(rx.peaks[0].valid);
+  EXPECT_DOUBLE_EQ(rx.peaks[0].peak_resultant_N[1], 0.05);
+  EXPECT_EQ(rx.peaks[1].revolution, 2);
+  EXPECT_TRUE(rx.peaks[1].valid);
 }
 
 }  // namespace
