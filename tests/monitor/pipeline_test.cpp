@@ -536,6 +536,33 @@ TEST(Pipeline, ASyncAverageIsNamedByItsLastRevolution) {
   }
 }
 
+// Every window of revolutions is handed on as it fills, whatever the block size: blocks holding
+// several windows' revolutions (calibrate read 4,096 samples at a time: at 50 kHz and 25,252 rpm,
+// 34 revolutions; at 20 kHz and 31,831 rpm, 108) gave one window per block and left a third of
+// the windows (or two thirds) unfitted.
+TEST(Pipeline, EveryWindowOfRevolutionsWhateverTheBlockSize) {
+  struct Sink : test::Collector {
+    std::vector<std::int64_t> windows;  // their last revolutions
+    void on_sync_average(const SyncAverage&, const Lockstep*, std::int64_t revolution,
+                         std::int64_t) override {
+      windows.push_back(revolution);
+    }
+  };
+  const sim::Scenario s = cut_at_50khz(true);
+  const Recording r = record(s);
+  Sink small, large;
+  Pipeline ps(monitor_for(s), small);
+  Pipeline pl(monitor_for(s), large);
+  replay(ps, r, 250);
+  replay(pl, r, 8192);  // 70 revolutions a block
+  const int window = monitor_for(s).sync_window_revolutions;
+  ASSERT_GE(small.windows.size(), 5u);
+  EXPECT_EQ(large.windows, small.windows);
+  for (std::size_t i = 1; i < large.windows.size(); ++i) {
+    EXPECT_EQ(large.windows[i] - large.windows[i - 1], window) << i;
+  }
+}
+
 // At 333.3 kHz (measured on every third sample) a lost block of 1001 samples — not a whole
 // number of strides — is bridged: the lock holds, the gap's event names input samples, and the
 // revolutions after it are measured at the right times.
