@@ -126,6 +126,9 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     }
   }
   pipeline.finish();
+  if (bad > 0) {  // the first five were named above; the total, always
+    spdlog::warn("{}: {} bad {} skipped", input.string(), bad, source->record_unit());
+  }
   if (windows.windows().empty()) {
     throw std::runtime_error(fmt::format(
         "{}: too short to calibrate on ({}): {} revolution(s) measured, one window needs {} "

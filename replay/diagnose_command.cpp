@@ -72,7 +72,10 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
           loaded.sidecar.string(), *loaded.sidecar_feed_per_tooth_um));
     }
     loaded.json["model"]["process"]["feed_per_tooth_um"] = f;
-  } else if (several && !loaded.sidecar_feed_per_tooth_um) {
+  } else if (loaded.sidecar_feed_per_tooth_um) {
+    // The cut's own feed wins over --config's (several cuts share one --config).
+    loaded.json["model"]["process"]["feed_per_tooth_um"] = *loaded.sidecar_feed_per_tooth_um;
+  } else if (several) {
     throw std::runtime_error(input.string() + ": no feed per tooth (" + where +
                              "): no sidecar states it; give --feeds-um, one per cut");
   }
@@ -99,29 +102,57 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   }
   const monitor::MonitorConfig config = parse_monitor_config(loaded);
 
-  // The record in the model frame, trimmed to [--from-s, --to-s).
+  // The record in the model frame, trimmed to [--from-s, --to-s) in seconds from its first
+  // sample, along the recording's own clock (an LCM log's is the epoch's). The model is fitted
+  // along an unbroken time base: a gap or a sample that is not a number within the stretch
+  // stops the diagnosis, saying where.
   LoadedCut cut;
   cut.input = input.string();
   cut.config_name = loaded.name;
   double rate = 0.0;
-  std::int64_t i_sample = 0;
+  double last_t = 0.0;
+  double end_t = 0.0;  // after the record's last sample
+  std::int64_t first_us = 0;
   while (auto block = source->next(65536)) {
     if (rate <= 0.0) {
       rate = block->sample_rate_hz;
+      first_us = block->utime_us;
     }
-    for (std::size_t i = 0; i < block->fx_N.size(); ++i, ++i_sample) {
-      const double t = static_cast<double>(i_sample) / rate;
+    const double t0 = static_cast<double>(block->utime_us - first_us) * 1e-6;
+    end_t = t0 + static_cast<double>(block->fx_N.size()) / rate;
+    for (std::size_t i = 0; i < block->fx_N.size(); ++i) {
+      const double t = t0 + static_cast<double>(i) / rate;
       if (t < o.from_s || (o.to_s > 0.0 && t >= o.to_s)) {
         continue;
+      }
+      if (!cut.record.force_N[0].empty() && t - last_t > 1.5 / rate) {
+        throw std::runtime_error(fmt::format(
+            "{}: {} sample(s) missing between {:.6f} s and {:.6f} s from the record's first "
+            "sample: the diagnosis needs an unbroken record; choose a stretch without the gap "
+            "with --from-s/--to-s",
+            input.string(), std::llround((t - last_t) * rate) - 1, last_t, t));
+      }
+      if (!std::isfinite(block->fx_N[i]) || !std::isfinite(block->fy_N[i]) ||
+          !std::isfinite(block->fz_N[i])) {
+        throw std::runtime_error(fmt::format(
+            "{}: the sample {:.6f} s from the record's first is not a finite number: choose a "
+            "stretch without it with --from-s/--to-s",
+            input.string(), t));
       }
       const auto f = config.axis_map.to_model({block->fx_N[i], block->fy_N[i], block->fz_N[i]});
       cut.record.force_N[0].push_back(f[0]);
       cut.record.force_N[1].push_back(f[1]);
+      last_t = t;
     }
   }
   if (rate <= 0.0 || cut.record.force_N[0].empty()) {
-    throw std::runtime_error(input.string() + ": no samples to diagnose" +
-                             (o.from_s > 0.0 || o.to_s > 0.0 ? " within --from-s/--to-s" : ""));
+    throw std::runtime_error(
+        input.string() + ": no samples to diagnose" +
+        (o.from_s > 0.0 || o.to_s > 0.0
+             ? fmt::format(" within --from-s/--to-s (the record spans {:.6f} s from its first "
+                           "sample)",
+                           end_t)
+             : std::string()));
   }
   cut.record.sample_rate_hz = rate;
   if (bad > 0) {
@@ -165,9 +196,12 @@ void print_steps(const diagnose::Diagnosis& d) {
               d.initial.residual_rms_N[0], d.initial.residual_rms_N[1], d.noise_floor_N[0],
               d.noise_floor_N[1]);
   for (const auto& s : d.steps) {
-    std::printf("  + %-22s residual %.4f, %.4f N  ΔBIC %.1f (over %s by %.1f)\n", s.added.c_str(),
-                s.residual_rms_N[0], s.residual_rms_N[1], s.gain,
-                s.runner_up.empty() ? "-" : s.runner_up.c_str(), s.margin_over_runner_up);
+    std::printf(
+        "  + %-22s residual %.4f, %.4f N  ΔBIC %.1f%s\n", s.added.c_str(), s.residual_rms_N[0],
+        s.residual_rms_N[1], s.gain,
+        s.runner_up.empty()
+            ? ""
+            : fmt::format(" (over {} by {:.1f})", s.runner_up, s.margin_over_runner_up).c_str());
   }
   for (const auto& p : d.at_bound) {
     std::printf("  %s held at its %s bound %g (outside the physical range)\n", p.name.c_str(),
@@ -178,6 +212,9 @@ void print_steps(const diagnose::Diagnosis& d) {
 }  // namespace
 
 int run_diagnose(const DiagnoseCliOptions& o) {
+  if (o.max_steps < 0) {
+    throw std::runtime_error(fmt::format("--max-steps: {} is negative", o.max_steps));
+  }
   if (o.start != "plain" && o.start != "configured") {
     throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");
   }

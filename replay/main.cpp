@@ -180,7 +180,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--start", o->start,
                   "Starting model: 'plain' (no effects, default) or 'configured'");
   cmd->add_option("--band", o->band_hz, "Upper end of the compared band, Hz (default 0.4·fs)");
-  cmd->add_option("--from-s", o->from_s, "Diagnose from this time on (s; skip the entry)");
+  cmd->add_option("--from-s", o->from_s,
+                  "Diagnose from this time on (s from the record's first sample; skip the entry)");
   cmd->add_option("--to-s", o->to_s, "Diagnose up to this time (s)");
   cmd->add_option("--candidates", o->candidates, "Comma-separated candidates (default: all)");
   cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 5)");

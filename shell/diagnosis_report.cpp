@@ -31,12 +31,24 @@ std::string quoted(const fs::path& p) {
   return out + "'";
 }
 
+}  // namespace
+
 std::string value_sigma(double v, double s) {
   if (s > 0.0 && std::isfinite(s)) {
-    return fmt::format("{:.4g} ± {:.2g}", v, s);
+    // The value to the σ's second significant digit (at least 4 digits): 24749.998 ± 0.001, not
+    // 2.475e+04 ± 0.001.
+    const int digits = v != 0.0 && std::isfinite(v)
+                           ? std::clamp(static_cast<int>(std::floor(std::log10(std::fabs(v))) -
+                                                         std::floor(std::log10(s))) +
+                                            2,
+                                        4, 15)
+                           : 4;
+    return fmt::format("{:.{}g} ± {:.2g}", v, digits, s);
   }
   return fmt::format("{:.4g}", v);
 }
+
+namespace {
 
 std::string stage_label(const Stage& s, std::size_t i) {
   return i == 0 ? std::string("starting model") : "+ " + s.added;
@@ -212,9 +224,9 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
           std::hypot(s.localisation.segment_rms_N[k][0], s.localisation.segment_rms_N[k][1]));
     }
     md += ".\n";
-    const auto& cands =
-        i + 1 < stages.size() ? scored.candidates : (i == 0 ? d.initial.candidates : s.candidates);
-    if (!cands.empty() && (i + 1 < stages.size() || i == 0)) {
+    // From this model: the round that chose the next stage, or after the last, the final round.
+    const auto& cands = i + 1 < stages.size() ? scored.candidates : d.final_candidates;
+    if (!cands.empty()) {
       md +=
           "\nCandidates scored from this model:\n\n| candidate | ΔBIC gained | residual fx / fy "
           "(N) | parameters |\n|---|---|---|---|\n";

@@ -26,6 +26,10 @@ struct ReportFiles {
   std::string plot_problem;  ///< why the plots are missing ("" if drawn)
 };
 
+/// "v ± σ" with v to σ's second significant digit (at least 4): "24749.998 ± 0.001", so that the
+/// estimate can be read to its uncertainty; "v" alone (4 digits) without a σ.
+std::string value_sigma(double v, double sigma);
+
 /// Writes the report into `dir` (created). @throws std::runtime_error naming a file that cannot
 /// be written. A missing or failing gnuplot leaves the plots out (said in the report).
 ReportFiles write_diagnosis_report(const diagnose::Diagnosis& d, const std::filesystem::path& dir,

@@ -1388,8 +1388,7 @@ Localisation Diagnoser::localise(const State& s, const Evaluation& ev, ModelView
         jmax = j;
       }
     }
-    line += "; synchronous residual largest on flute " + std::to_string(jmax) + " (CE" +
-            std::to_string(jmax + 1) + ")";
+    line += "; synchronous residual largest on CE" + std::to_string(jmax + 1);
   }
   const double edge = std::hypot(loc.entry_exit_rms_N[0], loc.entry_exit_rms_N[1]);
   const double middle = std::hypot(loc.middle_rms_N[0], loc.middle_rms_N[1]);
@@ -1546,6 +1545,7 @@ Diagnosis Diagnoser::run() {
     if (best < 0) {
       out.stop_reason =
           scores.empty() ? "every candidate is in the model" : "no candidate could be fitted";
+      out.final_candidates = scores;
       break;
     }
     const auto& win = scores[static_cast<std::size_t>(best)];
@@ -1554,10 +1554,7 @@ Diagnosis Diagnoser::run() {
           format("no candidate improves the criterion by %.0f or more (best: ", opt_.significance) +
           win.name + format(", ΔBIC %.1f)", win.gain);
       out.initial.candidates = step == 0 ? scores : out.initial.candidates;
-      if (step > 0) {
-        out.steps.back().candidates.insert(out.steps.back().candidates.end(), scores.begin(),
-                                           scores.end());
-      }
+      out.final_candidates = scores;  // scored from the final model, not the last step's round
       break;
     }
     State next = states[static_cast<std::size_t>(best)];
@@ -1600,6 +1597,15 @@ Diagnosis Diagnoser::run() {
       out.steps.empty() ? out.initial.residual_rms_N : out.steps.back().residual_rms_N;
   const double ratio = std::max(last_rms[0] / std::max(out.noise_floor_N[0], 1e-300),
                                 last_rms[1] / std::max(out.noise_floor_N[1], 1e-300));
+  // "Look outside the catalogue" only when the whole catalogue was scored and none gained.
+  const bool step_limited = out.stop_reason == "the step limit was reached";
+  const bool whole_catalogue = names.size() >= catalogue().size();
+  const std::string unexplained =
+      step_limited ? format("the step limit (%.0f) stopped the search", opt_.max_steps)
+      : whole_catalogue
+          ? std::string("look outside the catalogue")
+          : format("only %.0f of the catalogue's %.0f candidates were tried",
+                   static_cast<double>(names.size()), static_cast<double>(catalogue().size()));
   if (out.named_effects.empty()) {
     out.verdict =
         at_floor(current)
@@ -1607,10 +1613,10 @@ Diagnosis Diagnoser::run() {
                   "The model lacks nothing the data can show: its residual (%.4f, %.4f N) is "
                   "at the noise floor (%.4f, %.4f N).",
                   last_rms[0], last_rms[1], out.noise_floor_N[0], out.noise_floor_N[1])
-            : format(
-                  "No effect of the catalogue explains the residual (%.1f× the noise floor): "
-                  "look outside the catalogue.",
-                  ratio);
+        : step_limited
+            ? format("No effect was added (%.1f× the noise floor): ", ratio) + unexplained + "."
+            : format("No effect tried explains the residual (%.1f× the noise floor): ", ratio) +
+                  unexplained + ".";
   } else {
     std::string list;
     for (std::size_t i = 0; i < out.named_effects.size(); ++i) {
@@ -1622,7 +1628,7 @@ Diagnosis Diagnoser::run() {
                          out.initial.residual_rms_N[0], out.initial.residual_rms_N[1], last_rms[0],
                          last_rms[1]) +
                   format(" (%.2f× the noise floor)", ratio) +
-                  (at_floor(current) ? "." : "; something else remains.");
+                  (at_floor(current) ? "." : "; something else remains (" + unexplained + ").");
     if (out.named_effects.size() > 1) {
       out.verdict.replace(out.verdict.find("adding it"), 9, "adding them");
     }

@@ -176,6 +176,8 @@ struct Diagnosis {
   Stage initial;
   std::vector<Stage> steps;
   std::vector<std::string> named_effects;  ///< in the order added
+  /// The last round: every candidate scored from the final model (none gained enough).
+  std::vector<CandidateScore> final_candidates;
   std::string stop_reason;
   std::string verdict;  ///< one sentence
   model::ModelConfig final_model;

@@ -100,8 +100,15 @@ nlohmann::json to_json(const Diagnosis& d) {
                    {"extension", c.extension},
                    {"parameters", c.parameters}});
   }
+  nlohmann::json final_candidates = nlohmann::json::array();
+  {
+    Stage last_round;  // the candidates as a stage writes them
+    last_round.candidates = d.final_candidates;
+    final_candidates = to_json(last_round)["candidates"];
+  }
   return {{"named_effects", d.named_effects},
           {"steps", steps},
+          {"final_candidates", final_candidates},
           {"initial", to_json(d.initial)},
           {"initial_residual_rms_N", axes(d.initial.residual_rms_N)},
           {"final_residual_rms_N", axes(final_rms)},

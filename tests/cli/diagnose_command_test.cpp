@@ -4,11 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/model/model_config.hpp"
 #include "tests/support/hidden_effect_cut.hpp"
@@ -124,6 +126,75 @@ TEST(DiagnoseCommand, BadInputGivesAClearError) {
   EXPECT_NE(r.output.find("mains_hum"), std::string::npos) << r.output;
   // No report is left behind by a failed run.
   EXPECT_FALSE(fs::exists(dir / "r3" / "report.json"));
+  r = test::run_command(cli + f.csv.string() + " --config " + f.config.string() +
+                        " --max-steps -1 --report " + (dir / "r5").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--max-steps: -1 is negative"), std::string::npos) << r.output;
+
+  // The model is fitted along an unbroken time base: rows missing (a gap) or a sample that is
+  // not a number within the stretch stop the diagnosis, saying where; outside it they do not.
+  std::ifstream csv(f.csv);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(csv, line);) {
+    lines.push_back(line);
+  }
+  ASSERT_GT(lines.size(), 601u);
+  auto write_without = [&](const fs::path& out, std::size_t from, std::size_t to,
+                           const std::string& instead) {
+    std::ofstream o(out);
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      if (i < from || i >= to) {
+        o << lines[i] << "\n";
+      } else if (!instead.empty() && i == from) {
+        o << instead << "\n";
+      }
+    }
+  };
+  // Rows 300-436 (samples 299-435) missing: 137 samples.
+  write_without(dir / "gap.csv", 300, 437, "");
+  r = test::run_command(cli + (dir / "gap.csv").string() + " --config " + f.config.string() +
+                        " --report " + (dir / "r6").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("gap.csv: 137 sample(s) missing between"), std::string::npos) << r.output;
+  write_without(dir / "nan.csv", 600, 601,
+                lines[600].substr(0, lines[600].find(',')) + ",nan,0.1,0");
+  r = test::run_command(cli + (dir / "nan.csv").string() + " --config " + f.config.string() +
+                        " --report " + (dir / "r7").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("nan.csv: the sample"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("is not a finite number"), std::string::npos) << r.output;
+}
+
+// The verdict says why the search stopped: "look outside the catalogue" only when every
+// candidate of the catalogue was scored and none gained; the final round (scored from the final
+// model) is reported apart, under the last stage.
+TEST(DiagnoseCommand, TheVerdictSaysWhatWasTried) {
+  const fs::path dir = test::fresh_temp_dir();
+  const CutFiles f = write_cut(dir, 0.1);
+  const std::string cli = test::millwatch_cli() + " diagnose " + f.csv.string() + " --config " +
+                          f.config.string() + " --no-progress --no-plots";
+  auto read = [](const fs::path& p) { return nlohmann::json::parse(std::ifstream(p)); };
+  auto r = test::run_command(cli + " --max-steps 0 --report " + (dir / "none").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto none = read(dir / "none" / "report.json");
+  EXPECT_NE(none["verdict"].get<std::string>().find("the step limit (0) stopped the search"),
+            std::string::npos)
+      << none["verdict"];
+  EXPECT_EQ(none["verdict"].get<std::string>().find("outside the catalogue"), std::string::npos);
+
+  // Only mains hum, which the cut (a hidden runout) does not have: tried, nothing gained.
+  r = test::run_command(cli + " --candidates mains_hum --report " + (dir / "hum").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto hum = read(dir / "hum" / "report.json");
+  EXPECT_TRUE(hum["named_effects"].empty()) << hum["verdict"];
+  EXPECT_NE(hum["verdict"].get<std::string>().find("only 1 of the catalogue's"), std::string::npos)
+      << hum["verdict"];
+  ASSERT_EQ(hum["final_candidates"].size(), 1u) << hum.dump(1).substr(0, 1000);
+  EXPECT_EQ(hum["final_candidates"][0]["name"], "mains_hum");
+  std::ifstream md(dir / "hum" / "report.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("Candidates scored from this model"), std::string::npos);
+  EXPECT_NE(text.find("| mains_hum |"), std::string::npos);
 }
 
 TEST(DiagnoseCommand, SeveralCutsAreComparedAcrossFeeds) {
@@ -185,6 +256,25 @@ TEST(DiagnoseCommand, SeveralCutsAreComparedAcrossFeeds) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("no feed per tooth (cut 1 of 3)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "r3" / "report.json"));
+
+  // With a sidecar beside each cut stating its feed, --config (at 4 µm) does not override it.
+  for (const double feed : {2.0, 1.0, 4.0}) {
+    char stem[16];
+    std::snprintf(stem, sizeof stem, "cut_f%d", static_cast<int>(feed));
+    auto c = nlohmann::json::parse(std::ifstream(dir / (std::string(stem) + "_config.json")));
+    c["model"]["process"]["feed_per_tooth_um"] = feed;
+    std::ofstream(dir / (std::string(stem) + ".json")) << c.dump();
+  }
+  r = test::run_command(test::millwatch_cli() + " diagnose" + csvs + " --config " +
+                        f.config.string() + " --candidates runout --max-steps 0 --report " +
+                        (dir / "r4").string() + " --no-progress --no-plots");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto sidecars = nlohmann::json::parse(std::ifstream(dir / "r4" / "report.json"));
+  ASSERT_EQ(sidecars["across_feeds"]["cuts"].size(), 3U);
+  const std::array<double, 3> feeds{1.0, 2.0, 4.0};  // in rising order
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(sidecars["across_feeds"]["cuts"][k]["feed_per_tooth_um"].get<double>(), feeds[k]);
+  }
 }
 
 }  // namespace
