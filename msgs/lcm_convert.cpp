@@ -1,5 +1,6 @@
 #include "msgs/lcm_convert.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -42,10 +43,15 @@ tooth_periods2_t tooth_periods(const monitor::RevolutionRecord& r) {
                      : tooth_periods2_t::EVENT_VALLEY;
   t.valid = m.valid;
   t.spindle_rpm = r.spindle_rpm;
-  t.period_s = m.period_s;
+  // What was not measured is 0 with its flag down: the revolution's period needs its bounds
+  // (both CE1 events), each flute's period and α every event.
+  t.period_s = m.bounded ? m.period_s : 0.0;
   t.flute_period_s = first(m.flute_period_s, m.flutes);
+  if (!m.valid) {
+    std::fill(t.flute_period_s.begin(), t.flute_period_s.end(), 0.0);
+  }
   t.num_flutes = static_cast<std::int32_t>(t.flute_period_s.size());
-  t.alpha_deg = m.alpha_deg;
+  t.alpha_deg = m.valid ? m.alpha_deg : 0.0;
   t.alpha_mean_deg = r.alpha_mean_deg;
   t.alpha_std_deg = r.alpha_std_deg;
   t.window_revolutions = r.window_revolutions;
@@ -72,7 +78,7 @@ flute_peaks2_t flute_peaks(const monitor::RevolutionRecord& r) {
     p.model_peak_resultant_N.push_back(p.model_valid ? r.model.peak_resultant_N[uj] : 0.0);
   }
   p.num_flutes = static_cast<std::int32_t>(p.peak_fx_N.size());
-  p.delta_fy_N = m.delta_fy_N;
+  p.delta_fy_N = m.valid ? m.delta_fy_N : 0.0;  // CE2's peak needs its event
   p.delta_fy_mean_N = r.delta_fy_mean_N;
   p.model_delta_fy_N = p.model_valid ? r.model.delta_fy_N : 0.0;
   return p;

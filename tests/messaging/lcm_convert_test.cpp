@@ -46,5 +46,40 @@ TEST(LcmConvert, AFailedFitSaysWhy) {
   EXPECT_EQ(m.alpha_deg, 0.0);
 }
 
+// A revolution that lost a tooth event (valid false) has no α, flute periods or ΔFy: 0 with the
+// flag down, as the README promises, not the meter's leftovers; one without both CE1 events has
+// no period either. A valid revolution carries them all.
+TEST(LcmConvert, WhatARevolutionDidNotMeasureIsZeroWithItsFlagDown) {
+  monitor::RevolutionRecord r;
+  r.revolution = 86;
+  r.spindle_rpm = 25252.0;
+  auto& m = r.measured;
+  m.flutes = 2;
+  m.period_s = 60.0 / 25252.0;
+  m.flute_period_s = {0.0013, 0.0011};
+  m.alpha_deg = 183.8;
+  m.delta_fy_N = 0.751;
+  m.bounded = true;
+  m.valid = true;
+  const tooth_periods2_t ok = tooth_periods(r);
+  EXPECT_EQ(ok.alpha_deg, 183.8);
+  EXPECT_EQ(ok.flute_period_s[1], 0.0011);
+  EXPECT_EQ(flute_peaks(r).delta_fy_N, 0.751);
+
+  m.valid = false;  // bounded: CE2's event missing
+  const tooth_periods2_t lost = tooth_periods(r);
+  EXPECT_FALSE(lost.valid);
+  EXPECT_EQ(lost.alpha_deg, 0.0);
+  ASSERT_EQ(lost.flute_period_s.size(), 2u);
+  EXPECT_EQ(lost.flute_period_s[0], 0.0);
+  EXPECT_EQ(lost.flute_period_s[1], 0.0);
+  EXPECT_EQ(lost.period_s, 60.0 / 25252.0);  // its bounds were found
+  EXPECT_EQ(lost.spindle_rpm, 25252.0);
+  EXPECT_EQ(flute_peaks(r).delta_fy_N, 0.0);
+
+  m.bounded = false;
+  EXPECT_EQ(tooth_periods(r).period_s, 0.0);
+}
+
 }  // namespace
 }  // namespace millwatch::messaging
