@@ -41,7 +41,7 @@ struct ChannelNames {
 
 /// A copy of the synchronous averages (measured and model) with a fixed size.
 struct SyncSnapshot {
-  static constexpr int kMaxBins = 1024;
+  static constexpr int kMaxBins = 4096;  // sync_average.bins' upper bound (monitor_config.cpp)
   std::int64_t utime_us = 0;
   std::int64_t revolution = 0;
   int window_revolutions = 0;

@@ -142,6 +142,51 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   EXPECT_EQ(rx.alerts[0].kind, tool_alert_t::KIND_RUNOUT);
 }
 
+// The synchronous average goes out on every bin the configuration allows (up to 4,096), the
+// model on the same grid: with 2,048 bins it was cut to the first 1,024, labelled a revolution.
+TEST(LcmOutput, TheSyncAverageCarriesEveryConfiguredBin) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  Received rx;
+  const ChannelNames ch;
+  lcm.subscribe(ch.sync_average, &Received::on_sync, &rx)->setQueueCapacity(100);
+  sim::Scenario s;
+  s.sample_rate_hz = 333300.0;
+  s.duration_s = 0.3;
+  s.spindle.actual_rpm = 25252.0;
+  sim::CutSimulator sim(s);
+  monitor::MonitorConfig c;
+  c.model = s.model;
+  c.sample_rate_hz = s.sample_rate_hz;
+  c.sync_bins = 2048;
+  {
+    LcmOutput out(lcm, ch);
+    monitor::Pipeline p(c, out);
+    std::vector<double> t(3333), fx(3333), fy(3333), fz(3333);
+    while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
+      p.process({std::llround(t[0] * 1e6),
+                 0,
+                 s.sample_rate_hz,
+                 {fx.data(), n},
+                 {fy.data(), n},
+                 {fz.data(), n}});
+      ASSERT_TRUE(out.drain());
+    }
+  }
+  while (lcm.handleTimeout(10) > 0) {
+  }
+  ASSERT_FALSE(rx.sync.empty());
+  const sync_average2_t& a = rx.sync.back();
+  ASSERT_EQ(a.num_bins, 2048);
+  ASSERT_TRUE(a.model_valid);
+  double measured = 0.0, difference = 0.0;
+  for (std::size_t b = 0; b < 2048; ++b) {
+    measured += a.fx_N[b] * a.fx_N[b];
+    difference += (a.fx_N[b] - a.model_fx_N[b]) * (a.fx_N[b] - a.model_fx_N[b]);
+  }
+  EXPECT_LT(std::sqrt(difference), 0.1 * std::sqrt(measured));  // the same angles
+}
+
 TEST(LcmConvert, ForceBlockRoundTripKeepsEverySample) {
   const std::vector<double> fx = {1.0, 2.0, 3.0}, fy = {-1.0, 0.5, 0.25}, fz = {0.0, 0.1, 0.2};
   const monitor::SampleBlock b{123456, 7, 50000.0, fx, fy, fz};
