@@ -47,6 +47,7 @@ messaging::ChannelNames read_channels(ObjectReader r) {
   c.residual = r.string("residual", c.residual);
   c.sync_average = r.string("sync_average", c.sync_average);
   c.runout = r.string("runout", c.runout);
+  c.coefficients = r.string("coefficients", c.coefficients);
   c.alert = r.string("alert", c.alert);
   c.status = r.string("status", c.status);
   r.finish();

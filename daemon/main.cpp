@@ -130,7 +130,7 @@ std::string needs_restart(const daemon::DaemonConfig& running, const daemon::Dae
   note((c.raw != d.raw && a.channel == b.channel) || c.spindle != d.spindle ||
            c.tooth_periods != d.tooth_periods || c.flute_peaks != d.flute_peaks ||
            c.residual != d.residual || c.sync_average != d.sync_average || c.runout != d.runout ||
-           c.alert != d.alert || c.status != d.status,
+           c.coefficients != d.coefficients || c.alert != d.alert || c.status != d.status,
        "lcm.channels");
   return out;
 }
