@@ -1,5 +1,6 @@
 #include "shell/monitor_run.hpp"
 
+#include <algorithm>
 #include <complex>
 #include <utility>
 
@@ -129,8 +130,12 @@ void MonitorRun::idle() {
 
 std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
     std::unique_ptr<monitor::Pipeline> next) {
-  pipeline_->finish();  // samples held for zero-phase filtering are measured first
-  carry(carried_, pipeline_->status());
+  // Samples held for zero-phase filtering are measured first; its alerts are cleared (the new
+  // pipeline starts with none raised and raises again what still holds).
+  pipeline_->hand_over("configuration reloaded");
+  const monitor::PipelineStatus last = pipeline_->status();
+  carry(carried_, last);
+  carried_utime_us_ = std::max(carried_utime_us_, last.utime_us);
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());
@@ -143,6 +148,9 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
 
 monitor::PipelineStatus MonitorRun::status() const {
   monitor::PipelineStatus s = pipeline_->status();
+  if (s.input.samples_in == 0) {
+    s.utime_us = carried_utime_us_;  // a pipeline that has had no sample yet has no time
+  }
   carry(s, carried_);
   if (options_.source_losses) {
     options_.source_losses(s);

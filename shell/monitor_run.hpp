@@ -100,8 +100,9 @@ class MonitorRun {
   ShellSink shell_sink_;
   std::unique_ptr<messaging::LcmOutput> output_;
   std::unique_ptr<monitor::Pipeline> pipeline_;
-  monitor::PipelineStatus carried_;  // counts of the pipelines replaced
-  bool status_due_ = true;           // the first block always gives a status
+  monitor::PipelineStatus carried_;    // counts of the pipelines replaced
+  std::int64_t carried_utime_us_ = 0;  // the last replaced pipeline's newest sample time
+  bool status_due_ = true;             // the first block always gives a status
   std::int64_t next_status_utime_us_ = 0;
   std::chrono::steady_clock::time_point last_status_wall_;
   std::mutex publish_mutex_;                          // the identifier's thread publishes too

@@ -258,11 +258,11 @@ void AlertEngine::examine(const RevolutionRecord& r) {
   const std::int64_t t = r.utime_us;
 
   if (rebaselined_) {
-    clear_after_rebaseline(rev, t);
+    clear_after_rebaseline(rev, t, "new baseline");
   }
   if (flutes_ != 0 && f.count != flutes_) {
     rebaseline();  // another tool
-    clear_after_rebaseline(rev, t);
+    clear_after_rebaseline(rev, t, "new baseline");
   }
   if (!follow_estimates()) {
     check_runout(f, rev, t);
@@ -701,29 +701,44 @@ bool AlertEngine::check_breakage(const Flutes& f, std::int64_t rev, std::int64_t
   return weakest_margin < 0.0;
 }
 
-void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t) {
+void AlertEngine::clear_as_raised(AlertKind kind, const char* what, std::string_view why,
+                                  std::int64_t rev, std::int64_t t) {
+  const Raised& r = raised_[static_cast<std::size_t>(kind)];
+  write_message(emit(kind, AlertSeverity::kInfo, false, rev, t, r.value, r.threshold, r.quantity),
+                "%s cleared: %.*s (raised on %.*s %.4g against %.4g)", what,
+                static_cast<int>(why.size()), why.data(), static_cast<int>(r.quantity.size()),
+                r.quantity.data(), r.value, r.threshold);
+}
+
+void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t, std::string_view why) {
   rebaselined_ = false;
   // The new baseline has no value to compare yet: the clear repeats what the alert was raised on.
-  const auto clear = [&](AlertKind kind, const char* what) {
-    const Raised& r = raised_[static_cast<std::size_t>(kind)];
-    write_message(emit(kind, AlertSeverity::kInfo, false, rev, t, r.value, r.threshold, r.quantity),
-                  "%s cleared: new baseline (raised on %.*s %.4g against %.4g)", what,
-                  static_cast<int>(r.quantity.size()), r.quantity.data(), r.value, r.threshold);
-  };
   if (change_active_) {
     change_active_ = false;
     change_identify_ = false;
-    clear(AlertKind::kRunoutChange, "runout change");
+    clear_as_raised(AlertKind::kRunoutChange, "runout change", why, rev, t);
   }
   if (wear_active_) {
     wear_active_ = false;
-    clear(AlertKind::kWearDrift, "wear drift");
+    clear_as_raised(AlertKind::kWearDrift, "wear drift", why, rev, t);
   }
   if (breakage_.active) {
     breakage_.active = false;
     breakage_.streak = 0;
-    clear(AlertKind::kBreakage, "breakage");
+    clear_as_raised(AlertKind::kBreakage, "breakage", why, rev, t);
   }
+}
+
+void AlertEngine::clear_all(std::string_view why) {
+  if (runout_.active) {
+    runout_.active = false;
+    clear_as_raised(AlertKind::kRunout, "runout", why, last_revolution_, last_utime_us_);
+  }
+  if (sensor_.active) {
+    sensor_.active = false;
+    clear_as_raised(AlertKind::kSensor, "sensor trouble", why, last_revolution_, last_utime_us_);
+  }
+  clear_after_rebaseline(last_revolution_, last_utime_us_, why);
 }
 
 // ---- Estimates -------------------------------------------------------------------------------

@@ -217,6 +217,13 @@ class AlertEngine {
     examine(c, utime_us);
     flush(sink);
   }
+  /// Clears every active alert, saying `why` (this engine is being replaced, e.g. on a reload:
+  /// its successor starts with none raised); each clear carries the figures it was raised on.
+  template <typename Sink>
+  void clear_active(std::string_view why, Sink&& sink) {
+    clear_all(why);
+    flush(sink);
+  }
   /// Identification runs (identified windows will come): runout and wear drift wait for the
   /// estimates instead of following the flute forces until the first window arrives. With
   /// `expected` false (estimates stopped coming: fits rejected, a worker that cannot keep up)
@@ -317,7 +324,11 @@ class AlertEngine {
   void add_to_block(const Flutes& f, std::int64_t rev, std::int64_t t);
   void check_runout_change(const Block& b, std::int64_t rev, std::int64_t t);
   void check_wear(const Block& b, std::int64_t rev, std::int64_t t);
-  void clear_after_rebaseline(std::int64_t rev, std::int64_t t);
+  void clear_after_rebaseline(std::int64_t rev, std::int64_t t, std::string_view why);
+  void clear_all(std::string_view why);
+  /// Emits the clear of an alert of `kind` with the figures it was raised on.
+  void clear_as_raised(AlertKind kind, const char* what, std::string_view why, std::int64_t rev,
+                       std::int64_t t);
   /// Mean of the newest `blocks` recent blocks (at most kRecentBlocks).
   Block recent_mean(int blocks) const;
   /// Raises a runout change found by the flute forces (per revolution or per block).

@@ -239,7 +239,7 @@ void Pipeline::process(const SampleBlock& block) {
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
 }
 
-void Pipeline::finish() {
+void Pipeline::flush_tail() {
   conditioner_.flush(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
   finished_tail_revolutions_ = heard_since_update();  // the record's last part-hop
@@ -248,6 +248,15 @@ void Pipeline::finish() {
   alerts_.on_input(input_.counters(),
                    input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1)),
                    [this](const Alert& a) { sink_.on_alert(a); });
+}
+
+void Pipeline::hand_over(std::string_view why) {
+  flush_tail();
+  alerts_.clear_active(why, [this](const Alert& a) { sink_.on_alert(a); });
+}
+
+void Pipeline::finish() {
+  flush_tail();
   if (ever_locked_) {
     return;
   }

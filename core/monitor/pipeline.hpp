@@ -123,6 +123,10 @@ class Pipeline {
   /// turns heard since the tracker's last window, and says what the record was too short for.
   /// The last call for a record.
   void finish();
+  /// This pipeline is replaced mid-stream (a reload): processes the samples still held and
+  /// clears its active alerts, saying why (the successor starts with none), without the
+  /// record-level verdicts of finish() — the stream goes on. The last call for this pipeline.
+  void hand_over(std::string_view why);
 
   /// Identification (not owned; null: none). Every synchronous-average window goes to it, due
   /// back a window of revolutions after its end (when the next window ends); at that revolution
@@ -154,6 +158,8 @@ class Pipeline {
  private:
   void restart_stream(std::int64_t first_sample);
   void bridge_gap(std::int64_t first_sample);
+  /// Processes the samples still held and checks the input since the last health check.
+  void flush_tail();
   /// Everything after the conditioner, for filtered sample n.
   void downstream(std::int64_t n, double fx, double fy, double fz);
   /// downstream() for `count` samples from n on, within run_limit(n).

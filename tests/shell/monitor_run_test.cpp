@@ -11,6 +11,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/model/flute_positions.hpp"
@@ -144,6 +145,61 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
               1e-9);
   // The whole second heard cutting, within the revolutions a restarted tracker needs to hear.
   EXPECT_NEAR(after.cutting_revolutions, 25252.0 / 60.0, 5.0);
+}
+
+// A reload clears the replaced pipeline's alerts (with the figures they were raised on): its
+// successor starts with none raised and raises again what still holds, so no alert stays raised
+// on LCM and in the summary without an engine behind it. Until the new pipeline's first block
+// the status keeps the stream's time, and a pipeline replaced after a short stretch does not
+// call the record too short.
+TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
+  sim::Scenario s;
+  s.sample_rate_hz = kRate_hz;
+  s.duration_s = 1.0;
+  s.spindle.actual_rpm = 25252.0;
+  const test::Recording r = test::record(s);
+  MonitorRun::Options options;
+  options.identify = false;  // runout from the flute forces: [000]'s runout raises it
+  MonitorRun run(test::monitor_for(s), options);
+  const auto block = [&](std::size_t k) {
+    const std::span<const double> fx(r.fx), fy(r.fy), fz(r.fz);
+    return monitor::SampleBlock{static_cast<std::int64_t>(k) * 20'000,
+                                static_cast<std::int64_t>(k),
+                                kRate_hz,
+                                fx.subspan(k * kBlock, kBlock),
+                                fy.subspan(k * kBlock, kBlock),
+                                fz.subspan(k * kBlock, kBlock)};
+  };
+  run.process(block(0));  // 20 ms, then a reload: not a record too short
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
+  for (std::size_t k = 1; k < 25; ++k) {
+    run.process(block(k));
+  }
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
+  EXPECT_EQ(run.status().utime_us, 24 * 20'000 + 999 * 20);  // the stream's newest sample
+  for (std::size_t k = 25; k < 50; ++k) {
+    run.process(block(k));
+  }
+  run.finish();
+  const nlohmann::json j = run.summary();
+  std::vector<nlohmann::json> raised, cleared;
+  for (const auto& a : j["alerts"]) {
+    if (a["kind"] == "runout") {
+      (a["active"].get<bool>() ? raised : cleared).push_back(a);
+    }
+  }
+  ASSERT_EQ(raised.size(), 2u) << j["alerts"].dump(1);  // before the reload, and after it again
+  ASSERT_EQ(cleared.size(), 1u) << j["alerts"].dump(1);
+  EXPECT_NE(cleared[0]["message"].get<std::string>().find("runout cleared: configuration reloaded"),
+            std::string::npos)
+      << cleared[0]["message"];
+  EXPECT_EQ(cleared[0]["value"], raised[0]["value"]);
+  EXPECT_EQ(cleared[0]["threshold"], raised[0]["threshold"]);
+  EXPECT_LT(cleared[0]["revolution"].get<double>(), 0.5 * 25252.0 / 60.0);  // the first half's
+  for (const auto& w : j["warnings"]) {
+    EXPECT_NE(w["kind"], "record too short") << w.dump();
+    EXPECT_NE(w["kind"], "no steady tooth-passing signal") << w.dump();
+  }
 }
 
 struct IdentityLog {
