@@ -137,6 +137,7 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carry(carried_, last);
   carried_utime_us_ = std::max(carried_utime_us_, last.utime_us);
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
+  pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq());
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());
   if (off.empty()) {

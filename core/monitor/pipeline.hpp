@@ -127,6 +127,15 @@ class Pipeline {
   /// clears its active alerts, saying why (the successor starts with none), without the
   /// record-level verdicts of finish() — the stream goes on. The last call for this pipeline.
   void hand_over(std::string_view why);
+  /// Numbers this pipeline's revolutions from `first_revolution` and its spindle updates after
+  /// `last_spindle_seq` (a successor's, after a reload: the numbers a subscriber sees go on).
+  /// Before the first block.
+  void continue_numbering(std::int64_t first_revolution, std::int64_t last_spindle_seq) {
+    revolution_base_ = first_revolution;
+    spindle_seq_ = last_spindle_seq;
+  }
+  /// The sequence number of the last spindle update (0: none yet).
+  [[nodiscard]] std::int64_t last_spindle_seq() const { return spindle_seq_; }
 
   /// Identification (not owned; null: none). Every synchronous-average window goes to it, due
   /// back a window of revolutions after its end (when the next window ends); at that revolution
@@ -248,6 +257,7 @@ class Pipeline {
   double window_rpm_sum_ = 0.0;          // speeds of the window's bounded revolutions
   int window_rpm_count_ = 0;
   std::int64_t lock_revolution_ = 0;  // first revolution of the current lock
+  std::int64_t revolution_base_ = 0;  // the number of this pipeline's first revolution
   std::int64_t identifications_taken_ = 0;
   std::int64_t identifications_rejected_ = 0;
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates

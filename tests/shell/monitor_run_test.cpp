@@ -196,6 +196,9 @@ TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
   EXPECT_EQ(cleared[0]["value"], raised[0]["value"]);
   EXPECT_EQ(cleared[0]["threshold"], raised[0]["threshold"]);
   EXPECT_LT(cleared[0]["revolution"].get<double>(), 0.5 * 25252.0 / 60.0);  // the first half's
+  // The numbers go on across the reload: the second raise comes after the clear.
+  EXPECT_GT(raised[1]["revolution"].get<std::int64_t>(),
+            cleared[0]["revolution"].get<std::int64_t>());
   for (const auto& w : j["warnings"]) {
     EXPECT_NE(w["kind"], "record too short") << w.dump();
     EXPECT_NE(w["kind"], "no steady tooth-passing signal") << w.dump();
