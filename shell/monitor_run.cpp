@@ -138,6 +138,7 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carried_utime_us_ = std::max(carried_utime_us_, last.utime_us);
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
   pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq());
+  summary_.reconfigure(pipeline_->config(), carried_.revolutions, carried_utime_us_);
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());
   if (off.empty()) {

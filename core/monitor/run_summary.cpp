@@ -132,6 +132,28 @@ void RunSummary::finish(const PipelineStatus& status) {
   status_ = status;
 }
 
+void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolution,
+                             std::int64_t utime_us) {
+  const int flutes = config.model.tool.flutes;
+  if (flutes != flutes_) {
+    for (Running* r : {&alpha_, &delta_fy_, &model_alpha_, &model_delta_fy_, &measured_rms_}) {
+      *r = Running{};
+    }
+    period_ = {};
+    peak_ = {};
+    peak_resultant_ = {};
+    residual_ = {};
+    warnings_.push_back({"tool changed", 1, 0, utime_us,
+                         "monitor.model.tool.flutes " + std::to_string(flutes_) + " → " +
+                             std::to_string(flutes) + " on a reload at revolution " +
+                             std::to_string(revolution) +
+                             ": alpha, tooth periods, peaks, ΔFy and residuals cover the "
+                             "revolutions since"});
+  }
+  config_ = config;
+  flutes_ = flutes;
+}
+
 void RunSummary::warn(const std::string& kind, const std::string& detail) const {
   derived_.push_back({kind, 1, 0, status_.utime_us, detail});
 }
@@ -187,8 +209,8 @@ nlohmann::json RunSummary::to_json() const {
   if (flutes_ < 2) {
     // With one flute α is 360° and ΔFy 0 by definition [000]: they say nothing of the cut.
     warn("no alpha", "one flute: α and ΔFy compare two cutting edges");
-  } else if (valid_ > 0 && valid_ < config_.alpha_window_revolutions) {
-    warn("short window", "α and ΔFy are averaged over " + std::to_string(valid_) +
+  } else if (alpha_.n > 0 && alpha_.n < config_.alpha_window_revolutions) {
+    warn("short window", "α and ΔFy are averaged over " + std::to_string(alpha_.n) +
                              " revolutions, fewer than tooth_periods.window_revolutions (" +
                              std::to_string(config_.alpha_window_revolutions) + ")");
   }

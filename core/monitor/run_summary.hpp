@@ -31,6 +31,11 @@ class RunSummary {
   void add(const PipelineEvent& e);
   /// The pipeline's final status (counters, samples).
   void finish(const PipelineStatus& status);
+  /// The configuration changed on a reload (from revolution `revolution`, at `utime_us`): the
+  /// summary states the new cut as commanded; a tool with another number of flutes starts α,
+  /// the periods, peaks, ΔFy and residuals afresh (one tool's flutes are not another's), with a
+  /// warning saying so.
+  void reconfigure(const MonitorConfig& config, std::int64_t revolution, std::int64_t utime_us);
   /// The last identified window: {"runout", "coefficients", "fit"} (identify::to_json).
   void set_identification(nlohmann::json identification) {
     identification_ = std::move(identification);

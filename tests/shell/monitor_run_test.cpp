@@ -266,6 +266,64 @@ void feed(MonitorRun& run, const test::Recording& r) {
   run.finish();
 }
 
+// A reload onto another tool (2 flutes → 3): the summary states the new cut, and α, the periods
+// and the peaks are the new tool's alone, with a warning saying from where.
+TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
+  sim::Scenario two;
+  two.sample_rate_hz = kRate_hz;
+  two.duration_s = 0.5;
+  two.spindle.actual_rpm = 25252.0;
+  const sim::Scenario three = three_flute_cut_with_runout();
+  MonitorRun::Options options;
+  options.identify = false;
+  MonitorRun run(test::monitor_for(two), options);
+  std::int64_t seq = 0;
+  const auto play = [&](const test::Recording& r, std::int64_t from_us) {
+    for (std::size_t from = 0; from + kBlock <= r.t.size(); from += kBlock) {
+      run.process({from_us + std::llround(r.t[from] * 1e6), seq++, kRate_hz,
+                   std::span<const double>(r.fx).subspan(from, kBlock),
+                   std::span<const double>(r.fy).subspan(from, kBlock),
+                   std::span<const double>(r.fz).subspan(from, kBlock)});
+    }
+  };
+  play(test::record(two), 0);
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(three), run.sink()));
+  play(test::record(three), 500'000);
+  run.finish();
+  const nlohmann::json j = run.summary();
+  // The same as monitoring the 3-flute cut alone.
+  MonitorRun alone_run(test::monitor_for(three), options);
+  const test::Recording r3 = test::record(three);
+  for (std::size_t from = 0; from + kBlock <= r3.t.size(); from += kBlock) {
+    alone_run.process({std::llround(r3.t[from] * 1e6), static_cast<std::int64_t>(from / kBlock),
+                       kRate_hz, std::span<const double>(r3.fx).subspan(from, kBlock),
+                       std::span<const double>(r3.fy).subspan(from, kBlock),
+                       std::span<const double>(r3.fz).subspan(from, kBlock)});
+  }
+  alone_run.finish();
+  const nlohmann::json alone = alone_run.summary();
+  ASSERT_EQ(j["tooth_period_s"].size(), 3u) << j.dump(1);
+  for (std::size_t f = 0; f < 3; ++f) {
+    EXPECT_NEAR(j["tooth_period_s"][f].get<double>(), alone["tooth_period_s"][f].get<double>(),
+                1e-6)
+        << f;
+    EXPECT_NEAR(j["peak_force_N"]["resultant"][f].get<double>(),
+                alone["peak_force_N"]["resultant"][f].get<double>(), 0.01)
+        << f;
+  }
+  EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), alone["alpha_deg"]["mean"].get<double>(), 0.1);
+  EXPECT_EQ(j["spindle_rpm_commanded"], three.model.process.spindle_rpm);
+  int changed = 0;
+  for (const auto& w : j["warnings"]) {
+    if (w["kind"] == "tool changed") {
+      ++changed;
+      EXPECT_NE(w["detail"].get<std::string>().find("flutes 2 → 3 on a reload"), std::string::npos)
+          << w["detail"];
+    }
+  }
+  EXPECT_EQ(changed, 1) << j["warnings"].dump(1);
+}
+
 // A simulated 3-flute cut with known runout (noise, quantisation, a finer truth, the actual speed
 // 1 % below the commanded one): the run identifies it in its worker thread, publishes each
 // window on LCM and puts the last one in the summary.
