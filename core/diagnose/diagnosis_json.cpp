@@ -51,11 +51,11 @@ nlohmann::json localisation(const Localisation& l) {
           {"by_time", segments}};
 }
 
-}  // namespace
-
-nlohmann::json to_json(const Stage& s) {
-  nlohmann::json candidates = nlohmann::json::array();
-  for (const auto& c : s.candidates) {
+/// Every candidate scored in one round: its criterion, gain, residual and parameters, or why it
+/// was not fitted.
+nlohmann::json candidates(const std::vector<CandidateScore>& scores) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& c : scores) {
     nlohmann::json cj = {{"name", c.name}, {"ok", c.ok}};
     if (c.ok) {
       cj["criterion"] = c.criterion;
@@ -66,8 +66,14 @@ nlohmann::json to_json(const Stage& s) {
     } else {
       cj["message"] = c.message;
     }
-    candidates.push_back(cj);
+    out.push_back(cj);
   }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const Stage& s) {
   nlohmann::json j = {
       {"added", s.added.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.added)},
       {"parameters", parameters(s.parameters)},
@@ -76,7 +82,7 @@ nlohmann::json to_json(const Stage& s) {
       {"residual_percent", axes(s.residual_percent)},
       {"criterion", s.criterion},
       {"free_parameters", s.free_parameters},
-      {"candidates", candidates},
+      {"candidates", candidates(s.candidates)},
       {"localisation", localisation(s.localisation)}};
   if (!s.added.empty()) {
     j["gain"] = s.gain;
@@ -100,15 +106,9 @@ nlohmann::json to_json(const Diagnosis& d) {
                    {"extension", c.extension},
                    {"parameters", c.parameters}});
   }
-  nlohmann::json final_candidates = nlohmann::json::array();
-  {
-    Stage last_round;  // the candidates as a stage writes them
-    last_round.candidates = d.final_candidates;
-    final_candidates = to_json(last_round)["candidates"];
-  }
   return {{"named_effects", d.named_effects},
           {"steps", steps},
-          {"final_candidates", final_candidates},
+          {"final_candidates", candidates(d.final_candidates)},
           {"initial", to_json(d.initial)},
           {"initial_residual_rms_N", axes(d.initial.residual_rms_N)},
           {"final_residual_rms_N", axes(final_rms)},

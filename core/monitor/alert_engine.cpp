@@ -712,7 +712,8 @@ void AlertEngine::clear_as_raised(AlertKind kind, const char* what, std::string_
 
 void AlertEngine::clear_after_rebaseline(std::int64_t rev, std::int64_t t, std::string_view why) {
   rebaselined_ = false;
-  // The new baseline has no value to compare yet: the clear repeats what the alert was raised on.
+  // Neither a new baseline nor a successor has a value to compare yet: the clear repeats what
+  // the alert was raised on.
   if (change_active_) {
     change_active_ = false;
     change_identify_ = false;

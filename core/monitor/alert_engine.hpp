@@ -369,7 +369,8 @@ class AlertEngine {
   std::vector<double> baseline_force_N_;
   std::vector<double> series_, scratch_, block_medians_;
   bool rebaselined_ = false;
-  std::array<Raised, 6> raised_{};  // by AlertKind: the newest raise of each kind
+  // By AlertKind (kRunout 1 … kSensor 5): the newest raise of each kind.
+  std::array<Raised, static_cast<std::size_t>(AlertKind::kSensor) + 1> raised_{};
 
   // The block being filled: shares [flute·B + i] and mean force [kMaxFlutes·B + i].
   std::vector<double> block_values_;

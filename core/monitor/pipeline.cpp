@@ -516,7 +516,7 @@ void Pipeline::submit_window() {
   window_rpm_count_ = 0;
   // Due when the next window ends: the fit has a window's time to finish.
   const std::int64_t end_us = utime_at(ring_.newest());
-  identifier_->submit(window_, revolution_base_ + revolutions_ - 1, end_us,
+  identifier_->submit(window_, last_revolution(), end_us,
                       revolutions_ + config_.sync_window_revolutions);
   // While no estimate comes (fits rejected, or live, a worker that cannot keep up), the alerts
   // follow the flute forces; the next accepted estimate takes over again. Windows the live
@@ -632,8 +632,8 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     sync_revolutions_since_report_ = 0;
     submit_window();
     // Named by its last revolution (as identification names the window), not the next one.
-    sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr,
-                          revolution_base_ + revolutions_ - 1, utime_at(ring_.newest()));
+    sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, last_revolution(),
+                          utime_at(ring_.newest()));
   }
 }
 

@@ -169,6 +169,8 @@ class Pipeline {
   void bridge_gap(std::int64_t first_sample);
   /// Processes the samples still held and checks the input since the last health check.
   void flush_tail();
+  /// The number of the last revolution reported (a reload's successor numbers on).
+  [[nodiscard]] std::int64_t last_revolution() const { return revolution_base_ + revolutions_ - 1; }
   /// Everything after the conditioner, for filtered sample n.
   void downstream(std::int64_t n, double fx, double fy, double fz);
   /// downstream() for `count` samples from n on, within run_limit(n).
