@@ -53,6 +53,37 @@ struct Direct : monitor::PipelineSink {
   void on_revolution(const monitor::RevolutionRecord& r) override { records.push_back(r); }
 };
 
+/// The monitor's configuration for a simulated cut: its model and rate.
+monitor::MonitorConfig monitor_config(const sim::Scenario& s) {
+  monitor::MonitorConfig c;
+  c.model = s.model;
+  c.sample_rate_hz = s.sample_rate_hz;
+  return c;
+}
+
+/// Simulates the cut `s` in blocks of `block` samples through a pipeline configured by `c` that
+/// publishes into `out`, drained after each block (faster than real time: the publisher keeps
+/// up, as it does at the machine's rate). False when a drain timed out; `status`: the pipeline's.
+bool monitor_cut(LcmOutput& out, const sim::Scenario& s, const monitor::MonitorConfig& c,
+                 std::size_t block, monitor::PipelineStatus& status) {
+  sim::CutSimulator sim(s);
+  monitor::Pipeline p(c, out);
+  std::vector<double> t(block), fx(block), fy(block), fz(block);
+  while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
+    p.process({std::llround(t[0] * 1e6),
+               0,
+               s.sample_rate_hz,
+               {fx.data(), n},
+               {fy.data(), n},
+               {fz.data(), n}});
+    if (!out.drain()) {
+      return false;
+    }
+  }
+  status = p.status();
+  return true;
+}
+
 TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
@@ -70,26 +101,12 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   s.sample_rate_hz = 50000.0;
   s.duration_s = 0.6;
   s.spindle.actual_rpm = 25252.0;
-  sim::CutSimulator sim(s);
-  monitor::MonitorConfig c;
-  c.model = s.model;
-  c.sample_rate_hz = s.sample_rate_hz;
   Direct direct;
   {
     LcmOutput out(lcm, ch, &direct);
-    monitor::Pipeline p(c, out);
-    std::vector<double> t(1000), fx(1000), fy(1000), fz(1000);
-    while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
-      p.process({std::llround(t[0] * 1e6),
-                 0,
-                 s.sample_rate_hz,
-                 {fx.data(), n},
-                 {fy.data(), n},
-                 {fz.data(), n}});
-      // Faster than real time: let the publisher keep up, as it does at the machine's rate.
-      ASSERT_TRUE(out.drain());
-    }
-    out.publish_status(p.status());
+    monitor::PipelineStatus status;
+    ASSERT_TRUE(monitor_cut(out, s, monitor_config(s), 1000, status));
+    out.publish_status(status);
     ASSERT_TRUE(out.drain());
     EXPECT_EQ(out.dropped(), 0);
   }
@@ -154,24 +171,12 @@ TEST(LcmOutput, TheSyncAverageCarriesEveryConfiguredBin) {
   s.sample_rate_hz = 333300.0;
   s.duration_s = 0.3;
   s.spindle.actual_rpm = 25252.0;
-  sim::CutSimulator sim(s);
-  monitor::MonitorConfig c;
-  c.model = s.model;
-  c.sample_rate_hz = s.sample_rate_hz;
+  monitor::MonitorConfig c = monitor_config(s);
   c.sync_bins = 2048;
   {
     LcmOutput out(lcm, ch);
-    monitor::Pipeline p(c, out);
-    std::vector<double> t(3333), fx(3333), fy(3333), fz(3333);
-    while (const std::size_t n = sim.next_block(t, fx, fy, fz)) {
-      p.process({std::llround(t[0] * 1e6),
-                 0,
-                 s.sample_rate_hz,
-                 {fx.data(), n},
-                 {fy.data(), n},
-                 {fz.data(), n}});
-      ASSERT_TRUE(out.drain());
-    }
+    monitor::PipelineStatus status;
+    ASSERT_TRUE(monitor_cut(out, s, c, 3333, status));
   }
   while (lcm.handleTimeout(10) > 0) {
   }

@@ -41,6 +41,19 @@ struct Blocks {
   }
 };
 
+/// Block k of a recording (kBlock samples, 20 ms), stamped `from_us` later, numbered `seq`
+/// (default: k).
+monitor::SampleBlock block_of(const test::Recording& r, std::size_t k, std::int64_t from_us = 0,
+                              std::int64_t seq = -1) {
+  const std::size_t from = k * kBlock;
+  return {from_us + std::llround(r.t[from] * 1e6),
+          seq < 0 ? static_cast<std::int64_t>(k) : seq,
+          kRate_hz,
+          std::span<const double>(r.fx).subspan(from, kBlock),
+          std::span<const double>(r.fy).subspan(from, kBlock),
+          std::span<const double>(r.fz).subspan(from, kBlock)};
+}
+
 struct StatusLog {
   std::vector<pipeline_status2_t> messages;
   void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status2_t* m) {
@@ -117,17 +130,8 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
   MonitorRun::Options options;
   options.identify = false;
   MonitorRun run(test::monitor_for(s), options);
-  const auto block = [&](std::size_t k) {
-    const std::span<const double> fx(r.fx), fy(r.fy), fz(r.fz);
-    return monitor::SampleBlock{static_cast<std::int64_t>(k) * 20'000,
-                                static_cast<std::int64_t>(k),
-                                kRate_hz,
-                                fx.subspan(k * kBlock, kBlock),
-                                fy.subspan(k * kBlock, kBlock),
-                                fz.subspan(k * kBlock, kBlock)};
-  };
   for (std::size_t k = 0; k < 25; ++k) {
-    run.process(block(k));
+    run.process(block_of(r, k));
   }
   auto next = std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink());
   const monitor::Pipeline& second = *next;
@@ -136,7 +140,7 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
   ASSERT_GT(before.cutting_revolutions, 150.0);
   ASSERT_GT(before.model_builds, 0);
   for (std::size_t k = 25; k < 50; ++k) {
-    run.process(block(k));
+    run.process(block_of(r, k));
   }
   const monitor::PipelineStatus after = run.status();
   const monitor::PipelineStatus last = second.status();
@@ -161,24 +165,15 @@ TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
   MonitorRun::Options options;
   options.identify = false;  // runout from the flute forces: [000]'s runout raises it
   MonitorRun run(test::monitor_for(s), options);
-  const auto block = [&](std::size_t k) {
-    const std::span<const double> fx(r.fx), fy(r.fy), fz(r.fz);
-    return monitor::SampleBlock{static_cast<std::int64_t>(k) * 20'000,
-                                static_cast<std::int64_t>(k),
-                                kRate_hz,
-                                fx.subspan(k * kBlock, kBlock),
-                                fy.subspan(k * kBlock, kBlock),
-                                fz.subspan(k * kBlock, kBlock)};
-  };
-  run.process(block(0));  // 20 ms, then a reload: not a record too short
+  run.process(block_of(r, 0));  // 20 ms, then a reload: not a record too short
   run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
   for (std::size_t k = 1; k < 25; ++k) {
-    run.process(block(k));
+    run.process(block_of(r, k));
   }
   run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
   EXPECT_EQ(run.status().utime_us, 24 * 20'000 + 999 * 20);  // the stream's newest sample
   for (std::size_t k = 25; k < 50; ++k) {
-    run.process(block(k));
+    run.process(block_of(r, k));
   }
   run.finish();
   const nlohmann::json j = run.summary();
@@ -279,11 +274,8 @@ TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
   MonitorRun run(test::monitor_for(two), options);
   std::int64_t seq = 0;
   const auto play = [&](const test::Recording& r, std::int64_t from_us) {
-    for (std::size_t from = 0; from + kBlock <= r.t.size(); from += kBlock) {
-      run.process({from_us + std::llround(r.t[from] * 1e6), seq++, kRate_hz,
-                   std::span<const double>(r.fx).subspan(from, kBlock),
-                   std::span<const double>(r.fy).subspan(from, kBlock),
-                   std::span<const double>(r.fz).subspan(from, kBlock)});
+    for (std::size_t k = 0; (k + 1) * kBlock <= r.t.size(); ++k) {
+      run.process(block_of(r, k, from_us, seq++));
     }
   };
   play(test::record(two), 0);
@@ -293,14 +285,7 @@ TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
   const nlohmann::json j = run.summary();
   // The same as monitoring the 3-flute cut alone.
   MonitorRun alone_run(test::monitor_for(three), options);
-  const test::Recording r3 = test::record(three);
-  for (std::size_t from = 0; from + kBlock <= r3.t.size(); from += kBlock) {
-    alone_run.process({std::llround(r3.t[from] * 1e6), static_cast<std::int64_t>(from / kBlock),
-                       kRate_hz, std::span<const double>(r3.fx).subspan(from, kBlock),
-                       std::span<const double>(r3.fy).subspan(from, kBlock),
-                       std::span<const double>(r3.fz).subspan(from, kBlock)});
-  }
-  alone_run.finish();
+  feed(alone_run, test::record(three));
   const nlohmann::json alone = alone_run.summary();
   ASSERT_EQ(j["tooth_period_s"].size(), 3u) << j.dump(1);
   for (std::size_t f = 0; f < 3; ++f) {
