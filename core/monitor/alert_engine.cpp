@@ -1245,7 +1245,7 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   const bool trouble = fraction > config_.sensor_bad_fraction || new_gaps > 0;
   if (trouble && !sensor_.active) {
     sensor_.active = true;
-    // The revolution the alert comes at: the last one reported (0: none yet).
+    // The revolution the alert comes at: the last one reported (−1: none yet).
     write_message(emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_,
                        utime_us, fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
                   "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "

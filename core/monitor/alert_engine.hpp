@@ -232,6 +232,10 @@ class AlertEngine {
   /// Forget the baselines (a new tool, a reconfiguration); active runout change, wear drift and
   /// breakage alerts are cleared at the next revolution.
   void rebaseline();
+  /// The stream's revolutions so far end at `last_revolution` (a successor's, after a reload:
+  /// an alert before this engine's first revolution names the last one reported, as it would
+  /// have without the reload). Before the first revolution.
+  void continue_after(std::int64_t last_revolution) { last_revolution_ = last_revolution; }
 
   /// The baseline, once complete (for tests and diagnostics).
   struct Baseline {

@@ -133,6 +133,7 @@ class Pipeline {
   void continue_numbering(std::int64_t first_revolution, std::int64_t last_spindle_seq) {
     revolution_base_ = first_revolution;
     spindle_seq_ = last_spindle_seq;
+    alerts_.continue_after(first_revolution - 1);
   }
   /// The sequence number of the last spindle update (0: none yet).
   [[nodiscard]] std::int64_t last_spindle_seq() const { return spindle_seq_; }

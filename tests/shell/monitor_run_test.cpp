@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -198,6 +199,42 @@ TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
     EXPECT_NE(w["kind"], "record too short") << w.dump();
     EXPECT_NE(w["kind"], "no steady tooth-passing signal") << w.dump();
   }
+}
+
+// Sensor trouble in the first block after a reload, before the new pipeline has measured a
+// revolution: the alert names the last revolution the stream reported (the numbers go on), not
+// "before the first revolution".
+TEST(MonitorRun, ASensorAlertRightAfterAReloadNamesTheStreamsLastRevolution) {
+  sim::Scenario s;
+  s.sample_rate_hz = kRate_hz;
+  s.duration_s = 0.54;
+  s.spindle.actual_rpm = 25252.0;
+  test::Recording r = test::record(s);
+  for (std::size_t i = 25 * kBlock; i < 26 * kBlock; ++i) {
+    r.fx[i] = std::numeric_limits<double>::quiet_NaN();  // the block after the reload
+  }
+  MonitorRun::Options options;
+  options.identify = false;
+  MonitorRun run(test::monitor_for(s), options);
+  for (std::size_t k = 0; k < 25; ++k) {
+    run.process(block_of(r, k));
+  }
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
+  const std::int64_t last = run.status().revolutions - 1;  // numbered from 0
+  ASSERT_GT(last, 100);  // half a second of a 2-flute cut measured before the reload
+  for (std::size_t k = 25; k < 27; ++k) {  // 40 ms: the new pipeline measures no revolution
+    run.process(block_of(r, k));
+  }
+  run.finish();  // the input since the last health check: a fifth not finite
+  const nlohmann::json j = run.summary();
+  std::vector<nlohmann::json> sensor;
+  for (const auto& a : j["alerts"]) {
+    if (a["kind"] == "sensor" && a["active"].get<bool>()) {
+      sensor.push_back(a);
+    }
+  }
+  ASSERT_EQ(sensor.size(), 1u) << j["alerts"].dump(1);
+  EXPECT_EQ(sensor[0]["revolution"].get<std::int64_t>(), last) << sensor[0].dump();
 }
 
 struct IdentityLog {
