@@ -74,6 +74,9 @@ class LcmOutput : public monitor::PipelineSink {
 
   /// Waits (up to `timeout_s`) until everything queued so far has been published.
   bool drain(double timeout_s = 5.0);
+  /// Counts a message published on the same LCM outside the queue, from another thread
+  /// (identification's estimates): in published() when LCM took it, else in dropped().
+  void count_published_elsewhere(bool taken) { (taken ? published_ : dropped_).fetch_add(1); }
   [[nodiscard]] std::int64_t published() const { return published_.load(); }
   [[nodiscard]] std::int64_t dropped() const { return dropped_.load(); }
 

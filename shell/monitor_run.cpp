@@ -99,8 +99,13 @@ void MonitorRun::on_identified(const identify::IdentifiedWindow& w) {
     const std::lock_guard lock(publish_mutex_);
     const runout_estimate_t runout = messaging::runout_estimate(w);
     const force_coefficients_t coefficients = messaging::force_coefficients(w);
-    options_.lcm->publish(options_.channels.runout, &runout);
-    options_.lcm->publish(options_.channels.coefficients, &coefficients);
+    // Counted with the publisher thread's messages: the status's messages_published and
+    // messages_dropped cover every output.
+    const int runout_result = options_.lcm->publish(options_.channels.runout, &runout);
+    const int coefficients_result =
+        options_.lcm->publish(options_.channels.coefficients, &coefficients);
+    output_->count_published_elsewhere(runout_result == 0);
+    output_->count_published_elsewhere(coefficients_result == 0);
   }
 }
 

@@ -249,6 +249,11 @@ struct IdentityLog {
   }
 };
 
+struct MessageCount {
+  std::int64_t messages = 0;
+  void on_message(const lcm::ReceiveBuffer*, const std::string&) { ++messages; }
+};
+
 /// A 3-flute slot with runout, simulated as a real cut would differ from the model (noise,
 /// quantisation, a finer truth, the actual speed 1 % below the commanded one).
 sim::Scenario three_flute_cut_with_runout() {
@@ -360,9 +365,12 @@ TEST(MonitorRun, IdentifiesRunoutAndCoefficientsPublishesThemAndSummarises) {
   lcm.subscribe("MILLWATCH_RUNOUT", &IdentityLog::on_runout, &rx)->setQueueCapacity(1000);
   lcm.subscribe("MILLWATCH_COEFFICIENTS", &IdentityLog::on_coefficients, &rx)
       ->setQueueCapacity(1000);
+  MessageCount every;
+  lcm.subscribe(".*", &MessageCount::on_message, &every)->setQueueCapacity(100000);
   MonitorRun::Options options;
   options.lcm = &lcm;
   const test::Recording r = test::record(s);
+  std::int64_t published = 0, dropped = 0;
   {
     MonitorRun run(c, options);
     feed(run, r);
@@ -392,9 +400,14 @@ TEST(MonitorRun, IdentifiesRunoutAndCoefficientsPublishesThemAndSummarises) {
     EXPECT_GT(summary["coefficients"]["k_tc_N_per_mm2"]["std"].get<double>(), 0.0);
     EXPECT_LT(summary["fit"]["unexplained_fraction"].get<double>(), 0.05);
     EXPECT_GE(summary["fit"]["revolutions"].get<int>(), 1);
+    published = run.output()->published();
+    dropped = run.output()->dropped();
   }
   while (lcm.handleTimeout(50) > 0) {
   }
+  // The run's count of messages published is every message on the bus, the estimates too.
+  EXPECT_EQ(published, every.messages);
+  EXPECT_EQ(dropped, 0);
   ASSERT_FALSE(rx.runout.empty());
   EXPECT_EQ(rx.runout.size(), rx.coefficients.size());
   EXPECT_TRUE(rx.runout.back().valid);
