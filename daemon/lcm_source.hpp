@@ -24,6 +24,10 @@ struct SourceCounters {
   std::atomic<std::int64_t> oversized{0};    ///< a whole one of more than max_block_samples
   std::atomic<std::int64_t> queue_full{0};
   std::atomic<std::int64_t> samples_dropped{0};
+  /// Of those, the samples dropped since the last block queued: the pipeline counts a dropped
+  /// block's samples as the gap it leaves, when the next block comes; until then (and for good
+  /// at the end of a stream) only this counts them.
+  std::atomic<std::int64_t> samples_dropped_since_block{0};
 };
 
 class LcmSource {

@@ -171,11 +171,13 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   run_options.channels = config.channels;
   run_options.status_period_s = config.status_period_s;
   // What the source lost before the pipeline saw it, in every status and the summary: the
-  // blocks. Their samples are counted once, as the gap they leave before the next block (a
-  // lost block is a hole in the stream's time; counting it here too counted it twice).
+  // blocks. Their samples are counted once: as the gap they leave before the next block (a
+  // lost block is a hole in the stream's time; counting it here too counted it twice), or here
+  // while no block has come after them (the end of the stream).
   run_options.source_losses = [&source_counters](monitor::PipelineStatus& s) {
     s.input.blocks_rejected += source_counters.undecodable.load() +
                                source_counters.oversized.load() + source_counters.queue_full.load();
+    s.input.samples_dropped += source_counters.samples_dropped_since_block.load();
   };
   // Built here, so that a configuration the stages refuse stops the daemon with its message.
   name_next_threads("mw-identify");  // the identification worker (the publisher names itself)

@@ -121,6 +121,8 @@ case "$mode" in
     sleep 0.3
     play garbage.lcmlog
     play part2.lcmlog
+    play tail.lcmlog
+    sleep 0.1  # dropped
     stop_daemon TERM
     stop_logger
     ;;

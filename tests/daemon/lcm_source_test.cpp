@@ -67,7 +67,11 @@ TEST(LcmSource, MalformedMessagesAreCountedAndDroppedBeforeDecoding) {
   other_type[0] ^= 0x80;
   send(other_type);
   send(encoded(8, 101));  // whole, but above max_block_samples
+  // Its samples are a gap no block has shown yet ...
+  EXPECT_EQ(counters.samples_dropped_since_block.load(), 101);
   send(encoded(9, 100));
+  // ... until this one: the pipeline counts the gap before it.
+  EXPECT_EQ(counters.samples_dropped_since_block.load(), 0);
 
   EXPECT_EQ(counters.messages.load(), 10);
   EXPECT_EQ(counters.undecodable.load(), 7);
@@ -172,6 +176,7 @@ TEST(LcmSource, TheDaemonsTwoSlotsTakeABurstWhenEachBlockIsRunBeforeTheNext) {
   }
   EXPECT_EQ(counters.queue_full.load(), 1);
   EXPECT_EQ(counters.samples_dropped.load(), 100);
+  EXPECT_EQ(counters.samples_dropped_since_block.load(), 100);  // none queued after it
   auto slot = std::make_unique<BlockSlot>();
   ASSERT_TRUE(queue->try_pop(*slot));
   EXPECT_EQ(slot->seq, kBurst);

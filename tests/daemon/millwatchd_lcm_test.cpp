@@ -415,10 +415,20 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
     test::write_force_event(garbage, kRandomMessages + 1,
                             messaging::to_message({500000, 1001, 20000.0, zeros, zeros, zeros}));
   }
+  // After the last block, one the daemon drops (more samples than source.max_block_samples):
+  // no block after it shows the gap, yet its samples count as dropped.
+  constexpr int kOversizedSamples = 2500;
+  {
+    lcm::LogFile tail((dir_ / "tail.lcmlog").string(), "w");
+    const std::vector<double> zeros(kOversizedSamples, 0.0);
+    test::write_force_event(tail, 0,
+                            messaging::to_message({1'000'000, 200, 50000.0, zeros, zeros, zeros}));
+  }
   // Start: status every 0.05 s of samples, commanded 25,000 rpm. Good reload: every 10 s and
   // 25,100 rpm. Bad reload: a mistyped field (and 26,000 rpm, which must not be taken).
   nlohmann::json initial = nlohmann::json::parse(std::ifstream(dir_ / "monitor.json"));
   initial["status_period_s"] = 0.05;
+  initial["source"]["max_block_samples"] = 2000;  // blocks of up to 1,000 samples below
   nlohmann::json good = initial;
   good["status_period_s"] = 10.0;
   good["monitor"]["model"]["process"]["spindle_rpm"] = 25100.0;
@@ -448,8 +458,10 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   const std::int64_t unusable = 2;
   EXPECT_EQ(summary["samples"], 50000);  // every sample, across the reloads
   EXPECT_EQ(summary["counters"]["samples_in"], 50000 + kWrongRateSamples);
-  EXPECT_EQ(summary["dropped_samples"], kWrongRateSamples);  // the unusable blocks' only
-  EXPECT_EQ(summary["counters"]["blocks_rejected"], kRandomMessages + kMalformedMessages + unusable)
+  // The unusable blocks' and the last one's.
+  EXPECT_EQ(summary["dropped_samples"], kWrongRateSamples + kOversizedSamples);
+  EXPECT_EQ(summary["counters"]["blocks_rejected"],
+            kRandomMessages + kMalformedMessages + unusable + 1)  // and the oversized one
       << summary.dump(2);
   EXPECT_GT(summary["revolutions"].get<int>(), 100);  // it kept measuring after all that
 
@@ -470,7 +482,8 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   EXPECT_EQ(late_in_part2, 0);  // every 10 s after it
   EXPECT_EQ(status.back().samples_in, 50000 + kWrongRateSamples);  // the final status
   EXPECT_EQ(status.back().samples_processed, 50000);
-  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + kMalformedMessages + unusable);
+  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + kMalformedMessages + unusable + 1);
+  EXPECT_EQ(status.back().samples_dropped, kWrongRateSamples + kOversizedSamples);
   EXPECT_EQ(status.back().revolutions, summary["revolutions"].get<std::int64_t>());  // both parts
 
   // The commanded speed of the good reload is in effect after it; the bad one's never is.
