@@ -3,8 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cstdint>
 #include <stdexcept>
 #include <vector>
+
+#include "daemon/scan_timing.hpp"
 
 #ifdef MILLWATCH_HAVE_COMEDI
 #include <comedilib.h>
@@ -57,7 +60,7 @@ ComediSource::ComediSource(const SourceConfig& config, double sample_rate_hz, Bl
     chanlist[a] = CR_PACK(chan, range, AREF_GROUND);
   }
   comedi_cmd cmd{};
-  const auto period_ns = static_cast<unsigned>(1e9 / sample_rate_hz_);
+  const std::uint32_t period_ns = scan_period_ns(sample_rate_hz_);
   if (comedi_get_cmd_generic_timed(dev, static_cast<unsigned>(subdevice_), &cmd, 3, period_ns) <
       0) {
     comedi_close(dev);
@@ -70,6 +73,16 @@ ComediSource::ComediSource(const SourceConfig& config, double sample_rate_hz, Bl
   cmd.stop_arg = 0;
   for (int pass = 0; pass < 2; ++pass) {
     comedi_command_test(dev, &cmd);
+  }
+  // The period the board took (it rounds to its clock): a timed scan, or the conversions of a
+  // scan that follows the last one.
+  const std::uint64_t board_period_ns = cmd.scan_begin_src == TRIG_TIMER ? cmd.scan_begin_arg
+                                        : cmd.convert_src == TRIG_TIMER
+                                            ? std::uint64_t{cmd.convert_arg} * cmd.chanlist_len
+                                            : 0;
+  if (const std::string why = scan_rate_mismatch(sample_rate_hz_, board_period_ns); !why.empty()) {
+    comedi_close(dev);
+    throw std::runtime_error(config_.device + ": " + why);
   }
   if (comedi_command(dev, &cmd) < 0) {
     comedi_close(dev);

@@ -91,4 +91,58 @@ DaemonConfig daemon_config_from_json(const nlohmann::json& j) {
   return c;
 }
 
+std::string fields_needing_restart(const DaemonConfig& running, const DaemonConfig& next) {
+  std::string out;
+  auto note = [&out](bool differs, const char* field) {
+    if (differs) {
+      out += (out.empty() ? "" : ", ") + std::string(field);
+    }
+  };
+  const auto& a = running.source;
+  const auto& b = next.source;
+  note(a.kind != b.kind, "source.kind");
+  note(a.channel != b.channel, "source.channel");
+  note(a.device != b.device, "source.device");
+  note(a.subdevice != b.subdevice, "source.subdevice");
+  note(a.block_samples != b.block_samples, "source.block_samples");
+  note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
+  note(a.wake_period_s != b.wake_period_s, "source.wake_period_s");
+  // A Comedi board scans at the rate it was started with; an LCM source's blocks carry theirs.
+  note(a.kind == SourceConfig::Kind::kComedi &&
+           running.monitor.sample_rate_hz != next.monitor.sample_rate_hz,
+       "monitor.sample_rate_hz (the Comedi board's scan rate)");
+  bool channels_differ = false;
+  for (std::size_t i = 0; i < a.channels.size(); ++i) {
+    const auto& x = a.channels[i];
+    const auto& y = b.channels[i];
+    channels_differ = channels_differ || x.daq_channel != y.daq_channel ||
+                      x.volts_min != y.volts_min || x.volts_max != y.volts_max ||
+                      x.maxdata != y.maxdata || x.range_N != y.range_N ||
+                      x.full_scale_V != y.full_scale_V;
+  }
+  note(channels_differ, "source.channels");
+  note(running.lcm_url != next.lcm_url, "lcm.url");
+  note(running.lcm_output_url != next.lcm_output_url, "lcm.output_url");
+  const auto& c = running.channels;
+  const auto& d = next.channels;
+  // For an LCM source, lcm.channels.raw follows source.channel (noted above).
+  note((c.raw != d.raw && a.channel == b.channel) || c.spindle != d.spindle ||
+           c.tooth_periods != d.tooth_periods || c.flute_peaks != d.flute_peaks ||
+           c.residual != d.residual || c.sync_average != d.sync_average || c.runout != d.runout ||
+           c.coefficients != d.coefficients || c.alert != d.alert || c.status != d.status,
+       "lcm.channels");
+  return out;
+}
+
+DaemonConfig as_reload_of(const DaemonConfig& running, DaemonConfig next) {
+  next.source = running.source;
+  next.lcm_url = running.lcm_url;
+  next.lcm_output_url = running.lcm_output_url;
+  next.channels = running.channels;
+  if (running.source.kind == SourceConfig::Kind::kComedi) {
+    next.monitor.sample_rate_hz = running.monitor.sample_rate_hz;  // the board's scan rate
+  }
+  return next;
+}
+
 }  // namespace millwatch::daemon

@@ -55,4 +55,12 @@ struct DaemonConfig {
 /// @throws config::ConfigError naming the field, its value and the allowed range.
 DaemonConfig daemon_config_from_json(const nlohmann::json& j);
 
+/// What a reload cannot change in a running daemon — the source, the LCM set-up, and with a
+/// Comedi source the sample rate its board scans at (an LCM source's blocks carry their rate):
+/// the fields of `next` that differ from `running`, for a warning (empty: none).
+[[nodiscard]] std::string fields_needing_restart(const DaemonConfig& running,
+                                                 const DaemonConfig& next);
+/// What a reload applies: `next` with those fields at their running values.
+[[nodiscard]] DaemonConfig as_reload_of(const DaemonConfig& running, DaemonConfig next);
+
 }  // namespace millwatch::daemon

@@ -94,47 +94,6 @@ std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
   return build_for(path, [&] { return std::make_unique<monitor::Pipeline>(config, sink); });
 }
 
-/// What a reload cannot change in a running daemon (the source and the LCM set-up): the fields
-/// of `next` that differ from the running configuration, for a warning.
-std::string needs_restart(const daemon::DaemonConfig& running, const daemon::DaemonConfig& next) {
-  std::string out;
-  auto note = [&out](bool differs, const char* field) {
-    if (differs) {
-      out += (out.empty() ? "" : ", ") + std::string(field);
-    }
-  };
-  const auto& a = running.source;
-  const auto& b = next.source;
-  note(a.kind != b.kind, "source.kind");
-  note(a.channel != b.channel, "source.channel");
-  note(a.device != b.device, "source.device");
-  note(a.subdevice != b.subdevice, "source.subdevice");
-  note(a.block_samples != b.block_samples, "source.block_samples");
-  note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
-  note(a.wake_period_s != b.wake_period_s, "source.wake_period_s");
-  bool channels_differ = false;
-  for (std::size_t i = 0; i < a.channels.size(); ++i) {
-    const auto& x = a.channels[i];
-    const auto& y = b.channels[i];
-    channels_differ = channels_differ || x.daq_channel != y.daq_channel ||
-                      x.volts_min != y.volts_min || x.volts_max != y.volts_max ||
-                      x.maxdata != y.maxdata || x.range_N != y.range_N ||
-                      x.full_scale_V != y.full_scale_V;
-  }
-  note(channels_differ, "source.channels");
-  note(running.lcm_url != next.lcm_url, "lcm.url");
-  note(running.lcm_output_url != next.lcm_output_url, "lcm.output_url");
-  const auto& c = running.channels;
-  const auto& d = next.channels;
-  // For an LCM source, lcm.channels.raw follows source.channel (noted above).
-  note((c.raw != d.raw && a.channel == b.channel) || c.spindle != d.spindle ||
-           c.tooth_periods != d.tooth_periods || c.flute_peaks != d.flute_peaks ||
-           c.residual != d.residual || c.sync_average != d.sync_average || c.runout != d.runout ||
-           c.coefficients != d.coefficients || c.alert != d.alert || c.status != d.status,
-       "lcm.channels");
-  return out;
-}
-
 int run(const std::string& config_path, const UrlOverrides& urls, const std::string& summary_path,
         double stall_after_s) {
   daemon::ServiceNotifier notifier;
@@ -315,12 +274,13 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
         }
         auto next = std::make_unique<Reload>();
         next->config = load(config_path, urls);
-        next->pipeline = make_pipeline(config_path, next->config.monitor, run->sink());
-        const std::string restart = needs_restart(config, next->config);
+        const std::string restart = daemon::fields_needing_restart(config, next->config);
         if (!restart.empty()) {
           spdlog::warn("SIGHUP: {}: {} changed; that takes a restart, the running values stay",
                        config_path, restart);
         }
+        next->config = daemon::as_reload_of(config, std::move(next->config));
+        next->pipeline = make_pipeline(config_path, next->config.monitor, run->sink());
         std::lock_guard<std::mutex> lock(reload_mutex);
         pending = std::move(next);
         reload.store(true);

@@ -32,5 +32,38 @@ TEST(DaemonConfig, EveryPublishedChannelCanBeNamed) {
             "MILLWATCH_COEFFICIENTS");
 }
 
+// A reload takes the monitor's settings; what a running daemon cannot change (its source, its
+// LCM set-up, a Comedi board's scan rate) is named for the warning and kept at its running value.
+TEST(DaemonConfig, AReloadKeepsWhatTakesARestartAndNamesIt) {
+  DaemonConfig running;
+  running.monitor.sample_rate_hz = 333300.0;
+  DaemonConfig next = running;
+  next.monitor.sample_rate_hz = 100000.0;
+  next.monitor.model.process.spindle_rpm = 30000.0;
+  // An LCM source: each block carries its rate, so the new one is the DAQ bridge's to send.
+  EXPECT_EQ(fields_needing_restart(running, next), "");
+  EXPECT_EQ(as_reload_of(running, next).monitor.sample_rate_hz, 100000.0);
+
+  // A Comedi board keeps scanning at the rate it was started with.
+  running.source.kind = SourceConfig::Kind::kComedi;
+  next.source.kind = SourceConfig::Kind::kComedi;
+  EXPECT_EQ(fields_needing_restart(running, next),
+            "monitor.sample_rate_hz (the Comedi board's scan rate)");
+  const DaemonConfig comedi = as_reload_of(running, next);
+  EXPECT_EQ(comedi.monitor.sample_rate_hz, 333300.0);
+  EXPECT_EQ(comedi.monitor.model.process.spindle_rpm, 30000.0);  // the rest is taken
+
+  // The source and the LCM set-up.
+  next = running;
+  next.source.device = "/dev/comedi1";
+  next.lcm_output_url = "udpm://239.255.76.67:7669?ttl=0";
+  next.channels.alert = "S2_ALERT";
+  EXPECT_EQ(fields_needing_restart(running, next), "source.device, lcm.output_url, lcm.channels");
+  const DaemonConfig kept = as_reload_of(running, next);
+  EXPECT_EQ(kept.source.device, running.source.device);
+  EXPECT_EQ(kept.lcm_output_url, running.lcm_output_url);
+  EXPECT_EQ(kept.channels.alert, running.channels.alert);
+}
+
 }  // namespace
 }  // namespace millwatch::daemon
