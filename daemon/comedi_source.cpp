@@ -119,6 +119,7 @@ void ComediSource::run() {
     if (got <= 0) {
       spdlog::error("{}: acquisition stopped ({})", config_.device,
                     got == 0 ? "end of data" : comedi_strerror(comedi_errno()));
+      counters_.ended.store(true);  // the daemon stops and says so (exit status 1)
       return;
     }
     filled += static_cast<std::size_t>(got);

@@ -28,6 +28,8 @@ struct SourceCounters {
   /// block's samples as the gap it leaves, when the next block comes; until then (and for good
   /// at the end of a stream) only this counts them.
   std::atomic<std::int64_t> samples_dropped_since_block{0};
+  /// The source will deliver nothing more (a Comedi board whose reads failed).
+  std::atomic<bool> ended{false};
 };
 
 class LcmSource {

@@ -94,8 +94,16 @@ std::unique_ptr<monitor::Pipeline> make_pipeline(const std::string& path,
   return build_for(path, [&] { return std::make_unique<monitor::Pipeline>(config, sink); });
 }
 
+/// Tests only (hidden options): the sample thread hangs after `stall_after_s`, as a stuck
+/// pipeline would, so that the systemd watchdog's pings stop; the source ends after
+/// `source_ends_after_s`, as a DAQ whose reads fail would (0: never).
+struct TestHooks {
+  double stall_after_s = 0.0;
+  double source_ends_after_s = 0.0;
+};
+
 int run(const std::string& config_path, const UrlOverrides& urls, const std::string& summary_path,
-        double stall_after_s) {
+        TestHooks hooks) {
   daemon::ServiceNotifier notifier;
   daemon::DaemonConfig config = load(config_path, urls);
   spdlog::set_level(spdlog::level::from_str(config.log_level));
@@ -195,19 +203,26 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
 
   const auto started = std::chrono::steady_clock::now();
   const auto wake_period = std::chrono::duration<double>(config.source.wake_period_s);
+  std::atomic<bool> source_ended{false};
+  const auto source_has_ended = [&] {
+    return source_counters.ended.load() ||
+           (hooks.source_ends_after_s > 0.0 &&
+            std::chrono::steady_clock::now() - started >
+                std::chrono::duration<double>(hooks.source_ends_after_s));
+  };
   std::thread sample_thread([&] {
     pthread_setname_np(pthread_self(), "mw-sample");
     bool took_blocks = false;  // in this round (since the last wake period)
     while (true) {
       notifier.watchdog();  // a stalled loop stops the pings: systemd restarts the daemon
-      if (stall_after_s > 0.0 && std::chrono::steady_clock::now() - started >
-                                     std::chrono::duration<double>(stall_after_s)) {
+      if (hooks.stall_after_s > 0.0 && std::chrono::steady_clock::now() - started >
+                                           std::chrono::duration<double>(hooks.stall_after_s)) {
         // Test hook (--test-stall-sample-thread): the sample thread hangs until told to stop.
         spdlog::warn("test: the sample thread stalls");
         while (!stop.load()) {
           std::this_thread::sleep_for(std::chrono::milliseconds(5));
         }
-        stall_after_s = 0.0;
+        hooks.stall_after_s = 0.0;
       }
       if (reload.load()) {
         std::unique_ptr<Reload> next;
@@ -241,6 +256,14 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
           continue;
         }
         break;
+      }
+      if (!source_ended.load() && source_has_ended()) {
+        // Nothing more will come (a DAQ whose reads fail): the daemon stops as on SIGTERM,
+        // with its final status and summary, and exits 1, so that a service manager restarts
+        // it instead of watching a live process that measures nothing.
+        source_ended.store(true);
+        spdlog::error("the source has ended: millwatchd stops (exit status 1)");
+        kill(getpid(), SIGTERM);
       }
       run->idle();  // no samples: still a status every status period
       // Asleep until the source has a block; woken at least every 20 ms (LCM: 20 ms after a
@@ -292,7 +315,9 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
       }
       continue;
     }
-    spdlog::info("{}: stopping", signal == SIGTERM ? "SIGTERM" : "SIGINT");
+    spdlog::info("{}: stopping", source_ended.load() ? "the source has ended"
+                                 : signal == SIGTERM ? "SIGTERM"
+                                                     : "SIGINT");
     break;
   }
   // Stop the source first, then let the sample thread drain what was queued.
@@ -312,7 +337,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   if (!summary_path.empty()) {
     shell::write_text_file(summary_path, j.dump(2) + "\n");
   }
-  return 0;
+  return source_ended.load() ? 1 : 0;
 }
 
 }  // namespace
@@ -324,7 +349,7 @@ int main(int argc, char** argv) {
   UrlOverrides urls;
   std::string summary_path;
   bool check = false;
-  double stall_after_s = 0.0;
+  TestHooks hooks;
   app.add_option("-c,--config", config_path, "Daemon configuration JSON")
       ->required()
       ->check(CLI::ExistingFile);
@@ -335,9 +360,9 @@ int main(int argc, char** argv) {
                  "Override the configuration's LCM output URL (lcm.output_url)");
   app.add_option("--summary", summary_path, "Write the final summary JSON here on exit");
   app.add_flag("--check", check, "Validate the configuration and exit");
-  // Tests only (hidden): the sample thread hangs after this many seconds, as a stuck pipeline
-  // would, so that the systemd watchdog's pings stop.
-  app.add_option("--test-stall-sample-thread", stall_after_s)->group("");
+  // Tests only (hidden): TestHooks.
+  app.add_option("--test-stall-sample-thread", hooks.stall_after_s)->group("");
+  app.add_option("--test-source-ends-after", hooks.source_ends_after_s)->group("");
   CLI11_PARSE(app, argc, argv);
   try {
     if (check) {
@@ -347,7 +372,7 @@ int main(int argc, char** argv) {
       std::printf("%s: configuration is valid\n", config_path.c_str());
       return 0;
     }
-    return run(config_path, urls, summary_path, stall_after_s);
+    return run(config_path, urls, summary_path, hooks);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;

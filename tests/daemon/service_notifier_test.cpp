@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -198,6 +199,34 @@ TEST(ServiceNotifier, NoWatchdogAskedNoPingsAndNoSocketNoHarm) {
   const daemon::ServiceNotifier off;
   EXPECT_FALSE(off.enabled());
   EXPECT_EQ(off.watchdog_interval().count(), 0);
+}
+
+// A source that ends (a DAQ whose reads fail) does not leave a live daemon that measures
+// nothing: it stops as on SIGTERM — STOPPING=1, the final summary written — and exits 1, which
+// the unit's Restart=on-failure answers.
+TEST(ServiceNotifier, ASourceThatEndsStopsTheDaemonWithExitStatusOne) {
+  const fs::path dir = test::fresh_temp_dir();
+  NotifySocket sock(socket_path("ends"));
+  ASSERT_TRUE(sock.bound());
+  const auto start = Clock::now();
+  const pid_t pid =
+      start_daemon({MILLWATCH_DAEMON, "-c", config(), "--lcm-url", "memq://", "--summary",
+                    (dir / "summary.json").string(), "--test-source-ends-after", "0.5"},
+                   {"NOTIFY_SOCKET=" + socket_path("ends").string()}, dir / "daemon.log");
+  std::vector<Message> m;
+  sock.receive(start, start + std::chrono::milliseconds(2000), m);
+  EXPECT_EQ(wait_exit(pid), 1);  // by itself, no signal sent
+  std::ifstream log_file(dir / "daemon.log");
+  const std::string log((std::istreambuf_iterator<char>(log_file)),
+                        std::istreambuf_iterator<char>());
+  EXPECT_NE(log.find("the source has ended: millwatchd stops (exit status 1)"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("the source has ended: stopping"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(dir / "summary.json")) << log;
+  ASSERT_EQ(m.size(), 2u) << log;
+  EXPECT_EQ(m[0].text.rfind("READY=1", 0), 0u);
+  EXPECT_EQ(m[1].text.rfind("STOPPING=1", 0), 0u);
+  EXPECT_GT(m[1].t_s, 0.4);
 }
 
 TEST(ServiceUnit, PassesSystemdAnalyzeVerify) {
