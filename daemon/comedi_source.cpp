@@ -133,7 +133,7 @@ void ComediSource::run() {
     BlockSlot* slot = queue_.claim();  // converted straight into the queue's free slot
     if (slot == nullptr) {
       ++counters_.queue_full;
-      counters_.samples_dropped += static_cast<std::int64_t>(block);
+      counters_.dropped(static_cast<std::int64_t>(block));
       continue;
     }
     slot->count = block;
@@ -154,6 +154,7 @@ void ComediSource::run() {
         (a == 0 ? slot->fx : a == 1 ? slot->fy : slot->fz)[i] = s.force_N;
       }
     }
+    counters_.queuing_block();
     queue_.publish();
   }
 }

@@ -12,7 +12,7 @@
 
 #include "daemon/block_queue.hpp"
 #include "daemon/daemon_config.hpp"
-#include "daemon/lcm_source.hpp"
+#include "daemon/source_counters.hpp"
 
 namespace millwatch::daemon {
 

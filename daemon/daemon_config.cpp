@@ -135,13 +135,19 @@ std::string fields_needing_restart(const DaemonConfig& running, const DaemonConf
 }
 
 DaemonConfig as_reload_of(const DaemonConfig& running, DaemonConfig next) {
+  const bool comedi = running.source.kind == SourceConfig::Kind::kComedi;
+  if (comedi || next.source.kind != running.source.kind) {
+    // A Comedi channel saturates at its amplifier's range (read_source): the running channels'
+    // (an LCM source's: the running monitor section's, not a Comedi file's channels').
+    next.monitor.saturation_N = running.monitor.saturation_N;
+  }
+  if (comedi) {
+    next.monitor.sample_rate_hz = running.monitor.sample_rate_hz;  // the board's scan rate
+  }
   next.source = running.source;
   next.lcm_url = running.lcm_url;
   next.lcm_output_url = running.lcm_output_url;
   next.channels = running.channels;
-  if (running.source.kind == SourceConfig::Kind::kComedi) {
-    next.monitor.sample_rate_hz = running.monitor.sample_rate_hz;  // the board's scan rate
-  }
   return next;
 }
 

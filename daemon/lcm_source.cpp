@@ -48,8 +48,7 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
     // A whole block, only longer than we take: its samples are lost.
     const auto n = ++counters_.oversized;
-    counters_.samples_dropped += c.num_samples;
-    counters_.samples_dropped_since_block += c.num_samples;
+    counters_.dropped(c.num_samples);
     if (n <= 10) {
       spdlog::warn(
           "{}: message {}: block of {} samples, more than source.max_block_samples ({}); "
@@ -71,8 +70,7 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   }
   if (slot == nullptr) {
     ++counters_.queue_full;
-    counters_.samples_dropped += c.num_samples;
-    counters_.samples_dropped_since_block += c.num_samples;
+    counters_.dropped(c.num_samples);
     return;
   }
   // The check made num_samples ≤ max_block_samples_ ≤ the slot's size.
@@ -80,10 +78,8 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   slot->seq = header.seq;
   slot->sample_rate_hz = header.sample_rate_hz;
   slot->count = header.num_samples;
+  counters_.queuing_block();
   queue_.publish();
-  // The pipeline counts the samples dropped before this block as the gap before it (the thread
-  // that handles LCM processes it before any status).
-  counters_.samples_dropped_since_block.store(0);
 }
 
 }  // namespace millwatch::daemon

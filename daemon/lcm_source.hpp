@@ -9,28 +9,14 @@
 // a std::string of the channel name for every message (a heap allocation for a name of more than 15
 // characters, as MILLWATCH_FORCE_RAW): in steady state a block costs no allocation here.
 
-#include <atomic>
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 
 #include "daemon/block_queue.hpp"
+#include "daemon/source_counters.hpp"
 
 namespace millwatch::daemon {
-
-struct SourceCounters {
-  std::atomic<std::int64_t> messages{0};
-  std::atomic<std::int64_t> undecodable{0};  ///< not a whole force_block_t
-  std::atomic<std::int64_t> oversized{0};    ///< a whole one of more than max_block_samples
-  std::atomic<std::int64_t> queue_full{0};
-  std::atomic<std::int64_t> samples_dropped{0};
-  /// Of those, the samples dropped since the last block queued: the pipeline counts a dropped
-  /// block's samples as the gap it leaves, when the next block comes; until then (and for good
-  /// at the end of a stream) only this counts them.
-  std::atomic<std::int64_t> samples_dropped_since_block{0};
-  /// The source will deliver nothing more (a Comedi board whose reads failed).
-  std::atomic<bool> ended{false};
-};
 
 class LcmSource {
  public:

@@ -18,8 +18,10 @@
 
 #include <fmt/format.h>
 #include <pthread.h>
+#include <signal.h>  // kill
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>  // getpid
 
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -140,11 +142,11 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   // What the source lost before the pipeline saw it, in every status and the summary: the
   // blocks. Their samples are counted once: as the gap they leave before the next block (a
   // lost block is a hole in the stream's time; counting it here too counted it twice), or here
-  // while no block has come after them (the end of the stream).
+  // when no such gap shows them (before the stream's first block; since the last one).
   run_options.source_losses = [&source_counters](monitor::PipelineStatus& s) {
     s.input.blocks_rejected += source_counters.undecodable.load() +
                                source_counters.oversized.load() + source_counters.queue_full.load();
-    s.input.samples_dropped += source_counters.samples_dropped_since_block.load();
+    s.input.samples_dropped += source_counters.samples_dropped_unseen();
   };
   // Built here, so that a configuration the stages refuse stops the daemon with its message.
   name_next_threads("mw-identify");  // the identification worker (the publisher names itself)

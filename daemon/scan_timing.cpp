@@ -11,13 +11,13 @@ std::uint32_t scan_period_ns(double sample_rate_hz) {
 }
 
 std::string scan_rate_mismatch(double sample_rate_hz, std::uint64_t period_ns) {
-  constexpr double kTolerance = 1e-6;
+  constexpr double kRelativeRateTolerance = 1e-6;
   if (period_ns == 0) {
     return fmt::format("the board gives no scan period for {} Hz", sample_rate_hz);
   }
   const double board_hz = 1e9 / static_cast<double>(period_ns);
   const double off = board_hz / sample_rate_hz - 1.0;
-  if (std::fabs(off) <= kTolerance) {
+  if (std::fabs(off) <= kRelativeRateTolerance) {
     return {};
   }
   return fmt::format(

@@ -49,9 +49,26 @@ TEST(DaemonConfig, AReloadKeepsWhatTakesARestartAndNamesIt) {
   next.source.kind = SourceConfig::Kind::kComedi;
   EXPECT_EQ(fields_needing_restart(running, next),
             "monitor.sample_rate_hz (the Comedi board's scan rate)");
+  // Its channels saturate at their amplifiers' range (the running ones: a new range_N takes a
+  // restart).
+  running.monitor.saturation_N = {500.0, 500.0, 1000.0};
+  next.monitor.saturation_N = {100.0, 100.0, 100.0};
+  next.source.channels[0].range_N = running.source.channels[0].range_N + 100.0;
+  EXPECT_EQ(fields_needing_restart(running, next),
+            "monitor.sample_rate_hz (the Comedi board's scan rate), source.channels");
   const DaemonConfig comedi = as_reload_of(running, next);
+  EXPECT_EQ(comedi.monitor.saturation_N, running.monitor.saturation_N);
   EXPECT_EQ(comedi.monitor.sample_rate_hz, 333300.0);
   EXPECT_EQ(comedi.monitor.model.process.spindle_rpm, 30000.0);  // the rest is taken
+
+  // A file that switches an LCM source to a Comedi board: the LCM source runs on, with the
+  // saturation its blocks were checked against.
+  DaemonConfig lcm;
+  DaemonConfig to_comedi = lcm;
+  to_comedi.source.kind = SourceConfig::Kind::kComedi;
+  to_comedi.monitor.saturation_N = {100.0, 100.0, 100.0};
+  EXPECT_EQ(fields_needing_restart(lcm, to_comedi), "source.kind");
+  EXPECT_EQ(as_reload_of(lcm, to_comedi).monitor.saturation_N, lcm.monitor.saturation_N);
 
   // The source and the LCM set-up.
   next = running;

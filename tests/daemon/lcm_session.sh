@@ -122,7 +122,7 @@ case "$mode" in
     play garbage.lcmlog
     play part2.lcmlog
     play tail.lcmlog
-    sleep 0.1  # dropped
+    sleep 0.1  # its oversized block handled (and dropped) before the stop
     stop_daemon TERM
     stop_logger
     ;;

@@ -68,10 +68,10 @@ TEST(LcmSource, MalformedMessagesAreCountedAndDroppedBeforeDecoding) {
   send(other_type);
   send(encoded(8, 101));  // whole, but above max_block_samples
   // Its samples are a gap no block has shown yet ...
-  EXPECT_EQ(counters.samples_dropped_since_block.load(), 101);
+  EXPECT_EQ(counters.samples_dropped_unseen(), 101);
   send(encoded(9, 100));
   // ... until this one: the pipeline counts the gap before it.
-  EXPECT_EQ(counters.samples_dropped_since_block.load(), 0);
+  EXPECT_EQ(counters.samples_dropped_unseen(), 0);
 
   EXPECT_EQ(counters.messages.load(), 10);
   EXPECT_EQ(counters.undecodable.load(), 7);
@@ -176,7 +176,7 @@ TEST(LcmSource, TheDaemonsTwoSlotsTakeABurstWhenEachBlockIsRunBeforeTheNext) {
   }
   EXPECT_EQ(counters.queue_full.load(), 1);
   EXPECT_EQ(counters.samples_dropped.load(), 100);
-  EXPECT_EQ(counters.samples_dropped_since_block.load(), 100);  // none queued after it
+  EXPECT_EQ(counters.samples_dropped_unseen(), 100);  // none queued after it
   auto slot = std::make_unique<BlockSlot>();
   ASSERT_TRUE(queue->try_pop(*slot));
   EXPECT_EQ(slot->seq, kBurst);

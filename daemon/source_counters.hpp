@@ -1,0 +1,51 @@
+#pragma once
+// What a live source (LCM raw channel, Comedi board) counts before the pipeline sees a block:
+// messages, the blocks it drops and their samples, and whether it has ended. Shared with the
+// sample thread and the status through atomics.
+//
+// A dropped block's samples are a hole in the stream's time, which the pipeline counts as the gap
+// before the next block it takes (samples_dropped, once). Two holes no next block shows are
+// counted here instead: the drops before the stream's first block, and those since the last
+// block queued (for good at the end of a stream).
+
+#include <atomic>
+#include <cstdint>
+
+namespace millwatch::daemon {
+
+struct SourceCounters {
+  std::atomic<std::int64_t> messages{0};
+  std::atomic<std::int64_t> undecodable{0};  ///< not a whole force_block_t
+  std::atomic<std::int64_t> oversized{0};    ///< a whole one of more than max_block_samples
+  std::atomic<std::int64_t> queue_full{0};
+  std::atomic<std::int64_t> samples_dropped{0};  ///< in the blocks dropped (their own count)
+  /// The source will deliver nothing more (a Comedi board whose reads failed).
+  std::atomic<bool> ended{false};
+
+  /// A block of `samples` dropped (oversized, or the queue full).
+  void dropped(std::int64_t samples) {
+    samples_dropped += samples;
+    since_block_ += samples;
+  }
+  /// Just before a block is published to the queue: the drops since the last one are the gap
+  /// the pipeline sees before it (before the stream's first block, none shows them). Zeroed
+  /// before the block is published, so that no status counts them twice (one taken meanwhile
+  /// misses them until the block is processed).
+  void queuing_block() {
+    const std::int64_t before = since_block_.exchange(0);
+    if (!any_queued_.exchange(true)) {
+      before_first_block_ += before;
+    }
+  }
+  /// The dropped samples no gap in the pipeline's stream shows (for the status and summary).
+  [[nodiscard]] std::int64_t samples_dropped_unseen() const {
+    return before_first_block_.load() + since_block_.load();
+  }
+
+ private:
+  std::atomic<std::int64_t> since_block_{0};
+  std::atomic<std::int64_t> before_first_block_{0};
+  std::atomic<bool> any_queued_{false};
+};
+
+}  // namespace millwatch::daemon
