@@ -142,7 +142,10 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carry(carried_, last);
   carried_utime_us_ = std::max(carried_utime_us_, last.utime_us);
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
-  pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq());
+  pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq(), carried_utime_us_);
+  if (const std::optional<std::int64_t> next_us = old->next_input_utime_us()) {
+    pipeline_->continue_input_after(*next_us);  // a gap across the reload is counted
+  }
   summary_.reconfigure(pipeline_->config(), carried_.revolutions, carried_utime_us_);
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());

@@ -1232,6 +1232,7 @@ void AlertEngine::check_coefficient_wear(const WindowEstimate& e, std::int64_t r
 }
 
 void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
+  last_utime_us_ = std::max(last_utime_us_, utime_us);  // a clear says when, revolutions or not
   const std::int64_t bad = c.samples_flagged;
   const std::int64_t samples = c.samples_in;
   const std::int64_t new_samples = samples - last_samples_;

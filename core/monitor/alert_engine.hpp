@@ -145,7 +145,7 @@ struct Alert {
   AlertKind kind = AlertKind::kSensor;
   AlertSeverity severity = AlertSeverity::kWarning;
   bool active = true;           ///< raised (true) or cleared (false)
-  std::int64_t revolution = 0;  ///< at detection; −1: before the first revolution (a sensor alert)
+  std::int64_t revolution = 0;  ///< at detection; −1: before the stream's first revolution
   std::int64_t utime_us = 0;
   double value = 0.0;
   double threshold = 0.0;
@@ -232,10 +232,13 @@ class AlertEngine {
   /// Forget the baselines (a new tool, a reconfiguration); active runout change, wear drift and
   /// breakage alerts are cleared at the next revolution.
   void rebaseline();
-  /// The stream's revolutions so far end at `last_revolution` (a successor's, after a reload:
-  /// an alert before this engine's first revolution names the last one reported, as it would
-  /// have without the reload). Before the first revolution.
-  void continue_after(std::int64_t last_revolution) { last_revolution_ = last_revolution; }
+  /// The stream so far ends at revolution `last_revolution`, time `utime_us` (a successor's,
+  /// after a reload: an alert or a clear before this engine's first revolution names them, as
+  /// it would have without the reload). Call before the first revolution.
+  void continue_after(std::int64_t last_revolution, std::int64_t utime_us) {
+    last_revolution_ = last_revolution;
+    last_utime_us_ = utime_us;
+  }
 
   /// The baseline, once complete (for tests and diagnostics).
   struct Baseline {

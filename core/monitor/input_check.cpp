@@ -72,6 +72,13 @@ void InputCheck::restart() {
   started_ = false;
 }
 
+std::optional<std::int64_t> InputCheck::next_utime() const {
+  if (started_) {
+    return utime_of(next_sample_);
+  }
+  return continued_from_utime_us_;
+}
+
 CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) {
   const auto n = static_cast<std::int64_t>(block.fx_N.size());
   counters_.samples_dropped += n;
@@ -114,6 +121,19 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     started_ = true;
     start_utime_us_ = block.utime_us;
     start_sample_ = next_sample_;
+    if (continued_from_utime_us_) {  // the samples lost between the predecessor and this block
+      const double missing_samples =
+          static_cast<double>(block.utime_us - *continued_from_utime_us_) * config_.sample_rate_hz /
+          1e6;
+      if (missing_samples > config_.tolerance_samples) {
+        const auto missing = static_cast<std::int64_t>(std::llround(missing_samples));
+        ++counters_.gaps;
+        counters_.samples_dropped += missing;
+        out.gap_samples = missing;
+        out.problem = "gap before block (since the stream before a reload)";
+      }
+      continued_from_utime_us_.reset();
+    }
   }
   const double offset_samples =
       static_cast<double>(block.utime_us - utime_of(next_sample_)) * config_.sample_rate_hz / 1e6;

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,13 @@ class InputCheck {
   [[nodiscard]] std::int64_t next_sample() const { return next_sample_; }
   /// Forget the stream's timing (the next block starts a new stream); counters are kept.
   void restart();
+  /// The utime (µs) the next sample is expected at; empty before the first block (unless
+  /// continue_after() said).
+  [[nodiscard]] std::optional<std::int64_t> next_utime() const;
+  /// This check's stream goes on from one that expected its next sample at `next_utime_us` (a
+  /// reload's successor): a first block later than that counts the samples missing before it
+  /// as a gap (reported in its CheckedBlock), although the stream's timing starts at it.
+  void continue_after(std::int64_t next_utime_us) { continued_from_utime_us_ = next_utime_us; }
 
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
@@ -102,6 +110,7 @@ class InputCheck {
   std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
   std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
+  std::optional<std::int64_t> continued_from_utime_us_;  // continue_after(), until the first block
   std::array<double, 3> last_good_{};
   // max_block_samples each, left uninitialised (not 1.5 MiB zeroed at construction for the
   // default 65,536): a page is touched (faulted in) only when a block reaches it — flags_ by

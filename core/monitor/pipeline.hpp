@@ -19,6 +19,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -128,12 +129,21 @@ class Pipeline {
   /// record-level verdicts of finish() — the stream goes on. The last call for this pipeline.
   void hand_over(std::string_view why);
   /// Numbers this pipeline's revolutions from `first_revolution` and its spindle updates after
-  /// `last_spindle_seq` (a successor's, after a reload: the numbers a subscriber sees go on).
-  /// Before the first block.
-  void continue_numbering(std::int64_t first_revolution, std::int64_t last_spindle_seq) {
+  /// `last_spindle_seq`, the stream having reached `last_utime_us` (a successor's, after a
+  /// reload: the numbers a subscriber sees go on). Before the first block.
+  void continue_numbering(std::int64_t first_revolution, std::int64_t last_spindle_seq,
+                          std::int64_t last_utime_us) {
     revolution_base_ = first_revolution;
     spindle_seq_ = last_spindle_seq;
-    alerts_.continue_after(first_revolution - 1);
+    alerts_.continue_after(first_revolution - 1, last_utime_us);
+  }
+  /// The input goes on from a predecessor's (a reload): samples missing between the time it
+  /// expected next (its next_input_utime_us()) and this pipeline's first block are a gap,
+  /// counted as dropped. Before the first block.
+  void continue_input_after(std::int64_t next_utime_us) { input_.continue_after(next_utime_us); }
+  /// The utime (µs) the next input sample is expected at (empty: no block yet).
+  [[nodiscard]] std::optional<std::int64_t> next_input_utime_us() const {
+    return input_.next_utime();
   }
   /// The sequence number of the last spindle update (0: none yet).
   [[nodiscard]] std::int64_t last_spindle_seq() const { return spindle_seq_; }

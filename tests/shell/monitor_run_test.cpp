@@ -120,6 +120,35 @@ TEST(MonitorRun, ReplacedPipelinesAndSourceLossesAreCounted) {
   EXPECT_EQ(j["counters"]["blocks_rejected"], 3);
 }
 
+// Samples lost across a reload (a block the source dropped as the configuration changed) are a
+// gap of the stream: counted as dropped, as without the reload — through reloads that saw no
+// block too — and a reload without a loss adds none.
+TEST(MonitorRun, AGapAcrossAReloadIsCountedAsDropped) {
+  const Blocks blocks;
+  const auto run_with = [&](std::int64_t reloads, std::int64_t lost) {
+    MonitorRun::Options options;
+    options.identify = false;
+    MonitorRun run(config(), options);
+    for (std::int64_t k = 0; k < 10; ++k) {
+      run.process(blocks(k));
+    }
+    for (std::int64_t i = 0; i < reloads; ++i) {
+      run.replace_pipeline(std::make_unique<monitor::Pipeline>(config(), run.sink()));
+    }
+    for (std::int64_t k = 10 + lost; k < 20; ++k) {
+      run.process(blocks(k));
+    }
+    return run.status().input;
+  };
+  EXPECT_EQ(run_with(1, 0).samples_dropped, 0);
+  EXPECT_EQ(run_with(1, 0).gaps, 0);
+  EXPECT_EQ(run_with(0, 1).samples_dropped, 1000);  // the same loss without a reload
+  EXPECT_EQ(run_with(1, 1).samples_dropped, 1000);
+  EXPECT_EQ(run_with(1, 1).gaps, 1);
+  EXPECT_EQ(run_with(2, 2).samples_dropped, 2000);
+  EXPECT_EQ(run_with(2, 2).samples_accepted, 18000);
+}
+
 // A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
 // revolutions turned while cutting and the model builds too, not only the samples.
 TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
@@ -225,16 +254,24 @@ TEST(MonitorRun, ASensorAlertRightAfterAReloadNamesTheStreamsLastRevolution) {
   for (std::size_t k = 25; k < 27; ++k) {  // 40 ms: the new pipeline measures no revolution
     run.process(block_of(r, k));
   }
-  run.finish();  // the input since the last health check: a fifth not finite
+  // Another reload: the input since the last health check (half of it not finite) raises the
+  // alert, and the hand-over clears it.
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
+  run.finish();
   const nlohmann::json j = run.summary();
-  std::vector<nlohmann::json> sensor;
+  std::vector<nlohmann::json> raised, cleared;
   for (const auto& a : j["alerts"]) {
-    if (a["kind"] == "sensor" && a["active"].get<bool>()) {
-      sensor.push_back(a);
+    if (a["kind"] == "sensor") {
+      (a["active"].get<bool>() ? raised : cleared).push_back(a);
     }
   }
-  ASSERT_EQ(sensor.size(), 1u) << j["alerts"].dump(1);
-  EXPECT_EQ(sensor[0]["revolution"].get<std::int64_t>(), last) << sensor[0].dump();
+  ASSERT_EQ(raised.size(), 1u) << j["alerts"].dump(1);
+  ASSERT_EQ(cleared.size(), 1u) << j["alerts"].dump(1);
+  EXPECT_EQ(raised[0]["revolution"].get<std::int64_t>(), last) << raised[0].dump();
+  EXPECT_EQ(cleared[0]["revolution"].get<std::int64_t>(), last) << cleared[0].dump();
+  // Both at the stream's newest sample, not at 0 for want of a revolution.
+  EXPECT_EQ(raised[0]["utime"].get<std::int64_t>(), 26 * 20'000 + 999 * 20);
+  EXPECT_EQ(cleared[0]["utime"].get<std::int64_t>(), 26 * 20'000 + 999 * 20);
 }
 
 struct IdentityLog {
