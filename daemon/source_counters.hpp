@@ -22,30 +22,34 @@ struct SourceCounters {
   /// The source will deliver nothing more (a Comedi board whose reads failed).
   std::atomic<bool> ended{false};
 
+  // dropped() and queuing_block() are called by the source's one writer thread (LCM: the
+  // sample thread; Comedi: its reader), samples_dropped_unseen() by the sample thread.
+
   /// A block of `samples` dropped (oversized, or the queue full).
   void dropped(std::int64_t samples) {
     samples_dropped += samples;
+    unseen_ += samples;
     since_block_ += samples;
   }
   /// Just before a block is published to the queue: the drops since the last one are the gap
-  /// the pipeline sees before it (before the stream's first block, none shows them). Zeroed
+  /// the pipeline sees before it (before the stream's first block, none shows them). Taken out
   /// before the block is published, so that no status counts them twice (one taken meanwhile
   /// misses them until the block is processed).
   void queuing_block() {
-    const std::int64_t before = since_block_.exchange(0);
-    if (!any_queued_.exchange(true)) {
-      before_first_block_ += before;
+    if (any_queued_) {
+      unseen_ -= since_block_;
     }
+    since_block_ = 0;
+    any_queued_ = true;
   }
-  /// The dropped samples no gap in the pipeline's stream shows (for the status and summary).
-  [[nodiscard]] std::int64_t samples_dropped_unseen() const {
-    return before_first_block_.load() + since_block_.load();
-  }
+  /// The dropped samples no gap in the pipeline's stream shows (for the status and summary):
+  /// one atomic, so that a status never reads half an update.
+  [[nodiscard]] std::int64_t samples_dropped_unseen() const { return unseen_.load(); }
 
  private:
-  std::atomic<std::int64_t> since_block_{0};
-  std::atomic<std::int64_t> before_first_block_{0};
-  std::atomic<bool> any_queued_{false};
+  std::atomic<std::int64_t> unseen_{0};
+  std::int64_t since_block_ = 0;  // the writer's own
+  bool any_queued_ = false;       // the writer's own
 };
 
 }  // namespace millwatch::daemon

@@ -72,6 +72,11 @@ void InputCheck::restart() {
   started_ = false;
 }
 
+double InputCheck::continuation_offset_samples(std::int64_t utime_us) const {
+  // Both utimes are within ±kMaxAbsUtime_us (2⁵³): their difference cannot overflow.
+  return static_cast<double>(utime_us - *continued_from_utime_us_) * config_.sample_rate_hz / 1e6;
+}
+
 std::optional<std::int64_t> InputCheck::next_utime() const {
   if (started_) {
     return utime_of(next_sample_);
@@ -88,6 +93,12 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   if (started_ && plausible_utime(block.utime_us) && at_expected_time(block.utime_us)) {
     next_sample_ += n;
     hole_samples_ += n;
+  } else if (!started_ && continued_from_utime_us_ && plausible_utime(block.utime_us) &&
+             continuation_offset_samples(block.utime_us) >= -config_.tolerance_samples) {
+    // Before a continued stream's first block, one rejected at or after the time expected: the
+    // time its samples took is not known (nor whether the next blocks overlap it), so the
+    // continuation is dropped rather than count them twice or refuse good blocks after it.
+    continued_from_utime_us_.reset();
   }
   CheckedBlock out;
   out.verdict = BlockVerdict::kRejected;
@@ -117,23 +128,25 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   }
 
   CheckedBlock out;
+  if (!started_ && continued_from_utime_us_) {  // the first block after a predecessor's
+    const double missing_samples = continuation_offset_samples(block.utime_us);
+    if (missing_samples < -config_.tolerance_samples) {  // its predecessor had it already
+      ++counters_.out_of_order_blocks;
+      return reject(block, "block older than expected (out of order or repeated)");
+    }
+    if (missing_samples > config_.tolerance_samples) {  // samples lost between the two
+      const auto missing = static_cast<std::int64_t>(std::llround(missing_samples));
+      ++counters_.gaps;
+      counters_.samples_dropped += missing;
+      out.gap_samples = missing;
+      out.problem = "gap before block (since the stream before a reload)";
+    }
+    continued_from_utime_us_.reset();
+  }
   if (!started_) {
     started_ = true;
     start_utime_us_ = block.utime_us;
     start_sample_ = next_sample_;
-    if (continued_from_utime_us_) {  // the samples lost between the predecessor and this block
-      const double missing_samples =
-          static_cast<double>(block.utime_us - *continued_from_utime_us_) * config_.sample_rate_hz /
-          1e6;
-      if (missing_samples > config_.tolerance_samples) {
-        const auto missing = static_cast<std::int64_t>(std::llround(missing_samples));
-        ++counters_.gaps;
-        counters_.samples_dropped += missing;
-        out.gap_samples = missing;
-        out.problem = "gap before block (since the stream before a reload)";
-      }
-      continued_from_utime_us_.reset();
-    }
   }
   const double offset_samples =
       static_cast<double>(block.utime_us - utime_of(next_sample_)) * config_.sample_rate_hz / 1e6;

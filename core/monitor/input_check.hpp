@@ -93,13 +93,16 @@ class InputCheck {
   /// continue_after() said).
   [[nodiscard]] std::optional<std::int64_t> next_utime() const;
   /// This check's stream goes on from one that expected its next sample at `next_utime_us` (a
-  /// reload's successor): a first block later than that counts the samples missing before it
-  /// as a gap (reported in its CheckedBlock), although the stream's timing starts at it.
+  /// reload's successor, at the same sample rate): a first block later than that counts the
+  /// samples missing before it as a gap (reported in its CheckedBlock), although the stream's
+  /// timing starts at it; an earlier one (its predecessor had it) is rejected as out of order.
   void continue_after(std::int64_t next_utime_us) { continued_from_utime_us_ = next_utime_us; }
 
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
 
+  /// Samples from the continuation's time to `utime_us` (continue_after() set).
+  [[nodiscard]] double continuation_offset_samples(std::int64_t utime_us) const;
   /// Whether a block at `utime_us` is at the next sample expected (within the tolerance).
   [[nodiscard]] bool at_expected_time(std::int64_t utime_us) const;
 

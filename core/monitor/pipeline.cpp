@@ -204,9 +204,10 @@ void Pipeline::bridge_gap(std::int64_t first_sample) {
 }
 
 void Pipeline::process(const SampleBlock& block) {
+  const std::int64_t expected_sample = input_.next_sample();  // the block's, were it on time
   const CheckedBlock c = input_.check(block);
   if (c.verdict == BlockVerdict::kRejected) {
-    event(PipelineEventKind::kBlockRejected, input_.next_sample(),
+    event(PipelineEventKind::kBlockRejected, expected_sample,
           static_cast<std::int64_t>(block.fx_N.size()), 0.0, c.problem, block.seq);
     return;
   }

@@ -294,6 +294,63 @@ TEST(InputCheck, RestartStartsANewStreamAtTheNextBlocksTime) {
   EXPECT_EQ(check.utime_of(150), -4'999'000);
 }
 
+// A reload's successor goes on from the time its predecessor expected next (2,000 µs here):
+// samples lost in between are a gap counted once, and a block the predecessor had is rejected.
+TEST(InputCheck, AContinuedStreamCountsTheGapSinceItsPredecessorOnce) {
+  {
+    InputCheck check(config());
+    EXPECT_FALSE(check.next_utime());
+    check.continue_after(2000);
+    EXPECT_EQ(check.next_utime(), 2000);
+    const auto c = check.check(ramp(100).view(2000));  // on time: nothing lost
+    EXPECT_EQ(c.verdict, BlockVerdict::kAccepted);
+    EXPECT_EQ(c.gap_samples, 0);
+    EXPECT_EQ(check.counters().samples_dropped, 0);
+    EXPECT_EQ(check.next_utime(), 4000);
+  }
+  {
+    InputCheck check(config());
+    check.continue_after(2000);
+    const auto c = check.check(ramp(100).view(22000));  // 1,000 samples later
+    EXPECT_EQ(c.verdict, BlockVerdict::kAccepted);
+    EXPECT_EQ(c.gap_samples, 1000);
+    EXPECT_EQ(c.first_sample, 0);  // the stream's timing starts at it
+    EXPECT_EQ(check.utime_of(0), 22000);
+    EXPECT_EQ(check.counters().samples_dropped, 1000);
+    EXPECT_EQ(check.counters().gaps, 1);
+  }
+  {
+    InputCheck check(config());
+    check.continue_after(2000);
+    const auto old = check.check(ramp(100).view(0));  // the predecessor's last block again
+    EXPECT_EQ(old.verdict, BlockVerdict::kRejected);
+    EXPECT_EQ(check.counters().out_of_order_blocks, 1);
+    EXPECT_EQ(check.check(ramp(100).view(2000)).gap_samples, 0);  // the continuation holds
+    EXPECT_EQ(check.counters().samples_dropped, 100);             // the repeated block's
+  }
+  {
+    InputCheck check(config());
+    check.continue_after(2000);
+    // Rejected at or after the time expected: how long its samples took is not known, nor
+    // whether the next blocks overlap it, so the continuation is dropped: its samples are
+    // counted once, and a good block at the same time is not refused.
+    EXPECT_EQ(check.check(ramp(100).view(2000, 20000.0)).verdict, BlockVerdict::kRejected);
+    EXPECT_FALSE(check.next_utime());
+    const auto good = check.check(ramp(100).view(2000));
+    EXPECT_EQ(good.verdict, BlockVerdict::kAccepted);
+    EXPECT_EQ(good.gap_samples, 0);
+    EXPECT_EQ(check.counters().samples_dropped, 100);
+  }
+  {
+    InputCheck check(config());
+    check.continue_after(2000);
+    EXPECT_EQ(check.check(ramp(100).view(12000, 20000.0)).verdict, BlockVerdict::kRejected);
+    EXPECT_FALSE(check.next_utime());
+    EXPECT_EQ(check.check(ramp(100).view(17000)).gap_samples, 0);
+    EXPECT_EQ(check.counters().samples_dropped, 100);
+  }
+}
+
 TEST(InputCheck, SteadyStateAllocatesNothing) {
   InputCheck check(config());
   const Block a = ramp(1000);

@@ -149,6 +149,36 @@ TEST(MonitorRun, AGapAcrossAReloadIsCountedAsDropped) {
   EXPECT_EQ(run_with(2, 2).samples_accepted, 18000);
 }
 
+// The sender goes to 25 kHz before the configuration follows: the old pipeline rejects the new
+// blocks (counted), and the new one starts on the first it takes without counting that time
+// again as a gap.
+TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
+  MonitorRun::Options options;
+  options.identify = false;
+  MonitorRun run(config(), options);
+  const Blocks blocks;
+  for (std::int64_t k = 0; k < 10; ++k) {
+    run.process(blocks(k));  // 50 kHz, 20 ms each: 0 to 200 ms
+  }
+  monitor::MonitorConfig slow = config();
+  slow.sample_rate_hz = 25000.0;
+  const std::vector<double> zeros(kBlock, 0.0);
+  const auto slow_block = [&](std::int64_t k) {  // 25 kHz, 40 ms each, from 200 ms on
+    return monitor::SampleBlock{200'000 + k * 40'000, 10 + k, 25000.0, zeros, zeros, zeros};
+  };
+  for (std::int64_t k = 0; k < 5; ++k) {
+    run.process(slow_block(k));  // rejected: not the configured rate
+  }
+  run.replace_pipeline(std::make_unique<monitor::Pipeline>(slow, run.sink()));
+  for (std::int64_t k = 5; k < 10; ++k) {
+    run.process(slow_block(k));
+  }
+  const monitor::InputCounters c = run.status().input;
+  EXPECT_EQ(c.samples_dropped, 5 * 1000);
+  EXPECT_EQ(c.samples_accepted, 15 * 1000);
+  EXPECT_EQ(c.blocks_rejected, 5);
+}
+
 // A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
 // revolutions turned while cutting and the model builds too, not only the samples.
 TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
