@@ -161,8 +161,8 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
 
 monitor::PipelineStatus MonitorRun::status() const {
   monitor::PipelineStatus s = pipeline_->status();
-  if (s.input.samples_in == 0) {
-    s.utime_us = carried_utime_us_;  // a pipeline that has had no sample yet has no time
+  if (s.input.samples_accepted == 0) {
+    s.utime_us = carried_utime_us_;  // a pipeline that has taken no sample yet has no time
   }
   carry(s, carried_);
   if (options_.source_losses) {

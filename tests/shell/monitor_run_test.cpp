@@ -170,13 +170,17 @@ TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
     run.process(slow_block(k));  // rejected: not the configured rate
   }
   run.replace_pipeline(std::make_unique<monitor::Pipeline>(slow, run.sink()));
+  const std::int64_t reached_us = run.status().utime_us;  // the old pipeline's last
+  EXPECT_GE(reached_us, 9 * 20'000 + 999 * 20);
+  run.process(blocks(10));                       // one more at 50 kHz: the new pipeline rejects it
+  EXPECT_EQ(run.status().utime_us, reached_us);  // nothing taken yet: the stream's time stays
   for (std::int64_t k = 5; k < 10; ++k) {
     run.process(slow_block(k));
   }
   const monitor::InputCounters c = run.status().input;
-  EXPECT_EQ(c.samples_dropped, 5 * 1000);
+  EXPECT_EQ(c.samples_dropped, 6 * 1000);
   EXPECT_EQ(c.samples_accepted, 15 * 1000);
-  EXPECT_EQ(c.blocks_rejected, 5);
+  EXPECT_EQ(c.blocks_rejected, 6);
 }
 
 // A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
