@@ -33,6 +33,8 @@ struct BlockSlot {
   std::int64_t seq = 0;
   double sample_rate_hz = 0.0;
   std::size_t count = 0;
+  /// Samples the source dropped since the block before (SourceCounters::queuing_block()).
+  std::int64_t dropped_before = 0;
   std::array<double, kMaxSamples> fx{}, fy{}, fz{};
 
   /// Sets the header and copies the first `n` (≤ kMaxSamples) samples of each axis.
@@ -110,6 +112,7 @@ class BlockQueue {
     }
     out.assign(s->utime_us, s->seq, s->sample_rate_hz, s->fx.data(), s->fy.data(), s->fz.data(),
                s->count);
+    out.dropped_before = s->dropped_before;
     pop();
     return true;
   }

@@ -154,7 +154,7 @@ void ComediSource::run() {
         (a == 0 ? slot->fx : a == 1 ? slot->fy : slot->fz)[i] = s.force_N;
       }
     }
-    counters_.queuing_block();
+    slot->dropped_before = counters_.queuing_block();
     queue_.publish();
   }
 }

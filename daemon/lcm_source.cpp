@@ -78,7 +78,7 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   slot->seq = header.seq;
   slot->sample_rate_hz = header.sample_rate_hz;
   slot->count = header.num_samples;
-  counters_.queuing_block();
+  slot->dropped_before = counters_.queuing_block();
   queue_.publish();
 }
 

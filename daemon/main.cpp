@@ -247,7 +247,11 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
         }
       }
       if (const daemon::BlockSlot* block = queue.front()) {
-        run->process(block->view());  // in the queue's slot: no copy
+        const bool timed = run->input_timed();  // a gap before the block will be counted
+        run->process(block->view());            // in the queue's slot: no copy
+        if (!timed) {
+          source_counters.unseen_by_pipeline(block->dropped_before);
+        }
         queue.pop();
         took_blocks = true;
         continue;

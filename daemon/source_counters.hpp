@@ -4,12 +4,13 @@
 // sample thread and the status through atomics.
 //
 // A dropped block's samples are a hole in the stream's time, which the pipeline counts as the gap
-// before the next block it takes (samples_dropped, once). Two holes no next block shows are
-// counted here instead: the drops before the stream's first block, and those since the last
-// block queued (for good at the end of a stream).
+// before the next block it takes (samples_dropped, once). Holes no such gap shows are counted
+// here instead: the drops since the last block queued (for good at the end of a stream), and
+// those before a block the pipeline takes without timing (the stream's first).
 
 #include <atomic>
 #include <cstdint>
+#include <utility>
 
 namespace millwatch::daemon {
 
@@ -23,7 +24,8 @@ struct SourceCounters {
   std::atomic<bool> ended{false};
 
   // dropped() and queuing_block() are called by the source's one writer thread (LCM: the
-  // sample thread; Comedi: its reader), samples_dropped_unseen() by the sample thread.
+  // sample thread; Comedi: its reader), unseen_by_pipeline() and samples_dropped_unseen() by
+  // the sample thread.
 
   /// A block of `samples` dropped (oversized, or the queue full).
   void dropped(std::int64_t samples) {
@@ -31,17 +33,18 @@ struct SourceCounters {
     unseen_ += samples;
     since_block_ += samples;
   }
-  /// Just before a block is published to the queue: the drops since the last one are the gap
-  /// the pipeline sees before it (before the stream's first block, none shows them). Taken out
-  /// before the block is published, so that no status counts them twice (one taken meanwhile
-  /// misses them until the block is processed).
-  void queuing_block() {
-    if (any_queued_) {
-      unseen_ -= since_block_;
-    }
-    since_block_ = 0;
-    any_queued_ = true;
+  /// Just before a block is published to the queue: the samples dropped since the block before,
+  /// for the block's slot (BlockSlot::dropped_before). Taken out of the unseen count before the
+  /// block is published, so that no status counts them twice (one taken meanwhile misses them
+  /// until the block is processed).
+  [[nodiscard]] std::int64_t queuing_block() {
+    unseen_ -= since_block_;
+    return std::exchange(since_block_, 0);
   }
+  /// After the pipeline processed a block: `samples` dropped before it that the pipeline did not
+  /// count as a gap (it had no timing yet: the stream's first block, or a reload's successor
+  /// without its predecessor's time).
+  void unseen_by_pipeline(std::int64_t samples) { unseen_ += samples; }
   /// The dropped samples no gap in the pipeline's stream shows (for the status and summary):
   /// one atomic, so that a status never reads half an update.
   [[nodiscard]] std::int64_t samples_dropped_unseen() const { return unseen_.load(); }
@@ -49,7 +52,6 @@ struct SourceCounters {
  private:
   std::atomic<std::int64_t> unseen_{0};
   std::int64_t since_block_ = 0;  // the writer's own
-  bool any_queued_ = false;       // the writer's own
 };
 
 }  // namespace millwatch::daemon

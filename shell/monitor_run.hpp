@@ -88,6 +88,9 @@ class MonitorRun {
   [[nodiscard]] nlohmann::json summary() const { return summary_.to_json(); }
   /// The LCM output, if the run publishes.
   [[nodiscard]] const messaging::LcmOutput* output() const { return output_.get(); }
+  /// Whether the pipeline knows the time of the next sample it expects, so that it would count
+  /// samples missing before the next block as a gap (false before the stream's first block).
+  [[nodiscard]] bool input_timed() const { return pipeline_->next_input_utime_us().has_value(); }
 
  private:
   void publish_status();

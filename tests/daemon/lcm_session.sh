@@ -111,6 +111,7 @@ case "$mode" in
     cp initial.json reloadable.json
     start_logger reload.lcmlog
     start_daemon reloadable.json reload.json reload.log
+    play head.lcmlog
     play part1.lcmlog
     sleep 0.3  # processed
     cp good.json reloadable.json

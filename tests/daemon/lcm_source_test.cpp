@@ -86,6 +86,7 @@ TEST(LcmSource, MalformedMessagesAreCountedAndDroppedBeforeDecoding) {
   EXPECT_EQ(slot->fy[49], -2.0);
   ASSERT_TRUE(queue->try_pop(*slot));
   EXPECT_EQ(slot->seq, 9);
+  EXPECT_EQ(slot->dropped_before, 101);  // the oversized block's, for the pipeline's gap
   EXPECT_EQ(slot->count, 100u);
   EXPECT_EQ(slot->fz[99], 0.25);
   EXPECT_FALSE(queue->try_pop(*slot));

@@ -416,13 +416,21 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
                             messaging::to_message({500000, 1001, 20000.0, zeros, zeros, zeros}));
   }
   // After the last block, one the daemon drops (more samples than source.max_block_samples):
-  // no block after it shows the gap, yet its samples count as dropped.
+  // no block after it shows the gap, yet its samples count as dropped. Before the first, a block
+  // the pipeline rejects (not the configured rate) and one the source drops: the pipeline takes
+  // the first good block without timing, so no gap shows those either.
   constexpr int kOversizedSamples = 2500;
+  constexpr int kHeadWrongRateSamples = 500;
   {
     lcm::LogFile tail((dir_ / "tail.lcmlog").string(), "w");
     const std::vector<double> zeros(kOversizedSamples, 0.0);
     test::write_force_event(tail, 0,
                             messaging::to_message({1'000'000, 200, 50000.0, zeros, zeros, zeros}));
+    lcm::LogFile head((dir_ / "head.lcmlog").string(), "w");
+    const std::vector<double> few(kHeadWrongRateSamples, 0.0);
+    test::write_force_event(head, 0, messaging::to_message({-100'000, -2, 20000.0, few, few, few}));
+    test::write_force_event(head, 1,
+                            messaging::to_message({-50'000, -1, 50000.0, zeros, zeros, zeros}));
   }
   // Start: status every 0.05 s of samples, commanded 25,000 rpm. Good reload: every 10 s and
   // 25,100 rpm. Bad reload: a mistyped field (and 26,000 rpm, which must not be taken).
@@ -443,7 +451,7 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   const std::string log = read_text(dir_ / "reload.log");
   ASSERT_EQ(r.exit_code, 0) << r.output << log;
   EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
-  EXPECT_NE(log.find("configuration reloaded after 25000 samples"), std::string::npos) << log;
+  EXPECT_NE(log.find("configuration reloaded after 25500 samples"), std::string::npos) << log;
   EXPECT_NE(log.find("monitor.model.tool.flutes"), std::string::npos) << log;
   EXPECT_NE(log.find("keeping the running configuration"), std::string::npos) << log;
   EXPECT_NE(log.find("does not decode"), std::string::npos) << log;
@@ -457,11 +465,12 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   ASSERT_FALSE(summary.is_null()) << log;
   const std::int64_t unusable = 2;
   EXPECT_EQ(summary["samples"], 50000);  // every sample, across the reloads
-  EXPECT_EQ(summary["counters"]["samples_in"], 50000 + kWrongRateSamples);
-  // The unusable blocks' and the last one's.
-  EXPECT_EQ(summary["dropped_samples"], kWrongRateSamples + kOversizedSamples);
+  EXPECT_EQ(summary["counters"]["samples_in"], 50000 + kWrongRateSamples + kHeadWrongRateSamples);
+  // The unusable blocks' and the oversized ones'.
+  const int dropped = kWrongRateSamples + kHeadWrongRateSamples + 2 * kOversizedSamples;
+  EXPECT_EQ(summary["dropped_samples"], dropped);
   EXPECT_EQ(summary["counters"]["blocks_rejected"],
-            kRandomMessages + kMalformedMessages + unusable + 1)  // and the oversized one
+            kRandomMessages + kMalformedMessages + unusable + 3)  // and the head's and the tail's
       << summary.dump(2);
   EXPECT_GT(summary["revolutions"].get<int>(), 100);  // it kept measuring after all that
 
@@ -480,10 +489,11 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   }
   EXPECT_GE(before_reload, 5);  // every 0.05 s of samples before the reload,
   EXPECT_EQ(late_in_part2, 0);  // every 10 s after it
-  EXPECT_EQ(status.back().samples_in, 50000 + kWrongRateSamples);  // the final status
+  EXPECT_EQ(status.back().samples_in,
+            50000 + kWrongRateSamples + kHeadWrongRateSamples);  // the final status
   EXPECT_EQ(status.back().samples_processed, 50000);
-  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + kMalformedMessages + unusable + 1);
-  EXPECT_EQ(status.back().samples_dropped, kWrongRateSamples + kOversizedSamples);
+  EXPECT_EQ(status.back().blocks_rejected, kRandomMessages + kMalformedMessages + unusable + 3);
+  EXPECT_EQ(status.back().samples_dropped, dropped);
   EXPECT_EQ(status.back().revolutions, summary["revolutions"].get<std::int64_t>());  // both parts
 
   // The commanded speed of the good reload is in effect after it; the bad one's never is.
