@@ -37,9 +37,11 @@ struct BlockSlot {
   std::int64_t dropped_before = 0;
   std::array<double, kMaxSamples> fx{}, fy{}, fz{};
 
-  /// Sets the header and copies the first `n` (≤ kMaxSamples) samples of each axis.
+  /// Sets the header (nothing dropped before) and copies the first `n` (≤ kMaxSamples) samples
+  /// of each axis.
   void assign(std::int64_t utime, std::int64_t sequence, double rate_hz, const double* x,
               const double* y, const double* z, std::size_t n) {
+    dropped_before = 0;
     utime_us = utime;
     seq = sequence;
     sample_rate_hz = rate_hz;
@@ -90,6 +92,7 @@ class BlockQueue {
     }
     s->assign(block.utime_us, block.seq, block.sample_rate_hz, block.fx.data(), block.fy.data(),
               block.fz.data(), block.count);
+    s->dropped_before = block.dropped_before;
     publish();
     return true;
   }

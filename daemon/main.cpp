@@ -38,6 +38,7 @@
 #include "daemon/block_queue.hpp"
 #include "daemon/comedi_source.hpp"
 #include "daemon/daemon_config.hpp"
+#include "daemon/drop_ledger.hpp"
 #include "daemon/lcm_source.hpp"
 #include "daemon/service_notifier.hpp"
 #include "shell/json_file.hpp"
@@ -142,7 +143,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   // What the source lost before the pipeline saw it, in every status and the summary: the
   // blocks. Their samples are counted once: as the gap they leave before the next block (a
   // lost block is a hole in the stream's time; counting it here too counted it twice), or here
-  // when no such gap shows them (before the stream's first block; since the last one).
+  // when no such gap shows them (since the last block queued; DropLedger's).
   run_options.source_losses = [&source_counters](monitor::PipelineStatus& s) {
     s.input.blocks_rejected += source_counters.undecodable.load() +
                                source_counters.oversized.load() + source_counters.queue_full.load();
@@ -206,6 +207,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   const auto started = std::chrono::steady_clock::now();
   const auto wake_period = std::chrono::duration<double>(config.source.wake_period_s);
   std::atomic<bool> source_ended{false};
+  daemon::DropLedger ledger(source_counters);  // the sample thread's
   const auto source_has_ended = [&] {
     return source_counters.ended.load() ||
            (hooks.source_ends_after_s > 0.0 &&
@@ -247,11 +249,9 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
         }
       }
       if (const daemon::BlockSlot* block = queue.front()) {
-        const bool timed = run->input_timed();  // a gap before the block will be counted
-        run->process(block->view());            // in the queue's slot: no copy
-        if (!timed) {
-          source_counters.unseen_by_pipeline(block->dropped_before);
-        }
+        ledger.before_block(block->dropped_before, run->input_timed());
+        const bool accepted = run->process(block->view());  // in the queue's slot: no copy
+        ledger.after_block(accepted, run->input_timed());
         queue.pop();
         took_blocks = true;
         continue;
@@ -288,6 +288,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
         queue.wait(std::chrono::milliseconds(20));
       }
     }
+    ledger.close();  // before the final status
     run->finish();
   });
 

@@ -5,8 +5,8 @@
 //
 // A dropped block's samples are a hole in the stream's time, which the pipeline counts as the gap
 // before the next block it takes (samples_dropped, once). Holes no such gap shows are counted
-// here instead: the drops since the last block queued (for good at the end of a stream), and
-// those before a block the pipeline takes without timing (the stream's first).
+// here instead: the drops since the last block queued, and those before blocks no gap shows
+// (daemon/drop_ledger.hpp: taken without timing, timing lost, the stream ended).
 
 #include <atomic>
 #include <cstdint>
@@ -41,9 +41,7 @@ struct SourceCounters {
     unseen_ -= since_block_;
     return std::exchange(since_block_, 0);
   }
-  /// After the pipeline processed a block: `samples` dropped before it that the pipeline did not
-  /// count as a gap (it had no timing yet: the stream's first block, or a reload's successor
-  /// without its predecessor's time).
+  /// `samples` dropped before blocks the pipeline will not count as a gap (DropLedger).
   void unseen_by_pipeline(std::int64_t samples) { unseen_ += samples; }
   /// The dropped samples no gap in the pipeline's stream shows (for the status and summary):
   /// one atomic, so that a status never reads half an update.

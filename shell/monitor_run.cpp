@@ -116,14 +116,15 @@ monitor::PipelineSink& MonitorRun::sink() {
   return shell_sink_;
 }
 
-void MonitorRun::process(const monitor::SampleBlock& block) {
-  pipeline_->process(block);
+bool MonitorRun::process(const monitor::SampleBlock& block) {
+  const bool accepted = pipeline_->process(block);
   if (status_due_ || block.utime_us >= next_status_utime_us_) {
     publish_status();
     status_due_ = false;
     next_status_utime_us_ =
         block.utime_us + static_cast<std::int64_t>(options_.status_period_s * 1e6);
   }
+  return accepted;
 }
 
 void MonitorRun::idle() {

@@ -66,7 +66,8 @@ class MonitorRun {
   [[nodiscard]] monitor::PipelineSink& sink();
   /// One block through the pipeline; a status goes out when a status period of sample time has
   /// passed since the last one.
-  void process(const monitor::SampleBlock& block);
+  /// Whether the pipeline took the block (false: rejected, and counted).
+  bool process(const monitor::SampleBlock& block);
   /// No block came: a status goes out when a status period of wall-clock time has passed.
   void idle();
   /// Between two blocks: finishes the running pipeline, keeps its counts and hands it back (to
@@ -88,8 +89,9 @@ class MonitorRun {
   [[nodiscard]] nlohmann::json summary() const { return summary_.to_json(); }
   /// The LCM output, if the run publishes.
   [[nodiscard]] const messaging::LcmOutput* output() const { return output_.get(); }
-  /// Whether the pipeline knows the time of the next sample it expects, so that it would count
-  /// samples missing before the next block as a gap (false before the stream's first block).
+  /// Whether the pipeline knows when its next sample is due, so that it would count samples
+  /// missing before the next block it takes as a gap (false until it takes its first block,
+  /// unless it goes on from its predecessor's time after a reload).
   [[nodiscard]] bool input_timed() const { return pipeline_->next_input_utime_us().has_value(); }
 
  private:

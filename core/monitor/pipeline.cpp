@@ -203,13 +203,13 @@ void Pipeline::bridge_gap(std::int64_t first_sample) {
       static_cast<int>((stream_start_ + tracker_.next_sample() * decimation_) - first);
 }
 
-void Pipeline::process(const SampleBlock& block) {
+bool Pipeline::process(const SampleBlock& block) {
   const std::int64_t expected_sample = input_.next_sample();  // the block's, were it on time
   const CheckedBlock c = input_.check(block);
   if (c.verdict == BlockVerdict::kRejected) {
     event(PipelineEventKind::kBlockRejected, expected_sample,
           static_cast<std::int64_t>(block.fx_N.size()), 0.0, c.problem, block.seq);
-    return;
+    return false;
   }
   if (c.gap_samples > 0) {
     event(PipelineEventKind::kGap, c.first_sample, c.gap_samples, 0.0, c.problem, block.seq);
@@ -238,6 +238,7 @@ void Pipeline::process(const SampleBlock& block) {
       [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
              const double* fz) { downstream_run(n, run, fx, fy, fz); });
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
+  return true;
 }
 
 void Pipeline::flush_tail() {

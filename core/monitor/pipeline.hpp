@@ -119,7 +119,8 @@ class Pipeline {
   Pipeline(const MonitorConfig& config, PipelineSink& sink);
 
   /// Processes one block from any source.
-  void process(const SampleBlock& block);
+  /// Whether the input check took the block (false: rejected, and counted).
+  bool process(const SampleBlock& block);
   /// End of the record: processes the samples still held (zero-phase filtering), counts the
   /// turns heard since the tracker's last window, and says what the record was too short for.
   /// The last call for a record.
@@ -141,7 +142,8 @@ class Pipeline {
   /// expected next (its next_input_utime_us()) and this pipeline's first block are a gap,
   /// counted as dropped. Before the first block.
   void continue_input_after(std::int64_t next_utime_us) { input_.continue_after(next_utime_us); }
-  /// The utime (µs) the next input sample is expected at (empty: no block yet).
+  /// The utime (µs) the next input sample is expected at (empty until the first block taken,
+  /// unless continue_input_after() said).
   [[nodiscard]] std::optional<std::int64_t> next_input_utime_us() const {
     return input_.next_utime();
   }

@@ -63,6 +63,7 @@ TEST(BlockQueue, TheConsumerSleepsUntilABlockIsPublished) {
     block.count = 333;
     for (int k = 0; k < kBlocks; ++k) {
       block.seq = k;
+      block.dropped_before = k % 3;  // each slot's own, never a stale one from its last trip
       block.fy[332] = k;
       while (!q->try_push(block)) {
         std::this_thread::yield();  // the consumer is behind: the test loses nothing
@@ -76,6 +77,7 @@ TEST(BlockQueue, TheConsumerSleepsUntilABlockIsPublished) {
   while (received < kBlocks) {
     if (const BlockSlot* s = q->front()) {
       EXPECT_EQ(s->seq, received);
+      EXPECT_EQ(s->dropped_before, received % 3);
       EXPECT_EQ(s->count, 333u);
       EXPECT_EQ(s->fy[332], received);
       q->pop();

@@ -70,7 +70,7 @@ TEST(LcmSource, MalformedMessagesAreCountedAndDroppedBeforeDecoding) {
   // Its samples are a gap no block has shown yet ...
   EXPECT_EQ(counters.samples_dropped_unseen(), 101);
   send(encoded(9, 100));
-  // ... until this one: the pipeline counts the gap before it.
+  // ... until this one, which carries them (the pipeline's gap before it, or DropLedger).
   EXPECT_EQ(counters.samples_dropped_unseen(), 0);
 
   EXPECT_EQ(counters.messages.load(), 10);
