@@ -11,30 +11,29 @@ namespace {
 TEST(DropLedger, TheGapOfATimedBlockShowsThemElseTheyAreUnseen) {
   SourceCounters c;
   DropLedger ledger(c);
-  // The stream's first block, after 50 dropped samples: taken without timing, no gap shows them.
+  // One block through the pipeline: dropped before it, whether the pipeline was timed before,
+  // took it, and is timed after.
+  const auto block = [&](std::int64_t dropped, bool timed, bool accepted, bool timed_after) {
+    ledger.before_block(dropped, timed);
+    ledger.after_block(accepted, timed_after);
+    return c.samples_dropped_unseen();
+  };
+  // The stream's first block, after 50 dropped samples: taken without timing, no gap shows them
+  // (counted before the block: a status it publishes has them).
   ledger.before_block(50, false);
-  EXPECT_EQ(c.samples_dropped_unseen(), 50);  // before the block: a status it publishes has them
-  ledger.after_block(true, true);
-  // 30 dropped, then a block taken with timing: its gap shows them.
-  ledger.before_block(30, true);
-  ledger.after_block(true, true);
   EXPECT_EQ(c.samples_dropped_unseen(), 50);
-  // 20 dropped, then a block rejected as out of order: the next block's gap will show them.
-  ledger.before_block(20, true);
-  ledger.after_block(false, true);
+  ledger.after_block(true, true);
+  EXPECT_EQ(block(30, true, true, true), 50);  // a block taken with timing: its gap shows them
+  // Before a block rejected as out of order: the next block's gap will show them.
+  EXPECT_EQ(block(20, true, false, true), 50);
   EXPECT_EQ(ledger.pending(), 20);
-  ledger.before_block(0, true);
-  ledger.after_block(true, true);
-  EXPECT_EQ(c.samples_dropped_unseen(), 50);
-  // 10 dropped, then a block rejected that costs the timing (a reload's successor dropping its
+  EXPECT_EQ(block(0, true, true, true), 50);
+  // Before a block rejected that costs the timing (a reload's successor dropping its
   // predecessor's time): no gap will show them.
-  ledger.before_block(10, true);
-  ledger.after_block(false, false);
-  EXPECT_EQ(c.samples_dropped_unseen(), 60);
+  EXPECT_EQ(block(10, true, false, false), 60);
   EXPECT_EQ(ledger.pending(), 0);
-  // 5 dropped before a rejected block, then the stream ends.
-  ledger.before_block(5, true);
-  ledger.after_block(false, true);
+  // Before a rejected block, and then the stream ends.
+  EXPECT_EQ(block(5, true, false, true), 60);
   ledger.close();
   EXPECT_EQ(c.samples_dropped_unseen(), 65);
 }
