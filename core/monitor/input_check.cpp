@@ -62,19 +62,13 @@ std::int64_t InputCheck::utime_of(std::int64_t sample) const {
          std::llround(static_cast<double>(sample - start_sample_) * 1e6 / config_.sample_rate_hz);
 }
 
-bool InputCheck::at_expected_time(std::int64_t utime_us) const {
+double InputCheck::samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const {
   // Both utimes are within ±kMaxAbsUtime_us (2⁵³): their difference cannot overflow.
-  return std::fabs(static_cast<double>(utime_us - utime_of(next_sample_)) * config_.sample_rate_hz /
-                   1e6) <= config_.tolerance_samples;
+  return static_cast<double>(utime_us - expected_utime_us) * config_.sample_rate_hz / 1e6;
 }
 
 void InputCheck::restart() {
   started_ = false;
-}
-
-double InputCheck::continuation_offset_samples(std::int64_t utime_us) const {
-  // Both utimes are within ±kMaxAbsUtime_us (2⁵³): their difference cannot overflow.
-  return static_cast<double>(utime_us - *continued_from_utime_us_) * config_.sample_rate_hz / 1e6;
 }
 
 std::optional<std::int64_t> InputCheck::next_utime() const {
@@ -88,13 +82,16 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   const auto n = static_cast<std::int64_t>(block.fx_N.size());
   counters_.samples_dropped += n;
   ++counters_.blocks_rejected;
-  // A block rejected at its expected time leaves its slot empty: the next block follows the
-  // hole without counting those samples again.
-  if (started_ && plausible_utime(block.utime_us) && at_expected_time(block.utime_us)) {
+  const std::optional<std::int64_t> expected_us = next_utime();
+  const double late = expected_us && plausible_utime(block.utime_us)
+                          ? samples_late(block.utime_us, *expected_us)
+                          : -std::numeric_limits<double>::infinity();
+  if (started_ && std::fabs(late) <= config_.tolerance_samples) {
+    // A block rejected at its expected time leaves its slot empty: the next block follows the
+    // hole without counting those samples again.
     next_sample_ += n;
     hole_samples_ += n;
-  } else if (!started_ && continued_from_utime_us_ && plausible_utime(block.utime_us) &&
-             continuation_offset_samples(block.utime_us) >= -config_.tolerance_samples) {
+  } else if (!started_ && late >= -config_.tolerance_samples) {
     // Before a continued stream's first block, one rejected at or after the time expected: the
     // time its samples took is not known (nor whether the next blocks overlap it), so the
     // continuation is dropped rather than count them twice or refuse good blocks after it.
@@ -128,39 +125,32 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   }
 
   CheckedBlock out;
-  if (!started_ && continued_from_utime_us_) {  // the first block after a predecessor's
-    const double missing_samples = continuation_offset_samples(block.utime_us);
-    if (missing_samples < -config_.tolerance_samples) {  // its predecessor had it already
+  // When the block was due: after the stream's last block, or (its first after a reload) where
+  // the predecessor's stream stopped; none for a new stream.
+  if (const std::optional<std::int64_t> expected_us = next_utime()) {
+    const double late = samples_late(block.utime_us, *expected_us);
+    if (late < -config_.tolerance_samples) {  // a block the stream (or its predecessor) had
       ++counters_.out_of_order_blocks;
       return reject(block, "block older than expected (out of order or repeated)");
     }
-    if (missing_samples > config_.tolerance_samples) {  // samples lost between the two
-      const auto missing = static_cast<std::int64_t>(std::llround(missing_samples));
+    if (late > config_.tolerance_samples) {
+      const auto missing = static_cast<std::int64_t>(std::llround(late));
       ++counters_.gaps;
       counters_.samples_dropped += missing;
       out.gap_samples = missing;
-      out.problem = "gap before block (since the stream before a reload)";
+      if (started_) {
+        next_sample_ += missing;
+        out.problem = "gap before block";
+      } else {  // the new stream's timing starts at this block
+        out.problem = "gap before block (since the stream before a reload)";
+      }
     }
-    continued_from_utime_us_.reset();
   }
   if (!started_) {
     started_ = true;
     start_utime_us_ = block.utime_us;
     start_sample_ = next_sample_;
-  }
-  const double offset_samples =
-      static_cast<double>(block.utime_us - utime_of(next_sample_)) * config_.sample_rate_hz / 1e6;
-  if (offset_samples < -config_.tolerance_samples) {
-    ++counters_.out_of_order_blocks;
-    return reject(block, "block older than expected (out of order or repeated)");
-  }
-  if (offset_samples > config_.tolerance_samples) {
-    const auto missing = static_cast<std::int64_t>(std::llround(offset_samples));
-    ++counters_.gaps;
-    counters_.samples_dropped += missing;
-    next_sample_ += missing;
-    out.gap_samples = missing;
-    out.problem = "gap before block";
+    continued_from_utime_us_.reset();
   }
   if (hole_samples_ > 0) {  // a rejected block's slot: a discontinuity, already counted
     out.gap_samples += hole_samples_;

@@ -101,10 +101,8 @@ class InputCheck {
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
 
-  /// Samples from the continuation's time to `utime_us` (continue_after() set).
-  [[nodiscard]] double continuation_offset_samples(std::int64_t utime_us) const;
-  /// Whether a block at `utime_us` is at the next sample expected (within the tolerance).
-  [[nodiscard]] bool at_expected_time(std::int64_t utime_us) const;
+  /// How many samples later than `expected_utime_us` a block at `utime_us` comes (< 0: earlier).
+  [[nodiscard]] double samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const;
 
   InputCheckConfig config_;
   InputCounters counters_;
