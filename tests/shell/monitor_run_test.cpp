@@ -55,6 +55,23 @@ monitor::SampleBlock block_of(const test::Recording& r, std::size_t k, std::int6
           std::span<const double>(r.fz).subspan(from, kBlock)};
 }
 
+/// The default 2-flute cut for `duration_s`, its spindle at 25,252 rpm (1 % above the
+/// commanded 25,000).
+sim::Scenario two_flute_cut(double duration_s) {
+  sim::Scenario s;
+  s.sample_rate_hz = kRate_hz;
+  s.duration_s = duration_s;
+  s.spindle.actual_rpm = 25252.0;
+  return s;
+}
+
+/// A run without identification: its alerts follow the flute forces.
+MonitorRun::Options without_identification() {
+  MonitorRun::Options options;
+  options.identify = false;
+  return options;
+}
+
 struct StatusLog {
   std::vector<pipeline_status2_t> messages;
   void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status2_t* m) {
@@ -126,8 +143,7 @@ TEST(MonitorRun, ReplacedPipelinesAndSourceLossesAreCounted) {
 TEST(MonitorRun, AGapAcrossAReloadIsCountedAsDropped) {
   const Blocks blocks;
   const auto run_with = [&](std::int64_t reloads, std::int64_t lost) {
-    MonitorRun::Options options;
-    options.identify = false;
+    const MonitorRun::Options options = without_identification();
     MonitorRun run(config(), options);
     for (std::int64_t k = 0; k < 10; ++k) {
       run.process(blocks(k));
@@ -153,8 +169,7 @@ TEST(MonitorRun, AGapAcrossAReloadIsCountedAsDropped) {
 // blocks (counted), and the new one starts on the first it takes without counting that time
 // again as a gap.
 TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
-  MonitorRun::Options options;
-  options.identify = false;
+  const MonitorRun::Options options = without_identification();
   MonitorRun run(config(), options);
   const Blocks blocks;
   for (std::int64_t k = 0; k < 10; ++k) {
@@ -186,13 +201,9 @@ TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
 // A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
 // revolutions turned while cutting and the model builds too, not only the samples.
 TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
-  sim::Scenario s;
-  s.sample_rate_hz = kRate_hz;
-  s.duration_s = 1.0;
-  s.spindle.actual_rpm = 25252.0;
+  const sim::Scenario s = two_flute_cut(1.0);
   const test::Recording r = test::record(s);
-  MonitorRun::Options options;
-  options.identify = false;
+  const MonitorRun::Options options = without_identification();
   MonitorRun run(test::monitor_for(s), options);
   for (std::size_t k = 0; k < 25; ++k) {
     run.process(block_of(r, k));
@@ -221,13 +232,10 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
 // the status keeps the stream's time, and a pipeline replaced after a short stretch does not
 // call the record too short.
 TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
-  sim::Scenario s;
-  s.sample_rate_hz = kRate_hz;
-  s.duration_s = 1.0;
-  s.spindle.actual_rpm = 25252.0;
+  const sim::Scenario s = two_flute_cut(1.0);
   const test::Recording r = test::record(s);
-  MonitorRun::Options options;
-  options.identify = false;  // runout from the flute forces: [000]'s runout raises it
+  // Runout from the flute forces: [000]'s runout raises it.
+  const MonitorRun::Options options = without_identification();
   MonitorRun run(test::monitor_for(s), options);
   run.process(block_of(r, 0));  // 20 ms, then a reload: not a record too short
   run.replace_pipeline(std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink()));
@@ -268,16 +276,12 @@ TEST(MonitorRun, AReloadClearsTheReplacedPipelinesAlertsAndKeepsTheTime) {
 // revolution: the alert names the last revolution the stream reported (the numbers go on), not
 // "before the first revolution".
 TEST(MonitorRun, ASensorAlertRightAfterAReloadNamesTheStreamsLastRevolution) {
-  sim::Scenario s;
-  s.sample_rate_hz = kRate_hz;
-  s.duration_s = 0.54;
-  s.spindle.actual_rpm = 25252.0;
+  const sim::Scenario s = two_flute_cut(0.54);
   test::Recording r = test::record(s);
   for (std::size_t i = 25 * kBlock; i < 26 * kBlock; ++i) {
     r.fx[i] = std::numeric_limits<double>::quiet_NaN();  // the block after the reload
   }
-  MonitorRun::Options options;
-  options.identify = false;
+  const MonitorRun::Options options = without_identification();
   MonitorRun run(test::monitor_for(s), options);
   for (std::size_t k = 0; k < 25; ++k) {
     run.process(block_of(r, k));
@@ -377,13 +381,9 @@ void feed(MonitorRun& run, const test::Recording& r) {
 // A reload onto another tool (2 flutes → 3): the summary states the new cut, and α, the periods
 // and the peaks are the new tool's alone, with a warning saying from where.
 TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
-  sim::Scenario two;
-  two.sample_rate_hz = kRate_hz;
-  two.duration_s = 0.5;
-  two.spindle.actual_rpm = 25252.0;
+  const sim::Scenario two = two_flute_cut(0.5);
   const sim::Scenario three = three_flute_cut_with_runout();
-  MonitorRun::Options options;
-  options.identify = false;
+  const MonitorRun::Options options = without_identification();
   MonitorRun run(test::monitor_for(two), options);
   std::int64_t seq = 0;
   const auto play = [&](const test::Recording& r, std::int64_t from_us) {
