@@ -16,7 +16,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -39,12 +38,6 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kDaemon = MILLWATCH_DAEMON;
-
-std::string read_text(const fs::path& p) {
-  std::stringstream s;
-  s << std::ifstream(p).rdbuf();
-  return s.str();
-}
 
 nlohmann::json read_json(const fs::path& p) {
   return fs::exists(p) ? nlohmann::json::parse(std::ifstream(p)) : nlohmann::json();
@@ -146,10 +139,10 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   s.spindle.actual_rpm = 25252.0;
   test::write_force_log(dir_ / "cut.lcmlog", s, 250, 0, 200);
   const auto r = session("split", dir_);
-  ASSERT_EQ(r.exit_code, 0) << r.output << read_text(dir_ / "split.log");
+  ASSERT_EQ(r.exit_code, 0) << r.output << test::read_text(dir_ / "split.log");
   EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
   const nlohmann::json summary = read_json(dir_ / "split.json");
-  ASSERT_FALSE(summary.is_null()) << read_text(dir_ / "split.log");
+  ASSERT_FALSE(summary.is_null()) << test::read_text(dir_ / "split.log");
   EXPECT_EQ(summary["samples"], 50000);
   EXPECT_EQ(summary["dropped_samples"], 0);
   const int revolutions = summary["revolutions"].get<int>();
@@ -177,10 +170,10 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
 // recorded outputs decode; replaying the recorded raw channel gives the live run's results.
 TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   const auto r = session("live", dir_);
-  ASSERT_EQ(r.exit_code, 0) << r.output << read_text(dir_ / "daemon.log");
+  ASSERT_EQ(r.exit_code, 0) << r.output << test::read_text(dir_ / "daemon.log");
   EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
   const nlohmann::json live = read_json(dir_ / "daemon.json");
-  ASSERT_FALSE(live.is_null()) << read_text(dir_ / "daemon.log");
+  ASSERT_FALSE(live.is_null()) << test::read_text(dir_ / "daemon.log");
   EXPECT_EQ(live["samples"], 50000);
   EXPECT_EQ(live["dropped_samples"], 0);
   EXPECT_NEAR(live["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
@@ -349,11 +342,11 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   // lcm-logplayer feeds the recorded raw log into a fresh daemon, stopped by SIGINT this time:
   // the same results again.
   const auto played = session("logplayer", dir_);
-  ASSERT_EQ(played.exit_code, 0) << played.output << read_text(dir_ / "played.log");
+  ASSERT_EQ(played.exit_code, 0) << played.output << test::read_text(dir_ / "played.log");
   EXPECT_NE(played.output.find("daemon exit 0"), std::string::npos) << played.output;
-  EXPECT_NE(read_text(dir_ / "played.log").find("SIGINT: stopping"), std::string::npos);
+  EXPECT_NE(test::read_text(dir_ / "played.log").find("SIGINT: stopping"), std::string::npos);
   const nlohmann::json again = read_json(dir_ / "played.json");
-  ASSERT_FALSE(again.is_null()) << read_text(dir_ / "played.log");
+  ASSERT_FALSE(again.is_null()) << test::read_text(dir_ / "played.log");
   EXPECT_EQ(again["samples"], 50000);
   EXPECT_EQ(again["dropped_samples"], 0);
   EXPECT_EQ(again["revolutions"], live["revolutions"]);
@@ -448,7 +441,7 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
   std::ofstream(dir_ / "bad.json") << bad.dump();
 
   const auto r = session("reload", dir_);
-  const std::string log = read_text(dir_ / "reload.log");
+  const std::string log = test::read_text(dir_ / "reload.log");
   ASSERT_EQ(r.exit_code, 0) << r.output << log;
   EXPECT_NE(r.output.find("daemon exit 0"), std::string::npos) << r.output;
   EXPECT_NE(log.find("configuration reloaded after 25500 samples"), std::string::npos) << log;
@@ -629,7 +622,7 @@ TEST(Millwatchd, ConfigurationTheStagesRefuseIsAnErrorNotACrash) {
       "sleep 0.5; cp restart.json running.json; kill -HUP $pid; sleep 0.3; "
       "cp refused.json running.json; kill -HUP $pid; sleep 0.3; "
       "kill -TERM $pid; wait $pid; echo exit=$?'");
-  const std::string log = read_text(dir / "daemon.log");
+  const std::string log = test::read_text(dir / "daemon.log");
   EXPECT_NE(r.output.find("exit=0"), std::string::npos) << r.output << log;
   EXPECT_NE(log.find("source.channel changed; that takes a restart"), std::string::npos) << log;
   EXPECT_NE(log.find("configuration reloaded"), std::string::npos) << log;

@@ -18,7 +18,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -216,9 +215,7 @@ TEST(ServiceNotifier, ASourceThatEndsStopsTheDaemonWithExitStatusOne) {
   std::vector<Message> m;
   sock.receive(start, start + std::chrono::milliseconds(2000), m);
   EXPECT_EQ(wait_exit(pid), 1);  // by itself, no signal sent
-  std::ifstream log_file(dir / "daemon.log");
-  const std::string log((std::istreambuf_iterator<char>(log_file)),
-                        std::istreambuf_iterator<char>());
+  const std::string log = test::read_text(dir / "daemon.log");
   EXPECT_NE(log.find("the source has ended: millwatchd stops (exit status 1)"), std::string::npos)
       << log;
   EXPECT_NE(log.find("the source has ended: stopping"), std::string::npos) << log;

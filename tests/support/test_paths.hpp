@@ -1,7 +1,8 @@
 #pragma once
-// Where tests find files that are not in the repository.
+// Where tests find files that are not in the repository, and the text of one a program wrote.
 
 #include <filesystem>
+#include <string>
 
 namespace millwatch::test {
 
@@ -14,5 +15,8 @@ std::filesystem::path shared_dir();
 
 /// A fresh, empty temporary directory unique to the calling test and this build tree.
 std::filesystem::path fresh_temp_dir();
+
+/// The whole text of a file (empty if it cannot be read: a log a program did not write).
+std::string read_text(const std::filesystem::path& path);
 
 }  // namespace millwatch::test
