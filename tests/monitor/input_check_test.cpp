@@ -144,6 +144,58 @@ TEST(InputCheck, ABlockRejectedAtItsTimeLeavesOneHoleCountedOnce) {
   EXPECT_EQ(check.counters().gaps, 1);
 }
 
+// A block rejected later than expected (a wrong rate after a drop) lies in the gap before the
+// next good block: its samples are counted once, as the rejected block's, not again in the gap.
+TEST(InputCheck, ABlockRejectedInsideAGapIsNotCountedTwice) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));                               // due next at 2,000 µs
+  const auto bad = check.check(ramp(100).view(4000, 20000.0));  // 100 samples late
+  EXPECT_EQ(bad.verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(check.counters().samples_dropped, 100);
+  const auto next = check.check(ramp(100).view(6000));  // 200 samples after the first block
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.gap_samples, 200);
+  EXPECT_EQ(next.first_sample, 300);
+  EXPECT_EQ(check.counters().samples_dropped, 200);
+  EXPECT_EQ(check.counters().gaps, 1);
+  EXPECT_EQ(check.counters().blocks_rejected, 1);
+}
+
+// A rejected block with a corrupt but plausible utime ahead of the stream refuses none of the
+// good blocks after it; once the stream has passed its time it covers no later gap.
+TEST(InputCheck, ARejectedBlockTheStreamPassesCoversNoLaterGap) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  EXPECT_EQ(check.check(ramp(100).view(5000, 20000.0)).verdict, BlockVerdict::kRejected);
+  for (std::int64_t utime = 2000; utime <= 8000; utime += 2000) {  // over 5,000 µs, no gap
+    const auto c = check.check(ramp(100).view(utime));
+    EXPECT_EQ(c.verdict, BlockVerdict::kAccepted) << utime;
+    EXPECT_EQ(c.gap_samples, 0) << utime;
+  }
+  const auto after_gap = check.check(ramp(100).view(12'000));  // 100 samples missing
+  EXPECT_EQ(after_gap.gap_samples, 100);
+  EXPECT_EQ(check.counters().samples_dropped, 200);  // the rejected block's and the gap's
+}
+
+// More rejected blocks ahead than the check keeps: the nearest are kept, so the gap the stream
+// meets first still counts each missing sample once.
+TEST(InputCheck, ManyRejectedBlocksAheadKeepTheNearest) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  for (int i = 0; i < 20; ++i) {  // far ahead (corrupt times), then two inside the coming gap
+    check.check(ramp(100).view(1'000'000'000 + i * 2000, 20000.0));
+  }
+  check.check(ramp(100).view(2000, 20000.0 * 2));  // at its time: a hole, not ahead
+  check.check(ramp(100).view(6000, 20000.0));
+  check.check(ramp(100).view(8000, 20000.0));
+  const std::int64_t dropped_before = check.counters().samples_dropped;
+  EXPECT_EQ(dropped_before, 2300);
+  const auto next = check.check(ramp(100).view(10'000));  // the hole, then 300 samples missing
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.first_sample, 500);
+  EXPECT_EQ(check.counters().samples_dropped, dropped_before + 100);
+}
+
 TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
   InputCheck check(config());
   Block a = ramp(5);
