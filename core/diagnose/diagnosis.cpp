@@ -489,18 +489,11 @@ class Engine {
     return {best * group_s, 0.5 * group_s};
   }
 
-  /// The synchronous harmonic power (harmonics 1..k_max) of y − chain at a trial speed: what a
-  /// correct time base maximises (the synchronous average is not smeared).
-  double sync_power(double rpm, const std::array<std::vector<double>, 2>& y, int k_max) {
-    double p = 0.0;
-    std::vector<std::complex<double>> x;
-    for (std::size_t a = 0; a < 2; ++a) {
-      synchronous_harmonics(y[a], fs_, rpm / 60.0, std::min(k_max, harmonics(rpm)), x);
-      for (std::size_t k = 1; k < x.size(); ++k) {
-        p += std::norm(x[k]);
-      }
-    }
-    return p;
+  /// What the harmonics 1..k_max at a trial speed explain of y − chain (the energy of its
+  /// least-squares projection onto them and the mean, record_spectrum.hpp): what a correct time
+  /// base maximises (the synchronous average is not smeared).
+  double sync_energy(double rpm, const std::array<std::vector<double>, 2>& y, int k_max) {
+    return harmonic_fit_energy(y, fs_, rpm / 60.0, std::min(k_max, harmonics(rpm)));
   }
 
   /// The actual speed: the synchronous power's maximum within ±2.5 % of the commanded speed,
@@ -528,7 +521,7 @@ class Engine {
       const double centre = best;
       for (double rel = lo_rel; rel <= hi_rel + 1e-12; rel += step) {
         const double rpm = centre * (1.0 + rel);
-        const double p = sync_power(rpm, y, k);
+        const double p = sync_energy(rpm, y, k);
         if (p > best_p) {
           best_p = p;
           best = rpm;
@@ -545,31 +538,31 @@ class Engine {
     double lo = best * (1.0 - step), hi = best * (1.0 + step);
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-    double p1 = sync_power(x1, y, k_all), p2 = sync_power(x2, y, k_all);
-    for (int it = 0; it < 40 && hi - lo > 1e-7 * commanded_rpm; ++it) {
+    double p1 = sync_energy(x1, y, k_all), p2 = sync_energy(x2, y, k_all);
+    for (int it = 0; it < 60 && hi - lo > 1e-9 * commanded_rpm; ++it) {
       if (p1 > p2) {
         hi = x2;
         x2 = x1;
         p2 = p1;
         x1 = hi - g * (hi - lo);
-        p1 = sync_power(x1, y, k_all);
+        p1 = sync_energy(x1, y, k_all);
       } else {
         lo = x1;
         x1 = x2;
         p1 = p2;
         x2 = lo + g * (hi - lo);
-        p2 = sync_power(x2, y, k_all);
+        p2 = sync_energy(x2, y, k_all);
       }
     }
     const double rpm = 0.5 * (lo + hi);
-    // RSS(n) = Σy² − (n_used/2)·P(n): σ_n² = 2σ²/RSS''(n), σ² the per-sample noise variance.
+    // RSS(n) = Σy² − E(n): σ_n² = 2σ²/RSS''(n), σ² the per-sample noise variance.
     const double h = 0.05 * step * commanded_rpm;
-    const double d2 = (sync_power(rpm + h, y, k_all) - 2.0 * sync_power(rpm, y, k_all) +
-                       sync_power(rpm - h, y, k_all)) /
+    const double d2 = (sync_energy(rpm + h, y, k_all) - 2.0 * sync_energy(rpm, y, k_all) +
+                       sync_energy(rpm - h, y, k_all)) /
                       (h * h);
     const double var = 0.5 * (floor_[0] * floor_[0] + floor_[1] * floor_[1]) *
                        static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
-    const double curvature = 0.5 * static_cast<double>(n_) * std::fabs(d2);
+    const double curvature = std::fabs(d2);
     const double sigma = curvature > 0.0 ? std::sqrt(2.0 * var / curvature) : rpm;
     return {rpm, sigma};
   }

@@ -1,5 +1,6 @@
 #include "core/diagnose/record_spectrum.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -100,6 +101,77 @@ std::size_t synchronous_harmonics(std::span<const double> x, double sample_rate_
     out[static_cast<std::size_t>(k)] = 2.0 * acc[static_cast<std::size_t>(k)] / u;
   }
   return used;
+}
+
+namespace {
+
+/// Σ_{n<N} e^{iθn} = (1 − e^{iθN}) / (1 − e^{iθ}); N where θ is a multiple of 2π.
+std::complex<double> phasor_sum(double theta, std::size_t n) {
+  const std::complex<double> denominator = 1.0 - std::polar(1.0, theta);
+  if (std::abs(denominator) < 1e-12) {
+    return {static_cast<double>(n), 0.0};
+  }
+  return (1.0 - std::polar(1.0, theta * static_cast<double>(n))) / denominator;
+}
+
+/// The Gram matrix HᵀH of the columns 1, cos(kθn), sin(kθn) (k = 1..K; in that order, the
+/// constant first) over n = 0..N−1, from the product-to-sum identities.
+Eigen::MatrixXd harmonic_gram(double theta, std::size_t n, int harmonics) {
+  const int size = 2 * harmonics + 1;
+  auto cos_column = [](int k) { return k == 0 ? 0 : 2 * k - 1; };
+  Eigen::MatrixXd g(size, size);
+  for (int a = 0; a <= harmonics; ++a) {
+    for (int b = 0; b <= harmonics; ++b) {
+      const std::complex<double> difference = phasor_sum((a - b) * theta, n);
+      const std::complex<double> sum = phasor_sum((a + b) * theta, n);
+      g(cos_column(a), cos_column(b)) = 0.5 * (difference.real() + sum.real());  // cos·cos
+      if (b > 0) {
+        g(cos_column(a), 2 * b) = 0.5 * (sum.imag() - difference.imag());  // cos a · sin b
+      }
+      if (a > 0) {
+        g(2 * a, cos_column(b)) = 0.5 * (sum.imag() + difference.imag());  // sin a · cos b
+      }
+      if (a > 0 && b > 0) {
+        g(2 * a, 2 * b) = 0.5 * (difference.real() - sum.real());  // sin·sin
+      }
+    }
+  }
+  return g;
+}
+
+}  // namespace
+
+double harmonic_fit_energy(std::span<const std::vector<double>> signals, double sample_rate_hz,
+                           double spindle_hz, int harmonics) {
+  if (signals.empty() || signals[0].empty() || harmonics < 1) {
+    return 0.0;
+  }
+  const std::size_t n = signals[0].size();
+  const double theta = 2.0 * std::numbers::pi * spindle_hz / sample_rate_hz;
+  const Eigen::LDLT<Eigen::MatrixXd> gram(harmonic_gram(theta, n, harmonics));
+  const auto k_count = static_cast<std::size_t>(harmonics);
+  std::vector<std::complex<double>> acc(k_count + 1);
+  Eigen::VectorXd projection(2 * harmonics + 1);  // Hᵀx
+  double energy = 0.0;
+  for (const std::vector<double>& x : signals) {
+    std::fill(acc.begin(), acc.end(), std::complex<double>{});
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::complex<double> e = std::polar(1.0, -theta * static_cast<double>(i));
+      std::complex<double> p = x[i];
+      acc[0] += p;
+      for (std::size_t k = 1; k <= k_count; ++k) {
+        p *= e;
+        acc[k] += p;
+      }
+    }
+    projection(0) = acc[0].real();
+    for (int k = 1; k <= harmonics; ++k) {  // Σx·cos = Re, Σx·sin = −Im of Σx·e^{−ikθn}
+      projection(2 * k - 1) = acc[static_cast<std::size_t>(k)].real();
+      projection(2 * k) = -acc[static_cast<std::size_t>(k)].imag();
+    }
+    energy += projection.dot(gram.solve(projection));
+  }
+  return energy;
 }
 
 }  // namespace millwatch::diagnose
