@@ -144,12 +144,8 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   carried_utime_us_ = std::max(carried_utime_us_, last.utime_us);
   std::unique_ptr<monitor::Pipeline> old = std::exchange(pipeline_, std::move(next));
   pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq(), carried_utime_us_);
-  // A gap across the reload is counted (at the same rate: blocks at a new rate were rejected
-  // by the old pipeline without moving its expected time, and would count twice).
-  const std::optional<std::int64_t> next_us = old->next_input_utime_us();
-  if (next_us && old->config().sample_rate_hz == pipeline_->config().sample_rate_hz) {
-    pipeline_->continue_input_after(*next_us);
-  }
+  // A gap across the reload is counted (at the same rate).
+  pipeline_->continue_input_after(*old);
   summary_.reconfigure(pipeline_->config(), carried_.revolutions, carried_utime_us_);
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());

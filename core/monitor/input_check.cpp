@@ -62,12 +62,6 @@ std::int64_t InputCheck::utime_of(std::int64_t sample) const {
          std::llround(static_cast<double>(sample - start_sample_) * 1e6 / config_.sample_rate_hz);
 }
 
-std::int64_t InputCheck::end_utime(const SampleBlock& block) const {
-  // The utime is within ±2⁵³ µs and a block at most max_block_samples long: no overflow.
-  return block.utime_us +
-         std::llround(static_cast<double>(block.fx_N.size()) * 1e6 / config_.sample_rate_hz);
-}
-
 double InputCheck::samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const {
   // Both utimes are within ±kMaxAbsUtime_us (2⁵³): their difference cannot overflow.
   return static_cast<double>(utime_us - expected_utime_us) * config_.sample_rate_hz / 1e6;
@@ -75,39 +69,30 @@ double InputCheck::samples_late(std::int64_t utime_us, std::int64_t expected_uti
 
 void InputCheck::restart() {
   started_ = false;
-  rejected_ahead_count_ = 0;
+  rejected_ahead_.clear();
 }
 
-void InputCheck::note_rejected_ahead(std::int64_t utime_us, std::int64_t samples) {
-  if (rejected_ahead_count_ < kMaxRejectedAhead) {
-    rejected_ahead_[rejected_ahead_count_++] = {utime_us, samples};
-    return;
-  }
-  // Full (blocks with utimes far ahead, most likely corrupt ones): the furthest makes room for a
-  // nearer one, which a gap is more likely to cover.
-  auto* furthest = std::max_element(
-      rejected_ahead_.begin(), rejected_ahead_.end(),
-      [](const RejectedAhead& a, const RejectedAhead& b) { return a.utime_us < b.utime_us; });
-  if (utime_us < furthest->utime_us) {
-    *furthest = {utime_us, samples};
+void InputCheck::continue_after(const InputCheck& predecessor) {
+  if (const std::optional<std::int64_t> next_us = predecessor.next_utime();
+      next_us && predecessor.config_.sample_rate_hz == config_.sample_rate_hz) {
+    continue_after(*next_us);
+    rejected_ahead_ = predecessor.rejected_ahead_;
   }
 }
 
-std::int64_t InputCheck::counted_in_gap(std::int64_t missing, std::int64_t utime_us,
-                                        std::int64_t end_utime_us) {
-  std::int64_t counted = 0;
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < rejected_ahead_count_; ++i) {
-    const RejectedAhead& r = rejected_ahead_[i];
-    if (r.utime_us < utime_us) {
-      counted += r.samples;
-    }
-    if (r.utime_us >= end_utime_us) {  // still ahead of the stream
-      rejected_ahead_[kept++] = r;
-    }
+std::int64_t InputCheck::duration_us(std::int64_t samples) const {
+  // At most 2³¹ samples (a block's length) at ≥ 1 kHz: within 2⁴¹ µs, no overflow added to a
+  // utime within ±2⁵³.
+  return std::llround(static_cast<double>(samples) * 1e6 / config_.sample_rate_hz);
+}
+
+std::int64_t InputCheck::counted_already(std::int64_t missing, std::int64_t expected_us,
+                                         std::int64_t utime_us) const {
+  if (rejected_ahead_.empty()) {
+    return 0;
   }
-  rejected_ahead_count_ = kept;
-  return std::min(counted, missing);
+  const auto covered_us = static_cast<double>(rejected_ahead_.covered_us(expected_us, utime_us));
+  return std::min<std::int64_t>(missing, std::llround(covered_us * config_.sample_rate_hz / 1e6));
 }
 
 std::optional<std::int64_t> InputCheck::next_utime() const {
@@ -130,16 +115,14 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
     // hole without counting those samples again.
     next_sample_ += n;
     hole_samples_ += n;
-  } else if (started_ && late > config_.tolerance_samples) {
-    // Later than expected: the stream's time stays where it was (one corrupt utime must not
-    // refuse the good blocks after it), but the gap before the next block must not count these
+  } else if (late >= -config_.tolerance_samples) {
+    // Later than expected, or before a continued stream's first block: the stream's time stays
+    // where it was (one corrupt utime must not refuse the good blocks after it, nor a good block
+    // at the same time be refused), and the gap before the next block does not count these
     // samples again.
-    note_rejected_ahead(block.utime_us, n);
-  } else if (!started_ && late >= -config_.tolerance_samples) {
-    // Before a continued stream's first block, one rejected at or after the time expected: the
-    // time its samples took is not known (nor whether the next blocks overlap it), so the
-    // continuation is dropped rather than count them twice or refuse good blocks after it.
-    continued_from_utime_us_.reset();
+    const double tolerance_us = config_.tolerance_samples * 1e6 / config_.sample_rate_hz;
+    rejected_ahead_.add(block.utime_us, block.utime_us + duration_us(n),
+                        static_cast<std::int64_t>(tolerance_us));
   }
   CheckedBlock out;
   out.verdict = BlockVerdict::kRejected;
@@ -177,13 +160,10 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
       ++counters_.out_of_order_blocks;
       return reject(block, "block older than expected (out of order or repeated)");
     }
-    const std::int64_t missing =
-        late > config_.tolerance_samples ? static_cast<std::int64_t>(std::llround(late)) : 0;
-    const std::int64_t counted =
-        rejected_ahead_count_ > 0 ? counted_in_gap(missing, block.utime_us, end_utime(block)) : 0;
-    if (missing > 0) {
+    if (late > config_.tolerance_samples) {
+      const auto missing = static_cast<std::int64_t>(std::llround(late));
       ++counters_.gaps;
-      counters_.samples_dropped += missing - counted;
+      counters_.samples_dropped += missing - counted_already(missing, *expected_us, block.utime_us);
       out.gap_samples = missing;
       if (started_) {
         next_sample_ += missing;
@@ -192,6 +172,9 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
         out.problem = "gap before block (since the stream before a reload)";
       }
     }
+  }
+  if (!rejected_ahead_.empty()) {  // the stream is past what lies before this block's end
+    rejected_ahead_.forget_before(block.utime_us + duration_us(static_cast<std::int64_t>(n)));
   }
   if (!started_) {
     started_ = true;

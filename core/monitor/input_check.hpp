@@ -3,13 +3,14 @@
 // hands on a clean block. Nothing is thrown; everything is counted.
 //
 //  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected;
-//    when it came at its expected time, its slot is a gap before the next block (counted once)
+//    when it came at its expected time, its slot is a gap before the next block (counted once);
+//    when later (or before a reload's successor has a block), the stream's time stays (a corrupt
+//    utime must refuse no good block after it), and a gap over it does not count it again
 //  - block whose utime is beyond ±kMaxAbsUtime_us (a corrupt time: a block from the network can
 //    carry anything): rejected, with no effect on the stream's timing
 //  - block older than expected (out of order, duplicate): rejected
 //  - block later than expected: the missing samples are counted as dropped and reported as a
-//    gap so that downstream stages can restart; those of them already counted as a rejected
-//    block's (one rejected later than expected, inside the gap) are not counted again
+//    gap so that downstream stages can restart
 //  - non-finite or implausible (|F| > plausible_N) sample: replaced by the channel's last good
 //    value, flagged
 //  - sample at or beyond the channel's saturation level (charge-amplifier range): kept, flagged
@@ -25,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "core/monitor/rejected_spans.hpp"
 #include "core/monitor/sample_block.hpp"
 
 namespace millwatch::monitor {
@@ -98,26 +100,19 @@ class InputCheck {
   /// samples missing before it as a gap (reported in its CheckedBlock), although the stream's
   /// timing starts at it; an earlier one (its predecessor had it) is rejected as out of order.
   void continue_after(std::int64_t next_utime_us) { continued_from_utime_us_ = next_utime_us; }
+  /// continue_after() from a predecessor's stream at the same sample rate (nothing if it had
+  /// none), with what its rejected blocks ahead of that time covered (counted already).
+  void continue_after(const InputCheck& predecessor);
 
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
-  /// Notes a block rejected later than the stream expected: its samples, already counted, may
-  /// lie in the gap before the next accepted block.
-  void note_rejected_ahead(std::int64_t utime_us, std::int64_t samples);
-  /// Of a gap of `missing` samples before a block at `utime_us`, those already counted as
-  /// rejected blocks' in it; forgets every rejected block the stream has now passed.
-  std::int64_t counted_in_gap(std::int64_t missing, std::int64_t utime_us,
-                              std::int64_t end_utime_us);
+  /// µs that `samples` samples take at the configured rate.
+  [[nodiscard]] std::int64_t duration_us(std::int64_t samples) const;
+  /// Of the `missing` samples before a block at `utime_us` (due at `expected_us`), those that
+  /// rejected blocks covered — counted already.
+  [[nodiscard]] std::int64_t counted_already(std::int64_t missing, std::int64_t expected_us,
+                                             std::int64_t utime_us) const;
 
-  /// A block rejected later than expected, whose samples the next gap may cover.
-  struct RejectedAhead {
-    std::int64_t utime_us = 0;
-    std::int64_t samples = 0;
-  };
-  static constexpr std::size_t kMaxRejectedAhead = 8;
-
-  /// utime (µs) just after an accepted block's last sample.
-  [[nodiscard]] std::int64_t end_utime(const SampleBlock& block) const;
   /// How many samples later than `expected_utime_us` a block at `utime_us` comes (< 0: earlier).
   [[nodiscard]] double samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const;
 
@@ -128,8 +123,7 @@ class InputCheck {
   std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
   std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
-  std::array<RejectedAhead, kMaxRejectedAhead> rejected_ahead_{};
-  std::size_t rejected_ahead_count_ = 0;
+  RejectedSpans rejected_ahead_;   // blocks rejected at or after the time expected
   std::optional<std::int64_t> continued_from_utime_us_;  // continue_after(), until the first block
   std::array<double, 3> last_good_{};
   // max_block_samples each, left uninitialised (not 1.5 MiB zeroed at construction for the

@@ -138,10 +138,14 @@ class Pipeline {
     spindle_seq_ = last_spindle_seq;
     alerts_.continue_after(first_revolution - 1, last_utime_us);
   }
-  /// The input goes on from a predecessor's (a reload): samples missing between the time it
-  /// expected next (its next_input_utime_us()) and this pipeline's first block are a gap,
-  /// counted as dropped. Before the first block.
-  void continue_input_after(std::int64_t next_utime_us) { input_.continue_after(next_utime_us); }
+  /// The input goes on from a predecessor's (a reload) at the same sample rate: samples missing
+  /// between the time it expected next (its next_input_utime_us()) and this pipeline's first
+  /// block are a gap, counted as dropped once (those of blocks it rejected are counted already).
+  /// Before the first block. At another rate, nothing: blocks at the new rate were rejected by
+  /// the predecessor without moving its expected time, and would count twice.
+  void continue_input_after(const Pipeline& predecessor) {
+    input_.continue_after(predecessor.input_);
+  }
   /// The utime (µs) the next input sample is expected at (empty until the first block taken,
   /// unless continue_input_after() said).
   [[nodiscard]] std::optional<std::int64_t> next_input_utime_us() const {

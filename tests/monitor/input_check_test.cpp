@@ -182,8 +182,8 @@ TEST(InputCheck, ARejectedBlockTheStreamPassesCoversNoLaterGap) {
 TEST(InputCheck, ManyRejectedBlocksAheadKeepTheNearest) {
   InputCheck check(config());
   check.check(ramp(100).view(0));
-  for (int i = 0; i < 20; ++i) {  // far ahead (corrupt times), then two inside the coming gap
-    check.check(ramp(100).view(1'000'000'000 + i * 2000, 20000.0));
+  for (int i = 0; i < 20; ++i) {  // far ahead, apart (corrupt times), then two in the coming gap
+    check.check(ramp(100).view(1'000'000'000 + i * 1'000'000, 20000.0));
   }
   check.check(ramp(100).view(2000, 20000.0 * 2));  // at its time: a hole, not ahead
   check.check(ramp(100).view(6000, 20000.0));
@@ -194,6 +194,73 @@ TEST(InputCheck, ManyRejectedBlocksAheadKeepTheNearest) {
   EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
   EXPECT_EQ(next.first_sample, 500);
   EXPECT_EQ(check.counters().samples_dropped, dropped_before + 100);
+}
+
+Block unequal(std::size_t n) {
+  Block b = ramp(n);
+  b.fz.pop_back();
+  return b;
+}
+
+// A run of rejected blocks (a DAQ briefly at another rate, a sender writing broken blocks) is
+// one stretch of time, however many blocks: each sample is counted once.
+TEST(InputCheck, ARunOfRejectedBlocksInAGapIsCountedOnce) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));  // due next at 2,000 µs; that block is lost
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_EQ(check.check(unequal(100).view(4000 + i * 2000)).verdict, BlockVerdict::kRejected);
+  }
+  const auto next = check.check(ramp(100).view(44'000));
+  EXPECT_EQ(next.gap_samples, 2100);
+  EXPECT_EQ(check.counters().samples_dropped, 2100);  // 2,000 rejected, 100 lost
+}
+
+// Only what a rejected block covers of the gap is counted already: not the part beyond the next
+// good block, not a block covered twice, not one the stream's time has moved past.
+TEST(InputCheck, OnlyWhatARejectedBlockCoversOfTheGapIsCountedAlready) {
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    check.check(unequal(300).view(4000));  // 4,000–10,000 µs
+    EXPECT_EQ(check.check(ramp(100).view(6000)).gap_samples, 200);
+    EXPECT_EQ(check.counters().samples_dropped, 300 + 100);  // 2,000–4,000 µs were lost
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    check.check(unequal(100).view(4000));
+    check.check(unequal(100).view(4000));  // the same block again
+    EXPECT_EQ(check.check(ramp(100).view(6000)).gap_samples, 200);
+    EXPECT_EQ(check.counters().samples_dropped, 200 + 100);
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    check.check(unequal(100).view(4000));  // ahead
+    check.check(unequal(300).view(2000));  // at its time: a hole to 8,000 µs, over the first
+    const auto next = check.check(ramp(100).view(10'000));
+    EXPECT_EQ(next.gap_samples, 300 + 100);
+    EXPECT_EQ(next.first_sample, 500);
+    EXPECT_EQ(check.counters().samples_dropped, 100 + 300 + 100);  // 8,000–10,000 µs lost
+  }
+}
+
+// A reload's successor takes over what its predecessor's rejected blocks covered.
+TEST(InputCheck, AReloadKeepsWhatRejectedBlocksCovered) {
+  InputCheck before(config());
+  before.check(ramp(100).view(0));
+  before.check(unequal(100).view(4000));
+  InputCheck after(config());
+  after.continue_after(before);
+  EXPECT_EQ(after.next_utime(), 2000);
+  EXPECT_EQ(after.check(ramp(100).view(6000)).gap_samples, 200);
+  EXPECT_EQ(before.counters().samples_dropped + after.counters().samples_dropped, 200);
+  // At another rate the successor starts a stream of its own.
+  InputCheckConfig other = config();
+  other.sample_rate_hz = 25000.0;
+  InputCheck elsewhere(other);
+  elsewhere.continue_after(before);
+  EXPECT_FALSE(elsewhere.next_utime());
 }
 
 TEST(InputCheck, SaturatedSamplesAreKeptAndFlagged) {
@@ -383,11 +450,10 @@ TEST(InputCheck, AContinuedStreamCountsTheGapSinceItsPredecessorOnce) {
   {
     InputCheck check(config());
     check.continue_after(2000);
-    // Rejected at or after the time expected: how long its samples took is not known, nor
-    // whether the next blocks overlap it, so the continuation is dropped: its samples are
-    // counted once, and a good block at the same time is not refused.
+    // Rejected at the time expected: the continuation holds (a good block at the same time is
+    // not refused), and the samples it covered are not counted again in a gap.
     EXPECT_EQ(check.check(ramp(100).view(2000, 20000.0)).verdict, BlockVerdict::kRejected);
-    EXPECT_FALSE(check.next_utime());
+    EXPECT_EQ(check.next_utime(), 2000);
     const auto good = check.check(ramp(100).view(2000));
     EXPECT_EQ(good.verdict, BlockVerdict::kAccepted);
     EXPECT_EQ(good.gap_samples, 0);
@@ -396,10 +462,18 @@ TEST(InputCheck, AContinuedStreamCountsTheGapSinceItsPredecessorOnce) {
   {
     InputCheck check(config());
     check.continue_after(2000);
-    EXPECT_EQ(check.check(ramp(100).view(12000, 20000.0)).verdict, BlockVerdict::kRejected);
-    EXPECT_FALSE(check.next_utime());
-    EXPECT_EQ(check.check(ramp(100).view(17000)).gap_samples, 0);
+    EXPECT_EQ(check.check(ramp(100).view(2000, 20000.0)).verdict, BlockVerdict::kRejected);
+    EXPECT_EQ(check.check(ramp(100).view(4000)).gap_samples, 100);  // its slot
     EXPECT_EQ(check.counters().samples_dropped, 100);
+  }
+  {
+    InputCheck check(config());
+    check.continue_after(2000);
+    // Later: 2,000–12,000 and 14,000–17,000 µs were lost, 12,000–14,000 rejected.
+    EXPECT_EQ(check.check(ramp(100).view(12000, 20000.0)).verdict, BlockVerdict::kRejected);
+    EXPECT_EQ(check.next_utime(), 2000);
+    EXPECT_EQ(check.check(ramp(100).view(17000)).gap_samples, 750);
+    EXPECT_EQ(check.counters().samples_dropped, 750);
   }
 }
 
