@@ -493,10 +493,10 @@ class Engine {
   /// least-squares projection onto them and the mean, record_spectrum.hpp): what a correct time
   /// base maximises (the synchronous average is not smeared).
   double sync_energy(double rpm, const std::array<std::vector<double>, 2>& y, int k_max) {
-    return harmonic_fit_energy(y, fs_, rpm / 60.0, std::min(k_max, harmonics(rpm)));
+    return harmonic_fit_energy(y, fs_, rpm / 60.0, k_max);
   }
 
-  /// The actual speed: the synchronous power's maximum within ±2.5 % of the commanded speed,
+  /// The actual speed: the synchronous energy's maximum within ±2.5 % of the commanded speed,
   /// with σ from its curvature. Coarse to fine: harmonic k's peak is 1/(k·revolutions) wide, so
   /// the search runs on the tooth-passing fundamental first (a grid of a quarter of its width),
   /// then on 4× more harmonics around the best, then on all of them, then a golden section.
@@ -510,7 +510,10 @@ class Engine {
       }
     }
     const double revs = duration() * commanded_rpm / 60.0;
-    const int k_all = harmonics(commanded_rpm);
+    // The same harmonics at every trial speed, all in the band at the fastest: were the top one
+    // dropped above some speed, the energy would fall in a step there, which the search would
+    // take for the maximum (and the curvature for a sharp one) when the speed lies beside it.
+    const int k_all = harmonics(commanded_rpm * 1.025);
     double best = commanded_rpm;
     double lo_rel = -0.025, hi_rel = 0.025;
     int k = std::min(k_all, std::max(1, flutes));
