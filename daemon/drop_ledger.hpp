@@ -1,9 +1,9 @@
 #pragma once
 // The sample thread's account of the samples a source dropped before each block it queued
 // (BlockSlot::dropped_before): the pipeline shows them as the gap before the next block it
-// takes with timing; any it cannot show — taken without timing (the stream's first block, a
-// reload's successor without its predecessor's time), or timing lost to a rejected block, or
-// the stream ended — count as unseen in SourceCounters, once.
+// takes with timing; any it cannot show — before a block taken or rejected without timing (the
+// stream's first blocks, a reload's successor without its predecessor's time), or when the
+// stream ended — count as unseen in SourceCounters, once.
 
 #include <cstdint>
 

@@ -6,7 +6,7 @@
 // A dropped block's samples are a hole in the stream's time, which the pipeline counts as the gap
 // before the next block it takes (samples_dropped, once). Holes no such gap shows are counted
 // here instead: the drops since the last block queued, and those before blocks no gap shows
-// (daemon/drop_ledger.hpp: taken without timing, timing lost, the stream ended).
+// (daemon/drop_ledger.hpp: taken or rejected without timing, the stream ended).
 
 #include <atomic>
 #include <cstdint>

@@ -1671,10 +1671,13 @@ Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
     throw std::invalid_argument(
         format("diagnose: the band (%.0f Hz) must lie below Nyquist (%.0f Hz)", band, 0.5 * fs));
   }
-  if (band < start.process.spindle_rpm / 60.0 * start.tool.flutes) {
-    throw std::invalid_argument(
-        format("diagnose: the band (%.0f Hz) must hold the tooth-passing frequency (%.0f Hz)", band,
-               start.process.spindle_rpm / 60.0 * start.tool.flutes));
+  // The speed search reaches 2.5 % above the commanded speed, with the tooth-passing harmonic.
+  const double tooth_hz = start.process.spindle_rpm / 60.0 * start.tool.flutes;
+  if (band < 1.025 * tooth_hz) {
+    throw std::invalid_argument(format(
+        "diagnose: the band (%.0f Hz) must hold the tooth-passing frequency 2.5 %% above the "
+        "commanded speed (%.0f Hz)",
+        band, 1.025 * tooth_hz));
   }
   for (const auto& name : options.candidates) {
     if (find_candidate(name) == nullptr) {

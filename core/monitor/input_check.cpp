@@ -80,10 +80,13 @@ void InputCheck::continue_after(const InputCheck& predecessor) {
   }
 }
 
-std::int64_t InputCheck::duration_us(std::int64_t samples) const {
-  // At most 2³¹ samples (a block's length) at ≥ 1 kHz: within 2⁴¹ µs, no overflow added to a
-  // utime within ±2⁵³.
-  return std::llround(static_cast<double>(samples) * 1e6 / config_.sample_rate_hz);
+std::int64_t InputCheck::duration_us(std::int64_t samples, double rate_hz) const {
+  // A block's own rate within a factor 1000 of the configured one (≥ 1 Hz), else the configured
+  // rate: at most 2³¹ samples last within 2⁵¹ µs, no overflow added to a utime within ±2⁵³.
+  const double configured = config_.sample_rate_hz;
+  const double rate =
+      rate_hz >= 1e-3 * configured && rate_hz <= 1e3 * configured ? rate_hz : configured;
+  return std::llround(static_cast<double>(samples) * 1e6 / rate);
 }
 
 std::int64_t InputCheck::counted_already(std::int64_t missing, std::int64_t expected_us,
@@ -91,8 +94,8 @@ std::int64_t InputCheck::counted_already(std::int64_t missing, std::int64_t expe
   if (rejected_ahead_.empty()) {
     return 0;
   }
-  const auto covered_us = static_cast<double>(rejected_ahead_.covered_us(expected_us, utime_us));
-  return std::min<std::int64_t>(missing, std::llround(covered_us * config_.sample_rate_hz / 1e6));
+  return std::min(
+      missing, rejected_ahead_.counted_within(expected_us, utime_us, config_.sample_rate_hz / 1e6));
 }
 
 std::optional<std::int64_t> InputCheck::next_utime() const {
@@ -115,13 +118,17 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
     // hole without counting those samples again.
     next_sample_ += n;
     hole_samples_ += n;
+    if (!rejected_ahead_.empty()) {
+      rejected_ahead_.forget_before(utime_of(next_sample_));
+    }
   } else if (late >= -config_.tolerance_samples) {
     // Later than expected, or before a continued stream's first block: the stream's time stays
     // where it was (one corrupt utime must not refuse the good blocks after it, nor a good block
     // at the same time be refused), and the gap before the next block does not count these
     // samples again.
     const double tolerance_us = config_.tolerance_samples * 1e6 / config_.sample_rate_hz;
-    rejected_ahead_.add(block.utime_us, block.utime_us + duration_us(n),
+    // Its span at its own rate (a sender at another rate sends contiguous blocks at it).
+    rejected_ahead_.add(block.utime_us, block.utime_us + duration_us(n, block.sample_rate_hz), n,
                         static_cast<std::int64_t>(tolerance_us));
   }
   CheckedBlock out;
@@ -174,7 +181,8 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     }
   }
   if (!rejected_ahead_.empty()) {  // the stream is past what lies before this block's end
-    rejected_ahead_.forget_before(block.utime_us + duration_us(static_cast<std::int64_t>(n)));
+    rejected_ahead_.forget_before(
+        block.utime_us + duration_us(static_cast<std::int64_t>(n), config_.sample_rate_hz));
   }
   if (!started_) {
     started_ = true;

@@ -106,8 +106,8 @@ class InputCheck {
 
  private:
   CheckedBlock reject(const SampleBlock& block, std::string_view why);
-  /// µs that `samples` samples take at the configured rate.
-  [[nodiscard]] std::int64_t duration_us(std::int64_t samples) const;
+  /// µs that `samples` samples take at `rate_hz` (a rejected block's own rate, when plausible).
+  [[nodiscard]] std::int64_t duration_us(std::int64_t samples, double rate_hz) const;
   /// Of the `missing` samples before a block at `utime_us` (due at `expected_us`), those that
   /// rejected blocks covered — counted already.
   [[nodiscard]] std::int64_t counted_already(std::int64_t missing, std::int64_t expected_us,

@@ -1,56 +1,83 @@
 #include "core/monitor/rejected_spans.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace millwatch::monitor {
 
-void RejectedSpans::add(std::int64_t begin_us, std::int64_t end_us, std::int64_t tolerance_us) {
-  Span merged{begin_us, end_us};
-  std::array<Span, kCapacity> kept{};
+void RejectedSpans::add(std::int64_t begin_us, std::int64_t end_us, std::int64_t samples,
+                        std::int64_t tolerance_us) {
+  if (end_us <= begin_us || samples <= 0) {
+    return;
+  }
+  Span merged{begin_us, end_us, samples};
   std::size_t n = 0;
   // The spans are disjoint and further apart than the tolerance (they would have merged), so
   // one pass in time order merges every span the new one reaches, however far it grows.
   for (std::size_t i = 0; i < count_; ++i) {
-    const Span& s = spans_[i];
+    const Span s = spans_[i];
     if (s.end_us + tolerance_us >= merged.begin_us && merged.end_us + tolerance_us >= s.begin_us) {
-      merged.begin_us = std::min(merged.begin_us, s.begin_us);
-      merged.end_us = std::max(merged.end_us, s.end_us);
+      merged = {std::min(merged.begin_us, s.begin_us), std::max(merged.end_us, s.end_us),
+                merged.samples + s.samples};
     } else {
-      kept[n++] = s;
+      spans_[n++] = s;
     }
   }
-  if (n == kCapacity) {
-    if (merged.begin_us >= kept[n - 1].begin_us) {
-      return;  // the furthest ahead: given up
-    }
-    --n;
+  count_ = n;
+  const auto* at =
+      std::upper_bound(spans_.begin(), spans_.begin() + static_cast<std::ptrdiff_t>(count_), merged,
+                       [](const Span& a, const Span& b) { return a.begin_us < b.begin_us; });
+  std::copy_backward(at, spans_.cbegin() + static_cast<std::ptrdiff_t>(count_),
+                     spans_.begin() + static_cast<std::ptrdiff_t>(count_) + 1);
+  spans_[static_cast<std::size_t>(at - spans_.begin())] = merged;
+  ++count_;
+  if (count_ > kCapacity) {
+    join_closest();
   }
-  const auto at = static_cast<std::size_t>(
-      std::upper_bound(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(n), merged,
-                       [](const Span& a, const Span& b) { return a.begin_us < b.begin_us; }) -
-      kept.begin());
-  std::copy(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(at), spans_.begin());
-  spans_[at] = merged;
-  std::copy(kept.begin() + static_cast<std::ptrdiff_t>(at),
-            kept.begin() + static_cast<std::ptrdiff_t>(n),
-            spans_.begin() + static_cast<std::ptrdiff_t>(at) + 1);
-  count_ = n + 1;
 }
 
-std::int64_t RejectedSpans::covered_us(std::int64_t from_us, std::int64_t to_us) const {
-  std::int64_t covered = 0;
-  for (std::size_t i = 0; i < count_; ++i) {
-    covered += std::max<std::int64_t>(
-        0, std::min(spans_[i].end_us, to_us) - std::max(spans_[i].begin_us, from_us));
+void RejectedSpans::join_closest() {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i + 1 < count_; ++i) {
+    if (spans_[i + 1].begin_us - spans_[i].end_us <
+        spans_[best + 1].begin_us - spans_[best].end_us) {
+      best = i;
+    }
   }
-  return covered;
+  spans_[best] = {spans_[best].begin_us, spans_[best + 1].end_us,
+                  spans_[best].samples + spans_[best + 1].samples};
+  std::copy(spans_.begin() + static_cast<std::ptrdiff_t>(best) + 2,
+            spans_.begin() + static_cast<std::ptrdiff_t>(count_),
+            spans_.begin() + static_cast<std::ptrdiff_t>(best) + 1);
+  --count_;
+}
+
+std::int64_t RejectedSpans::counted_within(std::int64_t from_us, std::int64_t to_us,
+                                           double samples_per_us) const {
+  std::int64_t counted = 0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const Span& s = spans_[i];
+    const std::int64_t overlap_us = std::min(s.end_us, to_us) - std::max(s.begin_us, from_us);
+    if (overlap_us > 0) {  // each span rounded on its own: exact for a whole one
+      counted += std::min<std::int64_t>(
+          s.samples, std::llround(static_cast<double>(overlap_us) * samples_per_us));
+    }
+  }
+  return counted;
 }
 
 void RejectedSpans::forget_before(std::int64_t t_us) {
   std::size_t n = 0;
   for (std::size_t i = 0; i < count_; ++i) {
-    if (spans_[i].end_us > t_us) {
-      spans_[n++] = {std::max(spans_[i].begin_us, t_us), spans_[i].end_us};
+    const Span& s = spans_[i];
+    if (s.end_us > t_us) {
+      // Of a span the stream is inside, the part ahead keeps its share of the count.
+      const std::int64_t kept =
+          s.begin_us >= t_us
+              ? s.samples
+              : std::llround(static_cast<double>(s.samples) * static_cast<double>(s.end_us - t_us) /
+                             static_cast<double>(s.end_us - s.begin_us));
+      spans_[n++] = {std::max(s.begin_us, t_us), s.end_us, kept};
     }
   }
   count_ = n;

@@ -2,8 +2,8 @@
 // The stretches of stream time covered by blocks rejected at or after the time the stream
 // expected next (InputCheck): their samples are counted as dropped when rejected, so the gap the
 // stream later shows over them must not count them again. Spans that overlap or touch are
-// merged (a run of rejected blocks, or the same block twice, is one span); fixed capacity, no
-// allocation.
+// merged (a run of rejected blocks, or the same block twice, is one span), each with the samples
+// counted in it; fixed capacity, no allocation.
 
 #include <array>
 #include <cstddef>
@@ -15,12 +15,18 @@ class RejectedSpans {
  public:
   static constexpr std::size_t kCapacity = 8;
 
-  /// Adds [begin_us, end_us), merged with every span it overlaps or comes within tolerance_us
-  /// of. When all kCapacity spans are taken by others, the furthest ahead is given up (a gap is
-  /// more likely to cover a nearer one; far ahead lie corrupt times).
-  void add(std::int64_t begin_us, std::int64_t end_us, std::int64_t tolerance_us);
-  /// How much of [from_us, to_us) the spans cover, µs.
-  [[nodiscard]] std::int64_t covered_us(std::int64_t from_us, std::int64_t to_us) const;
+  /// Adds [begin_us, end_us), in which `samples` samples were counted (nothing for an empty
+  /// span or none counted), merged with every span it overlaps or comes within tolerance_us of.
+  /// Beyond kCapacity spans, the two closest become one (with the time between them): a gap
+  /// that covers both still subtracts exactly their samples.
+  void add(std::int64_t begin_us, std::int64_t end_us, std::int64_t samples,
+           std::int64_t tolerance_us);
+  /// Of the samples counted in the spans, those in [from_us, to_us) (a stream's gap): for each
+  /// span, the samples its overlap with the gap takes at `samples_per_us` (the stream's rate),
+  /// at most its count — its whole count where the gap holds it (a block received twice
+  /// counts once: the time it took).
+  [[nodiscard]] std::int64_t counted_within(std::int64_t from_us, std::int64_t to_us,
+                                            double samples_per_us) const;
   /// Forgets what lies before t_us (the stream has passed it).
   void forget_before(std::int64_t t_us);
   void clear() { count_ = 0; }
@@ -31,8 +37,13 @@ class RejectedSpans {
   struct Span {
     std::int64_t begin_us = 0;
     std::int64_t end_us = 0;
+    std::int64_t samples = 0;
   };
-  std::array<Span, kCapacity> spans_{};  // [0, count_): disjoint, in time order
+  /// Joins the two spans with the least time between them (count_ ≥ 2).
+  void join_closest();
+
+  std::array<Span, kCapacity + 1> spans_{};  // [0, count_): disjoint, in time order; one over
+                                             // the capacity while add() joins two
   std::size_t count_ = 0;
 };
 

@@ -245,6 +245,67 @@ TEST(InputCheck, OnlyWhatARejectedBlockCoversOfTheGapIsCountedAlready) {
   }
 }
 
+// More separate rejected blocks in one gap than spans are kept (every other block lost), a
+// sender briefly at a lower rate, empty blocks, and spans a hole passed over: each sample once.
+TEST(InputCheck, RejectedBlocksInAGapAreCountedOnceHoweverManyAndWhateverTheirRate) {
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    for (int i = 0; i < 9; ++i) {
+      check.check(unequal(100).view(4000 + i * 4000));
+    }
+    EXPECT_EQ(check.check(ramp(100).view(40'000)).gap_samples, 1900);
+    EXPECT_EQ(check.counters().samples_dropped, 1900);
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    for (int i = 0; i < 9; ++i) {  // 5,000 µs each, one after the other
+      check.check(ramp(100).view(7000 + i * 5000, 20000.0));
+    }
+    EXPECT_EQ(check.check(ramp(100).view(52'000)).gap_samples, 2500);
+    EXPECT_EQ(check.counters().samples_dropped, 2500);
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    for (int i = 0; i < 8; ++i) {
+      check.check(Block{}.view(3000 + i * 100));
+    }
+    check.check(ramp(100).view(6000, 20000.0));
+    EXPECT_EQ(check.check(ramp(100).view(8000)).gap_samples, 300);
+    EXPECT_EQ(check.counters().samples_dropped, 300);
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    for (int i = 0; i < 8; ++i) {
+      check.check(unequal(100).view(4000 + i * 4000));
+    }
+    check.check(unequal(1700).view(2000));  // at its time: a hole over all eight, to 36,000 µs
+    check.check(unequal(100).view(38'000));
+    EXPECT_EQ(check.check(ramp(100).view(40'000)).gap_samples, 1700 + 200);
+    EXPECT_EQ(check.counters().samples_dropped, 800 + 1700 + 200);
+  }
+}
+
+// At 333.3 kHz a sample is 3.0003 µs and a DAQ's utimes are whole µs: what two runs of rejected
+// blocks held is subtracted exactly, not rounded from their µs.
+TEST(InputCheck, RejectedRunsAtA333kHzRateAreSubtractedExactly) {
+  InputCheckConfig c = config();
+  c.sample_rate_hz = 333300.0;
+  InputCheck check(c);
+  auto at = [](int k) { return static_cast<std::int64_t>(k * 3000.3); };  // 1,000-sample blocks
+  Block b = ramp(1000);
+  check.check(b.view(at(0), 333300.0));
+  for (const int k : {10, 11, 12, 13, 20, 21, 22, 23}) {
+    Block bad = unequal(1000);
+    check.check(bad.view(at(k), 333300.0));
+  }
+  EXPECT_EQ(check.check(b.view(at(25), 333300.0)).gap_samples, 24000);
+  EXPECT_EQ(check.counters().samples_dropped, 24000);
+}
+
 // A reload's successor takes over what its predecessor's rejected blocks covered.
 TEST(InputCheck, AReloadKeepsWhatRejectedBlocksCovered) {
   InputCheck before(config());
@@ -469,7 +530,7 @@ TEST(InputCheck, AContinuedStreamCountsTheGapSinceItsPredecessorOnce) {
   {
     InputCheck check(config());
     check.continue_after(2000);
-    // Later: 2,000–12,000 and 14,000–17,000 µs were lost, 12,000–14,000 rejected.
+    // Later: 2,000–12,000 µs were lost, 12,000–17,000 rejected (100 samples at 20 kHz).
     EXPECT_EQ(check.check(ramp(100).view(12000, 20000.0)).verdict, BlockVerdict::kRejected);
     EXPECT_EQ(check.next_utime(), 2000);
     EXPECT_EQ(check.check(ramp(100).view(17000)).gap_samples, 750);
