@@ -69,6 +69,8 @@ double InputCheck::samples_late(std::int64_t utime_us, std::int64_t expected_uti
 
 void InputCheck::restart() {
   started_ = false;
+  hole_samples_ = 0;
+  continued_from_utime_us_.reset();
   rejected_ahead_.clear();
 }
 
@@ -127,7 +129,9 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
     // at the same time be refused), and the gap before the next block does not count these
     // samples again.
     const double tolerance_us = config_.tolerance_samples * 1e6 / config_.sample_rate_hz;
-    // Its span at its own rate (a sender at another rate sends contiguous blocks at it).
+    // Its span at its own rate (a sender at another rate sends contiguous blocks at it); a rate
+    // in a header rejected for it may be corrupt, but a gap takes at most the span's samples,
+    // shared out by time.
     rejected_ahead_.add(block.utime_us, block.utime_us + duration_us(n, block.sample_rate_hz), n,
                         static_cast<std::int64_t>(tolerance_us));
   }

@@ -58,10 +58,17 @@ std::int64_t RejectedSpans::counted_within(std::int64_t from_us, std::int64_t to
   for (std::size_t i = 0; i < count_; ++i) {
     const Span& s = spans_[i];
     const std::int64_t overlap_us = std::min(s.end_us, to_us) - std::max(s.begin_us, from_us);
-    if (overlap_us > 0) {  // each span rounded on its own: exact for a whole one
-      counted += std::min<std::int64_t>(
-          s.samples, std::llround(static_cast<double>(overlap_us) * samples_per_us));
+    if (overlap_us <= 0) {
+      continue;
     }
+    // The span's samples in the overlap (its share of them, all where the gap holds it), at most
+    // the stream samples the overlap takes; each span rounded on its own.
+    const double overlap = static_cast<double>(overlap_us);
+    const std::int64_t in_overlap = overlap_us == s.end_us - s.begin_us
+                                        ? s.samples
+                                        : std::llround(static_cast<double>(s.samples) * overlap /
+                                                       static_cast<double>(s.end_us - s.begin_us));
+    counted += std::min<std::int64_t>(in_overlap, std::llround(overlap * samples_per_us));
   }
   return counted;
 }

@@ -22,9 +22,10 @@ class RejectedSpans {
   void add(std::int64_t begin_us, std::int64_t end_us, std::int64_t samples,
            std::int64_t tolerance_us);
   /// Of the samples counted in the spans, those in [from_us, to_us) (a stream's gap): for each
-  /// span, the samples its overlap with the gap takes at `samples_per_us` (the stream's rate),
-  /// at most its count — its whole count where the gap holds it (a block received twice
-  /// counts once: the time it took).
+  /// span, its samples in the overlap (its share, by time; all of them where the gap holds it),
+  /// at most the stream samples the overlap takes at `samples_per_us` (a block received twice
+  /// counts once: the time it took). A share of a span the stream has partly passed is
+  /// subtracted once: forget_before() keeps the share ahead.
   [[nodiscard]] std::int64_t counted_within(std::int64_t from_us, std::int64_t to_us,
                                             double samples_per_us) const;
   /// Forgets what lies before t_us (the stream has passed it).

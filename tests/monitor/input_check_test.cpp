@@ -28,6 +28,13 @@ Block ramp(std::size_t n, double start = 0.0) {
   return b;
 }
 
+/// A malformed block: its fz has a sample fewer.
+Block unequal(std::size_t n) {
+  Block b = ramp(n);
+  b.fz.pop_back();
+  return b;
+}
+
 InputCheckConfig config() {
   InputCheckConfig c;
   c.sample_rate_hz = 50000.0;  // 20 µs per sample
@@ -144,12 +151,12 @@ TEST(InputCheck, ABlockRejectedAtItsTimeLeavesOneHoleCountedOnce) {
   EXPECT_EQ(check.counters().gaps, 1);
 }
 
-// A block rejected later than expected (a wrong rate after a drop) lies in the gap before the
+// A block rejected later than expected (malformed, after a drop) lies in the gap before the
 // next good block: its samples are counted once, as the rejected block's, not again in the gap.
 TEST(InputCheck, ABlockRejectedInsideAGapIsNotCountedTwice) {
   InputCheck check(config());
-  check.check(ramp(100).view(0));                               // due next at 2,000 µs
-  const auto bad = check.check(ramp(100).view(4000, 20000.0));  // 100 samples late
+  check.check(ramp(100).view(0));                         // due next at 2,000 µs
+  const auto bad = check.check(unequal(100).view(4000));  // 100 samples late
   EXPECT_EQ(bad.verdict, BlockVerdict::kRejected);
   EXPECT_EQ(check.counters().samples_dropped, 100);
   const auto next = check.check(ramp(100).view(6000));  // 200 samples after the first block
@@ -177,29 +184,23 @@ TEST(InputCheck, ARejectedBlockTheStreamPassesCoversNoLaterGap) {
   EXPECT_EQ(check.counters().samples_dropped, 200);  // the rejected block's and the gap's
 }
 
-// More rejected blocks ahead than the check keeps: the nearest are kept, so the gap the stream
-// meets first still counts each missing sample once.
-TEST(InputCheck, ManyRejectedBlocksAheadKeepTheNearest) {
+// More rejected blocks far ahead (corrupt times) than the check keeps spans for: the gap the
+// stream meets first still counts each missing sample once.
+TEST(InputCheck, ManyRejectedBlocksFarAheadLeaveTheGapNearByAlone) {
   InputCheck check(config());
   check.check(ramp(100).view(0));
   for (int i = 0; i < 20; ++i) {  // far ahead, apart (corrupt times), then two in the coming gap
-    check.check(ramp(100).view(1'000'000'000 + i * 1'000'000, 20000.0));
+    check.check(unequal(100).view(1'000'000'000 + i * 1'000'000));
   }
-  check.check(ramp(100).view(2000, 20000.0 * 2));  // at its time: a hole, not ahead
-  check.check(ramp(100).view(6000, 20000.0));
-  check.check(ramp(100).view(8000, 20000.0));
+  check.check(unequal(100).view(2000));  // at its time: a hole, not ahead
+  check.check(unequal(100).view(6000));
+  check.check(unequal(100).view(8000));
   const std::int64_t dropped_before = check.counters().samples_dropped;
   EXPECT_EQ(dropped_before, 2300);
   const auto next = check.check(ramp(100).view(10'000));  // the hole, then 300 samples missing
   EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
   EXPECT_EQ(next.first_sample, 500);
   EXPECT_EQ(check.counters().samples_dropped, dropped_before + 100);
-}
-
-Block unequal(std::size_t n) {
-  Block b = ramp(n);
-  b.fz.pop_back();
-  return b;
 }
 
 // A run of rejected blocks (a DAQ briefly at another rate, a sender writing broken blocks) is
@@ -272,9 +273,9 @@ TEST(InputCheck, RejectedBlocksInAGapAreCountedOnceHoweverManyAndWhateverTheirRa
     for (int i = 0; i < 8; ++i) {
       check.check(Block{}.view(3000 + i * 100));
     }
-    check.check(ramp(100).view(6000, 20000.0));
-    EXPECT_EQ(check.check(ramp(100).view(8000)).gap_samples, 300);
-    EXPECT_EQ(check.counters().samples_dropped, 300);
+    check.check(ramp(100).view(6000, 20000.0));  // 6,000–11,000 µs
+    EXPECT_EQ(check.check(ramp(100).view(12'000)).gap_samples, 500);
+    EXPECT_EQ(check.counters().samples_dropped, 500);
   }
   {
     InputCheck check(config());
@@ -304,6 +305,48 @@ TEST(InputCheck, RejectedRunsAtA333kHzRateAreSubtractedExactly) {
   }
   EXPECT_EQ(check.check(b.view(at(25), 333300.0)).gap_samples, 24000);
   EXPECT_EQ(check.counters().samples_dropped, 24000);
+}
+
+// A rejected block only partly in a gap (the next good block lies inside its time) is subtracted
+// by its share, and its share beyond that block by the next gap: never more than it counted, even
+// with a corrupt rate in its header that makes its span 1,000× too long.
+TEST(InputCheck, ARejectedBlockPartlyInAGapIsSubtractedByItsShare) {
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    check.check(ramp(100).view(6000, 20000.0));  // 6,000–11,000 µs
+    EXPECT_EQ(check.check(ramp(100).view(8000)).gap_samples, 300);
+    EXPECT_EQ(check.counters().samples_dropped, 100 + 300 - 40);  // 2,000 of its 5,000 µs
+    EXPECT_EQ(check.check(ramp(100).view(12'000)).gap_samples, 100);
+    EXPECT_EQ(check.counters().samples_dropped, 360 + 100 - 20);  // 10,000–11,000 µs
+  }
+  {
+    InputCheck check(config());
+    check.check(ramp(100).view(0));
+    check.check(ramp(100).view(4000, 50.0));  // "50 Hz": 4,000–2,004,000 µs
+    std::int64_t lost = 100;                  // 2,000–4,000 µs
+    for (std::int64_t utime = 6000; utime <= 104'000; utime += 4000) {  // every other one lost
+      check.check(ramp(100).view(utime));
+      lost += 100;
+    }
+    EXPECT_GE(check.counters().samples_dropped, lost - 100);
+    EXPECT_LE(check.counters().samples_dropped, lost + 100);
+  }
+}
+
+// restart() forgets a hole and a continuation: the new stream starts at its first block.
+TEST(InputCheck, RestartForgetsAHoleAndAContinuation) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  check.check(unequal(100).view(2000));  // a hole
+  check.restart();
+  const auto c = check.check(ramp(100).view(50'000));
+  EXPECT_EQ(c.gap_samples, 0);
+  EXPECT_EQ(check.counters().gaps, 0);
+  InputCheck continued(config());
+  continued.continue_after(2000);
+  continued.restart();
+  EXPECT_FALSE(continued.next_utime());
 }
 
 // A reload's successor takes over what its predecessor's rejected blocks covered.
@@ -523,7 +566,7 @@ TEST(InputCheck, AContinuedStreamCountsTheGapSinceItsPredecessorOnce) {
   {
     InputCheck check(config());
     check.continue_after(2000);
-    EXPECT_EQ(check.check(ramp(100).view(2000, 20000.0)).verdict, BlockVerdict::kRejected);
+    EXPECT_EQ(check.check(unequal(100).view(2000)).verdict, BlockVerdict::kRejected);
     EXPECT_EQ(check.check(ramp(100).view(4000)).gap_samples, 100);  // its slot
     EXPECT_EQ(check.counters().samples_dropped, 100);
   }
