@@ -21,6 +21,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kTwoPi = 2.0 * kPi;
 constexpr std::array<double, 3> kHumHarmonics = {1.0, 3.0, 5.0};
+/// spindle_speed_error searches the actual speed within this fraction of the commanded one.
+constexpr double kSpeedSearchFraction = 0.025;
 
 std::string format(const char* fmt, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
   char buf[256];
@@ -513,9 +515,9 @@ class Engine {
     // The same harmonics at every trial speed, all in the band at the fastest: were the top one
     // dropped above some speed, the energy would fall in a step there, which the search would
     // take for the maximum (and the curvature for a sharp one) when the speed lies beside it.
-    const int k_all = harmonics(commanded_rpm * 1.025);
+    const int k_all = harmonics(commanded_rpm * (1.0 + kSpeedSearchFraction));
     double best = commanded_rpm;
-    double lo_rel = -0.025, hi_rel = 0.025;
+    double lo_rel = -kSpeedSearchFraction, hi_rel = kSpeedSearchFraction;
     int k = std::min(k_all, std::max(1, flutes));
     double step = 0.0;
     while (true) {
@@ -1673,11 +1675,11 @@ Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
   }
   // The speed search reaches 2.5 % above the commanded speed, with the tooth-passing harmonic.
   const double tooth_hz = start.process.spindle_rpm / 60.0 * start.tool.flutes;
-  if (band < 1.025 * tooth_hz) {
+  if (band < (1.0 + kSpeedSearchFraction) * tooth_hz) {
     throw std::invalid_argument(format(
         "diagnose: the band (%.0f Hz) must hold the tooth-passing frequency 2.5 %% above the "
         "commanded speed (%.0f Hz)",
-        band, 1.025 * tooth_hz));
+        band, (1.0 + kSpeedSearchFraction) * tooth_hz));
   }
   for (const auto& name : options.candidates) {
     if (find_candidate(name) == nullptr) {

@@ -73,6 +73,26 @@ double noise_floor_rms(std::span<const double> x, std::size_t first, std::size_t
   return std::sqrt(sigma2 * 2.0 * static_cast<double>(last) / static_cast<double>(n));
 }
 
+namespace {
+
+/// acc[k] = Σ_n x_n·e^{−ik(θn + φ0)} for k = 0..acc.size() − 1: each sample's phasor raised
+/// harmonic by harmonic.
+void harmonic_sums(std::span<const double> x, double theta, double phase0_rad,
+                   std::span<std::complex<double>> acc) {
+  std::fill(acc.begin(), acc.end(), std::complex<double>{});
+  for (std::size_t n = 0; n < x.size(); ++n) {
+    const std::complex<double> e = std::polar(1.0, -(theta * static_cast<double>(n) + phase0_rad));
+    std::complex<double> p = x[n];
+    acc[0] += p;
+    for (std::size_t k = 1; k < acc.size(); ++k) {
+      p *= e;
+      acc[k] += p;
+    }
+  }
+}
+
+}  // namespace
+
 std::size_t synchronous_harmonics(std::span<const double> x, double sample_rate_hz,
                                   double spindle_hz, int harmonics,
                                   std::vector<std::complex<double>>& out, double phase0_rad) {
@@ -85,16 +105,8 @@ std::size_t synchronous_harmonics(std::span<const double> x, double sample_rate_
   const auto used =
       std::min(x.size(), static_cast<std::size_t>(std::llround(whole / revs_per_sample)));
   const double step = 2.0 * std::numbers::pi * revs_per_sample;
-  std::vector<std::complex<double>> acc(out.size(), {0.0, 0.0});
-  for (std::size_t n = 0; n < used; ++n) {
-    const std::complex<double> e = std::polar(1.0, -(step * static_cast<double>(n) + phase0_rad));
-    std::complex<double> p = x[n];
-    acc[0] += p;
-    for (int k = 1; k <= harmonics; ++k) {
-      p *= e;
-      acc[static_cast<std::size_t>(k)] += p;
-    }
-  }
+  std::vector<std::complex<double>> acc(out.size());
+  harmonic_sums(x.first(used), step, phase0_rad, acc);
   const auto u = static_cast<double>(used);
   out[0] = acc[0] / u;
   for (int k = 1; k <= harmonics; ++k) {
@@ -149,21 +161,11 @@ double harmonic_fit_energy(std::span<const std::vector<double>> signals, double 
   const std::size_t n = signals[0].size();
   const double theta = 2.0 * std::numbers::pi * spindle_hz / sample_rate_hz;
   const Eigen::LDLT<Eigen::MatrixXd> gram(harmonic_gram(theta, n, harmonics));
-  const auto k_count = static_cast<std::size_t>(harmonics);
-  std::vector<std::complex<double>> acc(k_count + 1);
+  std::vector<std::complex<double>> acc(static_cast<std::size_t>(harmonics) + 1);
   Eigen::VectorXd projection(2 * harmonics + 1);  // Hᵀx
   double energy = 0.0;
   for (const std::vector<double>& x : signals) {
-    std::fill(acc.begin(), acc.end(), std::complex<double>{});
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::complex<double> e = std::polar(1.0, -theta * static_cast<double>(i));
-      std::complex<double> p = x[i];
-      acc[0] += p;
-      for (std::size_t k = 1; k <= k_count; ++k) {
-        p *= e;
-        acc[k] += p;
-      }
-    }
+    harmonic_sums(x, theta, 0.0, acc);
     projection(0) = acc[0].real();
     for (int k = 1; k <= harmonics; ++k) {  // Σx·cos = Re, Σx·sin = −Im of Σx·e^{−ikθn}
       projection(2 * k - 1) = acc[static_cast<std::size_t>(k)].real();
