@@ -36,6 +36,13 @@ void RejectedSpans::add(std::int64_t begin_us, std::int64_t end_us, std::int64_t
   }
 }
 
+std::int64_t RejectedSpans::share(const Span& s, std::int64_t us) {
+  const std::int64_t length_us = s.end_us - s.begin_us;
+  return us == length_us ? s.samples
+                         : std::llround(static_cast<double>(s.samples) * static_cast<double>(us) /
+                                        static_cast<double>(length_us));
+}
+
 void RejectedSpans::join_closest() {
   std::size_t best = 0;
   for (std::size_t i = 1; i + 1 < count_; ++i) {
@@ -61,14 +68,10 @@ std::int64_t RejectedSpans::counted_within(std::int64_t from_us, std::int64_t to
     if (overlap_us <= 0) {
       continue;
     }
-    // The span's samples in the overlap (its share of them, all where the gap holds it), at most
-    // the stream samples the overlap takes; each span rounded on its own.
-    const double overlap = static_cast<double>(overlap_us);
-    const std::int64_t in_overlap = overlap_us == s.end_us - s.begin_us
-                                        ? s.samples
-                                        : std::llround(static_cast<double>(s.samples) * overlap /
-                                                       static_cast<double>(s.end_us - s.begin_us));
-    counted += std::min<std::int64_t>(in_overlap, std::llround(overlap * samples_per_us));
+    // The span's samples in the overlap, at most the stream samples the overlap takes; each
+    // span rounded on its own.
+    counted += std::min<std::int64_t>(
+        share(s, overlap_us), std::llround(static_cast<double>(overlap_us) * samples_per_us));
   }
   return counted;
 }
@@ -77,14 +80,9 @@ void RejectedSpans::forget_before(std::int64_t t_us) {
   std::size_t n = 0;
   for (std::size_t i = 0; i < count_; ++i) {
     const Span& s = spans_[i];
-    if (s.end_us > t_us) {
-      // Of a span the stream is inside, the part ahead keeps its share of the count.
-      const std::int64_t kept =
-          s.begin_us >= t_us
-              ? s.samples
-              : std::llround(static_cast<double>(s.samples) * static_cast<double>(s.end_us - t_us) /
-                             static_cast<double>(s.end_us - s.begin_us));
-      spans_[n++] = {std::max(s.begin_us, t_us), s.end_us, kept};
+    if (s.end_us > t_us) {  // of a span the stream is inside, the part ahead keeps its share
+      const std::int64_t begin_us = std::max(s.begin_us, t_us);
+      spans_[n++] = {begin_us, s.end_us, share(s, s.end_us - begin_us)};
     }
   }
   count_ = n;

@@ -40,6 +40,8 @@ class RejectedSpans {
     std::int64_t end_us = 0;
     std::int64_t samples = 0;
   };
+  /// The samples counted in `us` of a span's time, by time (all of them for the whole span).
+  [[nodiscard]] static std::int64_t share(const Span& s, std::int64_t us);
   /// Joins the two spans with the least time between them (count_ ≥ 2).
   void join_closest();
 
