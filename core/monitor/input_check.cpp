@@ -79,6 +79,9 @@ void InputCheck::continue_after(const InputCheck& predecessor) {
       next_us && predecessor.config_.sample_rate_hz == config_.sample_rate_hz) {
     continue_after(*next_us);
     rejected_ahead_ = predecessor.rejected_ahead_;
+    // A block rejected at its time just before the reload: the successor's first block follows
+    // the hole (its samples counted as dropped by the predecessor, the gap not yet).
+    hole_samples_ = predecessor.hole_samples_;
   }
 }
 
@@ -163,6 +166,7 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   }
 
   CheckedBlock out;
+  bool gap_counted = false;
   // When the block was due: after the stream's last block, or (its first after a reload) where
   // the predecessor's stream stopped; none for a new stream.
   if (const std::optional<std::int64_t> expected_us = next_utime()) {
@@ -174,6 +178,7 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     if (late > config_.tolerance_samples) {
       const auto missing = static_cast<std::int64_t>(std::llround(late));
       ++counters_.gaps;
+      gap_counted = true;
       counters_.samples_dropped += missing - counted_already(missing, *expected_us, block.utime_us);
       out.gap_samples = missing;
       if (started_) {
@@ -194,11 +199,13 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     start_sample_ = next_sample_;
     continued_from_utime_us_.reset();
   }
-  if (hole_samples_ > 0) {  // a rejected block's slot: a discontinuity, already counted
+  if (hole_samples_ > 0) {  // a rejected block's slot: a discontinuity, its samples counted
     out.gap_samples += hole_samples_;
-    ++counters_.gaps;
     hole_samples_ = 0;
-    out.problem = "samples of a rejected block missing before this one";
+    if (!gap_counted) {  // else one discontinuity: the hole and the samples missing after it
+      ++counters_.gaps;
+      out.problem = "samples of a rejected block missing before this one";
+    }
   }
 
   const std::array<std::span<const double>, 3> in = {block.fx_N, block.fy_N, block.fz_N};

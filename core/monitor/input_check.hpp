@@ -101,7 +101,8 @@ class InputCheck {
   /// timing starts at it; an earlier one (its predecessor had it) is rejected as out of order.
   void continue_after(std::int64_t next_utime_us) { continued_from_utime_us_ = next_utime_us; }
   /// continue_after() from a predecessor's stream at the same sample rate (nothing if it had
-  /// none), with what its rejected blocks ahead of that time covered (counted already).
+  /// none), with what its rejected blocks ahead of that time covered (counted already) and the
+  /// slot of one it rejected at its time just before (a gap before this check's first block).
   void continue_after(const InputCheck& predecessor);
 
  private:

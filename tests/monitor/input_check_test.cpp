@@ -151,6 +151,43 @@ TEST(InputCheck, ABlockRejectedAtItsTimeLeavesOneHoleCountedOnce) {
   EXPECT_EQ(check.counters().gaps, 1);
 }
 
+// A hole and samples missing after it are one discontinuity before the next good block.
+TEST(InputCheck, AHoleFollowedByAGapIsOneGap) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  EXPECT_EQ(check.check(unequal(100).view(2000)).verdict, BlockVerdict::kRejected);  // a hole
+  const auto next = check.check(ramp(100).view(4000 + 50 * 20));  // then 50 samples missing
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.gap_samples, 150);
+  EXPECT_EQ(next.first_sample, 250);
+  EXPECT_EQ(check.counters().samples_dropped, 150);
+  EXPECT_EQ(check.counters().gaps, 1);
+  EXPECT_EQ(check.utime_of(250), 5000);
+}
+
+// A hole just before a reload is the successor's gap: its first block reports it and counts it.
+TEST(InputCheck, AHoleBeforeAReloadIsCountedAsAGap) {
+  InputCheck before(config());
+  before.check(ramp(100).view(0));
+  before.check(unequal(100).view(2000));  // rejected at its time
+  EXPECT_EQ(before.counters().gaps, 0);
+  InputCheck after(config());
+  after.continue_after(before);
+  EXPECT_EQ(after.next_utime(), 4000);
+  const auto first = after.check(ramp(100).view(4000));
+  EXPECT_EQ(first.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(first.gap_samples, 100);
+  EXPECT_EQ(after.counters().gaps, 1);
+  EXPECT_EQ(before.counters().samples_dropped + after.counters().samples_dropped, 100);
+  // Late as well: still one gap, with both parts.
+  InputCheck late(config());
+  late.continue_after(before);
+  const auto first_late = late.check(ramp(100).view(4000 + 30 * 20));
+  EXPECT_EQ(first_late.gap_samples, 130);
+  EXPECT_EQ(late.counters().gaps, 1);
+  EXPECT_EQ(before.counters().samples_dropped + late.counters().samples_dropped, 130);
+}
+
 // A block rejected later than expected (malformed, after a drop) lies in the gap before the
 // next good block: its samples are counted once, as the rejected block's, not again in the gap.
 TEST(InputCheck, ABlockRejectedInsideAGapIsNotCountedTwice) {
