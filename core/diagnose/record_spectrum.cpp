@@ -75,18 +75,46 @@ double noise_floor_rms(std::span<const double> x, std::size_t first, std::size_t
 
 namespace {
 
+/// Samples between exact phasors in harmonic_sums(): the rotation's rounding grows by ~1e-16 a
+/// step, so a run drifts by ~3e-14 rad at most — below the rounding of θ·n itself (~1e-11 rad
+/// at n = 10⁶), which every phasor, exact or not, carries.
+constexpr std::size_t kExactPhasorEvery = 256;
+
 /// acc[k] = Σ_n x_n·e^{−ik(θn + φ0)} for k = 0..acc.size() − 1: each sample's phasor raised
-/// harmonic by harmonic.
+/// harmonic by harmonic. The phasor e^{−i(θn + φ0)} is computed (sin, cos) every
+/// kExactPhasorEvery samples and rotated by e^{−iθ} in between: a sin and a cos per sample were
+/// three quarters of a long record's speed search.
 void harmonic_sums(std::span<const double> x, double theta, double phase0_rad,
                    std::span<std::complex<double>> acc) {
+  // In real arithmetic: the products std::complex gives when no NaN comes out (the same values,
+  // bit for bit, without its check for one at every product). A complex<double> is an array of
+  // its real and imaginary parts ([complex.numbers]).
   std::fill(acc.begin(), acc.end(), std::complex<double>{});
-  for (std::size_t n = 0; n < x.size(); ++n) {
-    const std::complex<double> e = std::polar(1.0, -(theta * static_cast<double>(n) + phase0_rad));
-    std::complex<double> p = x[n];
-    acc[0] += p;
-    for (std::size_t k = 1; k < acc.size(); ++k) {
-      p *= e;
-      acc[k] += p;
+  if (acc.empty()) {
+    return;
+  }
+  auto* sums = reinterpret_cast<double*>(acc.data());  // re, im, re, im, …
+  const std::size_t harmonics = acc.size() - 1;
+  const double rot_re = std::cos(theta), rot_im = -std::sin(theta);
+  for (std::size_t start = 0; start < x.size(); start += kExactPhasorEvery) {
+    const std::size_t end = std::min(x.size(), start + kExactPhasorEvery);
+    const double phase = -(theta * static_cast<double>(start) + phase0_rad);
+    double e_re = std::cos(phase), e_im = std::sin(phase);
+    for (std::size_t n = start; n < end; ++n) {
+      double p_re = x[n], p_im = 0.0;
+      sums[0] += p_re;
+      for (std::size_t k = 1; k <= harmonics; ++k) {
+        const double next_re = p_re * e_re - p_im * e_im;
+        const double next_im = p_re * e_im + p_im * e_re;
+        p_re = next_re;
+        p_im = next_im;
+        sums[2 * k] += p_re;
+        sums[2 * k + 1] += p_im;
+      }
+      const double next_re = e_re * rot_re - e_im * rot_im;
+      const double next_im = e_re * rot_im + e_im * rot_re;
+      e_re = next_re;
+      e_im = next_im;
     }
   }
 }
