@@ -23,6 +23,10 @@ constexpr double kTwoPi = 2.0 * kPi;
 constexpr std::array<double, 3> kHumHarmonics = {1.0, 3.0, 5.0};
 /// spindle_speed_error searches the actual speed within this fraction of the commanded one.
 constexpr double kSpeedSearchFraction = 0.025;
+/// Revolutions beyond which the speed search's first grid runs on a leading part of the record
+/// (find_speed()): the records of a diagnosis are seconds long, rarely more than a thousand
+/// revolutions, and a longer one's search then takes time in proportion to its length.
+constexpr double kSpeedSearchRevolutions = 1000.0;
 
 std::string format(const char* fmt, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
   char buf[256];
@@ -501,7 +505,12 @@ class Engine {
   /// The actual speed: the synchronous energy's maximum within ±2.5 % of the commanded speed,
   /// with σ from its curvature. Coarse to fine: harmonic k's peak is 1/(k·revolutions) wide, so
   /// the search runs on the tooth-passing fundamental first (a grid of a quarter of its width),
-  /// then on 4× more harmonics around the best, then on all of them, then a golden section.
+  /// then on 4× more harmonics around the best, then on all of them, then a golden section. On
+  /// a record of more than kSpeedSearchRevolutions revolutions the first grid runs on its leading
+  /// quarter, sixteenth, … of at most that many, and each grid after it on a part 4× longer
+  /// around the best of the last, up to the whole record: the first grid's trials grow with the
+  /// revolutions it spans and each runs over every sample it holds, so on the whole of a long
+  /// record it took time as the square of the record's length.
   std::pair<double, double> find_speed(double commanded_rpm, const Evaluation& current,
                                        int flutes) {
     std::array<std::vector<double>, 2> y;
@@ -520,23 +529,39 @@ class Engine {
     double lo_rel = -kSpeedSearchFraction, hi_rel = kSpeedSearchFraction;
     int k = std::min(k_all, std::max(1, flutes));
     double step = 0.0;
-    while (true) {
-      step = 0.25 / (k * revs);
+    // A grid of trial speeds a quarter of harmonic k's peak width apart over [lo_rel, hi_rel]
+    // around the best so far, on signals spanning `span_revs` revolutions.
+    const auto grid = [&](const std::array<std::vector<double>, 2>& signals, double span_revs) {
+      step = 0.25 / (k * span_revs);
       double best_p = -1.0;
       const double centre = best;
       for (double rel = lo_rel; rel <= hi_rel + 1e-12; rel += step) {
         const double rpm = centre * (1.0 + rel);
-        const double p = sync_energy(rpm, y, k);
+        const double p = sync_energy(rpm, signals, k);
         if (p > best_p) {
           best_p = p;
           best = rpm;
         }
       }
+      lo_rel = -1.5 * step;
+      hi_rel = 1.5 * step;
+    };
+    int quarters = 0;  // the first grid on the record's leading 4^−quarters
+    while (revs / std::pow(4.0, quarters) > kSpeedSearchRevolutions) {
+      ++quarters;
+    }
+    for (int q = quarters; q > 0; --q) {
+      const auto length = static_cast<std::size_t>(static_cast<double>(n_) / std::pow(4.0, q));
+      const std::array<std::vector<double>, 2> part = {
+          std::vector<double>(y[0].begin(), y[0].begin() + static_cast<std::ptrdiff_t>(length)),
+          std::vector<double>(y[1].begin(), y[1].begin() + static_cast<std::ptrdiff_t>(length))};
+      grid(part, revs * static_cast<double>(length) / static_cast<double>(n_));
+    }
+    while (true) {
+      grid(y, revs);
       if (k >= k_all) {
         break;
       }
-      lo_rel = -1.5 * step;
-      hi_rel = 1.5 * step;
       k = std::min(k_all, 4 * k);
     }
     // Golden section on ±one step.
@@ -544,31 +569,45 @@ class Engine {
     const double g = 0.5 * (std::sqrt(5.0) - 1.0);
     double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
     double p1 = sync_energy(x1, y, k_all), p2 = sync_energy(x2, y, k_all);
-    for (int it = 0; it < 60 && hi - lo > 1e-9 * commanded_rpm; ++it) {
-      if (p1 > p2) {
-        hi = x2;
-        x2 = x1;
-        p2 = p1;
-        x1 = hi - g * (hi - lo);
-        p1 = sync_energy(x1, y, k_all);
-      } else {
-        lo = x1;
-        x1 = x2;
-        p1 = p2;
-        x2 = lo + g * (hi - lo);
-        p2 = sync_energy(x2, y, k_all);
+    const auto narrow = [&](double width_rpm) {
+      for (int it = 0; it < 60 && hi - lo > width_rpm; ++it) {
+        if (p1 > p2) {
+          hi = x2;
+          x2 = x1;
+          p2 = p1;
+          x1 = hi - g * (hi - lo);
+          p1 = sync_energy(x1, y, k_all);
+        } else {
+          lo = x1;
+          x1 = x2;
+          p1 = p2;
+          x2 = lo + g * (hi - lo);
+          p2 = sync_energy(x2, y, k_all);
+        }
       }
-    }
-    const double rpm = 0.5 * (lo + hi);
+    };
     // RSS(n) = Σy² − E(n): σ_n² = 2σ²/RSS''(n), σ² the per-sample noise variance.
-    const double h = 0.05 * step * commanded_rpm;
-    const double d2 = (sync_energy(rpm + h, y, k_all) - 2.0 * sync_energy(rpm, y, k_all) +
-                       sync_energy(rpm - h, y, k_all)) /
-                      (h * h);
     const double var = 0.5 * (floor_[0] * floor_[0] + floor_[1] * floor_[1]) *
                        static_cast<double>(n_fft_) / (2.0 * static_cast<double>(last_));
-    const double curvature = std::fabs(d2);
-    const double sigma = curvature > 0.0 ? std::sqrt(2.0 * var / curvature) : rpm;
+    const auto sigma_at = [&](double rpm) {
+      const double h = 0.05 * step * commanded_rpm;
+      const double d2 = (sync_energy(rpm + h, y, k_all) - 2.0 * sync_energy(rpm, y, k_all) +
+                         sync_energy(rpm - h, y, k_all)) /
+                        (h * h);
+      const double curvature = std::fabs(d2);
+      return curvature > 0.0 ? std::sqrt(2.0 * var / curvature) : rpm;
+    };
+    narrow(1e-9 * commanded_rpm);
+    double rpm = 0.5 * (lo + hi);
+    double sigma = sigma_at(rpm);
+    // σ falls as the record's length to the power −3/2, below 1e-9 of the speed from about 20 s
+    // of cutting: the search goes on to a tenth of it there, so that the speed errs by its σ
+    // and not by the search's last interval.
+    if (sigma > 0.0 && hi - lo > 0.1 * sigma) {
+      narrow(std::max(0.1 * sigma, 1e-13 * commanded_rpm));
+      rpm = 0.5 * (lo + hi);
+      sigma = sigma_at(rpm);
+    }
     return {rpm, sigma};
   }
 
