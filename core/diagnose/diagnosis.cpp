@@ -600,14 +600,17 @@ class Engine {
     narrow(1e-9 * commanded_rpm);
     double rpm = 0.5 * (lo + hi);
     double sigma = sigma_at(rpm);
-    // σ falls as the record's length to the power −3/2, below 1e-9 of the speed from about 20 s
-    // of cutting: the search goes on to a tenth of it there, so that the speed errs by its σ
-    // and not by the search's last interval.
+    // σ falls as the record's length to the power −3/2, below ten times the 1e-9 of the speed
+    // from about 5 s of cutting (below 1e-9 from about 20 s): the search goes on to a tenth of
+    // it there, so that the speed errs by its σ and not by the search's last interval.
     if (sigma > 0.0 && hi - lo > 0.1 * sigma) {
       narrow(std::max(0.1 * sigma, 1e-13 * commanded_rpm));
       rpm = 0.5 * (lo + hi);
       sigma = sigma_at(rpm);
     }
+    // Not below what the search resolved (a noise floor of 0 gives σ 0, a clean record's
+    // rounding can stop the search short of a tenth of σ): the last interval's RMS.
+    sigma = std::max(sigma, (hi - lo) / std::sqrt(12.0));
     return {rpm, sigma};
   }
 
