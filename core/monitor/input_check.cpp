@@ -82,6 +82,7 @@ void InputCheck::continue_after(const InputCheck& predecessor) {
     // A block rejected at its time just before the reload: the successor's first block follows
     // the hole (its samples counted as dropped by the predecessor, the gap not yet).
     hole_samples_ = predecessor.hole_samples_;
+    hole_start_utime_us_ = predecessor.hole_start_utime_us_;
   }
 }
 
@@ -121,6 +122,9 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   if (started_ && std::fabs(late) <= config_.tolerance_samples) {
     // A block rejected at its expected time leaves its slot empty: the next block follows the
     // hole without counting those samples again.
+    if (hole_samples_ == 0) {
+      hole_start_utime_us_ = *expected_us;
+    }
     next_sample_ += n;
     hole_samples_ += n;
     if (!rejected_ahead_.empty()) {
@@ -170,7 +174,21 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   // When the block was due: after the stream's last block, or (its first after a reload) where
   // the predecessor's stream stopped; none for a new stream.
   if (const std::optional<std::int64_t> expected_us = next_utime()) {
-    const double late = samples_late(block.utime_us, *expected_us);
+    double late = samples_late(block.utime_us, *expected_us);
+    if (late < -config_.tolerance_samples && hole_samples_ > 0) {
+      // Within the slot of a block rejected at its time: that block's length said more than the
+      // stream skipped (or its samples, at its own rate, lasted less than at the stream's). The
+      // hole ends at this block, which is not refused for it.
+      const double into_hole = samples_late(block.utime_us, hole_start_utime_us_);
+      if (into_hole >= -config_.tolerance_samples) {
+        const auto kept = std::max<std::int64_t>(0, std::llround(into_hole));
+        if (started_) {
+          next_sample_ -= hole_samples_ - kept;
+        }
+        hole_samples_ = kept;
+        late = 0.0;
+      }
+    }
     if (late < -config_.tolerance_samples) {  // a block the stream (or its predecessor) had
       ++counters_.out_of_order_blocks;
       return reject(block, "block older than expected (out of order or repeated)");

@@ -3,7 +3,8 @@
 // hands on a clean block. Nothing is thrown; everything is counted.
 //
 //  - malformed block (channels of unequal length, empty, too long, wrong sample rate): rejected;
-//    when it came at its expected time, its slot is a gap before the next block (counted once);
+//    when it came at its expected time, its slot is a gap before the next block (counted once),
+//    cut short by a block that comes within it (its length or rate said more than it lasted);
 //    when later (or before a reload's successor has a block), the stream's time stays (a corrupt
 //    utime must refuse no good block after it), and a gap over it does not count it again
 //  - block whose utime is beyond ±kMaxAbsUtime_us (a corrupt time: a block from the network can
@@ -123,8 +124,9 @@ class InputCheck {
   std::int64_t start_utime_us_ = 0;  // utime of sample start_sample_
   std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
-  std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
-  RejectedSpans rejected_ahead_;   // blocks rejected at or after the time expected
+  std::int64_t hole_samples_ = 0;         // slot of a block rejected at its expected time
+  std::int64_t hole_start_utime_us_ = 0;  // where that slot (or a run of them) began
+  RejectedSpans rejected_ahead_;          // blocks rejected at or after the time expected
   std::optional<std::int64_t> continued_from_utime_us_;  // continue_after(), until the first block
   std::array<double, 3> last_good_{};
   // max_block_samples each, left uninitialised (not 1.5 MiB zeroed at construction for the

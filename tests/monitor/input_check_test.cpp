@@ -165,6 +165,59 @@ TEST(InputCheck, AHoleFollowedByAGapIsOneGap) {
   EXPECT_EQ(check.utime_of(250), 5000);
 }
 
+// A block rejected at its time whose length or rate says more than the stream skipped: the next
+// good block, within that slot, cuts the hole short instead of being refused as out of order
+// (with the hole's full length, every good block for 1.4 s after it was).
+TEST(InputCheck, ABlockWithinAHoleCutsItShort) {
+  InputCheck check(config());
+  check.check(ramp(100).view(0));
+  const auto longer = check.check(ramp(70'000).view(2000));  // beyond max_block_samples
+  EXPECT_EQ(longer.verdict, BlockVerdict::kRejected);
+  const auto next = check.check(ramp(100).view(4000));  // 100 samples after the first block
+  EXPECT_EQ(next.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(next.gap_samples, 100);
+  EXPECT_EQ(next.first_sample, 200);
+  EXPECT_EQ(check.counters().gaps, 1);
+  EXPECT_EQ(check.counters().out_of_order_blocks, 0);
+  EXPECT_EQ(check.counters().samples_dropped, 70'000);  // the rejected block's own samples
+  EXPECT_EQ(check.check(ramp(100).view(6000)).verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(check.utime_of(300), 6000);
+
+  // 100 samples at twice the rate last 1 ms, not 2: the block after them is not refused.
+  InputCheck rate(config());
+  rate.check(ramp(100).view(0));
+  EXPECT_EQ(rate.check(ramp(100).view(2000, 100000.0)).verdict, BlockVerdict::kRejected);
+  const auto after = rate.check(ramp(100).view(3000));
+  EXPECT_EQ(after.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(after.gap_samples, 50);
+  EXPECT_EQ(after.first_sample, 150);
+  EXPECT_EQ(rate.counters().gaps, 1);
+  EXPECT_EQ(rate.counters().samples_dropped, 100);
+
+  // A block before the hole is still out of order; one where the hole began ends it at once.
+  InputCheck again(config());
+  again.check(ramp(100).view(0));
+  again.check(unequal(100).view(2000));
+  EXPECT_EQ(again.check(ramp(100).view(0)).verdict, BlockVerdict::kRejected);
+  EXPECT_EQ(again.counters().out_of_order_blocks, 1);
+  const auto resent = again.check(ramp(100).view(2000));
+  EXPECT_EQ(resent.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(resent.gap_samples, 0);
+  EXPECT_EQ(resent.first_sample, 100);
+  EXPECT_EQ(again.counters().gaps, 0);
+
+  // Across a reload, the successor's first block within the hole ends it too.
+  InputCheck before(config());
+  before.check(ramp(100).view(0));
+  before.check(ramp(70'000).view(2000));
+  InputCheck successor(config());
+  successor.continue_after(before);
+  const auto first = successor.check(ramp(100).view(2000 + 30 * 20));
+  EXPECT_EQ(first.verdict, BlockVerdict::kAccepted);
+  EXPECT_EQ(first.gap_samples, 30);
+  EXPECT_EQ(successor.counters().gaps, 1);
+}
+
 // A hole just before a reload is the successor's gap: its first block reports it and counts it.
 TEST(InputCheck, AHoleBeforeAReloadIsCountedAsAGap) {
   InputCheck before(config());
