@@ -119,6 +119,11 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   const double late = expected_us && plausible_utime(block.utime_us)
                           ? samples_late(block.utime_us, *expected_us)
                           : -std::numeric_limits<double>::infinity();
+  // Within an open hole (before the time expected after it): a good block there would cut the
+  // hole short (check()), and the gap after that block must find this one's samples counted.
+  const bool within_hole =
+      hole_samples_ > 0 && plausible_utime(block.utime_us) &&
+      samples_late(block.utime_us, hole_start_utime_us_) >= -config_.tolerance_samples;
   if (started_ && std::fabs(late) <= config_.tolerance_samples) {
     // A block rejected at its expected time leaves its slot empty: the next block follows the
     // hole without counting those samples again.
@@ -127,14 +132,14 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
     }
     next_sample_ += n;
     hole_samples_ += n;
-    if (!rejected_ahead_.empty()) {
-      rejected_ahead_.forget_before(utime_of(next_sample_));
+    if (!rejected_ahead_.empty()) {  // the spans within the hole stay: it may be cut short
+      rejected_ahead_.forget_before(hole_start_utime_us_);
     }
-  } else if (late >= -config_.tolerance_samples) {
-    // Later than expected, or before a continued stream's first block: the stream's time stays
-    // where it was (one corrupt utime must not refuse the good blocks after it, nor a good block
-    // at the same time be refused), and the gap before the next block does not count these
-    // samples again.
+  } else if (late >= -config_.tolerance_samples || within_hole) {
+    // Later than expected, or before a continued stream's first block, or within a hole: the
+    // stream's time stays where it was (one corrupt utime must not refuse the good blocks after
+    // it, nor a good block at the same time be refused), and the gap before the next block does
+    // not count these samples again.
     const double tolerance_us = config_.tolerance_samples * 1e6 / config_.sample_rate_hz;
     // Its span at its own rate (a sender at another rate sends contiguous blocks at it); a rate
     // in a header rejected for it may be corrupt, but a gap takes at most the span's samples,

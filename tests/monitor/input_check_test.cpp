@@ -206,6 +206,27 @@ TEST(InputCheck, ABlockWithinAHoleCutsItShort) {
   EXPECT_EQ(resent.first_sample, 100);
   EXPECT_EQ(again.counters().gaps, 0);
 
+  // A block rejected later than expected, then the too long block, then a good one within its
+  // slot: the gap before the next good block finds the first one's samples counted once, whether
+  // it came before the too long block or within its slot.
+  for (const bool late_block_first : {true, false}) {
+    InputCheck spans(config());
+    spans.check(ramp(100).view(0));
+    if (late_block_first) {
+      spans.check(unequal(100).view(4000));  // 100 samples late: covers 4,000–6,000 µs
+    }
+    spans.check(ramp(70'000).view(2000));  // at its time, too long
+    if (!late_block_first) {
+      spans.check(unequal(100).view(4000));  // within the long block's slot
+    }
+    EXPECT_EQ(spans.check(ramp(100).view(2000)).gap_samples, 0);  // at the hole's start
+    const auto later = spans.check(ramp(100).view(6000));         // after 4,000–6,000 µs
+    EXPECT_EQ(later.verdict, BlockVerdict::kAccepted);
+    EXPECT_EQ(later.gap_samples, 100);
+    EXPECT_EQ(spans.counters().samples_dropped, 70'100) << late_block_first;
+    EXPECT_EQ(spans.counters().gaps, 1);
+  }
+
   // Across a reload, the successor's first block within the hole ends it too.
   InputCheck before(config());
   before.check(ramp(100).view(0));
