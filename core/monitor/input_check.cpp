@@ -86,6 +86,14 @@ void InputCheck::continue_after(const InputCheck& predecessor) {
   }
 }
 
+std::optional<double> InputCheck::samples_into_hole(std::int64_t utime_us) const {
+  if (hole_samples_ == 0) {
+    return std::nullopt;
+  }
+  const double into = samples_late(utime_us, hole_start_utime_us_);
+  return into >= -config_.tolerance_samples ? std::optional<double>(into) : std::nullopt;
+}
+
 std::int64_t InputCheck::duration_us(std::int64_t samples, double rate_hz) const {
   // A block's own rate within a factor 1000 of the configured one (≥ 1 Hz), else the configured
   // rate: at most 2³¹ samples last within 2⁵¹ µs, no overflow added to a utime within ±2⁵³.
@@ -122,8 +130,7 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
   // Within an open hole (before the time expected after it): a good block there would cut the
   // hole short (check()), and the gap after that block must find this one's samples counted.
   const bool within_hole =
-      hole_samples_ > 0 && plausible_utime(block.utime_us) &&
-      samples_late(block.utime_us, hole_start_utime_us_) >= -config_.tolerance_samples;
+      plausible_utime(block.utime_us) && samples_into_hole(block.utime_us).has_value();
   if (started_ && std::fabs(late) <= config_.tolerance_samples) {
     // A block rejected at its expected time leaves its slot empty: the next block follows the
     // hole without counting those samples again.
@@ -180,13 +187,12 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
   // the predecessor's stream stopped; none for a new stream.
   if (const std::optional<std::int64_t> expected_us = next_utime()) {
     double late = samples_late(block.utime_us, *expected_us);
-    if (late < -config_.tolerance_samples && hole_samples_ > 0) {
+    if (late < -config_.tolerance_samples) {
       // Within the slot of a block rejected at its time: that block's length said more than the
       // stream skipped (or its samples, at its own rate, lasted less than at the stream's). The
       // hole ends at this block, which is not refused for it.
-      const double into_hole = samples_late(block.utime_us, hole_start_utime_us_);
-      if (into_hole >= -config_.tolerance_samples) {
-        const auto kept = std::max<std::int64_t>(0, std::llround(into_hole));
+      if (const std::optional<double> into_hole = samples_into_hole(block.utime_us)) {
+        const auto kept = std::max<std::int64_t>(0, std::llround(*into_hole));
         if (started_) {
           next_sample_ -= hole_samples_ - kept;
         }

@@ -115,6 +115,10 @@ class InputCheck {
   [[nodiscard]] std::int64_t counted_already(std::int64_t missing, std::int64_t expected_us,
                                              std::int64_t utime_us) const;
 
+  /// With a hole open, how many samples after its start `utime_us` lies, when at or after it
+  /// (within the tolerance); else none.
+  [[nodiscard]] std::optional<double> samples_into_hole(std::int64_t utime_us) const;
+
   /// How many samples later than `expected_utime_us` a block at `utime_us` comes (< 0: earlier).
   [[nodiscard]] double samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const;
 

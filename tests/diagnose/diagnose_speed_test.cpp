@@ -13,6 +13,7 @@
 #include <complex>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -25,23 +26,38 @@
 namespace millwatch::diagnose {
 namespace {
 
+/// The spindle_rpm the diagnosis finds in a record with the speed alone as candidate (one step,
+/// no systematic refit); none, with the failure added, when it names not just that.
+std::optional<Parameter> diagnosed_speed(const CutRecord& record, const model::ModelConfig& start) {
+  DiagnoseOptions options;
+  options.candidates = {"spindle_speed_error"};
+  options.max_steps = 1;
+  options.uncertainties = false;
+  const Diagnosis d = diagnose(record, start, options);
+  if (!d.ok) {
+    ADD_FAILURE() << d.message;
+    return std::nullopt;
+  }
+  if (d.named_effects.size() != 1U) {
+    ADD_FAILURE() << d.verdict;
+    return std::nullopt;
+  }
+  for (const auto& p : d.steps.front().parameters) {
+    if (p.name == "spindle_rpm") {
+      return p;
+    }
+  }
+  ADD_FAILURE() << "no spindle_rpm among the step's parameters";
+  return std::nullopt;
+}
+
 TEST(DiagnoseSpeed, ScattersAboutTheTruthAsItsSigmaSays) {
   constexpr int kSeeds = 12;
   double sum_error = 0.0, sum_error2 = 0.0, sum_z = 0.0, sum_z2 = 0.0;
   for (unsigned seed = 1; seed <= kSeeds; ++seed) {
     const auto cut = test::hidden_effect_cut({"spindle_speed_error"}, {}, 0.4, 20000.0, seed);
-    DiagnoseOptions options;
-    options.candidates = {"spindle_speed_error"};
-    options.max_steps = 1;
-    options.uncertainties = false;
-    const Diagnosis d = diagnose(cut.record, cut.start, options);
-    ASSERT_TRUE(d.ok) << d.message;
-    ASSERT_EQ(d.named_effects.size(), 1U) << d.verdict;
-    const Parameter* speed = nullptr;
-    for (const auto& p : d.steps.front().parameters) {
-      speed = p.name == "spindle_rpm" ? &p : speed;
-    }
-    ASSERT_NE(speed, nullptr);
+    const std::optional<Parameter> speed = diagnosed_speed(cut.record, cut.start);
+    ASSERT_TRUE(speed);
     ASSERT_GT(speed->sigma, 0.0);
     const double error = speed->value - cut.scenario.spindle.actual_rpm;
     std::printf("seed %2u: %.4f ± %.4f rpm, %+.4f rpm (%+.1f σ)\n", seed, speed->value,
@@ -95,18 +111,8 @@ TEST(DiagnoseSpeed, ALongRecordsSpeedIsFoundToItsSigma) {
         record.force_N[a][n] = v;
       }
     }
-    DiagnoseOptions options;
-    options.candidates = {"spindle_speed_error"};
-    options.max_steps = 1;
-    options.uncertainties = false;
-    const Diagnosis d = diagnose(record, cut.start, options);
-    ASSERT_TRUE(d.ok) << d.message;
-    ASSERT_EQ(d.named_effects.size(), 1U) << d.verdict;
-    const Parameter* speed = nullptr;
-    for (const auto& p : d.steps.front().parameters) {
-      speed = p.name == "spindle_rpm" ? &p : speed;
-    }
-    ASSERT_NE(speed, nullptr);
+    const std::optional<Parameter> speed = diagnosed_speed(record, cut.start);
+    ASSERT_TRUE(speed);
     const double error = speed->value - truth_rpm;
     std::printf("%.7f ± %.2e rpm, %+.2e rpm (%+.2f σ)\n", speed->value, speed->sigma, error,
                 error / speed->sigma);
