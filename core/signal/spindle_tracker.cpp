@@ -9,7 +9,7 @@
 
 #include "core/config/json_reader.hpp"
 #include "core/signal/fftw_planner.hpp"
-#include "core/signal/order_statistic.hpp"
+#include "core/signal/harmonic_floors.hpp"
 
 namespace millwatch::signal {
 namespace {
@@ -171,10 +171,8 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
     hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
   }
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
-  floor_bin_.assign(fft_size_ / 2 + 1, 0);
+  floors_.resize(fft_size_ / 2 + 1);
   past_.assign(window_ / hop_ + 2, Past{});
-  scratch_.assign(fft_size_ / 2 + 1, 0.0);
-  floor_scratch_.assign(fft_size_ / 2 + 1, 0.0);
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
   {
@@ -309,13 +307,7 @@ void SpindleTracker::update() {
   const std::size_t last_bin =
       std::min(magnitude_.size() - 1,
                static_cast<std::size_t>(std::lround(harmonics_ * harmonic_bins)) + reach + 1);
-  const double per_bin = 1.0 / harmonic_bins;
-  for (std::size_t c = 1; c <= last_bin; ++c) {
-    const double x = static_cast<double>(c) * per_bin;  // in harmonics
-    // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
-    const double fraction = x - static_cast<double>(static_cast<std::int64_t>(x));
-    floor_bin_[c] = std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe ? 1 : 0;
-  }
+  floors_.prepare(magnitude_, harmonic_bins, lobe, last_bin);
   double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, sum_peak = 0.0, sum_floor = 0.0;
   int used = 0;
   for (int h = 1; h <= harmonics_; ++h) {
@@ -330,17 +322,11 @@ void SpindleTracker::update() {
       }
     }
     const std::size_t from = center > reach + 1 ? center - reach : 1;
-    const std::size_t to = std::min(magnitude_.size() - 1, center + reach);
-    std::size_t count = 0;  // the floor bins, gathered without a branch per bin
-    for (std::size_t c = from; c <= std::min(to, last_bin); ++c) {
-      scratch_[count] = magnitude_[c];
-      count += floor_bin_[c];
-    }
-    if (count < 8) {
+    const std::size_t to = std::min({magnitude_.size() - 1, center + reach, last_bin});
+    if (floors_.count(from, to) < 8) {
       continue;
     }
-    const double floor =
-        std::max(kth_smallest(std::span(scratch_).first(count), count / 2, floor_scratch_), 1e-300);
+    const double floor = std::max(floors_.median(from, to), 1e-300);
     const double m = magnitude_[k];
     sum_peak += m;
     sum_floor += floor;

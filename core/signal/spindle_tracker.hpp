@@ -51,6 +51,7 @@
 #include <string>
 #include <vector>
 
+#include "core/signal/harmonic_floors.hpp"
 #include "core/signal/phase_model.hpp"
 
 namespace millwatch::signal {
@@ -157,9 +158,7 @@ class SpindleTracker {
   std::vector<double> ring_;  // the last window_ samples
   std::vector<double> hann_;
   std::vector<double> magnitude_;
-  std::vector<double> scratch_;          // for the median
-  std::vector<double> floor_scratch_;    // kth_smallest()'s second buffer
-  std::vector<std::uint8_t> floor_bin_;  // per bin: outside every harmonic's lobe (update())
+  HarmonicFloors floors_;  // the harmonics' noise floors (update())
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
   fftw_plan plan_ = nullptr;
