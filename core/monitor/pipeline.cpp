@@ -337,7 +337,9 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
   // Every decimation_-th measuring sample's magnitude to the tracker, a batch per call
   // (run_limit(): only the run's last sample can start an update).
   bool updated = false;
-  std::array<double, 64> magnitudes{};
+  // Not zeroed (only what is written is read): zeroing its 512 bytes took a quarter of this
+  // function at 50 kHz, one `rep stos` per block.
+  std::array<double, 64> magnitudes;
   std::size_t batch = 0;
   for (auto i = static_cast<std::size_t>(decimation_phase_); i < count;
        i += static_cast<std::size_t>(decimation_)) {
