@@ -16,9 +16,16 @@
 #include <cstdint>
 
 #include "core/monitor/extremum.hpp"
+#include "core/signal/cpu_features.hpp"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+// The extremes' pass keeps all four channels in one 256-bit register: an AVX kernel, compiled
+// for AVX alone (target attribute) and run only where the CPU has it.
+#if defined(__SSE2__) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#define MILLWATCH_ROW_EXTREMES_AVX 1
+#include <immintrin.h>
 #endif
 
 namespace millwatch::monitor {
@@ -53,17 +60,32 @@ struct RevolutionMeasurement {
   bool bounded = false;
 };
 
-/// Extremes of the four channels of a row (fx, fy, fz, fx² + fy²) over samples [from, to].
+/// Extremes of the four channels of a row (fx, fy, fz, fx² + fy²) over samples [from, to], and
+/// where each channel's peak is first reached: fx, fy and fz's extreme of largest magnitude (the
+/// highest where the two magnitudes are equal), the resultant's square's highest.
 struct RowExtremes {
   std::array<double, 4> lowest{};
   std::array<double, 4> highest{};
+  std::array<std::int64_t, 4> peak_at{};
 };
+
+/// Channel c's peak (see RowExtremes::peak_at) among its extremes.
+inline double row_peak(const RowExtremes& x, std::size_t c) {
+  return c < 3 && std::fabs(x.lowest[c]) > std::fabs(x.highest[c]) ? x.lowest[c] : x.highest[c];
+}
+
+/// For each channel c, the first sample in [from, to] whose value equals target[c] (from if none:
+/// a NaN), in one pass that ends when all four are found.
+template <typename Rows>
+std::array<std::int64_t, 4> first_equal(const Rows& row, std::int64_t from, std::int64_t to,
+                                        const std::array<double, 4>& target);
 
 /// `row(n)` returns the four channels of absolute sample n side by side. One pass of
 /// minimum/maximum (two channels per SSE2 register: the same comparisons as `v < lowest ? v :
-/// lowest`, so the same values, bit for bit).
+/// lowest`, so the same values, bit for bit), then a short scan for the first sample at each
+/// peak.
 template <typename Rows>
-RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to) {
+RowExtremes row_extremes_sse2(const Rows& row, std::int64_t from, std::int64_t to) {
   RowExtremes e;
 #if defined(__SSE2__)
   const double* r = row(from);
@@ -96,11 +118,64 @@ RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to) {
     }
   }
 #endif
+  e.peak_at =
+      first_equal(row, from, to, {row_peak(e, 0), row_peak(e, 1), row_peak(e, 2), e.highest[3]});
   return e;
 }
 
-/// For each channel c, the first sample in [from, to] whose value equals target[c] (from if none:
-/// a NaN), in one pass that ends when all four are found.
+#if defined(MILLWATCH_ROW_EXTREMES_AVX)
+/// row_extremes_sse2() in one pass: the four channels in one register, and with each extreme the
+/// sample it was last replaced at (a strict new extreme), which is the first sample at it: what
+/// first_equal() would find. The same comparisons, so the same values and samples, bit for bit.
+/// Sample numbers ride as doubles (exact below 2⁵³).
+template <typename Rows>
+__attribute__((target("avx"))) RowExtremes row_extremes_avx(const Rows& row, std::int64_t from,
+                                                            std::int64_t to) {
+  __m256d low = _mm256_loadu_pd(row(from)), high = low;
+  double n_d = static_cast<double>(from);
+  __m256d low_at = _mm256_set1_pd(n_d), high_at = low_at;
+  for (std::int64_t n = from + 1; n <= to; ++n) {
+    const __m256d v = _mm256_loadu_pd(row(n));
+    n_d += 1.0;
+    const __m256d at = _mm256_set1_pd(n_d);
+    // minpd(v, low) is v < low ? v : low; maxpd(v, high) is v > high ? v : high. The sample
+    // numbers are picked by the masks bit by bit (a blend instruction, GCC 12 turns into a branch
+    // per lane).
+    const __m256d lower = _mm256_cmp_pd(v, low, _CMP_LT_OQ);
+    const __m256d higher = _mm256_cmp_pd(v, high, _CMP_GT_OQ);
+    low_at = _mm256_or_pd(_mm256_and_pd(lower, at), _mm256_andnot_pd(lower, low_at));
+    high_at = _mm256_or_pd(_mm256_and_pd(higher, at), _mm256_andnot_pd(higher, high_at));
+    low = _mm256_min_pd(v, low);
+    high = _mm256_max_pd(v, high);
+  }
+  RowExtremes e;
+  std::array<double, 4> lowest_at{}, highest_at{};
+  _mm256_storeu_pd(e.lowest.data(), low);
+  _mm256_storeu_pd(e.highest.data(), high);
+  _mm256_storeu_pd(lowest_at.data(), low_at);
+  _mm256_storeu_pd(highest_at.data(), high_at);
+  for (std::size_t c = 0; c < 4; ++c) {
+    const bool lowest = c < 3 && std::fabs(e.lowest[c]) > std::fabs(e.highest[c]);
+    e.peak_at[c] = static_cast<std::int64_t>(lowest ? lowest_at[c] : highest_at[c]);
+  }
+  return e;
+}
+#endif
+
+/// The extremes and peak samples of [from, to]: row_extremes_avx() where the CPU has AVX (and
+/// `allow_avx`: the tests compare the two), else row_extremes_sse2().
+template <typename Rows>
+RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to,
+                         bool allow_avx = true) {
+#if defined(MILLWATCH_ROW_EXTREMES_AVX)
+  if (allow_avx && signal::cpu_has_avx()) {
+    return row_extremes_avx(row, from, to);
+  }
+#endif
+  (void)allow_avx;
+  return row_extremes_sse2(row, from, to);
+}
+
 template <typename Rows>
 std::array<std::int64_t, 4> first_equal(const Rows& row, std::int64_t from, std::int64_t to,
                                         const std::array<double, 4>& target) {
@@ -150,15 +225,10 @@ void measure_revolution(const Rows& row, double sample_rate_hz, RevolutionMeasur
     m.flute_period_s[uj] = (m.event_sample[uj + 1] - m.event_sample[uj]) * dt;
     const auto from = static_cast<std::int64_t>(std::ceil(m.boundary_sample[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(m.boundary_sample[uj + 1]));
-    const RowExtremes x = row_extremes(row, from, to);
     // The sample each peak is refined at: fx, fy, fz's of largest magnitude, the resultant's
     // largest square.
-    std::array<double, 4> extreme{};
-    for (std::size_t c = 0; c < 3; ++c) {
-      extreme[c] = std::fabs(x.lowest[c]) > std::fabs(x.highest[c]) ? x.lowest[c] : x.highest[c];
-    }
-    extreme[3] = x.highest[3];
-    const std::array<std::int64_t, 4> at = first_equal(row, from, to, extreme);
+    const RowExtremes x = row_extremes(row, from, to);
+    const std::array<std::int64_t, 4>& at = x.peak_at;
     for (std::size_t c = 0; c < 3; ++c) {
       auto value = [&](std::int64_t n) { return row(n)[c]; };
       const std::int64_t best = at[c];
