@@ -308,6 +308,19 @@ class Conditioner {
     envelope_sq_ = envelope_sq;
     // The first sample of the run on the caller's grid.
     const auto step = static_cast<std::size_t>(stride_);
+    if (step == 1) {
+      // A channel at a time: one loop over three arrays that may alias (for all the compiler
+      // knows) stays scalar; each of these is vectorised.
+      const auto subtract = [count](double* v, double tare) {
+        for (std::size_t i = 0; i < count; ++i) {
+          v[i] -= tare;
+        }
+      };
+      subtract(fx, tx);
+      subtract(fy, ty);
+      subtract(fz, tz);
+      return;
+    }
     for (std::size_t i = first_on_grid(first); i < count; i += step) {
       fx[i] -= tx;
       fy[i] -= ty;
