@@ -73,6 +73,15 @@ TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
       windows.emplace_back(center > reach + 1 ? center - reach : 1,
                            std::min(center + reach, last_bin));
     }
+    // Windows of exactly one to five whole runs (the floor bins between harmonics j and j + 1
+    // are run j): each of the merged runs' ways.
+    for (int j = 0; (j + 1) * harmonic_bins < static_cast<double>(last_bin); ++j) {
+      for (int runs = 1; runs <= 5; ++runs) {
+        const auto from = std::max<std::size_t>(1, static_cast<std::size_t>(j * harmonic_bins));
+        const auto to = static_cast<std::size_t>((j + runs) * harmonic_bins);
+        windows.emplace_back(from, std::min(to, last_bin));
+      }
+    }
     for (int r = 0; r < 20; ++r) {
       const auto a = 1 + static_cast<std::size_t>(uniform(rng) * static_cast<double>(last_bin));
       const auto b = 1 + static_cast<std::size_t>(uniform(rng) * static_cast<double>(last_bin));
