@@ -69,16 +69,49 @@ struct RowExtremes {
   std::array<std::int64_t, 4> peak_at{};
 };
 
-/// Channel c's peak (see RowExtremes::peak_at) among its extremes.
+/// Whether channel c's peak (see RowExtremes::peak_at) is its lowest value, not its highest.
+inline bool peak_is_lowest(const RowExtremes& x, std::size_t c) {
+  return c < 3 && std::fabs(x.lowest[c]) > std::fabs(x.highest[c]);
+}
+
+/// Channel c's peak among its extremes.
 inline double row_peak(const RowExtremes& x, std::size_t c) {
-  return c < 3 && std::fabs(x.lowest[c]) > std::fabs(x.highest[c]) ? x.lowest[c] : x.highest[c];
+  return peak_is_lowest(x, c) ? x.lowest[c] : x.highest[c];
 }
 
 /// For each channel c, the first sample in [from, to] whose value equals target[c] (from if none:
 /// a NaN), in one pass that ends when all four are found.
 template <typename Rows>
 std::array<std::int64_t, 4> first_equal(const Rows& row, std::int64_t from, std::int64_t to,
-                                        const std::array<double, 4>& target);
+                                        const std::array<double, 4>& target) {
+  std::array<std::int64_t, 4> at{from, from, from, from};
+  unsigned found = 0;  // bit c: channel c's sample is known
+#if defined(__SSE2__)
+  const __m128d t_xy = _mm_loadu_pd(&target[0]);
+  const __m128d t_zq = _mm_loadu_pd(&target[2]);
+  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
+    const double* r = row(n);
+    const auto equal =
+        static_cast<unsigned>(_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r), t_xy)) |
+                              (_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r + 2), t_zq)) << 2));
+#else
+  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
+    const double* r = row(n);
+    unsigned equal = 0;
+    for (unsigned c = 0; c < 4; ++c) {
+      equal |= r[c] == target[c] ? 1U << c : 0U;
+    }
+#endif
+    unsigned fresh = equal & ~found;
+    found |= fresh;
+    for (std::size_t c = 0; fresh != 0; ++c, fresh >>= 1) {
+      if ((fresh & 1U) != 0) {
+        at[c] = n;
+      }
+    }
+  }
+  return at;
+}
 
 /// `row(n)` returns the four channels of absolute sample n side by side. One pass of
 /// minimum/maximum (two channels per SSE2 register: the same comparisons as `v < lowest ? v :
@@ -119,7 +152,7 @@ RowExtremes row_extremes_sse2(const Rows& row, std::int64_t from, std::int64_t t
   }
 #endif
   e.peak_at =
-      first_equal(row, from, to, {row_peak(e, 0), row_peak(e, 1), row_peak(e, 2), e.highest[3]});
+      first_equal(row, from, to, {row_peak(e, 0), row_peak(e, 1), row_peak(e, 2), row_peak(e, 3)});
   return e;
 }
 
@@ -155,8 +188,7 @@ __attribute__((target("avx"))) RowExtremes row_extremes_avx(const Rows& row, std
   _mm256_storeu_pd(lowest_at.data(), low_at);
   _mm256_storeu_pd(highest_at.data(), high_at);
   for (std::size_t c = 0; c < 4; ++c) {
-    const bool lowest = c < 3 && std::fabs(e.lowest[c]) > std::fabs(e.highest[c]);
-    e.peak_at[c] = static_cast<std::int64_t>(lowest ? lowest_at[c] : highest_at[c]);
+    e.peak_at[c] = static_cast<std::int64_t>(peak_is_lowest(e, c) ? lowest_at[c] : highest_at[c]);
   }
   return e;
 }
@@ -176,44 +208,12 @@ RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to,
   return row_extremes_sse2(row, from, to);
 }
 
-template <typename Rows>
-std::array<std::int64_t, 4> first_equal(const Rows& row, std::int64_t from, std::int64_t to,
-                                        const std::array<double, 4>& target) {
-  std::array<std::int64_t, 4> at{from, from, from, from};
-  unsigned found = 0;  // bit c: channel c's sample is known
-#if defined(__SSE2__)
-  const __m128d t_xy = _mm_loadu_pd(&target[0]);
-  const __m128d t_zq = _mm_loadu_pd(&target[2]);
-  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
-    const double* r = row(n);
-    const auto equal =
-        static_cast<unsigned>(_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r), t_xy)) |
-                              (_mm_movemask_pd(_mm_cmpeq_pd(_mm_loadu_pd(r + 2), t_zq)) << 2));
-#else
-  for (std::int64_t n = from; n <= to && found != 0xFU; ++n) {
-    const double* r = row(n);
-    unsigned equal = 0;
-    for (unsigned c = 0; c < 4; ++c) {
-      equal |= r[c] == target[c] ? 1U << c : 0U;
-    }
-#endif
-    unsigned fresh = equal & ~found;
-    found |= fresh;
-    for (std::size_t c = 0; fresh != 0; ++c, fresh >>= 1) {
-      if ((fresh & 1U) != 0) {
-        at[c] = n;
-      }
-    }
-  }
-  return at;
-}
-
 /// Measures one revolution. `row(n)` returns the four channels of absolute sample n side by side
 /// (fx, fy, fz and the squared in-plane force fx² + fy², as the pipeline's ring holds them) for
 /// every n in [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the events, the
-/// boundaries and validity already; the periods and forces are filled in. Per flute window one
-/// pass finds every channel's extremes, then a short scan the first sample at the extreme each
-/// peak is refined at (the sample a pass tracking strict new extremes would keep).
+/// boundaries and validity already; the periods and forces are filled in. Per flute window,
+/// row_extremes() finds every channel's extremes and the first sample at the extreme each peak
+/// is refined at (the sample a pass tracking strict new extremes would keep).
 template <typename Rows>
 void measure_revolution(const Rows& row, double sample_rate_hz, RevolutionMeasurement& m) {
   const int flutes = m.flutes;
