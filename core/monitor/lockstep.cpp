@@ -1,10 +1,18 @@
 #include "core/monitor/lockstep.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <numbers>
 
 #include "core/monitor/extremum.hpp"
+#include "core/signal/cpu_features.hpp"
+
+#if defined(__SSE2__) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#define MILLWATCH_LOCKSTEP_AVX 1
+#include <immintrin.h>
+#endif
 
 namespace millwatch::monitor {
 namespace {
@@ -33,7 +41,7 @@ Lockstep::Lockstep(const model::ModelConfig& model, const signal::ButterworthDes
   for (auto& f : filtered_) {
     f.assign(steps, 0.0);
   }
-  line_table_.assign(steps * kLineRow, 0.0);
+  line_table_.assign(steps, LineRow{});
 }
 
 bool Lockstep::set_spindle_hz(double spindle_hz) {
@@ -84,10 +92,10 @@ void Lockstep::filter_periodic() {
   const std::size_t n = filtered_[0].size();
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t k1 = k + 1 == n ? 0 : k + 1;
-    double* row = &line_table_[k * kLineRow];
+    auto& row = line_table_[k].v;
     for (std::size_t a = 0; a < 3; ++a) {
       row[a] = filtered_[a][k];
-      row[3 + a] = filtered_[a][k1] - filtered_[a][k];
+      row[4 + a] = filtered_[a][k1] - filtered_[a][k];
     }
   }
 }
@@ -184,8 +192,73 @@ std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
           filtered_[2][k0] + f * (filtered_[2][k1] - filtered_[2][k0])};
 }
 
-void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t count,
-                              double* rows) const {
+namespace {
+
+/// forces_on_line()'s walk along the grid: sample i at grid position start + step·i, wrapped
+/// once a turn (step < grid), as the grid point below it and the fraction past it. Inline in
+/// both kernels, so that the positions are the same.
+struct GridWalk {
+  double start;  // [0, grid]
+  double step;   // grid points per sample, < grid
+  double grid;
+  std::int64_t last_point;
+  double wrapped = 0.0;  // whole turns of the grid passed, in grid points
+
+  // Signed indices: a double converts to a signed integer in one instruction (to an unsigned one
+  // only through a test and two paths); positions are in [0, n], far below 2⁶³.
+  [[gnu::always_inline]] std::int64_t at(std::int64_t i, double& fraction) {
+    double pos = start + step * static_cast<double>(i) - wrapped;
+    if (pos >= grid) {
+      wrapped += grid;
+      pos -= grid;
+    }
+    const std::int64_t k0 = std::min(static_cast<std::int64_t>(pos), last_point);
+    fraction = pos - static_cast<double>(k0);
+    return k0;
+  }
+};
+
+/// Rows fx, fy, fz, fx² + fy² along the walk: w[k0] + f·(w[k0 + 1] − w[k0]) from one row of
+/// the line table (values, 0, steps, 0).
+void line_rows_scalar(const Lockstep::LineRow* table, GridWalk walk, std::int64_t samples,
+                      double* rows) {
+  for (std::int64_t i = 0; i < samples; ++i) {
+    double f = 0.0;
+    const double* t = table[walk.at(i, f)].v.data();
+    const double fx = t[0] + f * t[4];
+    const double fy = t[1] + f * t[5];
+    double* r = rows + 4 * i;
+    r[0] = fx;
+    r[1] = fy;
+    r[2] = t[2] + f * t[6];
+    r[3] = fx * fx + fy * fy;
+  }
+}
+
+#if defined(MILLWATCH_LOCKSTEP_AVX)
+/// line_rows_scalar() with a table row's values and steps each one 256-bit load, the three
+/// forces one multiply and one add: the same operations on each lane, so the same rows, bit
+/// for bit. The row's fourth value, fx² + fy², is stored over the padding lane.
+__attribute__((target("avx"))) void line_rows_avx(const Lockstep::LineRow* table, GridWalk walk,
+                                                  std::int64_t samples, double* rows) {
+  for (std::int64_t i = 0; i < samples; ++i) {
+    double f = 0.0;
+    const double* t = table[walk.at(i, f)].v.data();
+    const __m256d forces =
+        _mm256_add_pd(_mm256_loadu_pd(t), _mm256_mul_pd(_mm256_set1_pd(f), _mm256_loadu_pd(t + 4)));
+    const __m128d xy = _mm256_castpd256_pd128(forces);
+    const __m128d xy2 = _mm_mul_pd(xy, xy);
+    double* r = rows + 4 * i;
+    _mm256_storeu_pd(r, forces);
+    _mm_store_sd(r + 3, _mm_add_sd(xy2, _mm_unpackhi_pd(xy2, xy2)));
+  }
+}
+#endif
+
+}  // namespace
+
+void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows,
+                              bool allow_avx) const {
   const std::size_t n = filtered_[0].size();
   const auto grid = static_cast<double>(n);
   if (!(step_rad >= 0.0 && step_rad < kTwoPi)) {
@@ -200,31 +273,17 @@ void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t co
     return;
   }
   const double turns = (angle0_rad + offset_rad_) / kTwoPi;
-  const double start = (turns - std::floor(turns)) * grid;  // [0, n]
-  const double step = step_rad / kTwoPi * grid;             // grid points per sample, < n
-  double wrapped = 0.0;  // whole turns of the grid passed, in grid points
-  // Signed indices: a double converts to a signed integer in one instruction (to an unsigned one
-  // only through a test and two paths); positions are in [0, n], far below 2⁶³.
-  const auto last_point = static_cast<std::int64_t>(n) - 1;
+  const GridWalk walk{(turns - std::floor(turns)) * grid, step_rad / kTwoPi * grid, grid,
+                      static_cast<std::int64_t>(n) - 1};
   const auto samples = static_cast<std::int64_t>(count);
-  for (std::int64_t i = 0; i < samples; ++i) {
-    double pos = start + step * static_cast<double>(i) - wrapped;
-    if (pos >= grid) {
-      wrapped += grid;
-      pos -= grid;
-    }
-    const std::int64_t k0 = std::min(static_cast<std::int64_t>(pos), last_point);
-    const double f = pos - static_cast<double>(k0);
-    // w[k0] + f·(w[k0 + 1] − w[k0]) from one row of the line table.
-    const double* t = &line_table_[static_cast<std::size_t>(k0) * kLineRow];
-    const double fx = t[0] + f * t[3];
-    const double fy = t[1] + f * t[4];
-    double* r = rows + 4 * i;
-    r[0] = fx;
-    r[1] = fy;
-    r[2] = t[2] + f * t[5];
-    r[3] = fx * fx + fy * fy;
+#if defined(MILLWATCH_LOCKSTEP_AVX)
+  if (allow_avx && signal::cpu_has_avx()) {
+    line_rows_avx(line_table_.data(), walk, samples, rows);
+    return;
   }
+#endif
+  (void)allow_avx;
+  line_rows_scalar(line_table_.data(), walk, samples, rows);
 }
 
 }  // namespace millwatch::monitor

@@ -27,6 +27,13 @@ namespace millwatch::monitor {
 
 class Lockstep {
  public:
+  /// forces_on_line()'s table, a row per model grid point k: fx, fy, fz at k, 0, and their steps
+  /// to k + 1 (cyclic), 0 — a sample's interpolation reads one cache line, the values and the
+  /// steps each one 256-bit load.
+  struct alignas(64) LineRow {
+    std::array<double, 8> v;
+  };
+
   Lockstep() = default;
   /// @param model the cut as commanded (process.spindle_rpm is the commanded speed)
   /// @param zero_phase the measurement is filtered forwards and backwards (|H|², no lag)
@@ -57,8 +64,10 @@ class Lockstep {
   /// force_at() along a line of tracker angles, angle0_rad + i·step_rad for i < count (step_rad
   /// ≥ 0, less than a turn): row i of `rows` (4 doubles a row, as the sample ring's) takes fx,
   /// fy, fz and fx² + fy². The position on the model's grid advances by a step per sample
-  /// instead of a division and a floor each.
-  void forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows) const;
+  /// instead of a division and a floor each. An AVX kernel where the CPU has it and `allow_avx`
+  /// (the tests compare the two: the same rows, bit for bit).
+  void forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows,
+                      bool allow_avx = true) const;
   /// The spindle frequency the model was built for (Hz; 0 before the first build).
   [[nodiscard]] double spindle_hz() const { return spindle_hz_; }
 
@@ -79,10 +88,8 @@ class Lockstep {
   model::PeriodicResponse response_;
   model::ForceWaveform waveform_;
   std::array<std::vector<double>, 3> filtered_;  // periodic steady-state filtered waveform
-  // filtered_ for forces_on_line(), a row per grid point k: fx, fy, fz at k and their steps to
-  // k + 1 (cyclic), so that a sample's interpolation reads one short run of memory.
-  static constexpr std::size_t kLineRow = 6;
-  std::vector<double> line_table_;
+  // filtered_ for forces_on_line(), a row per grid point (LineRow).
+  std::vector<LineRow> line_table_;
   // Scratch of align(): the model and the measured average on the tracker grid, correlations.
   std::array<std::vector<double>, 3> model_bins_, measured_bins_;
   std::vector<double> correlation_scratch_;

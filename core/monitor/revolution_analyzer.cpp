@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/monitor/residual_sums.hpp"
+
 namespace millwatch::monitor {
 namespace {
 
@@ -283,8 +285,6 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   if (from < ring.oldest() || to > ring.newest() || to <= from) {
     return;
   }
-  std::array<double, 3> sum{};
-  double measured_sum = 0.0;
   std::array<double, kMaxFlutes> flute_sum{};
   std::array<int, kMaxFlutes> flute_n{};
   std::array<double, kMaxSectors> sector_sum{};
@@ -293,40 +293,19 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   // The angle within the turn, [0, 2π), from the first sample's on: the map is a line.
   double start_rad = map.at(static_cast<double>(from));
   start_rad -= kTwoPi * std::floor(start_rad / kTwoPi);
-  // A run of samples in one flute window and one sector is summed in registers, then added to
-  // its sums (adding to memory sample by sample would wait on each store). The flute's and the
-  // sector's run sums are two sums of the same terms, reset at their own edges.
+  // The revolution's sums, and the current flute's and sector's run sums (two sums of the same
+  // terms, reset at their own edges): a run of samples in one flute window and one sector is
+  // summed in registers (residual_sums.hpp), then added to its flute's and sector's sums.
+  ResidualSums sums;
+  double& run_flute_sum = sums.flute_sector[0];
+  double& run_sector_sum = sums.flute_sector[1];
   std::size_t run_sector = 0;
-  double run_sector_sum = 0.0;
   int run_sector_n = 0;
-  double run_flute_sum = 0.0;
   int run_flute_n = 0;
+  const auto rows = [rows = ring.rows()](std::int64_t n) { return rows.row(n); };
   // Samples [first, last], all in one sector and one flute window.
   const auto piece = [&](std::int64_t first, std::int64_t last) {
-    // In locals: the compiler cannot keep sums reached through the closure in registers while
-    // the loop reads doubles through pointers that might alias them.
-    double sx = sum[0], sy = sum[1], sz = sum[2], sm = measured_sum;
-    double sf = run_flute_sum, ss = run_sector_sum;
-    for (std::int64_t s = first; s <= last; ++s) {
-      const double* v = ring.row(s);
-      const double* model = model_row(s);
-      const double dx = v[0] - model[0];
-      const double dy = v[1] - model[1];
-      const double dz = v[2] - model[2];
-      const double dx2 = dx * dx;
-      const double dy2 = dy * dy;
-      sx += dx2;
-      sy += dy2;
-      sz += dz * dz;
-      sm += v[3];  // Fx² + Fy²
-      const double d_xy2 = dx2 + dy2;
-      sf += d_xy2;
-      ss += d_xy2;
-    }
-    sum = {sx, sy, sz};
-    measured_sum = sm;
-    run_flute_sum = sf;
-    run_sector_sum = ss;
+    add_residuals(rows, model_row(first), first, last, sums, allow_avx_);
     const auto count = static_cast<int>(last - first + 1);
     run_flute_n += count;
     run_sector_n += count;
@@ -369,9 +348,9 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   sector_n[run_sector] += run_sector_n;
   const auto count = static_cast<double>(to - from + 1);
   for (std::size_t a = 0; a < 3; ++a) {
-    out.residual_rms_N[a] = std::sqrt(sum[a] / count);
+    out.residual_rms_N[a] = std::sqrt(sums.axes[a] / count);
   }
-  out.measured_rms_N = std::sqrt(measured_sum / count);
+  out.measured_rms_N = std::sqrt(sums.axes[3] / count);
   for (std::size_t j = 0; j < n_flutes; ++j) {
     out.residual_flute_rms_N[j] = flute_n[j] > 0 ? std::sqrt(flute_sum[j] / flute_n[j]) : 0.0;
   }

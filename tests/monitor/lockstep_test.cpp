@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <vector>
 
@@ -117,8 +119,14 @@ TEST(Lockstep, ForcesOnALineAreTheForcesAtEachAngle) {
   const double step_rad = kTwoPi * 421.0 / fs;
   const auto count = static_cast<std::size_t>(3.0 * fs / 421.0);
   for (const double angle0_rad : {0.3, -2.0, 40.0}) {
-    std::vector<double> rows(4 * count, -1.0);
+    std::vector<double> rows(4 * count, -1.0), scalar_rows(4 * count, -2.0);
     lockstep.forces_on_line(angle0_rad, step_rad, count, rows.data());
+    // The AVX kernel (where the CPU has it) and the scalar one: the same rows, bit for bit.
+    lockstep.forces_on_line(angle0_rad, step_rad, count, scalar_rows.data(), false);
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      ASSERT_EQ(std::bit_cast<std::uint64_t>(rows[i]), std::bit_cast<std::uint64_t>(scalar_rows[i]))
+          << i;
+    }
     double largest = 0.0, worst = 0.0;
     for (std::size_t i = 0; i < count; ++i) {
       const double* r = &rows[4 * i];
