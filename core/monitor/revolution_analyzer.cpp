@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/monitor/residual_sums.hpp"
+#include "core/monitor/sector_walk.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -171,111 +172,6 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
   measure_revolution(row, sample_rate_hz_, mm);
   return true;
 }
-
-namespace {
-
-/// The residuals' angle sectors along a revolution: the sector of sample s is that of its angle
-/// within the turn, a(s) = (start + slope·(s − from)) − turns, where turns steps by 2π once a(s)
-/// reaches 2π, in [0, sectors). Within a turn a(s) never decreases (every rounding is
-/// monotonic), so the sector changes only where the angle crosses a sector's edge: runs() finds
-/// those samples from the edges' angles and checks them with the per-sample arithmetic itself,
-/// so every sample gets the sector a per-sample walk would give it.
-class SectorWalk {
- public:
-  SectorWalk(double start_rad, double slope_rad, std::int64_t from, int sectors)
-      : start_(start_rad),
-        slope_(slope_rad),
-        samples_per_rad_(1.0 / slope_rad),
-        from_(from),
-        sectors_(sectors),
-        per_rad_(sectors / kTwoPi),
-        rad_per_sector_(kTwoPi / sectors) {}
-
-  /// Calls run(first, last, sector) for the runs of samples in [from, to] that share a sector,
-  /// in order. Sample by sample where the angle does not advance (slope ≤ 0, not finite, or so
-  /// small that its inverse is not) or turns twice.
-  template <typename Run>
-  void runs(std::int64_t to, const Run& run) const {
-    if (!(slope_ > 0.0) || !std::isfinite(start_) || !std::isfinite(slope_) ||
-        !std::isfinite(samples_per_rad_)) {  // a subnormal slope: its inverse is infinite
-      walk_each(to, run);
-      return;
-    }
-    // The first sample whose raw angle reaches a turn (to + 1: none), then the turn after it.
-    std::int64_t wrap = estimate(from_, to, kTwoPi, 0.0);
-    while (wrap <= to && raw(wrap) < kTwoPi) {
-      ++wrap;
-    }
-    while (wrap > from_ && raw(wrap - 1) >= kTwoPi) {
-      --wrap;
-    }
-    if (wrap <= to && raw(to) - kTwoPi >= kTwoPi) {
-      walk_each(to, run);  // a second turn: more than a revolution's span
-      return;
-    }
-    segment(from_, std::min(wrap - 1, to), 0.0, run);
-    segment(wrap, to, kTwoPi, run);
-  }
-
- private:
-  [[nodiscard]] double raw(std::int64_t s) const {
-    return start_ + slope_ * static_cast<double>(s - from_);
-  }
-  [[nodiscard]] int sector_of(double a) const {
-    return std::clamp(static_cast<int>(a * per_rad_), 0, sectors_ - 1);
-  }
-  [[nodiscard]] int sector(std::int64_t s, double turns_rad) const {
-    return sector_of(raw(s) - turns_rad);
-  }
-  /// About where, in [lo, hi + 1], the line's angle less turns reaches `angle` (to be checked).
-  [[nodiscard]] std::int64_t estimate(std::int64_t lo, std::int64_t hi, double angle,
-                                      double turns_rad) const {
-    const double samples =
-        std::clamp(std::ceil((angle + turns_rad - start_) * samples_per_rad_), -1.0, 1e15);
-    return std::clamp(from_ + static_cast<std::int64_t>(samples), lo, hi + 1);
-  }
-  template <typename Run>
-  void segment(std::int64_t lo, std::int64_t hi, double turns_rad, const Run& run) const {
-    std::int64_t s = lo;
-    while (s <= hi) {
-      const int k = sector(s, turns_rad);
-      // The run ends before the first sample of a later sector: from the edge's angle, then
-      // checked by the samples' own sectors.
-      std::int64_t end =
-          k + 1 < sectors_ ? estimate(s + 1, hi, (k + 1) * rad_per_sector_, turns_rad) : hi + 1;
-      while (end <= hi && sector(end, turns_rad) == k) {
-        ++end;
-      }
-      while (end - 1 > s && sector(end - 1, turns_rad) != k) {
-        --end;
-      }
-      run(s, end - 1, k);
-      s = end;
-    }
-  }
-  template <typename Run>
-  void walk_each(std::int64_t to, const Run& run) const {
-    double turns_rad = 0.0;
-    for (std::int64_t s = from_; s <= to; ++s) {
-      double a = raw(s) - turns_rad;
-      if (a >= kTwoPi) {
-        turns_rad += kTwoPi;
-        a -= kTwoPi;
-      }
-      run(s, s, sector_of(a));
-    }
-  }
-
-  double start_;
-  double slope_;
-  double samples_per_rad_;
-  std::int64_t from_;
-  int sectors_;
-  double per_rad_;
-  double rad_per_sector_;
-};
-
-}  // namespace
 
 void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleRing& ring,
                                    const AngleMap& map, RevolutionRecord& out) const {
