@@ -195,8 +195,8 @@ std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
 namespace {
 
 /// forces_on_line()'s walk along the grid: sample i at grid position start + step·i, wrapped
-/// once a turn (step < grid), as the grid point below it and the fraction past it. Inline in
-/// both kernels, so that the positions are the same.
+/// once a turn (step < grid), as the grid point below it and the fraction past it; inlined into
+/// both kernels' loops.
 struct GridWalk {
   double start;  // [0, grid]
   double step;   // grid points per sample, < grid

@@ -20,21 +20,22 @@
 namespace millwatch::monitor {
 
 struct ResidualSums {
-  /// Σ dx², Σ dy², Σ dz², Σ (Fx² + Fy²) measured.
-  std::array<double, 4> axes{};
-  /// The flute's and the sector's Σ (dx² + dy²).
-  std::array<double, 2> flute_sector{};
+  /// Σ dx², Σ dy², Σ dz², and Σ (Fx² + Fy²) measured (N²).
+  std::array<double, 4> sums_N2{};
+  /// The flute's and the sector's Σ (dx² + dy²) (N²).
+  std::array<double, 2> flute_sector_N2{};
 };
 
-/// Adds samples [first, last] to `s`: `measured(n)` points at sample n's four doubles, `model`
-/// at sample first's row of four (the next samples' rows follow it).
+/// Adds samples [first, last] to `s`: `measured(n)` points at sample n's row of at least four
+/// doubles (fx, fy, fz, Fx² + Fy²), `model` at sample first's row of four (fx, fy, fz, any), the
+/// next samples' rows after it.
 template <typename Rows>
 void add_residuals_scalar(const Rows& measured, const double* model, std::int64_t first,
                           std::int64_t last, ResidualSums& s) {
   // In locals: sums reached through a reference would be stored and reloaded at every sample,
   // the compiler unable to rule out that the rows alias them.
-  double sx = s.axes[0], sy = s.axes[1], sz = s.axes[2], sm = s.axes[3];
-  double sf = s.flute_sector[0], ss = s.flute_sector[1];
+  double sx = s.sums_N2[0], sy = s.sums_N2[1], sz = s.sums_N2[2], sm = s.sums_N2[3];
+  double sf = s.flute_sector_N2[0], ss = s.flute_sector_N2[1];
   for (std::int64_t n = first; n <= last; ++n, model += 4) {
     const double* v = measured(n);
     const double dx = v[0] - model[0];
@@ -50,32 +51,31 @@ void add_residuals_scalar(const Rows& measured, const double* model, std::int64_
     sf += d_xy2;
     ss += d_xy2;
   }
-  s.axes = {sx, sy, sz, sm};
-  s.flute_sector = {sf, ss};
+  s.sums_N2 = {sx, sy, sz, sm};
+  s.flute_sector_N2 = {sf, ss};
 }
 
 #if defined(MILLWATCH_RESIDUAL_SUMS_AVX)
 /// add_residuals_scalar() with a sample's row in one 256-bit register: d² on the three axes and
 /// the measured Fx² + Fy² in the fourth lane, added to the four sums at once; dx² + dy² added to
-/// the flute's and the sector's sums as one SSE pair. The rows are taken by value (a SIMD store
-/// may alias anything: members would be read again after each one).
+/// the flute's and the sector's sums as one SSE pair.
 template <typename Rows>
 __attribute__((target("avx"))) void add_residuals_avx(const Rows measured, const double* model,
                                                       std::int64_t first, std::int64_t last,
                                                       ResidualSums& s) {
-  __m256d axes = _mm256_loadu_pd(s.axes.data());
-  __m128d flute_sector = _mm_loadu_pd(s.flute_sector.data());
+  __m256d sums = _mm256_loadu_pd(s.sums_N2.data());
+  __m128d flute_sector = _mm_loadu_pd(s.flute_sector_N2.data());
   for (std::int64_t n = first; n <= last; ++n, model += 4) {
     const __m256d v = _mm256_loadu_pd(measured(n));
     const __m256d d = _mm256_sub_pd(v, _mm256_loadu_pd(model));
     const __m256d d2 = _mm256_mul_pd(d, d);
-    axes = _mm256_add_pd(axes, _mm256_blend_pd(d2, v, 0x8));  // (dx², dy², dz², Fx² + Fy²)
+    sums = _mm256_add_pd(sums, _mm256_blend_pd(d2, v, 0x8));  // (dx², dy², dz², Fx² + Fy²)
     const __m128d xy = _mm256_castpd256_pd128(d2);
     const __m128d d_xy2 = _mm_add_sd(xy, _mm_unpackhi_pd(xy, xy));  // dx² + dy²
     flute_sector = _mm_add_pd(flute_sector, _mm_movedup_pd(d_xy2));
   }
-  _mm256_storeu_pd(s.axes.data(), axes);
-  _mm_storeu_pd(s.flute_sector.data(), flute_sector);
+  _mm256_storeu_pd(s.sums_N2.data(), sums);
+  _mm_storeu_pd(s.flute_sector_N2.data(), flute_sector);
 }
 #endif
 

@@ -192,16 +192,18 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   // The revolution's sums, and the current flute's and sector's run sums (two sums of the same
   // terms, reset at their own edges): a run of samples in one flute window and one sector is
   // summed in registers (residual_sums.hpp), then added to its flute's and sector's sums.
+  // The kernels read four doubles a row: the ring's rows (fx, fy, fz, Fx² + Fy²) and the model's.
+  static_assert(kModelRow == 4);
   ResidualSums sums;
-  double& run_flute_sum = sums.flute_sector[0];
-  double& run_sector_sum = sums.flute_sector[1];
+  double& run_flute_sum = sums.flute_sector_N2[0];
+  double& run_sector_sum = sums.flute_sector_N2[1];
   std::size_t run_sector = 0;
   int run_sector_n = 0;
   int run_flute_n = 0;
   const auto rows = [rows = ring.rows()](std::int64_t n) { return rows.row(n); };
   // Samples [first, last], all in one sector and one flute window.
   const auto piece = [&](std::int64_t first, std::int64_t last) {
-    add_residuals(rows, model_row(first), first, last, sums, allow_avx_);
+    add_residuals(rows, model_row(first), first, last, sums);
     const auto count = static_cast<int>(last - first + 1);
     run_flute_n += count;
     run_sector_n += count;
@@ -244,9 +246,9 @@ void RevolutionAnalyzer::residuals(const RevolutionMeasurement& m, const SampleR
   sector_n[run_sector] += run_sector_n;
   const auto count = static_cast<double>(to - from + 1);
   for (std::size_t a = 0; a < 3; ++a) {
-    out.residual_rms_N[a] = std::sqrt(sums.axes[a] / count);
+    out.residual_rms_N[a] = std::sqrt(sums.sums_N2[a] / count);
   }
-  out.measured_rms_N = std::sqrt(sums.axes[3] / count);
+  out.measured_rms_N = std::sqrt(sums.sums_N2[3] / count);
   for (std::size_t j = 0; j < n_flutes; ++j) {
     out.residual_flute_rms_N[j] = flute_n[j] > 0 ? std::sqrt(flute_sum[j] / flute_n[j]) : 0.0;
   }

@@ -54,10 +54,6 @@ class RevolutionAnalyzer {
   void add_to_average(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                       const SampleRing& ring, SyncAverage& sync) const;
 
-  /// Whether the residuals' sums may run their AVX kernel where the CPU has it (on by default;
-  /// the tests compare the two kernels' records, which must be the same bit for bit).
-  void set_avx(bool allowed) { allow_avx_ = allowed; }
-
  private:
   bool model_revolution(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                         const AngleMap& map, const Lockstep& model, RevolutionRecord& out);
@@ -67,7 +63,6 @@ class RevolutionAnalyzer {
   double sample_rate_hz_ = 0.0;
   double search_fraction_ = 0.3;
   int sectors_ = 0;
-  bool allow_avx_ = true;
   /// The model's row at absolute sample s (first_ ≤ s).
   [[nodiscard]] const double* model_row(std::int64_t s) const {
     return &model_rows_[kModelRow * static_cast<std::size_t>(s - first_)];

@@ -18,7 +18,7 @@ namespace millwatch::monitor {
 
 class SectorWalk {
  public:
-  /// @param sectors 1 to kMaxSectors
+  /// @param sectors the number of sectors, taken within 1 to kMaxSectors
   SectorWalk(double start_rad, double slope_rad, std::int64_t from, int sectors)
       : start_(start_rad),
         slope_(slope_rad),

@@ -31,6 +31,35 @@ std::vector<int> sectors_by_sample(double start_rad, double slope_rad, std::int6
   return out;
 }
 
+/// Walks the line and checks its runs: they cover [from, to] in order, each sample in its run's
+/// sector by the definition, and — on a line that reaches no second turn — each run the whole of
+/// its sector within its turn (a new run only where the sector changes). Returns the runs.
+int check_runs(double start_rad, double slope_rad, std::int64_t from, std::int64_t to,
+               int sectors) {
+  const std::vector<int> expected = sectors_by_sample(start_rad, slope_rad, from, to, sectors);
+  const bool one_turn = start_rad + slope_rad * static_cast<double>(to - from) < 2.0 * kTwoPi;
+  std::int64_t next = from;
+  int last_sector = -1, runs = 0, turns = 0;
+  SectorWalk(start_rad, slope_rad, from, sectors)
+      .runs(to, [&](std::int64_t first, std::int64_t last, int sector) {
+        EXPECT_EQ(first, next);
+        EXPECT_LE(first, last);
+        for (std::int64_t s = first; s <= last; ++s) {
+          EXPECT_EQ(sector, expected[static_cast<std::size_t>(s - from)])
+              << sectors << " sectors, sample " << s - from << " of " << to - from;
+        }
+        turns += sector <= last_sector ? 1 : 0;  // the sectors start again: a turn
+        last_sector = sector;
+        next = last + 1;
+        ++runs;
+      });
+  EXPECT_EQ(next, to + 1);
+  if (one_turn) {
+    EXPECT_LE(turns, 1) << "a run split within a turn: start " << start_rad;
+  }
+  return runs;
+}
+
 // The runs cover the revolution's samples in order, each sample in its run's sector by the
 // per-sample definition, and within a turn every run is the whole of its sector (a new run only
 // where the sector changes): on lines of 60 to 1,200 samples a turn (50 to 333.3 kHz), a turn
@@ -47,38 +76,37 @@ TEST(SectorWalk, RunsAreTheSectorsOfEachSampleAndWholeWithinATurn) {
         per_turn = sectors * std::ceil(per_turn / sectors);
       }
       const double slope_rad = kTwoPi / per_turn;
-      // Starts below 0.85 of a turn: the line (at most 1.1 turns) reaches no second turn, which
-      // is walked sample by sample.
-      double start_rad = 0.85 * kTwoPi * uniform(rng);
+      double start_rad = kTwoPi * uniform(rng);
       if (trial % 4 == 1 || trial % 4 == 2) {  // on a sector's edge
-        start_rad = kTwoPi * std::floor(0.85 * sectors * uniform(rng)) / sectors;
+        start_rad = kTwoPi * std::floor(sectors * uniform(rng)) / sectors;
       }
       const std::int64_t from = 1000 + trial;
       const auto to = from + static_cast<std::int64_t>(per_turn * (1.0 + 0.1 * uniform(rng)));
-      const std::vector<int> expected = sectors_by_sample(start_rad, slope_rad, from, to, sectors);
-      std::int64_t next = from;
-      int last_sector = -1;
-      bool turned = false;
-      SectorWalk(start_rad, slope_rad, from, sectors)
-          .runs(to, [&](std::int64_t first, std::int64_t last, int sector) {
-            ASSERT_EQ(first, next);
-            ASSERT_LE(first, last);
-            for (std::int64_t s = first; s <= last; ++s) {
-              ASSERT_EQ(sector, expected[static_cast<std::size_t>(s - from)])
-                  << sectors << " sectors, line " << trial << ", sample " << s - from;
-            }
-            if (sector <= last_sector) {
-              ASSERT_FALSE(turned) << "a run within a turn split, or a second turn";
-              turned = true;  // the turn: the sectors start again
-            }
-            last_sector = sector;
-            next = last + 1;
-          });
-      ASSERT_EQ(next, to + 1);
+      check_runs(start_rad, slope_rad, from, to, sectors);
       ++lines;
     }
   }
   EXPECT_EQ(lines, 2000);
+}
+
+// Lines with fewer samples a turn than sectors (sectors no sample falls in), lines starting on
+// the turn (the first turn's part empty) or just before it, and lines into a second turn (walked
+// sample by sample): the same checks.
+TEST(SectorWalk, SparseLinesTurnsAtTheStartAndSecondTurns) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const double per_turn = 5.0 + 30.0 * uniform(rng);  // 36 sectors: some empty
+    const auto to = 50 + static_cast<std::int64_t>(per_turn * 1.05);
+    check_runs(kTwoPi * uniform(rng), kTwoPi / per_turn, 50, to, 36);
+  }
+  for (const double start_rad : {kTwoPi, std::nextafter(kTwoPi, 0.0), kTwoPi - 1e-9}) {
+    for (const int sectors : {1, 12, 36}) {
+      check_runs(start_rad, kTwoPi / 250.0, 0, 260, sectors);
+    }
+  }
+  // 2.5 turns: into a second turn, sample by sample, each in its sector.
+  EXPECT_EQ(check_runs(1.0, kTwoPi / 100.0, 0, 250, 12), 251);
 }
 
 // Where the angle does not advance (a slope of zero), every sample is its own run, in the
