@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <span>
 
+#include "core/monitor/extremum.hpp"
 #include "core/monitor/revolution_features.hpp"
 #include "core/monitor/sample_ring.hpp"
 #include "core/signal/phase_model.hpp"
@@ -67,7 +68,7 @@ template <typename Signal>
 EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t newest,
                         double predicted, std::int64_t half, int fit_half) {
   EventSearch out;
-  const auto center = static_cast<std::int64_t>(std::llround(predicted));
+  const std::int64_t center = nearest_sample(predicted);
   out.position = predicted;
   if (center + half + 3 * fit_half > newest) {
     out.status = EventSearch::Status::kWait;
@@ -103,8 +104,8 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     fit_center = best;
     e = refine_extremum(detect, fit_center, fit_half, true);
   }
-  for (int i = 0; i < 3 && e.valid && std::llround(e.position) != fit_center; ++i) {
-    fit_center = std::llround(e.position);
+  for (int i = 0; i < 3 && e.valid && nearest_sample(e.position) != fit_center; ++i) {
+    fit_center = nearest_sample(e.position);
     // Each step moves the window by up to fit_half: the checks above leave room for two such
     // steps and the blend's window a sample over (below). A vertex that walks further is no
     // valley of this search, and its fit would read samples the caller does not have.

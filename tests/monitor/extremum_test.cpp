@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 namespace millwatch::monitor {
 namespace {
@@ -42,6 +44,26 @@ TEST(Extremum, TheCubicAbsorbsAnAsymmetricValley) {
     ASSERT_TRUE(e.valid);
     EXPECT_NEAR(e.position, delta, 1e-9) << h;
     EXPECT_NEAR(e.value, 0.0, 1e-9) << h;
+  }
+}
+
+// nearest_sample() is std::llround(): halves away from zero, the doubles next to a half, zeros
+// of either sign, positions far beyond any record (where the library call takes over), and a
+// million positions of a long record's range.
+TEST(NearestSample, IsTheLibrarysRoundingEverywhere) {
+  std::vector<double> positions = {0.0,  -0.0,      0.5,          -0.5,   1.5,     -1.5,  2.5,
+                                   -2.5, 1e6 + 0.5, 0x1p52 - 0.5, 0x1p62, -0x1p62, 1e300, -1e300};
+  for (const double half : {0.5, -0.5, 2.5, -7.5, 123456.5}) {
+    positions.push_back(std::nextafter(half, 0.0));
+    positions.push_back(std::nextafter(half, 2.0 * half));
+  }
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> position(-2e9, 2e9);
+  for (int i = 0; i < 1000000; ++i) {
+    positions.push_back(position(rng));
+  }
+  for (const double p : positions) {
+    ASSERT_EQ(nearest_sample(p), std::llround(p)) << p;
   }
 }
 
