@@ -23,6 +23,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "core/monitor/extremum.hpp"
@@ -60,6 +61,42 @@ struct EventSearch {
   std::int64_t needed = 0;  ///< kWait: the newest sample the search needs
 };
 
+/// The first sample of [from, to] at `detect`'s lowest value: what one scan from `from` keeping
+/// each value below the lowest so far (`v < lowest`: a NaN is never taken, and one at `from`
+/// stays) finds. The even and the odd samples after `from` are scanned as two interleaved
+/// chains of comparisons, half as long as one (each waits on its last minimum), and the lower
+/// of their minima taken, the earlier sample on a tie: the same sample.
+template <typename Signal>
+std::int64_t first_minimum(const Signal& detect, std::int64_t from, std::int64_t to) {
+  std::int64_t best_even = from;  // from, from + 2, ...
+  double low_even = detect(from);
+  std::int64_t best_odd = to + 1;  // from + 1, from + 3, ...: none yet
+  double low_odd = std::numeric_limits<double>::infinity();
+  std::int64_t n = from + 1;
+  for (; n + 1 <= to; n += 2) {
+    const double odd = detect(n);
+    const double even = detect(n + 1);
+    if (odd < low_odd) {
+      low_odd = odd;
+      best_odd = n;
+    }
+    if (even < low_even) {
+      low_even = even;
+      best_even = n + 1;
+    }
+  }
+  if (n <= to) {
+    const double odd = detect(n);
+    if (odd < low_odd) {
+      low_odd = odd;
+      best_odd = n;
+    }
+  }
+  // +∞ is never taken by the odd chain, as the single scan never takes it after a finite value
+  // (nor after +∞, which it equals); a NaN at `from` keeps the even chain, both comparisons false.
+  return low_odd < low_even || (low_odd == low_even && best_odd < best_even) ? best_odd : best_even;
+}
+
 /// A valley of `detect` (callable on absolute sample n ∈ [oldest, newest]) within ± half
 /// samples of `predicted`, refined by a cubic over ± fit_half samples. Found only when the
 /// smallest sample is interior to the search window and the fit is curved upwards. Reads
@@ -79,15 +116,7 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     out.status = EventSearch::Status::kGone;
     return out;
   }
-  std::int64_t best = center - half;
-  double lowest = detect(best);
-  for (std::int64_t n = center - half + 1; n <= center + half; ++n) {
-    const double v = detect(n);
-    if (v < lowest) {
-      lowest = v;
-      best = n;
-    }
-  }
+  const std::int64_t best = first_minimum(detect, center - half, center + half);
   const bool interior = best > center - half && best < center + half;
   // Fit around the prediction when the data agree with it: a window chosen by the noisy
   // minimum itself leans towards the flatter side of an asymmetric valley (a bias of noise).

@@ -7,16 +7,53 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 namespace millwatch::monitor {
 namespace {
 
 // An asymmetric valley, (u − v)²·(1 + (u − v)/400) around vertex v, given only the samples the
 // search asks for (center ± (half + 3·fit)): found at its vertex wherever it sits in the window.
+// first_minimum() finds the sample one scan with a strict `<` finds, on windows of 1 to 40
+// samples drawn from few values (ties, ±0), with NaNs and infinities among them, at the start
+// too.
+TEST(FirstMinimum, IsTheSampleOneStrictScanFinds) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::array<double, 9> values = {3.0, 1.0, -2.0, 0.0, -0.0, nan, inf, -inf, 1.0};
+  std::mt19937 rng(19);
+  std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+  std::uniform_int_distribution<int> kind(0, 2);
+  int windows = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int length = 1 + trial % 40;
+    std::vector<double> x(static_cast<std::size_t>(length));
+    for (double& v : x) {
+      // Mostly finite values, so that the minimum moves along the window.
+      v = kind(rng) == 0 ? values[pick(rng)] : std::uniform_real_distribution<double>(-5, 5)(rng);
+    }
+    const std::int64_t from = 100 + trial % 7;
+    const auto detect = [&](std::int64_t n) { return x[static_cast<std::size_t>(n - from)]; };
+    std::int64_t best = from;
+    double lowest = detect(from);
+    for (std::int64_t n = from + 1; n < from + length; ++n) {
+      if (detect(n) < lowest) {
+        lowest = detect(n);
+        best = n;
+      }
+    }
+    ASSERT_EQ(first_minimum(detect, from, from + length - 1), best) << trial;
+    ++windows;
+  }
+  EXPECT_EQ(windows, 20000);
+}
+
 TEST(FindValley, FindsACleanValleyAnywhereInItsWindow) {
   const std::int64_t center = 5000;
   for (const int fit : {2, 5, 9, 17}) {
