@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "core/monitor/extremum.hpp"
 #include "core/signal/cpu_features.hpp"
@@ -157,20 +158,15 @@ RowExtremes row_extremes_sse2(const Rows& row, std::int64_t from, std::int64_t t
 }
 
 #if defined(MILLWATCH_ROW_EXTREMES_AVX)
-/// row_extremes_sse2() in one pass: the four channels in one register, and with each extreme the
-/// sample it was last replaced at (a strict new extreme), which is the first sample at it: what
-/// first_equal() would find. The same comparisons, so the same values and samples, bit for bit.
-/// Sample numbers ride as doubles (exact below 2⁵³).
-template <typename Rows>
-__attribute__((target("avx"))) RowExtremes row_extremes_avx(const Rows& row, std::int64_t from,
-                                                            std::int64_t to) {
-  __m256d low = _mm256_loadu_pd(row(from)), high = low;
-  double n_d = static_cast<double>(from);
-  __m256d low_at = _mm256_set1_pd(n_d), high_at = low_at;
-  for (std::int64_t n = from + 1; n <= to; ++n) {
-    const __m256d v = _mm256_loadu_pd(row(n));
-    n_d += 1.0;
-    const __m256d at = _mm256_set1_pd(n_d);
+/// One chain of row_extremes_avx(): the four channels' extremes in one register each, and with
+/// each extreme the sample it was last replaced at (a strict new extreme), which is the first
+/// sample at it. Sample numbers ride as doubles (exact below 2⁵³).
+struct ExtremesChain {
+  __m256d low, high, low_at, high_at;
+
+  __attribute__((target("avx"), always_inline)) inline void take(const double* r, double n) {
+    const __m256d v = _mm256_loadu_pd(r);
+    const __m256d at = _mm256_set1_pd(n);
     // minpd(v, low) is v < low ? v : low; maxpd(v, high) is v > high ? v : high. The sample
     // numbers are picked by the masks bit by bit (a blend instruction, GCC 12 turns into a branch
     // per lane).
@@ -181,12 +177,53 @@ __attribute__((target("avx"))) RowExtremes row_extremes_avx(const Rows& row, std
     low = _mm256_min_pd(v, low);
     high = _mm256_max_pd(v, high);
   }
+};
+
+/// `mask ? a : b` bit by bit.
+__attribute__((target("avx"), always_inline)) inline __m256d pick(__m256d mask, __m256d a,
+                                                                  __m256d b) {
+  return _mm256_or_pd(_mm256_and_pd(mask, a), _mm256_andnot_pd(mask, b));
+}
+
+/// row_extremes_sse2() in one pass: what one chain of strict comparisons from `from` finds,
+/// found by two interleaved chains, the even and the odd samples after `from` (each comparison
+/// waits on its chain's last extreme: two chains, half as long), then on each lane the more
+/// extreme of the two, the earlier sample on a tie. The odd chain starts at ±∞ and never takes
+/// ±∞ (nor does one chain after its first sample); a NaN at `from` wins both comparisons of the
+/// merge for the even chain, as it stays in one chain. The same values and samples, bit for bit.
+template <typename Rows>
+__attribute__((target("avx"))) RowExtremes row_extremes_avx(const Rows& row, std::int64_t from,
+                                                            std::int64_t to) {
+  const __m256d first = _mm256_loadu_pd(row(from));
+  const __m256d first_at = _mm256_set1_pd(static_cast<double>(from));
+  const __m256d none_at = _mm256_set1_pd(static_cast<double>(to + 1));
+  const double inf = std::numeric_limits<double>::infinity();
+  ExtremesChain even{first, first, first_at, first_at};
+  ExtremesChain odd{_mm256_set1_pd(inf), _mm256_set1_pd(-inf), none_at, none_at};
+  double n_d = static_cast<double>(from);
+  std::int64_t n = from + 1;
+  for (; n + 1 <= to; n += 2) {
+    odd.take(row(n), n_d + 1.0);
+    even.take(row(n + 1), n_d + 2.0);
+    n_d += 2.0;
+  }
+  if (n <= to) {
+    odd.take(row(n), n_d + 1.0);
+  }
+  const __m256d odd_lower =
+      _mm256_or_pd(_mm256_cmp_pd(odd.low, even.low, _CMP_LT_OQ),
+                   _mm256_and_pd(_mm256_cmp_pd(odd.low, even.low, _CMP_EQ_OQ),
+                                 _mm256_cmp_pd(odd.low_at, even.low_at, _CMP_LT_OQ)));
+  const __m256d odd_higher =
+      _mm256_or_pd(_mm256_cmp_pd(odd.high, even.high, _CMP_GT_OQ),
+                   _mm256_and_pd(_mm256_cmp_pd(odd.high, even.high, _CMP_EQ_OQ),
+                                 _mm256_cmp_pd(odd.high_at, even.high_at, _CMP_LT_OQ)));
   RowExtremes e;
   std::array<double, 4> lowest_at{}, highest_at{};
-  _mm256_storeu_pd(e.lowest.data(), low);
-  _mm256_storeu_pd(e.highest.data(), high);
-  _mm256_storeu_pd(lowest_at.data(), low_at);
-  _mm256_storeu_pd(highest_at.data(), high_at);
+  _mm256_storeu_pd(e.lowest.data(), pick(odd_lower, odd.low, even.low));
+  _mm256_storeu_pd(e.highest.data(), pick(odd_higher, odd.high, even.high));
+  _mm256_storeu_pd(lowest_at.data(), pick(odd_lower, odd.low_at, even.low_at));
+  _mm256_storeu_pd(highest_at.data(), pick(odd_higher, odd.high_at, even.high_at));
   for (std::size_t c = 0; c < 4; ++c) {
     e.peak_at[c] = static_cast<std::int64_t>(peak_is_lowest(e, c) ? lowest_at[c] : highest_at[c]);
   }
