@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "core/monitor/extremum.hpp"
+#include "core/monitor/grid_line.hpp"
 #include "core/signal/cpu_features.hpp"
 
 #if defined(__SSE2__) && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
@@ -194,37 +195,23 @@ std::array<double, 3> Lockstep::force_at(double tracker_angle_rad) const {
 
 namespace {
 
-/// forces_on_line()'s walk along the grid: sample i at grid position start + step·i, wrapped
-/// once a turn (step < grid), as the grid point below it and the fraction past it; inlined into
-/// both kernels' loops.
-struct GridWalk {
-  double start;  // [0, grid]
-  double step;   // grid points per sample, < grid
-  double grid;
-  std::int64_t last_point;
-  double wrapped = 0.0;  // whole turns of the grid passed, in grid points
+/// The grid point at or below a position in [0, n] (at most the last point, n − 1) and the
+/// fraction past it. Signed indices: a double converts to a signed integer in one instruction
+/// (to an unsigned one only through a test and two paths); positions are far below 2⁶³.
+[[gnu::always_inline]] inline std::int64_t grid_point(double pos, std::int64_t last_point,
+                                                      double& fraction) {
+  const std::int64_t k0 = std::min(static_cast<std::int64_t>(pos), last_point);
+  fraction = pos - static_cast<double>(k0);
+  return k0;
+}
 
-  // Signed indices: a double converts to a signed integer in one instruction (to an unsigned one
-  // only through a test and two paths); positions are in [0, n], far below 2⁶³.
-  [[gnu::always_inline]] std::int64_t at(std::int64_t i, double& fraction) {
-    double pos = start + step * static_cast<double>(i) - wrapped;
-    if (pos >= grid) {
-      wrapped += grid;
-      pos -= grid;
-    }
-    const std::int64_t k0 = std::min(static_cast<std::int64_t>(pos), last_point);
-    fraction = pos - static_cast<double>(k0);
-    return k0;
-  }
-};
-
-/// Rows fx, fy, fz, fx² + fy² along the walk: w[k0] + f·(w[k0 + 1] − w[k0]) from one row of
-/// the line table (values, 0, steps, 0).
-void line_rows_scalar(const Lockstep::LineRow* table, GridWalk walk, std::int64_t samples,
-                      double* rows) {
+/// Rows fx, fy, fz, fx² + fy² along the line of grid positions: w[k0] + f·(w[k0 + 1] − w[k0])
+/// from one row of the line table (values, 0, steps, 0).
+void line_rows_scalar(const Lockstep::LineRow* table, GridLine line, std::int64_t last_point,
+                      std::int64_t samples, double* rows) {
   for (std::int64_t i = 0; i < samples; ++i) {
     double f = 0.0;
-    const double* t = table[walk.at(i, f)].v.data();
+    const double* t = table[grid_point(line.at(i), last_point, f)].v.data();
     const double fx = t[0] + f * t[4];
     const double fy = t[1] + f * t[5];
     double* r = rows + 4 * i;
@@ -239,11 +226,12 @@ void line_rows_scalar(const Lockstep::LineRow* table, GridWalk walk, std::int64_
 /// line_rows_scalar() with a table row's values and steps each one 256-bit load, the three
 /// forces one multiply and one add: the same operations on each lane, so the same rows, bit
 /// for bit. The row's fourth value, fx² + fy², is stored over the padding lane.
-__attribute__((target("avx"))) void line_rows_avx(const Lockstep::LineRow* table, GridWalk walk,
-                                                  std::int64_t samples, double* rows) {
+__attribute__((target("avx"))) void line_rows_avx(const Lockstep::LineRow* table, GridLine line,
+                                                  std::int64_t last_point, std::int64_t samples,
+                                                  double* rows) {
   for (std::int64_t i = 0; i < samples; ++i) {
     double f = 0.0;
-    const double* t = table[walk.at(i, f)].v.data();
+    const double* t = table[grid_point(line.at(i), last_point, f)].v.data();
     const __m256d forces =
         _mm256_add_pd(_mm256_loadu_pd(t), _mm256_mul_pd(_mm256_set1_pd(f), _mm256_loadu_pd(t + 4)));
     const __m128d xy = _mm256_castpd256_pd128(forces);
@@ -273,17 +261,17 @@ void Lockstep::forces_on_line(double angle0_rad, double step_rad, std::size_t co
     return;
   }
   const double turns = (angle0_rad + offset_rad_) / kTwoPi;
-  const GridWalk walk{(turns - std::floor(turns)) * grid, step_rad / kTwoPi * grid, grid,
-                      static_cast<std::int64_t>(n) - 1};
+  const GridLine line((turns - std::floor(turns)) * grid, step_rad / kTwoPi * grid, grid);
+  const auto last_point = static_cast<std::int64_t>(n) - 1;
   const auto samples = static_cast<std::int64_t>(count);
 #if defined(MILLWATCH_LOCKSTEP_AVX)
   if (allow_avx && signal::cpu_has_avx()) {
-    line_rows_avx(line_table_.data(), walk, samples, rows);
+    line_rows_avx(line_table_.data(), line, last_point, samples, rows);
     return;
   }
 #endif
   (void)allow_avx;
-  line_rows_scalar(line_table_.data(), walk, samples, rows);
+  line_rows_scalar(line_table_.data(), line, last_point, samples, rows);
 }
 
 }  // namespace millwatch::monitor

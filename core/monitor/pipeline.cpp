@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/monitor/extremum.hpp"
+
 namespace millwatch::monitor {
 namespace {
 
@@ -573,7 +575,7 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     return;
   }
   take_identification();
-  const auto first = static_cast<std::int64_t>(std::llround(ev.event_sample[0]));
+  const std::int64_t first = nearest_sample(ev.event_sample[0]);
   // The model follows the filtered revolution period, not one revolution's jitter.
   follow_speed(rate_hz_ / events_.samples_per_revolution());
   RevolutionRecord& r = record_;

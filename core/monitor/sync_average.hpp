@@ -17,6 +17,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/monitor/grid_line.hpp"
 #include "core/signal/cpu_features.hpp"
 
 #if defined(__SSE2__)
@@ -73,7 +74,7 @@ class SyncAverageOf {
       add_any_line(count, first_bin, bins_per_sample, values);
       return;
     }
-    Line line(first_bin, bins_per_sample, bins_);
+    Line line = line_of(first_bin, bins_per_sample, bins_);
     if (bins_per_sample >= 1.0) {
       for (std::size_t i = 0; i < count; ++i) {
         add_at(line.at(i), values(i));
@@ -118,7 +119,7 @@ class SyncAverageOf {
     static_assert(Channels == 3, "rows of three channels and one more double");
 #if defined(MILLWATCH_SYNC_AVERAGE_AVX)
     if (avx_ && spindle_line(bins_per_sample)) {
-      Line line(first_bin, bins_per_sample, bins_);
+      Line line = line_of(first_bin, bins_per_sample, bins_);
       if (bins_per_sample >= 1.0) {
         add_sparse_avx(count, line, rows);
       } else {
@@ -206,29 +207,12 @@ class SyncAverageOf {
   using Row = std::array<double, kRow>;
 
   /// The bin positions of a line of samples, sample i at first_bin + i·bins_per_sample, in
-  /// [0, bins]: advanced by a step and wrapped once a turn, not wrapped per sample. at() must be
-  /// called for i = 0, 1, 2, … in order.
-  class Line {
-   public:
-    Line(double first_bin, double bins_per_sample, int bins)
-        : grid_(static_cast<double>(bins)),
-          start_(first_bin - grid_ * std::floor(first_bin / grid_)),
-          step_(bins_per_sample) {}
-    double at(std::size_t i) {
-      double pos = start_ + step_ * static_cast<double>(i) - wrapped_;
-      if (pos >= grid_) {
-        wrapped_ += grid_;
-        pos -= grid_;
-      }
-      return pos;
-    }
-
-   private:
-    double grid_;
-    double start_;          // [0, bins]
-    double step_;           // bins per sample
-    double wrapped_ = 0.0;  // whole turns of the grid passed, in bins
-  };
+  /// [0, bins] (grid_line.hpp).
+  using Line = GridLine;
+  [[nodiscard]] static Line line_of(double first_bin, double bins_per_sample, int bins) {
+    const auto grid = static_cast<double>(bins);
+    return Line(first_bin - grid * std::floor(first_bin / grid), bins_per_sample, grid);
+  }
   /// A line a spindle makes: forwards, less than a turn a sample.
   [[nodiscard]] bool spindle_line(double bins_per_sample) const {
     return bins_per_sample >= 0.0 && bins_per_sample < static_cast<double>(bins_);
