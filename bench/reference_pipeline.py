@@ -20,8 +20,12 @@ Whole process (--whole-s, default 10 s, when no CSV is given): on one simulated 
 processing once) against `millwatch replay --no-identify` of the same file (start, CSV parse, the
 whole pipeline with the lockstep model, summary). --no-identify: replay otherwise identifies
 runout and coefficients on every 30-revolution window and waits for the fits, work the reference
-does not do at all. Best of --whole-repeats (10), the two alternating run by run; one JSON line
-{"bench": "whole_process", ...}. --whole-only: that comparison alone.
+does not do at all. The same cut is also written as an lcm-logger log of 1 ms raw blocks
+(`millwatch publish --url file://...?mode=w`) and `millwatch replay --no-identify` of that log
+(with a configuration from the CSV's sidecar) timed beside them: the issue asks the LCM log
+reader, like the CSV parser, not to cost more than the pipeline. Best of --whole-repeats (10),
+the three alternating run by run; one JSON line {"bench": "whole_process", ...}. --whole-only:
+that comparison alone.
 
   /usr/bin/python3 bench/reference_pipeline.py [--millwatch build/release/replay/millwatch]
   /usr/bin/python3 bench/reference_pipeline.py CUT.csv ...   # recordings with their sidecars
@@ -158,11 +162,41 @@ def simulate(millwatch, scenario, rate_hz, duration_s, workdir, tag="reference")
     return csv
 
 
+def lcm_log_of(millwatch, csv):
+    """The cut as an lcm-logger log of 1 ms raw blocks, and a configuration to replay it with
+    (the log holds the samples alone: the rate, model and axis map come from the sidecar)."""
+    log = csv.with_suffix(".lcmlog")
+    log.unlink(missing_ok=True)
+    subprocess.run([millwatch, "publish", str(csv), "--url", f"file://{log.resolve()}?mode=w",
+                    "--speed", "0", "--block", "50"], check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL)
+    sidecar = json.loads(csv.with_suffix(".json").read_text())
+    config = csv.with_suffix(".lcmlog.json")
+    config.write_text(json.dumps({"monitor": {
+        "sample_rate_hz": sidecar["sample_rate_hz"], "model": sidecar["scenario"]["model"],
+        "axis_map": sidecar["force_sign_convention"]["axis_map"]}}, indent=1))
+    return log, config
+
+
+def revolutions_measured(command):
+    out = subprocess.run(command + ["--json"], check=True, capture_output=True, text=True).stdout
+    return json.loads(out)["revolutions_measured"]
+
+
 def whole_process(millwatch, scenario, duration_s, workdir, repeats):
-    """Wall-clock time of the whole reference script and of millwatch replay on one CSV."""
+    """Wall-clock time of the whole reference script and of millwatch replay on one CSV, and of
+    millwatch replay on the same cut as an LCM log."""
     csv = simulate(millwatch, scenario, 50000.0, duration_s, workdir, "whole")
+    log, config = lcm_log_of(millwatch, csv)
+    replay = [millwatch, "replay", "--no-identify", "--no-progress"]
     runs = {"reference": [sys.executable, __file__, str(csv), "--repeats", "1"],
-            "millwatch": [millwatch, "replay", "--no-identify", "--no-progress", str(csv)]}
+            "millwatch": replay + [str(csv)],
+            "millwatch_lcmlog": replay + [str(log), "--config", str(config)]}
+    # Both replays measure the same revolutions, or their times would compare different work.
+    measured = {name: revolutions_measured(runs[name])
+                for name in ("millwatch", "millwatch_lcmlog")}
+    if measured["millwatch"] != measured["millwatch_lcmlog"]:
+        sys.exit(f"the CSV and the LCM log replays differ: {measured} revolutions measured")
     # The two alternate, run by run: on a shared machine whose speed drifts over minutes, each
     # sees the same phases (run one after the other, one could be timed in a slow one).
     times = {name: [] for name in runs}
@@ -176,10 +210,15 @@ def whole_process(millwatch, scenario, duration_s, workdir, repeats):
     result = {"bench": "whole_process", "csv": str(csv), "sample_rate_hz": 50000.0,
               "duration_s": duration_s, "rows": round(duration_s * 50000.0),
               "reference_s": best["reference"], "millwatch_s": best["millwatch"],
-              "ratio": best["reference"] / best["millwatch"], "repeats": repeats}
+              "ratio": best["reference"] / best["millwatch"], "repeats": repeats,
+              "lcmlog": str(log), "lcmlog_bytes": log.stat().st_size,
+              "millwatch_lcmlog_s": best["millwatch_lcmlog"],
+              "lcmlog_ratio": best["reference"] / best["millwatch_lcmlog"],
+              "revolutions_measured": measured["millwatch"]}
     print(f"  whole process, {duration_s:g} s at 50 kHz ({result['rows']} rows): reference script "
           f"{best['reference']:.3f} s, millwatch replay --no-identify {best['millwatch']:.3f} s "
-          f"({result['ratio']:.1f}x)", file=sys.stderr)
+          f"({result['ratio']:.1f}x), of the LCM log {best['millwatch_lcmlog']:.3f} s "
+          f"({result['lcmlog_ratio']:.1f}x)", file=sys.stderr)
     print(json.dumps(result), flush=True)
 
 
