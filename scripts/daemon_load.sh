@@ -11,8 +11,10 @@
 # processed.
 #
 #   scripts/daemon_load.sh [--seconds 30] [--warmup 8] [--block 333] [--build build/release]
-#                          [--same-url]
+#                          [--same-url] [--wake-period S]
 #
+# --wake-period S sets source.wake_period_s (default: millwatchd's, 5 ms): the sample thread
+# takes the blocks in rounds S apart, each block waiting up to S for its round.
 # --same-url publishes the results on the input URL (what millwatchd did before lcm.output_url):
 # its LCM receive thread then also reads the daemon's own outputs. Prints a human summary on
 # stderr and one JSON line on stdout. Builds nothing: build millwatchd and daemon_feeder first.
@@ -24,6 +26,7 @@ warmup=8
 block=333
 build=build/release
 same_url=0
+wake_period=
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
@@ -36,6 +39,7 @@ while [ $# -gt 0 ]; do
       ;;
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
+    --wake-period) wake_period=$2; shift 2 ;;
     *) echo "daemon_load.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -47,7 +51,8 @@ done
 
 if [ "${MW_DAEMON_LOAD_IN_NS:-}" != 1 ]; then
   exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" --seconds "$seconds" --warmup "$warmup" \
-    --block "$block" --build "$build" $([ "$same_url" = 1 ] && echo --same-url)
+    --block "$block" --build "$build" $([ "$same_url" = 1 ] && echo --same-url) \
+    ${wake_period:+--wake-period "$wake_period"}
 fi
 
 ip link set lo up
@@ -62,8 +67,11 @@ cache=$build/bench/daemon_load_cut.bin  # the simulated cut, kept between runs
 mkdir -p "$(dirname "$cache")"
 
 # BM_DaemonLoadRealTime's configuration: the default monitor at 333.3 kHz, 25,250 rpm.
+source_section=
+[ -n "$wake_period" ] && source_section="\"source\": {\"wake_period_s\": $wake_period},"
 cat >"$work/d.json" <<EOF
 {"monitor": {"sample_rate_hz": 333300.0, "model": {"process": {"spindle_rpm": 25250.0}}},
+ $source_section
  "status_period_s": 1.0, "log_level": "warn"}
 EOF
 # Simulate (or read) the cut before anything is measured.
@@ -97,10 +105,11 @@ sleep 0.5
 kill -TERM "$pid"
 wait "$pid" || { cat "$work/daemon.log" >&2; exit 3; }
 
-python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" <<'EOF'
+python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" "$wake_period" <<'EOF'
 import json, sys
 work, seconds, same_url, hz = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4])
 block = int(sys.argv[5])
+wake_period_s = float(sys.argv[6]) if sys.argv[6] else None  # None: millwatchd's default
 def read(name):
     process, threads = 0, {}
     for line in open(f"{work}/{name}"):
@@ -121,7 +130,7 @@ for tid, (comm, ns) in sorted(t1.items()):
 fit = summary.get("fit", {})
 result = {
     "bench": "daemon_load", "sample_rate_hz": 333300.0, "seconds": seconds,
-    "block_samples": block,
+    "block_samples": block, "wake_period_s": wake_period_s,
     "outputs_on_input_url": same_url,
     "process_percent_of_a_core": round(100 * (p1 - p0) / hz / seconds, 2),
     "threads_percent_of_a_core": threads,
@@ -130,7 +139,8 @@ result = {
         fit.get("windows_skipped_for_budget"),
     "udp_rcvbuf_errors": int(udp[5]) if len(udp) > 5 else None,
 }
-print(f"millwatchd at 333.3 kHz in {block}-sample blocks, {seconds:g} s measured"
+wake = f", wake period {wake_period_s * 1e3:g} ms" if wake_period_s is not None else ""
+print(f"millwatchd at 333.3 kHz in {block}-sample blocks, {seconds:g} s measured{wake}"
       f" ({'outputs on the input URL' if same_url else 'outputs on their own URL'}):"
       f" process {result['process_percent_of_a_core']:.2f} % of a core", file=sys.stderr)
 for name, pct in threads.items():
