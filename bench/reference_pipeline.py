@@ -197,7 +197,7 @@ def whole_process(millwatch, scenario, duration_s, workdir, repeats):
                 for name in ("millwatch", "millwatch_lcmlog")}
     if measured["millwatch"] != measured["millwatch_lcmlog"]:
         sys.exit(f"the CSV and the LCM log replays differ: {measured} revolutions measured")
-    # The two alternate, run by run: on a shared machine whose speed drifts over minutes, each
+    # The three alternate, run by run: on a shared machine whose speed drifts over minutes, each
     # sees the same phases (run one after the other, one could be timed in a slow one).
     times = {name: [] for name in runs}
     for _ in range(repeats):

@@ -137,23 +137,22 @@ if unshare -n true 2>/dev/null; then
 import json, sys
 runs = sorted((json.loads(l) for l in open(sys.argv[1])), key=lambda r: r["process_percent_of_a_core"])
 r = runs[len(runs) // 2]
-t = r["threads_percent_of_a_core"]
-share = lambda prefix: sum(v for k, v in t.items() if k.startswith(prefix))
+def share(run, prefix):  # the CPU share of a run's threads named prefix*
+    return sum(v for k, v in run["threads_percent_of_a_core"].items() if k.startswith(prefix))
 others = ", ".join(f"{x['process_percent_of_a_core']:.1f} %" for x in runs if x is not r)
 print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['seconds']:g} s, median of"
       f" {len(runs)}): the process {r['process_percent_of_a_core']:.1f} % of a core between fits"
-      f" (the other runs {others}): the sample thread {share('mw-sample'):.1f} %, LCM's receive"
-      f" thread {share('mw-lcm-receive'):.1f} %, the publisher {share('mw-publish'):.1f} %,"
-      f" identification {share('mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
+      f" (the other runs {others}): the sample thread {share(r, 'mw-sample'):.1f} %, LCM's receive"
+      f" thread {share(r, 'mw-lcm-receive'):.1f} %, the publisher {share(r, 'mw-publish'):.1f} %,"
+      f" identification {share(r, 'mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
       f" {r['windows_skipped_for_budget']} skipped for the budget); identification's budget adds"
       f" about 1 % on average (cpu_budget 0.01); target < 5 % with it; {r['dropped_samples']}"
       f" samples dropped.")
 f = json.load(open(sys.argv[2]))
-identify = sum(v for k, v in f["threads_percent_of_a_core"].items() if k.startswith("mw-identify"))
 print(f"With identification's fits, over {f['seconds']:g} s ({f['windows_fitted']} windows fitted,"
       f" {f['windows_skipped_for_budget']} skipped for the budget): the process"
       f" {f['process_percent_of_a_core']:.2f} % of a core (target < 5 %), identification"
-      f" {identify:.2f} % of it; {f['dropped_samples']} samples dropped.")
+      f" {share(f, 'mw-identify'):.2f} % of it; {f['dropped_samples']} samples dropped.")
 EOF
 else
   echo "== millwatchd over LCM: skipped (unshare -n needs root)" >&2

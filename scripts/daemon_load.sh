@@ -74,6 +74,12 @@ cat >"$work/d.json" <<EOF
  $source_section
  "status_period_s": 1.0, "log_level": "warn"}
 EOF
+# millwatchd's own check, before anything runs: a bad --wake-period is named, not a failed run.
+if ! "$daemon" --check -c "$work/d.json" >"$work/check.log" 2>&1; then
+  echo "daemon_load.sh: millwatchd refuses the configuration:" >&2
+  cat "$work/check.log" >&2
+  exit 2
+fi
 # Simulate (or read) the cut before anything is measured.
 "$feeder" --url "memq://" --seconds 0.001 --cache "$cache" 2>/dev/null
 
