@@ -126,7 +126,7 @@ EOF
 # millwatchd itself over LCM (needs root for unshare -n; skipped, saying so, without it).
 if unshare -n true 2>/dev/null; then
   echo "== millwatchd over LCM (scripts/daemon_load.sh, three runs)" >&2
-  for run in 1 2 3; do  # the machine's noise shows most here: the median of three
+  for _ in 1 2 3; do  # the machine's noise shows most here: the median of three
     scripts/daemon_load.sh --build "$build" --seconds 20
   done >"$out/daemon_load.jsonl"
   # Identification fits a window about once a minute within its budget: a span of three minutes

@@ -34,8 +34,10 @@ while [ $# -gt 0 ]; do
     --block)
       block=$2
       shift 2
-      [[ $block =~ ^[0-9]+$ ]] && ((block >= 16 && block <= 2000)) ||
-        { echo "daemon_load.sh: --block takes 16 to 2000 samples (force_block_t), not $block" >&2; exit 2; }
+      if ! [[ $block =~ ^[0-9]+$ ]] || ((block < 16 || block > 2000)); then
+        echo "daemon_load.sh: --block takes 16 to 2000 samples (force_block_t), not $block" >&2
+        exit 2
+      fi
       ;;
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
@@ -50,9 +52,10 @@ for p in "$daemon" "$feeder"; do
 done
 
 if [ "${MW_DAEMON_LOAD_IN_NS:-}" != 1 ]; then
-  exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" --seconds "$seconds" --warmup "$warmup" \
-    --block "$block" --build "$build" $([ "$same_url" = 1 ] && echo --same-url) \
-    ${wake_period:+--wake-period "$wake_period"}
+  args=(--seconds "$seconds" --warmup "$warmup" --block "$block" --build "$build")
+  [ "$same_url" = 1 ] && args+=(--same-url)
+  [ -n "$wake_period" ] && args+=(--wake-period "$wake_period")
+  exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" "${args[@]}"
 fi
 
 ip link set lo up
