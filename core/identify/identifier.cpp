@@ -236,7 +236,7 @@ void Identifier::run() {
     // only waiting ones dropped), and list nodes do not move.
     const double cpu0_s = thread_cpu_s();
     out.fit_started_s = steady_s();
-    out.fit = fit(entry->window, previous);
+    out.fit = fit(entry->window, previous, out.variants_fitted);
     const double end_s = steady_s();
     out.fit_cpu_seconds = thread_cpu_s() - cpu0_s;
     out.fit_seconds = end_s - out.fit_started_s;
@@ -271,32 +271,50 @@ void Identifier::run() {
 
 namespace millwatch::identify {
 
+bool runout_moved(const FitResult& before, const FitResult& now) {
+  constexpr double kChiSquare2Dof3Sigma = 11.83;
+  const double rho0 = before.rho_um.value, gamma0 = before.gamma_rad.value;
+  const double rho1 = now.rho_um.value, gamma1 = now.gamma_rad.value;
+  // now's vector in before's radial and tangential directions, minus before's (ρ0, 0).
+  const double radial_um = rho1 * std::cos(gamma1 - gamma0) - rho0;
+  const double across_um = rho1 * std::sin(gamma1 - gamma0);
+  const auto square = [](double x) { return x * x; };
+  const double var_radial = square(before.rho_um.sigma) + square(now.rho_um.sigma);
+  const double var_across =
+      square(rho0 * before.gamma_rad.sigma) + square(rho1 * now.gamma_rad.sigma);
+  // A component without uncertainty (an exact fit) moved if it moved at all.
+  const auto term = [&](double d, double var) {
+    return var > 0.0 ? square(d) / var : (d != 0.0 ? kChiSquare2Dof3Sigma + 1.0 : 0.0);
+  };
+  return term(radial_um, var_radial) + term(across_um, var_across) > kChiSquare2Dof3Sigma;
+}
+
 FitResult Identifier::fit(const MeasuredRevolution& window,
-                          const std::optional<FitResult>& previous) {
+                          const std::optional<FitResult>& previous, bool& variants_fitted) {
   const FitResult* seed = previous ? &*previous : nullptr;
-  if (!options_.systematic || !systematic_ || ++since_systematic_ >= kSystematicEvery) {
-    FitResult full = fitter_.fit(window, seed);
+  variants_fitted = false;
+  auto with_variants = [&](const FitResult* from) {
+    FitResult full = fitter_.fit(window, from);
+    variants_fitted = options_.systematic;
     if (full.ok) {
       systematic_ = full;
       since_systematic_ = 0;
     }
     return full;
+  };
+  if (!options_.systematic || !systematic_ || ++since_systematic_ >= kSystematicEvery) {
+    return with_variants(seed);
   }
   FitResult r = fitter_.fit(window, seed, false);
-  const FitResult& s = *systematic_;
-  // Moved by more than the uncertainty since the variants were fitted: fit them again.
-  const double moved_um = std::hypot(
-      r.rho_um.value * std::cos(r.gamma_rad.value) - s.rho_um.value * std::cos(s.gamma_rad.value),
-      r.rho_um.value * std::sin(r.gamma_rad.value) - s.rho_um.value * std::sin(s.gamma_rad.value));
-  if (!r.ok || moved_um > s.rho_um.sigma) {
-    FitResult full = fitter_.fit(window, seed);
-    if (full.ok) {
-      systematic_ = full;
-      since_systematic_ = 0;
-    }
-    return full;
+  if (!r.ok) {
+    return with_variants(seed);
   }
-  carry_systematic(s, r);
+  carry_systematic(*systematic_, r);
+  if (runout_moved(*systematic_, r)) {
+    // The runout moved beyond both windows' uncertainty since the variants were fitted: fit
+    // them again, from this window's own result (the main fit then starts where it ends).
+    return with_variants(&r);
+  }
   return r;
 }
 

@@ -23,8 +23,8 @@
 //
 // Cost. The systematic part of the uncertainty (the spread over model variants, window_fit.hpp)
 // costs several refits; the model's discrepancy changes slowly, so it is re-estimated on the
-// first window, every kSystematicEvery windows and whenever the estimate moved by more than its
-// uncertainty since, and carried over (per parameter) in between.
+// first window, every kSystematicEvery windows and whenever the runout moved by more than the
+// two fits' noise explains (runout_moved()), and carried over (per parameter) in between.
 //
 //   Identifier id(model, filter, options, publish, HandOver::kWhenReady, 0.02);
 //   id.submit(window, revolution, utime_us, due_revolution);  // sample thread: a copy, no fit
@@ -54,7 +54,17 @@ struct IdentifiedWindow {
   double fit_seconds = 0.0;      ///< wall-clock time the fit took
   double fit_cpu_seconds = 0.0;  ///< the worker thread's CPU time for it (what the budget counts)
   double fit_started_s = 0.0;    ///< steady-clock time (s since its epoch) the fit began
+  bool variants_fitted = false;  ///< the systematic variants were fitted on this window (else
+                                 ///< their σ_sys carried over from the last window that had them)
 };
+
+/// Whether the runout of `now` differs from that of `before` by more than the two fits'
+/// uncertainty explains: the difference of the runout vectors ρ·e^{iγ}, radial and across
+/// `before`'s, each against the sum of both fits' variances (σ_ρ², and (ρ·σ_γ)² across; σ as
+/// reported), the two summed, beyond χ²'s 99.73 % point with two degrees of freedom (11.83: a 3σ
+/// move). Two windows of a steady cut differ by about √2 times one fit's σ in each direction, so
+/// a test against one σ fires on most of them.
+[[nodiscard]] bool runout_moved(const FitResult& before, const FitResult& now);
 
 /// How take_due() treats a result whose fit is still running when it is due.
 enum class HandOver {
@@ -122,7 +132,8 @@ class Identifier {
 
   void run();
   /// Fits one window, with or without the systematic variants (see Cost above).
-  FitResult fit(const MeasuredRevolution& window, const std::optional<FitResult>& previous);
+  FitResult fit(const MeasuredRevolution& window, const std::optional<FitResult>& previous,
+                bool& variants_fitted);
   /// The first entry that may be handed over (not stale), or null.
   Entry* front();
 

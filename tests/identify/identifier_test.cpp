@@ -12,6 +12,7 @@
 #include <cmath>
 #include <complex>
 #include <mutex>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -206,6 +207,102 @@ TEST(Identifier, InAReplayTheBudgetIsIgnored) {
   EXPECT_EQ(id.skipped_for_budget(), 0);
   EXPECT_EQ(id.superseded(), 0);
   EXPECT_EQ(id.budget_period_s(), 0.0);  // nothing for the alerts to wait on
+}
+
+// runout_moved(): the difference of two runout vectors against both fits' σ, radial (σ_ρ) and
+// across (ρ·σ_γ), at χ²(2 dof)'s 3σ point, 11.83.
+FitResult runout_fit(double rho_um, double gamma_rad, double sigma_rho_um, double sigma_gamma_rad) {
+  FitResult f;
+  f.ok = true;
+  f.rho_um.value = rho_um;
+  f.rho_um.sigma = sigma_rho_um;
+  f.gamma_rad.value = gamma_rad;
+  f.gamma_rad.sigma = sigma_gamma_rad;
+  return f;
+}
+
+TEST(Identifier, ARunoutMovesWhenBothFitsUncertaintyDoesNotExplainTheDifference) {
+  // σ_ρ 0.03 µm in each fit: the radial difference's σ is 0.03·√2 = 0.0424 µm; 3.44 of them
+  // (√11.83) is 0.1459 µm.
+  const FitResult before = runout_fit(2.0, 0.5, 0.03, 0.001);
+  EXPECT_FALSE(runout_moved(before, runout_fit(2.0, 0.5, 0.03, 0.001)));
+  EXPECT_FALSE(runout_moved(before, runout_fit(2.14, 0.5, 0.03, 0.001)));
+  EXPECT_TRUE(runout_moved(before, runout_fit(2.15, 0.5, 0.03, 0.001)));
+  EXPECT_TRUE(runout_moved(before, runout_fit(1.85, 0.5, 0.03, 0.001)));
+  // Across: ρ·σ_γ = 2 µm · 0.02 = 0.04 µm in each, the difference's σ 0.0566 µm; 3.44 of them
+  // is 0.1946 µm, about 0.097 rad at 2 µm (the radial part of the chord adds a little).
+  const FitResult wide = runout_fit(2.0, 0.5, 0.03, 0.02);
+  EXPECT_FALSE(runout_moved(wide, runout_fit(2.0, 0.5 + 0.096, 0.03, 0.02)));
+  EXPECT_TRUE(runout_moved(wide, runout_fit(2.0, 0.5 + 0.099, 0.03, 0.02)));
+  // The radial σ does not hide a move across (and the other way round).
+  EXPECT_TRUE(runout_moved(before, runout_fit(2.0, 0.55, 0.03, 0.001)));
+  // A runout near zero: its direction is noise, its vector is not.
+  const FitResult small = runout_fit(0.01, 0.0, 0.03, 3.0);
+  EXPECT_FALSE(runout_moved(small, runout_fit(0.02, 3.0, 0.03, 1.5)));
+  EXPECT_TRUE(runout_moved(small, runout_fit(0.3, 3.0, 0.03, 0.1)));
+  // Exact fits (no noise): any move is one.
+  EXPECT_TRUE(runout_moved(runout_fit(1.0, 0.0, 0.0, 0.0), runout_fit(1.0 + 1e-9, 0.0, 0.0, 0.0)));
+  EXPECT_FALSE(runout_moved(runout_fit(1.0, 0.0, 0.0, 0.0), runout_fit(1.0, 0.0, 0.0, 0.0)));
+}
+
+// The systematic variants are fitted on the first window, every tenth and when the runout moves;
+// between them the windows of a steady cut carry their σ_sys. Twelve windows of one cut, each
+// with its own noise (0.1 N per bin; the averaged forces peak at about 2 N): their runouts
+// differ by the noise, which the former test (the move against the last variants' σ alone) took
+// for a move on all eleven after the first; then a window after a runout step.
+TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNoise) {
+  const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
+  Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution exact = window_of(truth);
+  std::mt19937_64 rng(20261201);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  constexpr int kWindows = 12;
+  auto noisy = [&](MeasuredRevolution w) {
+    for (auto& axis : w.force_N) {
+      for (double& f : axis) {
+        f += noise(rng);
+      }
+    }
+    return w;
+  };
+  for (int k = 1; k <= kWindows; ++k) {
+    id.submit(noisy(exact), 30 * k, 1000 * k, 30 * k);
+  }
+  std::vector<IdentifiedWindow> results;
+  for (int k = 1; k <= kWindows; ++k) {
+    const auto r = id.take_due(30 * k);
+    ASSERT_TRUE(r.has_value() && r->fit.ok) << k;
+    results.push_back(*r);
+  }
+  int former_test_fired = 0;
+  const FitResult* with_variants = nullptr;
+  for (int k = 0; k < kWindows; ++k) {
+    const FitResult& f = results[static_cast<std::size_t>(k)].fit;
+    EXPECT_EQ(results[static_cast<std::size_t>(k)].variants_fitted, k == 0 || k == 10) << k;
+    EXPECT_GT(f.rho_um.sigma_stat, 0.0);
+    EXPECT_GT(f.rho_um.sigma_sys, 0.0) << k;  // fitted or carried over: always there
+    EXPECT_NEAR(f.rho_um.sigma, std::hypot(f.rho_um.sigma_stat, f.rho_um.sigma_sys), 1e-15);
+    EXPECT_NEAR(f.rho_um.value, 1.2, 4.0 * f.rho_um.sigma) << k;
+    if (with_variants != nullptr) {
+      const double moved_um =
+          std::abs(std::polar(f.rho_um.value, f.gamma_rad.value) -
+                   std::polar(with_variants->rho_um.value, with_variants->gamma_rad.value));
+      former_test_fired += moved_um > with_variants->rho_um.sigma ? 1 : 0;
+    }
+    if (results[static_cast<std::size_t>(k)].variants_fitted) {
+      with_variants = &f;
+    }
+  }
+  EXPECT_GE(former_test_fired, 3);  // the test could fail: noise alone moves the runout that much
+
+  const model::ModelConfig after = three_flute_slot(2.0, -1.0);
+  id.submit(noisy(window_of(after)), 30 * (kWindows + 1), 1000 * (kWindows + 1),
+            30 * (kWindows + 1));
+  const auto stepped = id.take_due(30 * (kWindows + 1));
+  ASSERT_TRUE(stepped.has_value() && stepped->fit.ok);
+  EXPECT_TRUE(stepped->variants_fitted);
+  EXPECT_NEAR(stepped->fit.rho_um.value, 2.0, 3.0 * stepped->fit.rho_um.sigma);
+  id.finish();
 }
 
 TEST(Identifier, RefusesABudgetOutsideZeroToOne) {
