@@ -14,7 +14,7 @@
 //     "sync_average": {"bins": 256, "window_revolutions": 30, "template_revolutions": 10},
 //     "lockstep": {"enabled": true, "sectors": 12},
 //     "identification": {"enabled": true, "extra_parameters": ["h_min_um"],
-//                        "max_unexplained": 0.2, "runout_prior_um": 5, "cpu_budget": 0.01},
+//                        "max_unexplained": 0.2, "runout_prior_um": 5, "cpu_budget": 0.005},
 //     "alerts": { AlertConfig } }
 
 #include <array>
@@ -62,10 +62,11 @@ struct MonitorConfig {
     double max_unexplained = 0.2;
     double runout_prior_um = 5.0;  ///< identify::FitOptions::runout_prior_um
     /// Live: the fraction of one core the fits may use on average, in (0, 1] (identify::CpuBudget;
-    /// the replay waits for every fit and ignores it). 0.01: a fit of the default model takes
-    /// ~0.4 s of CPU, so one window in ~40 s is fitted, and the daemon at 333.3 kHz (the sample
-    /// thread ~4 % of a core) stays under 5 % in total.
-    double cpu_budget = 0.01;
+    /// the replay waits for every fit and ignores it). 0.005: a fit of the default model takes
+    /// ~0.15–0.4 s of CPU (the first, with the systematic variants, ~0.6 s), so one window in
+    /// 30–80 s is fitted, and the daemon at 333.3 kHz (~4 % of a core without its fits) stays
+    /// under 5 % in total.
+    double cpu_budget = 0.005;
   } identification;
   AlertConfig alerts;
 };
