@@ -133,7 +133,13 @@ if unshare -n true 2>/dev/null; then
   # measures the process with its fits, not only between them.
   echo "== millwatchd over LCM with identification's fits (scripts/daemon_load.sh, 180 s)" >&2
   scripts/daemon_load.sh --build "$build" --seconds 180 >"$out/daemon_load_fits.json"
-  /usr/bin/python3 - "$out/daemon_load.jsonl" "$out/daemon_load_fits.json" <<'EOF'
+  # As a service would run it with CPUAffinity=: its threads on one core (the last CPU here).
+  pinned_cpu=$(($(nproc) - 1))
+  echo "== the same, millwatchd pinned to CPU $pinned_cpu (scripts/daemon_load.sh --cpu, 180 s)" >&2
+  scripts/daemon_load.sh --build "$build" --seconds 180 --cpu "$pinned_cpu" \
+    >"$out/daemon_load_pinned.json"
+  /usr/bin/python3 - "$out/daemon_load.jsonl" "$out/daemon_load_fits.json" \
+    "$out/daemon_load_pinned.json" <<'EOF'
 import json, sys
 runs = sorted((json.loads(l) for l in open(sys.argv[1])), key=lambda r: r["process_percent_of_a_core"])
 r = runs[len(runs) // 2]
@@ -146,13 +152,14 @@ print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['second
       f" thread {share(r, 'mw-lcm-receive'):.1f} %, the publisher {share(r, 'mw-publish'):.1f} %,"
       f" identification {share(r, 'mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
       f" {r['windows_skipped_for_budget']} skipped for the budget); identification's budget adds"
-      f" about 1 % on average (cpu_budget 0.01); target < 5 % with it; {r['dropped_samples']}"
+      f" about 0.5 % on average (cpu_budget 0.005); target < 5 % with it; {r['dropped_samples']}"
       f" samples dropped.")
-f = json.load(open(sys.argv[2]))
-print(f"With identification's fits, over {f['seconds']:g} s ({f['windows_fitted']} windows fitted,"
-      f" {f['windows_skipped_for_budget']} skipped for the budget): the process"
-      f" {f['process_percent_of_a_core']:.2f} % of a core (target < 5 %), identification"
-      f" {share(f, 'mw-identify'):.2f} % of it; {f['dropped_samples']} samples dropped.")
+for path, how in ((sys.argv[2], "unpinned"), (sys.argv[3], "pinned to one core")):
+    f = json.load(open(path))
+    print(f"With identification's fits, {how}, over {f['seconds']:g} s ({f['windows_fitted']}"
+          f" windows fitted, {f['windows_skipped_for_budget']} skipped for the budget): the process"
+          f" {f['process_percent_of_a_core']:.2f} % of a core (target < 5 %), identification"
+          f" {share(f, 'mw-identify'):.2f} % of it; {f['dropped_samples']} samples dropped.")
 EOF
 else
   echo "== millwatchd over LCM: skipped (unshare -n needs root)" >&2

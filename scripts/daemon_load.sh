@@ -11,10 +11,13 @@
 # processed.
 #
 #   scripts/daemon_load.sh [--seconds 30] [--warmup 8] [--block 333] [--build build/release]
-#                          [--same-url] [--wake-period S]
+#                          [--same-url] [--wake-period S] [--cpu N]
 #
 # --wake-period S sets source.wake_period_s (default: millwatchd's, 5 ms): the sample thread
 # takes the blocks in rounds S apart, each block waiting up to S for its round.
+# --cpu N runs millwatchd pinned to CPU N (taskset -c N; a service: CPUAffinity=N), all its
+# threads on one core: on a VM, a wake-up across cores costs an inter-processor interrupt and the
+# threads' caches are not shared, so the unpinned figure moves with where the scheduler puts them.
 # --same-url publishes the results on the input URL (what millwatchd did before lcm.output_url):
 # its LCM receive thread then also reads the daemon's own outputs. Prints a human summary on
 # stderr and one JSON line on stdout. Builds nothing: build millwatchd and daemon_feeder first.
@@ -27,6 +30,7 @@ block=333
 build=build/release
 same_url=0
 wake_period=
+cpu=
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
@@ -42,6 +46,14 @@ while [ $# -gt 0 ]; do
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
     --wake-period) wake_period=$2; shift 2 ;;
+    --cpu)
+      cpu=$2
+      shift 2
+      if ! [[ $cpu =~ ^[0-9]+$ ]] || ! taskset -c "$cpu" true 2>/dev/null; then
+        echo "daemon_load.sh: --cpu takes a CPU this process may run on ($(taskset -cp $$ | sed 's/.*: //')), not $cpu" >&2
+        exit 2
+      fi
+      ;;
     *) echo "daemon_load.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -55,6 +67,7 @@ if [ "${MW_DAEMON_LOAD_IN_NS:-}" != 1 ]; then
   args=(--seconds "$seconds" --warmup "$warmup" --block "$block" --build "$build")
   [ "$same_url" = 1 ] && args+=(--same-url)
   [ -n "$wake_period" ] && args+=(--wake-period "$wake_period")
+  [ -n "$cpu" ] && args+=(--cpu "$cpu")
   exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" "${args[@]}"
 fi
 
@@ -88,7 +101,9 @@ fi
 
 output_option=(--lcm-output-url "$out_url")
 [ "$same_url" = 1 ] && output_option=()  # --lcm-url alone: the outputs on it too
-"$daemon" -c "$work/d.json" --lcm-url "$in_url" "${output_option[@]}" \
+pin=()
+[ -n "$cpu" ] && pin=(taskset -c "$cpu")
+"${pin[@]}" "$daemon" -c "$work/d.json" --lcm-url "$in_url" "${output_option[@]}" \
   --summary "$work/summary.json" 2>"$work/daemon.log" &
 pid=$!
 sleep 0.5
@@ -114,11 +129,12 @@ sleep 0.5
 kill -TERM "$pid"
 wait "$pid" || { cat "$work/daemon.log" >&2; exit 3; }
 
-python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" "$wake_period" <<'EOF'
+python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" "$wake_period" "$cpu" <<'EOF'
 import json, sys
 work, seconds, same_url, hz = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4])
 block = int(sys.argv[5])
 wake_period_s = float(sys.argv[6]) if sys.argv[6] else None  # None: millwatchd's default
+cpu = int(sys.argv[7]) if sys.argv[7] else None  # None: not pinned
 def read(name):
     process, threads = 0, {}
     for line in open(f"{work}/{name}"):
@@ -139,7 +155,7 @@ for tid, (comm, ns) in sorted(t1.items()):
 fit = summary.get("fit", {})
 result = {
     "bench": "daemon_load", "sample_rate_hz": 333300.0, "seconds": seconds,
-    "block_samples": block, "wake_period_s": wake_period_s,
+    "block_samples": block, "wake_period_s": wake_period_s, "cpu": cpu,
     "outputs_on_input_url": same_url,
     "process_percent_of_a_core": round(100 * (p1 - p0) / hz / seconds, 2),
     "threads_percent_of_a_core": threads,
@@ -149,6 +165,7 @@ result = {
     "udp_rcvbuf_errors": int(udp[5]) if len(udp) > 5 else None,
 }
 wake = f", wake period {wake_period_s * 1e3:g} ms" if wake_period_s is not None else ""
+wake += f", pinned to CPU {cpu}" if cpu is not None else ""
 print(f"millwatchd at 333.3 kHz in {block}-sample blocks, {seconds:g} s measured{wake}"
       f" ({'outputs on the input URL' if same_url else 'outputs on their own URL'}):"
       f" process {result['process_percent_of_a_core']:.2f} % of a core", file=sys.stderr)
