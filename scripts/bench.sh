@@ -133,8 +133,9 @@ if unshare -n true 2>/dev/null; then
   # measures the process with its fits, not only between them.
   echo "== millwatchd over LCM with identification's fits (scripts/daemon_load.sh, 180 s)" >&2
   scripts/daemon_load.sh --build "$build" --seconds 180 >"$out/daemon_load_fits.json"
-  # As a service would run it with CPUAffinity=: its threads on one core (the last CPU here).
-  pinned_cpu=$(($(nproc) - 1))
+  # As a service would run it with CPUAffinity=: its threads on one core (the last this script
+  # may use; python: the affinity mask may be a list with gaps).
+  pinned_cpu=$(python3 -c 'import os; print(max(os.sched_getaffinity(0)))')
   echo "== the same, millwatchd pinned to CPU $pinned_cpu (scripts/daemon_load.sh --cpu, 180 s)" >&2
   scripts/daemon_load.sh --build "$build" --seconds 180 --cpu "$pinned_cpu" \
     >"$out/daemon_load_pinned.json"

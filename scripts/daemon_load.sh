@@ -49,6 +49,7 @@ while [ $# -gt 0 ]; do
     --cpu)
       cpu=$2
       shift 2
+      command -v taskset >/dev/null || { echo "daemon_load.sh: --cpu needs taskset (util-linux)" >&2; exit 2; }
       if ! [[ $cpu =~ ^[0-9]+$ ]] || ! taskset -c "$cpu" true 2>/dev/null; then
         echo "daemon_load.sh: --cpu takes a CPU this process may run on ($(taskset -cp $$ | sed 's/.*: //')), not $cpu" >&2
         exit 2

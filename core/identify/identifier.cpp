@@ -275,13 +275,18 @@ bool runout_moved(const FitResult& before, const FitResult& now) {
   constexpr double kChiSquare2Dof3Sigma = 11.83;
   const double rho0 = before.rho_um.value, gamma0 = before.gamma_rad.value;
   const double rho1 = now.rho_um.value, gamma1 = now.gamma_rad.value;
+  const double cos_turn = std::cos(gamma1 - gamma0), sin_turn = std::sin(gamma1 - gamma0);
   // now's vector in before's radial and tangential directions, minus before's (ρ0, 0).
-  const double radial_um = rho1 * std::cos(gamma1 - gamma0) - rho0;
-  const double across_um = rho1 * std::sin(gamma1 - gamma0);
+  const double radial_um = rho1 * cos_turn - rho0;
+  const double across_um = rho1 * sin_turn;
   const auto square = [](double x) { return x * x; };
-  const double var_radial = square(before.rho_um.sigma) + square(now.rho_um.sigma);
+  // now's variances along its own radius and across it, turned into before's directions.
+  const double c2 = square(cos_turn), s2 = square(sin_turn);
+  const double now_radial = square(now.rho_um.sigma);
+  const double now_across = square(rho1 * now.gamma_rad.sigma);
+  const double var_radial = square(before.rho_um.sigma) + c2 * now_radial + s2 * now_across;
   const double var_across =
-      square(rho0 * before.gamma_rad.sigma) + square(rho1 * now.gamma_rad.sigma);
+      square(rho0 * before.gamma_rad.sigma) + s2 * now_radial + c2 * now_across;
   // A component without uncertainty (an exact fit) moved if it moved at all.
   const auto term = [&](double d, double var) {
     return var > 0.0 ? square(d) / var : (d != 0.0 ? kChiSquare2Dof3Sigma + 1.0 : 0.0);
@@ -295,7 +300,7 @@ FitResult Identifier::fit(const MeasuredRevolution& window,
   variants_fitted = false;
   auto with_variants = [&](const FitResult* from) {
     FitResult full = fitter_.fit(window, from);
-    variants_fitted = options_.systematic;
+    variants_fitted = options_.systematic && full.ok;
     if (full.ok) {
       systematic_ = full;
       since_systematic_ = 0;

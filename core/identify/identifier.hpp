@@ -60,10 +60,14 @@ struct IdentifiedWindow {
 
 /// Whether the runout of `now` differs from that of `before` by more than the two fits'
 /// uncertainty explains: the difference of the runout vectors ρ·e^{iγ}, radial and across
-/// `before`'s, each against the sum of both fits' variances (σ_ρ², and (ρ·σ_γ)² across; σ as
-/// reported), the two summed, beyond χ²'s 99.73 % point with two degrees of freedom (11.83: a 3σ
-/// move). Two windows of a steady cut differ by about √2 times one fit's σ in each direction, so
-/// a test against one σ fires on most of them.
+/// `before`'s, each against the sum of both fits' variances there (σ_ρ² along a fit's radius,
+/// (ρ·σ_γ)² across it, `now`'s turned by the angle between them), the two summed, beyond χ²'s
+/// 99.73 % point with two degrees of freedom (11.83: a 3σ move). Two windows of a steady cut
+/// differ by about √2 times one fit's σ in each direction, so a test against one σ fires on most
+/// of them. σ as reported, its systematic part included: the identifier refits the variants to
+/// follow a change of the operating point, and a move the reported σ cannot resolve changes their
+/// spread by a small part of itself (statistical σ alone also missed the fit's own wander between
+/// windows, about twice it on exact windows with little noise).
 [[nodiscard]] bool runout_moved(const FitResult& before, const FitResult& now);
 
 /// How take_due() treats a result whose fit is still running when it is due.

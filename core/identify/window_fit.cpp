@@ -342,8 +342,27 @@ struct WindowFitter::Impl {
       }
     }
 
+    /// `config` with the key's values: the runout, the extra parameters, and the coefficients
+    /// when they are nonlinear parameters.
+    void apply(const Eigen::VectorXd& key) {
+      const double u = key[0], v = key[1];
+      config.effects.runout.offset_um = std::hypot(u, v);
+      config.effects.runout.angle_rad = std::atan2(v, u);
+      const int n_extra = owner->extra_map.size();
+      if (n_extra > 0) {
+        model::set_parameters(owner->extra_map, key.segment(2, n_extra), config);
+      }
+      if (!owner->separable) {
+        model::set_parameters(owner->coefficient_map,
+                              key.segment(2 + n_extra, owner->coefficient_map.size()), config);
+      }
+    }
+
     /// The model's columns for the shared nonlinear values (θ without the alignments).
     void evaluate(const Eigen::VectorXd& key) {
+      // `config` follows the key asked for, cached or not: the fit reads its coefficients (their
+      // scales, a start) and must not see whichever key was last evaluated.
+      apply(key);
       for (std::size_t i = 0; i < kCached; ++i) {
         const Cached& entry = cache[i];
         if (entry.key.size() == key.size() && entry.key == key) {
@@ -354,19 +373,8 @@ struct WindowFitter::Impl {
           return;
         }
       }
-      const double u = key[0], v = key[1];
-      config.effects.runout.offset_um = std::hypot(u, v);
-      config.effects.runout.angle_rad = std::atan2(v, u);
-      const int n_extra = owner->extra_map.size();
-      if (n_extra > 0) {
-        model::set_parameters(owner->extra_map, key.segment(2, n_extra), config);
-        if (owner->extra_moves_resonance && resonance) {
-          compute_gains();  // a fitted natural frequency or damping ratio
-        }
-      }
-      if (!owner->separable) {
-        model::set_parameters(owner->coefficient_map,
-                              key.segment(2 + n_extra, owner->coefficient_map.size()), config);
+      if (owner->extra_map.size() > 0 && owner->extra_moves_resonance && resonance) {
+        compute_gains();  // a fitted natural frequency or damping ratio
       }
       const int s = setting.steps;
       if (owner->separable) {

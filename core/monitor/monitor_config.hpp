@@ -63,9 +63,9 @@ struct MonitorConfig {
     double runout_prior_um = 5.0;  ///< identify::FitOptions::runout_prior_um
     /// Live: the fraction of one core the fits may use on average, in (0, 1] (identify::CpuBudget;
     /// the replay waits for every fit and ignores it). 0.005: a fit of the default model takes
-    /// ~0.15–0.4 s of CPU (the first, with the systematic variants, ~0.6 s), so one window in
-    /// 30–80 s is fitted, and the daemon at 333.3 kHz (~4 % of a core without its fits) stays
-    /// under 5 % in total.
+    /// ~0.15–0.4 s of CPU (with the systematic variants, up to ~0.6 s: a run's first window, every
+    /// tenth, after a move), so one window in 30–80 s is fitted, and the daemon at 333.3 kHz (~4 %
+    /// of a core without its fits) stays under 5 % in total.
     double cpu_budget = 0.005;
   } identification;
   AlertConfig alerts;

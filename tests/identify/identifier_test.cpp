@@ -240,6 +240,11 @@ TEST(Identifier, ARunoutMovesWhenBothFitsUncertaintyDoesNotExplainTheDifference)
   const FitResult small = runout_fit(0.01, 0.0, 0.03, 3.0);
   EXPECT_FALSE(runout_moved(small, runout_fit(0.02, 3.0, 0.03, 1.5)));
   EXPECT_TRUE(runout_moved(small, runout_fit(0.3, 3.0, 0.03, 0.1)));
+  // Each fit's σ in its own directions: a quarter turn puts now's wide σ across (0.1 µm) along
+  // before's radius, where before's own is 0.01 µm. Taken in before's directions unturned, the
+  // radial 0.05 µm would be 3.5 of √2·0.01 µm, a move; turned, it is half of √0.0101.
+  const FitResult lopsided = runout_fit(0.05, 0.0, 0.01, 2.0);
+  EXPECT_FALSE(runout_moved(lopsided, runout_fit(0.05, std::acos(-1.0) / 2.0, 0.01, 2.0)));
   // Exact fits (no noise): any move is one.
   EXPECT_TRUE(runout_moved(runout_fit(1.0, 0.0, 0.0, 0.0), runout_fit(1.0 + 1e-9, 0.0, 0.0, 0.0)));
   EXPECT_FALSE(runout_moved(runout_fit(1.0, 0.0, 0.0, 0.0), runout_fit(1.0, 0.0, 0.0, 0.0)));
@@ -280,7 +285,11 @@ TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNois
     const FitResult& f = results[static_cast<std::size_t>(k)].fit;
     EXPECT_EQ(results[static_cast<std::size_t>(k)].variants_fitted, k == 0 || k == 10) << k;
     EXPECT_GT(f.rho_um.sigma_stat, 0.0);
-    EXPECT_GT(f.rho_um.sigma_sys, 0.0) << k;  // fitted or carried over: always there
+    if (with_variants != nullptr && !results[static_cast<std::size_t>(k)].variants_fitted) {
+      // Carried over from the last window whose variants were fitted, parameter by parameter.
+      EXPECT_EQ(f.rho_um.sigma_sys, with_variants->rho_um.sigma_sys) << k;
+      EXPECT_EQ(f.gamma_rad.sigma_sys, with_variants->gamma_rad.sigma_sys) << k;
+    }
     EXPECT_NEAR(f.rho_um.sigma, std::hypot(f.rho_um.sigma_stat, f.rho_um.sigma_sys), 1e-15);
     EXPECT_NEAR(f.rho_um.value, 1.2, 4.0 * f.rho_um.sigma) << k;
     if (with_variants != nullptr) {
