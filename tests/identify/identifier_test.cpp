@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -48,6 +49,22 @@ MeasuredRevolution window_of(const model::ModelConfig& truth) {
   m.shared_bins = false;
   return m;
 }
+
+/// Windows with Gaussian noise on every bin, one generator and one distribution for all of them
+/// (the distribution keeps the second value of each pair it draws: the sequence is one stream).
+struct NoisyWindows {
+  std::mt19937_64 rng;
+  std::normal_distribution<double> noise;
+  NoisyWindows(double sigma_N, std::uint64_t seed) : rng(seed), noise(0.0, sigma_N) {}
+  MeasuredRevolution operator()(MeasuredRevolution w) {
+    for (auto& axis : w.force_N) {
+      for (double& f : axis) {
+        f += noise(rng);
+      }
+    }
+    return w;
+  }
+};
 
 std::complex<double> pass_band(double hz) {
   return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
@@ -259,17 +276,8 @@ TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNois
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
   Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait);
   const MeasuredRevolution exact = window_of(truth);
-  std::mt19937_64 rng(20261201);
-  std::normal_distribution<double> noise(0.0, 0.1);
+  NoisyWindows noisy(0.1, 20261201);
   constexpr int kWindows = 12;
-  auto noisy = [&](MeasuredRevolution w) {
-    for (auto& axis : w.force_N) {
-      for (double& f : axis) {
-        f += noise(rng);
-      }
-    }
-    return w;
-  };
   for (int k = 1; k <= kWindows; ++k) {
     id.submit(noisy(exact), 30 * k, 1000 * k, 30 * k);
   }
@@ -322,17 +330,10 @@ TEST(Identifier, AStepAfterNoisyWindowsIsFoundOnACleanWindow) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
   Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait);
   const MeasuredRevolution exact = window_of(truth);
-  std::mt19937_64 rng(20261201);
-  std::normal_distribution<double> noise(0.0, 0.3);
+  NoisyWindows noisy(0.3, 20261201);
   constexpr int kWindows = 12;
   for (int k = 1; k <= kWindows; ++k) {
-    MeasuredRevolution w = exact;
-    for (auto& axis : w.force_N) {
-      for (double& f : axis) {
-        f += noise(rng);
-      }
-    }
-    id.submit(w, 30 * k, 1000 * k, 30 * k);
+    id.submit(noisy(exact), 30 * k, 1000 * k, 30 * k);
   }
   const model::ModelConfig after = three_flute_slot(2.0, -1.0);
   id.submit(window_of(after), 30 * (kWindows + 1), 1000 * (kWindows + 1), 30 * (kWindows + 1));
