@@ -174,6 +174,11 @@ runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w) {
     m.method = "window fit failed: " + f.message;
     return m;
   }
+  if (f.runout_at_contact_edge) {
+    m.method +=
+        "; at a flute's contact edge: offset_um is a lower bound (a flute cuts nothing "
+        "beyond it)";
+  }
   m.offset_um = f.rho_um.value;
   m.angle_rad = f.gamma_rad.value;
   m.offset_sigma_um = f.rho_um.sigma;

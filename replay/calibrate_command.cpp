@@ -192,8 +192,12 @@ std::string report_text(const nlohmann::json& j, const identify::CalibrationResu
   if (j.contains("runout")) {
     const auto& ro = j["runout"];
     s += fmt::format("\n  runout (one for all cuts, at the tool tip)\n");
-    s += fmt::format("    rho                {} ± {} um\n", num(ro["rho_um"], "{:.3f}"),
-                     num(ro["rho_std_um"], "{:.3f}"));
+    const bool lower_bound = ro.value("rho_is_lower_bound", false);
+    s += fmt::format("    rho                {}{} ± {} um{}\n", lower_bound ? ">= " : "",
+                     num(ro["rho_um"], "{:.3f}"), num(ro["rho_std_um"], "{:.3f}"),
+                     lower_bound ? " (at a flute's contact edge: a flute cuts nothing beyond it, "
+                                   "a lower bound)"
+                                 : "");
     s += fmt::format("    gamma              {} ± {} deg (from CE1)\n",
                      num(ro["gamma_deg"], "{:.1f}"), num(ro["gamma_std_deg"], "{:.1f}"));
     for (std::size_t f = 1; f < ro["r_minus_r_ce1_um"].size(); ++f) {

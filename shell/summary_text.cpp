@@ -136,9 +136,13 @@ std::string summary_text(const json& j) {
   // The identified runout (core/identify), when a window was fitted.
   const json& runout = j.value("runout", json::object());
   if (has_number(runout, "rho_um")) {
-    s += fmt::format("  runout        {:.3f} ± {:.3f} µm at {:.1f}° ± {:.1f}° (identified)\n",
-                     num(runout, "rho_um"), num(runout, "rho_std_um"), num(runout, "gamma_deg"),
-                     num(runout, "gamma_std_deg"));
+    const bool lower_bound = runout.value("rho_is_lower_bound", false);
+    s += fmt::format("  runout        {}{:.3f} ± {:.3f} µm at {:.1f}° ± {:.1f}° (identified{})\n",
+                     lower_bound ? "≥ " : "", num(runout, "rho_um"), num(runout, "rho_std_um"),
+                     num(runout, "gamma_deg"), num(runout, "gamma_std_deg"),
+                     lower_bound ? "; at a flute's contact edge: a flute cuts nothing beyond it, "
+                                   "so the force bounds the runout from below only"
+                                 : "");
   }
   const json& alerts = j.value("alerts", json::array());
   if (alerts.empty()) {

@@ -62,7 +62,9 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
                            {"r_minus_r_ce1_um", from_ce1},
                            {"r_minus_r_ce1_std_um", from_ce1_std},
                            {"alignment_deg", number(f.alignment_rad.value * kDegPerRad)},
-                           {"flute_labelling", f.flute_labelling}};
+                           {"flute_labelling", f.flute_labelling},
+                           // At a flute's contact edge ρ is the least runout the force allows.
+                           {"rho_is_lower_bound", f.runout_at_contact_edge}};
   if (f.config.tool.flutes >= 2) {  // the geometric α: one flute has none
     runout["alpha_deg"] = number(f.alpha_deg.value);
     runout["alpha_std_deg"] = number(f.alpha_deg.sigma);

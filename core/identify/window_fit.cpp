@@ -903,6 +903,29 @@ struct WindowFitter::Impl {
     return best;
   }
 
+  /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter
+  /// (FitResult::runout_at_contact_edge): of its changes to `rp` and `rm` (a step either way),
+  /// one exceeds the other kContactEdgeRatio times, kContactEdgeSignificance of the measured
+  /// harmonics (not the model's rounding) and kContactEdgeDecisive of the residual (the data
+  /// reject the step on the steep side: a weakly pinned direction of a poor fit, whose two small
+  /// changes differ by their second order, is no edge). At an ordinary minimum the two changes
+  /// are ±J·h to first order.
+  [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
+                                            const Eigen::VectorXd& r, const Eigen::VectorXd& rp,
+                                            const Eigen::VectorXd& rm) {
+    const double up = (rp - r).norm();
+    const double down = (r - rm).norm();
+    const double steep = std::max(up, down);
+    if (!(steep > kContactEdgeRatio * std::min(up, down)) ||
+        !(steep > kContactEdgeDecisive * r.norm())) {
+      return false;
+    }
+    Eigen::VectorXd y, b0;
+    Eigen::MatrixXd a;
+    p.assemble(theta, y, b0, a);
+    return steep > kContactEdgeSignificance * y.head(p.data_size()).norm();
+  }
+
   /// Refits from `theta` with another setting (a variant of the model's approximations).
   Eigen::VectorXd refit(const std::vector<const MeasuredRevolution*>& m, const Setting& s,
                         const Eigen::VectorXd& theta, double prior_weight) {
@@ -1034,7 +1057,13 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       tp[i] += h;
       Eigen::VectorXd tm = theta;
       tm[i] -= h;
-      j.col(i) = (p.residual_at(tp, coefficients) - p.residual_at(tm, coefficients)) / (2.0 * h);
+      const Eigen::VectorXd rp = p.residual_at(tp, coefficients);
+      const Eigen::VectorXd rm = p.residual_at(tm, coefficients);
+      j.col(i) = (rp - rm) / (2.0 * h);
+      if (i < 2 && options.fit_runout) {
+        out.runout_at_contact_edge =
+            out.runout_at_contact_edge || at_contact_edge(p, theta, r, rp, rm);
+      }
     }
     if (nc > 0) {
       j.rightCols(nc) = p.coefficient_jacobian(theta);

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -274,41 +275,60 @@ TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {
   EXPECT_GE(honest, static_cast<int>(std::ceil(0.9 * total)));
 }
 
+// A 0.5 mm cut with the linear edge law and no effect but the runout and the helix lag: `flutes`
+// in a slot or down-milling 30 %, f_t 3 µm (the fitter-alone tests below).
+model::ModelConfig small_linear_edge_cut(model::Operation op, int flutes, double rho_um,
+                                         double gamma_rad) {
+  model::ModelConfig m = model::without_effects(model::ModelConfig{});
+  m.material.law = model::ForceLawKind::kLinearEdge;
+  m.tool.flutes = flutes;
+  m.tool.diameter_mm = 0.5;
+  m.process.operation = op;
+  m.process.radial_depth_mm = op == model::Operation::kSlot ? 0.5 : 0.15;
+  m.process.feed_per_tooth_um = 3.0;
+  m.process.axial_depth_mm = 0.05;
+  model::set_effect(m, "runout", true);
+  m.effects.runout.offset_um = rho_um;
+  m.effects.runout.angle_rad = gamma_rad;
+  model::set_effect(m, "helix_lag", true);
+  return m;
+}
+
+// The exact mean revolution of a finer truth than the fitter's (1440 steps and 20 helix discs
+// against 720 and 5), as a window of 30 revolutions sampled exactly.
+MeasuredRevolution finer_truth(const model::ModelConfig& m) {
+  model::ModelConfig truth = m;
+  truth.effects.helix_lag.discs = 20;
+  model::SteadyStateWorkspace ws;
+  const auto& ss = model::evaluate_steady_state(truth, m.process.spindle_rpm, 1440, ws);
+  MeasuredRevolution measured;
+  measured.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
+  measured.spindle_rpm = m.process.spindle_rpm;
+  measured.revolutions = 30;
+  measured.shared_bins = false;
+  return measured;
+}
+
+// An ideal low-pass at 3.3 kHz: the filter of the fitter-alone tests.
+std::complex<double> ideal_lowpass(double hz) {
+  return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
+}
+
 // The fitter alone, on the exact revolution of a finer truth (1440 steps, 20 discs against the
 // fitter's 720 and 5; no monitor, no noise): the waveform is matched, the radii found, and the
 // runout within its stated uncertainty.
 TEST(WindowFit, FitsTheSteadyStateOfAFinerModel) {
   for (const model::Operation op : {model::Operation::kSlot, model::Operation::kDownMilling}) {
     for (int flutes : {2, 3, 4}) {
-      model::ModelConfig m = model::without_effects(model::ModelConfig{});
-      m.material.law = model::ForceLawKind::kLinearEdge;
-      m.tool.flutes = flutes;
-      m.tool.diameter_mm = 0.5;
-      m.process.operation = op;
-      m.process.radial_depth_mm = op == model::Operation::kSlot ? 0.5 : 0.15;
-      m.process.feed_per_tooth_um = 3.0;
-      m.process.axial_depth_mm = 0.05;
-      model::set_effect(m, "runout", true);
       // The short flute keeps a chip of at least 0.7 µm (2ρ·cos γ = 2.3 µm of f_t = 3 µm).
-      m.effects.runout.offset_um = 1.2;
-      m.effects.runout.angle_rad = 0.3;
-      model::set_effect(m, "helix_lag", true);
+      model::ModelConfig m = small_linear_edge_cut(op, flutes, 1.2, 0.3);
       model::set_effect(m, "dynamometer", true);
       m.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
-      model::ModelConfig truth = m;
-      truth.effects.helix_lag.discs = 20;
-      model::SteadyStateWorkspace ws;
-      const auto& ss = model::evaluate_steady_state(truth, m.process.spindle_rpm, 1440, ws);
-      MeasuredRevolution measured;
-      measured.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
-      measured.spindle_rpm = m.process.spindle_rpm;
-      measured.revolutions = 30;
-      measured.shared_bins = false;
+      const MeasuredRevolution measured = finer_truth(m);
       model::ModelConfig start = m;
       start.effects.runout.offset_um = 0.0;
       start.material.linear_edge.k_tc_N_per_mm2 *= 0.7;
-      WindowFitter fitter(
-          start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); });
+      WindowFitter fitter(start, ideal_lowpass);
       const FitResult f = fitter.fit(measured);
       ASSERT_TRUE(f.ok) << f.message;
       const auto pitch = model::flute_pitch_angles_rad(m.tool);
@@ -333,8 +353,112 @@ TEST(WindowFit, FitsTheSteadyStateOfAFinerModel) {
       EXPECT_LT(f.residual_rms_N[1], 0.01 * f.measured_rms_N[1]);
       EXPECT_LT(radius_error, 0.05);
       EXPECT_LT(std::fabs(f.rho_um.value - 1.2), 2.0 * f.rho_um.sigma);
+      EXPECT_FALSE(f.runout_at_contact_edge);  // every flute cuts, on either side
     }
   }
+}
+
+// A runout so large for the feed that a flute cuts nothing (2ρ·cos γ = 3.8 µm of f_t = 3 µm;
+// the linear edge law, no minimum chip thickness, no deflection): beyond where that flute stops
+// cutting the force hardly depends on the runout, while on the near side the flute's edge force
+// and chip start at once. A fit from below stopped on that edge and reported, for 2.0 µm, 1.79 ±
+// 0.015 µm with three flutes (the idle flute's radius 0.37 µm off): a confident wrong number.
+// Now a fit ending on the edge says so, and its ρ is a lower bound: the truth is not below it;
+// a fit ending beyond the edge has a σ that holds the truth.
+TEST(WindowFit, AFluteThatCutsNothingBoundsTheRunoutFromBelow) {
+  const double rho_um = 2.0;
+  int on_edge = 0;
+  for (const model::Operation op : {model::Operation::kSlot, model::Operation::kDownMilling}) {
+    for (int flutes : {2, 3}) {
+      const model::ModelConfig m = small_linear_edge_cut(op, flutes, rho_um, 0.3);
+      const MeasuredRevolution measured = finer_truth(m);
+      model::ModelConfig start = m;
+      start.effects.runout.offset_um = 0.0;
+      WindowFitter fitter(start, ideal_lowpass);
+      const FitResult f = fitter.fit(measured);
+      ASSERT_TRUE(f.ok) << f.message;
+      const char* name = op == model::Operation::kSlot ? "slot" : "down 30 %";
+      std::printf("%d flutes %s: rho %s%.3f ± %.3f (truth %.1f), gamma %.1f ± %.1f deg\n", flutes,
+                  name, f.runout_at_contact_edge ? ">= " : "", f.rho_um.value, f.rho_um.sigma,
+                  rho_um, f.gamma_rad.value * 180 / kPi, f.gamma_rad.sigma * 180 / kPi);
+      EXPECT_LT(f.residual_rms_N[1], 0.01 * f.measured_rms_N[1]) << flutes << " " << name;
+      if (f.runout_at_contact_edge) {
+        ++on_edge;
+        EXPECT_GE(rho_um, f.rho_um.value - 2.0 * f.rho_um.sigma) << flutes << " " << name;
+        // On the edge a flute is exactly where it stops cutting: some flute's radius lies below
+        // the flute's before it by the largest chip f_t·sin θ of the engagement (sin θ = 1 in
+        // the slot; at the entry, θ = π − acos(1 − 2·a_e/D), down-milling 30 %).
+        const double immersion = m.process.radial_depth_mm / m.tool.diameter_mm;
+        const double peak_sin =
+            immersion >= 0.5 ? 1.0 : std::sqrt(1.0 - std::pow(1.0 - 2.0 * immersion, 2));
+        double deficit_um = -1e300;
+        for (int j = 0; j < flutes; ++j) {
+          const auto uj = static_cast<std::size_t>(j);
+          const auto before = static_cast<std::size_t>((j + flutes - 1) % flutes);
+          deficit_um = std::max(
+              deficit_um, f.radius_from_ce1_um[before].value - f.radius_from_ce1_um[uj].value);
+        }
+        EXPECT_NEAR(deficit_um, m.process.feed_per_tooth_um * peak_sin, 0.05)
+            << flutes << " " << name;
+      } else {
+        EXPECT_LT(std::fabs(f.rho_um.value - rho_um), 2.0 * f.rho_um.sigma)
+            << flutes << " " << name;
+      }
+    }
+  }
+  // A fit from the grid of starts ends on the edge in these cuts (1.79 µm for three flutes in the
+  // slot, as before); none may end there silently.
+  EXPECT_GE(on_edge, 2);
+}
+
+// The same with [000]'s power law (no minimum chip thickness, no deflection: the force has no
+// other hold on the idle flute), 2 flutes, ρ 2.6 µm at 0.3 rad (2ρ·cos γ = 5.0 µm of f_t =
+// 4 µm), noise on every sample of the revolution: some windows end on the edge (they reported
+// r_CE1 − r_CE2 = 4.03 ± 0.04 µm for 4.97, ρ 2.2 ± 0.08 µm), others beyond it with a large σ.
+// Each must be honest: a lower bound on the edge, the truth within 2σ beyond it.
+TEST(WindowFit, AFluteThatCutsNothingIsHonestInNoise) {
+  model::ModelConfig m{};
+  m.tool.flutes = 2;
+  for (const char* effect : {"deflection", "min_chip", "accumulation"}) {
+    model::set_effect(m, effect, false);
+  }
+  const double rho_um = 2.6;
+  m.effects.runout.offset_um = rho_um;
+  m.effects.runout.angle_rad = 0.3;
+  const MeasuredRevolution exact = finer_truth(m);
+  const auto pos = model::flute_positions(model::tool_radius_um(m),
+                                          model::flute_pitch_angles_rad(m.tool), rho_um, 0.3);
+  const double deficit_truth_um = pos[0].radius_um - pos[1].radius_um;
+  int on_edge = 0;
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    MeasuredRevolution measured = exact;
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, 0.03);
+    for (auto& axis : measured.force_N) {
+      for (double& x : axis) {
+        x += noise(rng);
+      }
+    }
+    model::ModelConfig start = m;
+    start.effects.runout.offset_um = 0.0;
+    WindowFitter fitter(start, ideal_lowpass);
+    const FitResult f = fitter.fit(measured);
+    ASSERT_TRUE(f.ok) << f.message;
+    const Estimate& d = f.radius_from_ce1_um[1];  // r_CE2 − r_CE1
+    std::printf("seed %u: rho %s%.3f ± %.3f (truth %.1f), r_CE1 - r_CE2 %.3f ± %.3f (truth %.3f)\n",
+                seed, f.runout_at_contact_edge ? ">= " : "", f.rho_um.value, f.rho_um.sigma, rho_um,
+                -d.value, d.sigma, deficit_truth_um);
+    if (f.runout_at_contact_edge) {
+      ++on_edge;
+      EXPECT_GE(rho_um, f.rho_um.value - 2.0 * f.rho_um.sigma) << seed;
+      EXPECT_GE(deficit_truth_um, -d.value - 2.0 * d.sigma) << seed;
+      EXPECT_NEAR(-d.value, m.process.feed_per_tooth_um, 3.0 * d.sigma + 0.05) << seed;
+    } else {
+      EXPECT_LT(std::fabs(f.rho_um.value - rho_um), 2.0 * f.rho_um.sigma) << seed;
+      EXPECT_LT(std::fabs(-d.value - deficit_truth_um), 2.0 * d.sigma) << seed;
+    }
+  }
+  EXPECT_GE(on_edge, 1);
 }
 
 }  // namespace
@@ -366,15 +490,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     } else {
       m.effects.deflection.stiffness_N_per_um = x.truth;
     }
-    model::ModelConfig truth = m;
-    truth.effects.helix_lag.discs = 20;
-    model::SteadyStateWorkspace ws;
-    const auto& ss = model::evaluate_steady_state(truth, m.process.spindle_rpm, 1440, ws);
-    MeasuredRevolution measured;
-    measured.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
-    measured.spindle_rpm = m.process.spindle_rpm;
-    measured.revolutions = 30;
-    measured.shared_bins = false;
+    MeasuredRevolution measured = finer_truth(m);
     measured.use_axis[2] = false;  // no axial force compared: K_ac cannot be fitted
     model::ModelConfig start = m;
     start.effects.runout.offset_um = 0.0;
@@ -385,9 +501,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     }
     FitOptions options;
     options.extra_parameters = {x.name};
-    WindowFitter fitter(
-        start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); },
-        options);
+    WindowFitter fitter(start, ideal_lowpass, options);
     const FitResult f = fitter.fit(measured);
     ASSERT_TRUE(f.ok) << x.name << ": " << f.message;
     ASSERT_EQ(f.extra.size(), 1u);

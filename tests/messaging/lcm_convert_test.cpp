@@ -36,6 +36,21 @@ TEST(LcmConvert, ARunoutEstimateCarriesTheFitsGeometricAlpha) {
   EXPECT_EQ(m.alpha_deg, 120.24);
 }
 
+// A fit on a flute's contact edge: offset_um is the least runout the force allows, and the
+// method says so.
+TEST(LcmConvert, ARunoutThatIsALowerBoundSaysSo) {
+  EXPECT_EQ(runout_estimate(window()).method,
+            "window fit (flute 0 = CE1, the flute with the largest cut)");
+  identify::IdentifiedWindow w = window();
+  w.fit.runout_at_contact_edge = true;
+  const runout_estimate_t m = runout_estimate(w);
+  EXPECT_TRUE(m.valid);
+  EXPECT_EQ(m.offset_um, 0.8);
+  EXPECT_EQ(m.method,
+            "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "
+            "edge: offset_um is a lower bound (a flute cuts nothing beyond it)");
+}
+
 TEST(LcmConvert, AFailedFitSaysWhy) {
   identify::IdentifiedWindow w = window();
   w.fit.ok = false;

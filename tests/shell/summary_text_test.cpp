@@ -44,6 +44,28 @@ TEST(SummaryText, AlphaFromOneRevolutionHasNoSpread) {
   EXPECT_NE(summary_text(many).find("alpha         157.29° ± 0.15°"), std::string::npos);
 }
 
+// The identified runout, and where a flute cuts nothing beyond it (the fit on a flute's contact
+// edge), that the figure is a lower bound.
+TEST(SummaryText, TheRunoutSaysWhenItIsALowerBound) {
+  nlohmann::json j = summary(41, 41);
+  j["runout"] = {{"rho_um", 1.795},
+                 {"rho_std_um", 0.015},
+                 {"gamma_deg", 15.7},
+                 {"gamma_std_deg", 0.5},
+                 {"rho_is_lower_bound", false}};
+  const std::string measured = summary_text(j);
+  EXPECT_NE(measured.find("  runout        1.795 ± 0.015 µm at 15.7° ± 0.5° (identified)\n"),
+            std::string::npos)
+      << measured;
+  j["runout"]["rho_is_lower_bound"] = true;
+  const std::string bound = summary_text(j);
+  EXPECT_NE(bound.find("  runout        ≥ 1.795 ± 0.015 µm at 15.7° ± 0.5° (identified; at a "
+                       "flute's contact edge: a flute cuts nothing beyond it, so the force "
+                       "bounds the runout from below only)\n"),
+            std::string::npos)
+      << bound;
+}
+
 // A warning is printed whole: its reason comes last.
 TEST(SummaryText, PrintsAWarningWhole) {
   nlohmann::json j = summary(41, 41);
