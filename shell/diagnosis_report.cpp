@@ -146,9 +146,10 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
 std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
   std::string out;
   for (const auto& p : ps) {
-    out += (out.empty() ? "" : ", ") + p.name + " = " +
+    out += (out.empty() ? "" : ", ") + p.name + (p.lower_bound ? " ≥ " : " = ") +
            (p.at_bound.empty()
-                ? value_sigma(p.value, p.sigma)
+                ? value_sigma(p.value, p.sigma) +
+                      (p.lower_bound ? " (a flute cuts nothing beyond it: a lower bound)" : "")
                 : fmt::format("{:.4g} (at its {} physical bound: held)", p.value, p.at_bound));
   }
   return out.empty() ? "—" : out;

@@ -813,6 +813,7 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
   const auto& fit = ev.fit;
   if (name == "runout") {
     out.push_back({"rho_um", fit.rho_um.value, fit.rho_um.sigma});
+    out.back().lower_bound = fit.runout_at_contact_edge;
     out.push_back(
         {"gamma_deg", fit.gamma_rad.value * 180.0 / kPi, fit.gamma_rad.sigma * 180.0 / kPi});
     for (const auto& d : fit.radius_from_ce1_um) {
@@ -862,6 +863,7 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
     for (int w = 0; w < 2; ++w) {
       const auto& f = *fits[w];
       out.push_back({std::string("rho_") + when[w] + "_um", f.rho_um.value, f.rho_um.sigma});
+      out.back().lower_bound = f.runout_at_contact_edge;
       out.push_back({std::string("gamma_") + when[w] + "_deg", f.gamma_rad.value * 180.0 / kPi,
                      f.gamma_rad.sigma * 180.0 / kPi});
       if (f.radius_from_ce1_um.size() > 1) {

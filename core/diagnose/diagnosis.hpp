@@ -85,6 +85,9 @@ struct Parameter {
   /// "lower" or "upper" when the fit sits on the parameter's physical bound (the value is the
   /// bound, not an estimate: sigma 0); "" inside.
   std::string at_bound;
+  /// The value is the least the force allows, not a measurement: ρ of a fit on a flute's contact
+  /// edge (identify::FitResult::runout_at_contact_edge), a flute cutting nothing beyond it.
+  bool lower_bound = false;
 };
 
 /// The physical range of a dynamometer's damping ratio ζ: a piezoelectric dynamometer clamped

@@ -14,6 +14,12 @@ nlohmann::json parameters(const std::vector<Parameter>& ps) {
   for (const auto& p : ps) {
     if (p.at_bound.empty()) {
       j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
+      if (p.lower_bound) {
+        j[p.name]["lower_bound"] = true;
+        j[p.name]["note"] =
+            "at a flute's contact edge: a flute cuts nothing beyond it, the force "
+            "bounds the value from below only";
+      }
     } else {  // a bound, not an estimate: no σ
       j[p.name] = {{"value", p.value},
                    {"sigma", nullptr},

@@ -903,13 +903,9 @@ struct WindowFitter::Impl {
     return best;
   }
 
-  /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter
-  /// (FitResult::runout_at_contact_edge): of its changes to `rp` and `rm` (a step either way),
-  /// one exceeds the other kContactEdgeRatio times, kContactEdgeSignificance of the measured
-  /// harmonics (not the model's rounding) and kContactEdgeDecisive of the residual (the data
-  /// reject the step on the steep side: a weakly pinned direction of a poor fit, whose two small
-  /// changes differ by their second order, is no edge). At an ordinary minimum the two changes
-  /// are ±J·h to first order.
+  /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter,
+  /// from its changes to `rp` and `rm` (a step either way; kContactEdgeRatio and below). At an
+  /// ordinary minimum the two are ±J·h to first order.
   [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
                                             const Eigen::VectorXd& r, const Eigen::VectorXd& rp,
                                             const Eigen::VectorXd& rm) {
@@ -923,7 +919,7 @@ struct WindowFitter::Impl {
     Eigen::VectorXd y, b0;
     Eigen::MatrixXd a;
     p.assemble(theta, y, b0, a);
-    return steep > kContactEdgeSignificance * y.head(p.data_size()).norm();
+    return steep > kContactEdgeSignificance * y.norm();  // the measured harmonics
   }
 
   /// Refits from `theta` with another setting (a variant of the model's approximations).

@@ -129,11 +129,11 @@ struct FitResult {
   /// The fit ended on a flute's contact edge: at the runout found a flute just stops cutting.
   /// Towards less runout that flute cuts and the force changes steeply with the runout (its
   /// edge force and chip start at once); beyond, the flute idle, the force hardly changes, and
-  /// nothing but the weak prior holds the fit back. The force then bounds the runout from below
-  /// only: ρ (and the radius differences to the idle flute) are the least it allows, not a
-  /// measurement of where the runout is; their σ is the steep side's. Found from the runout's
-  /// one-sided differences at the solution, whose changes of the residual differ by more than
-  /// kContactEdgeRatio.
+  /// nothing but the weak prior holds the fit back. The force then bounds the runout from one
+  /// side only: the idle flute's radius lies at least the largest chip below the flute's before
+  /// it (exactly), and ρ is about the least runout the force allows (the edge is a line in
+  /// (u, v), the truth beyond it); their σ, and γ's, are the steep side's. Told from an ordinary
+  /// minimum by the runout's one-sided differences (kContactEdgeRatio and below).
   bool runout_at_contact_edge = false;
   /// Each flute's cutting radius r_j = |O→edge j| (µm) and r_j − r_0, with σ.
   std::vector<Estimate> cutting_radius_um;

@@ -25,6 +25,11 @@ std::size_t at(int i) {
   return static_cast<std::size_t>(i);
 }
 
+/// "≥ " before a value that is a lower bound (ρ of a fit on a flute's contact edge), else "".
+const char* at_least(bool lower_bound) {
+  return lower_bound ? "≥ " : "";
+}
+
 /// Writes an alert's operator line (printf format; truncated to the message's size).
 __attribute__((format(printf, 2, 3))) void write_message(Alert* alert, const char* format, ...) {
   if (alert == nullptr) {
@@ -923,11 +928,11 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
                          "radius_deficit_per_feed"),
                     "runout high: %s %.3f ± %.3f µm = %.1f ± %.1f %% of f_t %.2f µm (first "
                     "window %.1f %% → %.1f %%; limit %.0f %%, at 100 %% flute %d stops cutting); "
-                    "ρ %s%.2f ± %.2f µm at γ %.1f ± %.1f°%s",
+                    "ρ %s%.2f ± %.2f µm at γ %.1f ± %.1f°",
                     pair, deficit, sigma, percent(u), percent(sigma_u), ft,
                     percent(runout_first_ratio_), percent(u), percent(limit), shorter + 1,
-                    e.rho_lower_bound ? "≥ " : "", e.rho_um, e.rho_sigma_um, degrees(e.gamma_rad),
-                    degrees(e.gamma_sigma_rad), e.rho_lower_bound ? " (a lower bound)" : "");
+                    at_least(e.rho_lower_bound), e.rho_um, e.rho_sigma_um, degrees(e.gamma_rad),
+                    degrees(e.gamma_sigma_rad));
     }
     return;
   }
@@ -1012,10 +1017,12 @@ void AlertEngine::finish_estimate_baseline() {
   }
   base.rho_um = median_of([](const WindowEstimate& w) { return w.rho_um; });
   base.rho_sigma_um = median_of([](const WindowEstimate& w) { return w.rho_sigma_um; });
+  base.rho_lower_bound = false;  // any window's ρ a lower bound: the median's may be one
   double c = 0.0, s = 0.0;
   for (int i = 0; i < n; ++i) {
     c += std::cos(recent_window(i).gamma_rad);
     s += std::sin(recent_window(i).gamma_rad);
+    base.rho_lower_bound = base.rho_lower_bound || recent_window(i).rho_lower_bound;
   }
   base.gamma_rad = std::atan2(s, c);
   base.gamma_sigma_rad = median_of([](const WindowEstimate& w) { return w.gamma_sigma_rad; });
@@ -1084,18 +1091,20 @@ void AlertEngine::state_change_identified(const WindowEstimate& e, std::int64_t 
   }
   const double rho = from_baseline ? base.rho_um : before_window->rho_um;
   const double rho_sd = from_baseline ? base.rho_sigma_um : before_window->rho_sigma_um;
+  const bool rho_bound = from_baseline ? base.rho_lower_bound : before_window->rho_lower_bound;
   const double gamma = from_baseline ? base.gamma_rad : before_window->gamma_rad;
   const double gamma_sd = from_baseline ? base.gamma_sigma_rad : before_window->gamma_sigma_rad;
   const double was = -before_d(flute), now = -e.radius_difference_um[at(flute)];
-  write_message(emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, true, rev, t, now, was,
-                     "radius_difference_um"),
-                "runout change identified: r_CE1 − r_CE%d %.3f ± %.3f µm → %.3f ± %.3f µm; ρ %.2f "
-                "± %.2f µm at γ %.1f ± %.1f° → %.2f ± %.2f µm at %.1f ± %.1f° (revolutions "
-                "%lld–%lld)",
-                flute + 1, was, before_sd(flute), now, e.radius_sigma_um[at(flute)], rho, rho_sd,
-                degrees(gamma), degrees(gamma_sd), e.rho_um, e.rho_sigma_um, degrees(e.gamma_rad),
-                degrees(e.gamma_sigma_rad), static_cast<long long>(e.first_revolution),
-                static_cast<long long>(e.last_revolution));
+  write_message(
+      emit(AlertKind::kRunoutChange, AlertSeverity::kInfo, true, rev, t, now, was,
+           "radius_difference_um"),
+      "runout change identified: r_CE1 − r_CE%d %.3f ± %.3f µm → %.3f ± %.3f µm; ρ %s%.2f "
+      "± %.2f µm at γ %.1f ± %.1f° → %s%.2f ± %.2f µm at %.1f ± %.1f° (revolutions "
+      "%lld–%lld)",
+      flute + 1, was, before_sd(flute), now, e.radius_sigma_um[at(flute)], at_least(rho_bound), rho,
+      rho_sd, degrees(gamma), degrees(gamma_sd), at_least(e.rho_lower_bound), e.rho_um,
+      e.rho_sigma_um, degrees(e.gamma_rad), degrees(e.gamma_sigma_rad),
+      static_cast<long long>(e.first_revolution), static_cast<long long>(e.last_revolution));
 }
 
 void AlertEngine::check_estimate_change(const WindowEstimate& e, std::int64_t rev, std::int64_t t) {
@@ -1152,12 +1161,13 @@ void AlertEngine::check_estimate_change(const WindowEstimate& e, std::int64_t re
         emit(AlertKind::kRunoutChange, AlertSeverity::kWarning, true, rev, t,
              -e.radius_difference_um[q], -base.radius_difference_um[q], "radius_difference_um"),
         "runout change: r_CE1 − r_CE%d %.3f ± %.3f µm → %.3f ± %.3f µm (limit ± %.3f "
-        "µm, %d windows); ρ %.2f ± %.2f µm at γ %.1f ± %.1f° → %.2f ± %.2f µm at %.1f "
+        "µm, %d windows); ρ %s%.2f ± %.2f µm at γ %.1f ± %.1f° → %s%.2f ± %.2f µm at %.1f "
         "± %.1f°",
         j + 1, -base.radius_difference_um[q], base.radius_total_sigma_um[q],
-        -e.radius_difference_um[q], e.radius_sigma_um[q], limit, persist, base.rho_um,
-        base.rho_sigma_um, degrees(base.gamma_rad), degrees(base.gamma_sigma_rad), e.rho_um,
-        e.rho_sigma_um, degrees(e.gamma_rad), degrees(e.gamma_sigma_rad));
+        -e.radius_difference_um[q], e.radius_sigma_um[q], limit, persist,
+        at_least(base.rho_lower_bound), base.rho_um, base.rho_sigma_um, degrees(base.gamma_rad),
+        degrees(base.gamma_sigma_rad), at_least(e.rho_lower_bound), e.rho_um, e.rho_sigma_um,
+        degrees(e.gamma_rad), degrees(e.gamma_sigma_rad));
     return;
   }
 }

@@ -270,6 +270,7 @@ class AlertEngine {
     std::array<double, kMaxFlutes> radius_limit_um{};  ///< runout-change limit of |d_j − d̄_j|
     std::array<double, kMaxFlutes> radius_total_sigma_um{};  ///< median total σ of d_j (absolute)
     double rho_um = 0.0, rho_sigma_um = 0.0;                 ///< median ρ, median total σ
+    bool rho_lower_bound = false;  ///< some window's ρ a lower bound (on a contact edge)
     double gamma_rad = 0.0, gamma_sigma_rad = 0.0;  ///< γ (circular mean), median total σ
     int coefficients = 0;
     std::array<std::array<char, 32>, kMaxCoefficients> coefficient_name{};
