@@ -315,9 +315,12 @@ FitResult Identifier::fit(const MeasuredRevolution& window,
     return with_variants(seed);
   }
   carry_systematic(*systematic_, r);
-  if (runout_moved(*systematic_, r)) {
-    // The runout moved beyond both windows' uncertainty since the variants were fitted: fit
-    // them again, from this window's own result (the main fit then starts where it ends).
+  if (runout_moved(*systematic_, r) ||
+      r.runout_at_contact_edge != systematic_->runout_at_contact_edge) {
+    // The runout moved beyond both windows' uncertainty since the variants were fitted, or the
+    // fit went onto a flute's contact edge or off it (the spread of the variants off an edge says
+    // nothing of it on one, and back): fit them again, from this window's own result (the main
+    // fit then starts where it ends).
     return with_variants(&r);
   }
   return r;

@@ -322,6 +322,70 @@ TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNois
   id.finish();
 }
 
+// Windows of a cut whose runout leaves a flute idle ([000]'s power law without deflection and
+// minimum chip thickness, 2 flutes, 2.6 µm at 0.3 rad: 2ρ·cos γ = 5.0 µm of f_t = 4 µm), 0.03 N
+// of noise per bin. Most fits end on the idle flute's contact edge, where r_CE1 − r_CE2 is
+// pinned from below to ±0.04 µm; one ends beyond it, where the runout is loose (σ_sys of
+// micrometres). Carried across such a change, the variants' spread misstates σ either way:
+// window 2 here, off the edge, carried window 1's 0.061 µm where its own variants spread
+// 0.835 µm; in `millwatch replay` of such a cut the edge windows after an off-edge one carried
+// micrometres, and runout high came at revolution 389 of 418 instead of 89. The variants are
+// fitted again whenever a fit goes onto an edge or off one, and every edge window's bound holds
+// the runout-high alert's test (u − 3σ above 50 % of f_t).
+TEST(Identifier, TheVariantsAreRefittedWhenAFitGoesOntoAContactEdgeOrOffIt) {
+  model::ModelConfig cut{};
+  cut.tool.flutes = 2;
+  for (const char* effect : {"deflection", "min_chip", "accumulation"}) {
+    model::set_effect(cut, effect, false);
+  }
+  cut.effects.runout.offset_um = 2.6;
+  cut.effects.runout.angle_rad = 0.3;
+  model::ModelConfig truth = cut;
+  truth.effects.helix_lag.discs = 20;
+  model::ModelConfig start = cut;
+  start.effects.runout.offset_um = 0.0;
+  Identifier id(start, pass_band, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution exact = window_of(truth);
+  NoisyWindows noisy(0.03, 1);
+  constexpr int kWindows = 8;
+  for (int k = 1; k <= kWindows; ++k) {
+    id.submit(noisy(exact), 30 * k, 1000 * k, 30 * k);
+  }
+  std::vector<IdentifiedWindow> results;
+  for (int k = 1; k <= kWindows; ++k) {
+    const auto r = id.take_due(30 * k);
+    ASSERT_TRUE(r.has_value() && r->fit.ok) << k;
+    results.push_back(*r);
+  }
+  const double ft_um = cut.process.feed_per_tooth_um;
+  int changes = 0;
+  int on_edge = 0;
+  const FitResult* with_variants = nullptr;
+  for (int k = 0; k < kWindows; ++k) {
+    const IdentifiedWindow& w = results[static_cast<std::size_t>(k)];
+    const FitResult& f = w.fit;
+    const Estimate& d = f.radius_from_ce1_um[1];  // r_CE2 − r_CE1
+    std::printf("window %d: rho %s%.3f ± %.3f (sys %.3f), r_CE1 - r_CE2 %.3f ± %.3f%s\n", k + 1,
+                f.runout_at_contact_edge ? ">= " : "", f.rho_um.value, f.rho_um.sigma,
+                f.rho_um.sigma_sys, -d.value, d.sigma, w.variants_fitted ? ", variants" : "");
+    if (with_variants != nullptr &&
+        f.runout_at_contact_edge != with_variants->runout_at_contact_edge) {
+      ++changes;
+      EXPECT_TRUE(w.variants_fitted) << k;
+    }
+    if (w.variants_fitted) {
+      with_variants = &f;
+    }
+    if (f.runout_at_contact_edge) {
+      ++on_edge;
+      EXPECT_GT((-d.value - 3.0 * d.sigma) / ft_um, 0.5) << k;  // runout high's test passes
+    }
+  }
+  EXPECT_GE(changes, 2);  // onto an edge and off it: the sequence tests what it should
+  EXPECT_GE(on_edge, kWindows / 2);
+  id.finish();
+}
+
 // After noisy windows (0.3 N per bin), a window of a stepped runout with no noise: seeded from
 // the last noisy result, the fit settled in another valley (2.64 µm for 2.0, half the force
 // unexplained) whose residual was still within twice the noisy window's, so it did not search
