@@ -904,22 +904,27 @@ struct WindowFitter::Impl {
   }
 
   /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter,
-  /// from its changes to `rp` and `rm` (a step either way; kContactEdgeRatio and below). At an
-  /// ordinary minimum the two are ±J·h to first order.
+  /// from its changes to `rp` and `rm` (a step either way) and the fit's degrees of freedom
+  /// (kContactEdgeRatio and below). At an ordinary minimum the two changes are ±J·h to first
+  /// order.
   [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
                                             const Eigen::VectorXd& r, const Eigen::VectorXd& rp,
-                                            const Eigen::VectorXd& rm) {
+                                            const Eigen::VectorXd& rm, double dof) {
     const double up = (rp - r).norm();
     const double down = (r - rm).norm();
-    const double steep = std::max(up, down);
-    if (!(steep > kContactEdgeRatio * std::min(up, down)) ||
-        !(steep > kContactEdgeDecisive * r.norm())) {
+    if (!(std::max(up, down) > kContactEdgeRatio * std::min(up, down))) {
+      return false;
+    }
+    // The step onto the steep side raises the cost by more than one value's variance RSS/dof.
+    const double rss = r.squaredNorm();
+    const double steep_cost = (up > down ? rp : rm).squaredNorm() - rss;
+    if (!(steep_cost > rss / dof)) {
       return false;
     }
     Eigen::VectorXd y, b0;
     Eigen::MatrixXd a;
     p.assemble(theta, y, b0, a);
-    return steep > kContactEdgeSignificance * y.norm();  // the measured harmonics
+    return std::max(up, down) > kContactEdgeSignificance * y.norm();  // the measured harmonics
   }
 
   /// Refits from `theta` with another setting (a variant of the model's approximations).
@@ -1058,7 +1063,9 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       j.col(i) = (rp - rm) / (2.0 * h);
       if (i < 2 && options.fit_runout) {
         out.runout_at_contact_edge =
-            out.runout_at_contact_edge || at_contact_edge(p, theta, r, rp, rm);
+            out.runout_at_contact_edge ||
+            at_contact_edge(p, theta, r, rp, rm,
+                            std::max(1.0, static_cast<double>(mres - nt - nc)));
       }
     }
     if (nc > 0) {

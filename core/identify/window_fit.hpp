@@ -100,15 +100,14 @@ struct FitOptions {
 
 /// A fit ends on a flute's contact edge (FitResult::runout_at_contact_edge) when a step of the
 /// runout one way changes the residual by more than kContactEdgeRatio times the same step the
-/// other way, by more than kContactEdgeSignificance of the measured harmonics (not the model's
-/// rounding) and by more than kContactEdgeDecisive of the residual itself (the data reject the
-/// step: not a weakly pinned direction of a poor fit, whose two small changes differ by their
-/// second order — a PHM 2010 window, 81 % unexplained, read 4.1 there, steep/residual 0.0014).
-/// On the edges of simulated cuts the ratio read 9–20 (linear edge law) and 10³–10⁴ (power
-/// law), the steep change 0.3–2000 times the residual; at ordinary minima 1.0–1.5.
+/// other way, raises the cost by more than one value's variance (RSS over the degrees of freedom:
+/// the data reject the step; a weakly pinned direction of a poor fit, whose two small changes
+/// differ by their second order, does not — a PHM 2010 window, 81 % unexplained, read a ratio
+/// of 4.1 there) and changes it by more than kContactEdgeSignificance of the measured harmonics
+/// (not the model's rounding). On the edges of simulated cuts the ratio read 9–20 (linear edge
+/// law) and 10³–10⁴ (power law); at ordinary minima 1.0–1.5.
 inline constexpr double kContactEdgeRatio = 4.0;
 inline constexpr double kContactEdgeSignificance = 1e-3;
-inline constexpr double kContactEdgeDecisive = 0.1;
 
 /// One estimated parameter.
 struct Estimate {
