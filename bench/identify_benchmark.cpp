@@ -16,6 +16,7 @@
 #include "core/model/steady_state.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/sim/cut_simulator.hpp"
+#include "tests/support/exact_window.hpp"
 
 namespace {
 
@@ -40,28 +41,14 @@ model::ModelConfig cut(int flutes, model::Operation op) {
   return m;
 }
 
-MeasuredRevolution measured_from(const model::ModelConfig& truth) {
-  model::ModelConfig fine = truth;
-  fine.effects.helix_lag.discs = 20;
-  model::SteadyStateWorkspace ws;
-  const auto& ss = model::evaluate_steady_state(fine, truth.process.spindle_rpm, 1440, ws);
-  MeasuredRevolution m;
-  m.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
-  m.spindle_rpm = truth.process.spindle_rpm;
-  m.revolutions = 30;
-  m.shared_bins = false;
-  return m;
-}
-
 /// Fits `truth`'s measured window from `truth` without runout (or, from_previous, from the
 /// first fit's result) each iteration; the evaluations per fit as a counter.
 void fit_window(benchmark::State& state, const model::ModelConfig& truth, bool from_previous,
                 const millwatch::identify::FitOptions& options) {
-  const MeasuredRevolution measured = measured_from(truth);
+  const MeasuredRevolution measured = millwatch::test::finer_window(truth);
   model::ModelConfig start = truth;
   start.effects.runout.offset_um = 0.0;
-  WindowFitter fitter(
-      start, [](double hz) { return std::complex<double>(hz < 3300.0 ? 1.0 : 0.0, 0.0); }, options);
+  WindowFitter fitter(start, millwatch::test::ideal_lowpass, options);
   const FitResult first = fitter.fit(measured);
   if (!first.ok) {
     state.SkipWithError(first.message.c_str());

@@ -19,6 +19,7 @@
 
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
+#include "tests/support/exact_window.hpp"
 
 namespace millwatch::identify {
 namespace {
@@ -38,18 +39,6 @@ model::ModelConfig three_flute_slot(double rho_um, double gamma_rad) {
   return m;
 }
 
-/// The exact revolution of a finer model (1440 steps against the fitter's 720).
-MeasuredRevolution window_of(const model::ModelConfig& truth) {
-  model::SteadyStateWorkspace ws;
-  const auto& ss = model::evaluate_steady_state(truth, truth.process.spindle_rpm, 1440, ws);
-  MeasuredRevolution m;
-  m.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
-  m.spindle_rpm = truth.process.spindle_rpm;
-  m.revolutions = 30;
-  m.shared_bins = false;
-  return m;
-}
-
 /// Windows with Gaussian noise on every bin, one generator and one distribution for all of them
 /// (the distribution keeps the second value of each pair it draws: the sequence is one stream).
 struct NoisyWindows {
@@ -65,10 +54,6 @@ struct NoisyWindows {
     return w;
   }
 };
-
-std::complex<double> pass_band(double hz) {
-  return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
-}
 
 /// Submits `count` noisy copies of `exact` as windows 1..count (revolutions 30·k, each due at its
 /// own end) and takes each when due: the results in order (empty if one did not fit).
@@ -94,9 +79,9 @@ TEST(Identifier, LiveItFitsWhatItGetsToDropsTheBacklogAndCountsLateResults) {
   start.effects.runout.offset_um = 0.0;
   std::atomic<int> calls{0};
   Identifier id(
-      start, pass_band, FitOptions{}, [&](const IdentifiedWindow&) { ++calls; },
+      start, test::ideal_lowpass, FitOptions{}, [&](const IdentifiedWindow&) { ++calls; },
       HandOver::kWhenReady);
-  const MeasuredRevolution w = window_of(truth);
+  const MeasuredRevolution w = test::exact_window(truth);
   id.submit(w, 30, 1000, 60);
   // Due at once, but a fit takes tens of milliseconds: not waited for, counted late once.
   EXPECT_FALSE(id.take_due(60).has_value());
@@ -134,8 +119,8 @@ TEST(Identifier, InAReplayEveryResultIsHandedOverAtItsDueRevolutionInOrder) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
   model::ModelConfig start = truth;
   start.effects.runout.offset_um = 0.0;
-  Identifier id(start, pass_band, FitOptions{}, nullptr, HandOver::kWait);
-  const MeasuredRevolution w = window_of(truth);
+  Identifier id(start, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution w = test::exact_window(truth);
   for (int k = 1; k <= 3; ++k) {
     id.submit(w, 30 * k, 1000 * k, 30 * k + 45);
   }
@@ -158,13 +143,14 @@ TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
   const model::ModelConfig after = three_flute_slot(2.0, -1.0);
   model::ModelConfig start = before;
   start.effects.runout.offset_um = 0.0;
-  Identifier id(start, pass_band, FitOptions{}, nullptr);
-  id.submit(window_of(before), 30, 1, 60);
+  Identifier id(start, test::ideal_lowpass, FitOptions{}, nullptr);
+  id.submit(test::exact_window(before), 30, 1, 60);
   while (id.fitted() < 1) {
     std::this_thread::yield();
   }
   const double rho_before = id.latest()->fit.rho_um.value;
-  id.submit(window_of(after), 60, 2, 90);  // seeded with the old runout: must search afresh
+  id.submit(test::exact_window(after), 60, 2,
+            90);  // seeded with the old runout: must search afresh
   id.finish();
   const auto last = id.latest();
   ASSERT_TRUE(last.has_value() && last->fit.ok);
@@ -184,14 +170,14 @@ TEST(Identifier, LiveWithACpuBudgetItRestsAfterEachFitAndCountsTheWindowsItSkips
   std::mutex m;
   std::vector<IdentifiedWindow> results;
   Identifier id(
-      start, pass_band, FitOptions{},
+      start, test::ideal_lowpass, FitOptions{},
       [&](const IdentifiedWindow& w) {
         const std::lock_guard lock(m);
         results.push_back(w);
       },
       HandOver::kWhenReady, kBudget);
   EXPECT_EQ(id.budget_period_s(), 0.0);  // no fit yet
-  const MeasuredRevolution w = window_of(truth);
+  const MeasuredRevolution w = test::exact_window(truth);
   int submitted = 0;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (id.fitted() < 3 && std::chrono::steady_clock::now() < give_up) {
@@ -227,8 +213,8 @@ TEST(Identifier, LiveWithACpuBudgetItRestsAfterEachFitAndCountsTheWindowsItSkips
 // A replay waits for every fit: the budget does not apply, every window is fitted.
 TEST(Identifier, InAReplayTheBudgetIsIgnored) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
-  Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait, 0.001);
-  const MeasuredRevolution w = window_of(truth);
+  Identifier id(truth, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWait, 0.001);
+  const MeasuredRevolution w = test::exact_window(truth);
   for (int k = 1; k <= 4; ++k) {
     id.submit(w, 30 * k, 1000 * k, 30 * k + 30);
   }
@@ -292,8 +278,8 @@ TEST(Identifier, ARunoutMovesWhenBothFitsUncertaintyDoesNotExplainTheDifference)
 // for a move on all eleven after the first; then a window after a runout step.
 TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNoise) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
-  Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait);
-  const MeasuredRevolution exact = window_of(truth);
+  Identifier id(truth, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution exact = test::exact_window(truth);
   NoisyWindows noisy(0.1, 20261201);
   constexpr int kWindows = 12;
   const std::vector<IdentifiedWindow> results = fit_noisy_windows(id, noisy, exact, kWindows);
@@ -324,7 +310,7 @@ TEST(Identifier, TheVariantsAreRefittedEveryTenthWindowAndOnARunoutStepNotOnNois
   EXPECT_GE(former_test_fired, 3);  // the test could fail: noise alone moves the runout that much
 
   const model::ModelConfig after = three_flute_slot(2.0, -1.0);
-  id.submit(noisy(window_of(after)), 30 * (kWindows + 1), 1000 * (kWindows + 1),
+  id.submit(noisy(test::exact_window(after)), 30 * (kWindows + 1), 1000 * (kWindows + 1),
             30 * (kWindows + 1));
   const auto stepped = id.take_due(30 * (kWindows + 1));
   ASSERT_TRUE(stepped.has_value() && stepped->fit.ok);
@@ -351,12 +337,10 @@ TEST(Identifier, TheVariantsAreRefittedWhenAFitGoesOntoAContactEdgeOrOffIt) {
   }
   cut.effects.runout.offset_um = 2.6;
   cut.effects.runout.angle_rad = 0.3;
-  model::ModelConfig truth = cut;
-  truth.effects.helix_lag.discs = 20;
   model::ModelConfig start = cut;
   start.effects.runout.offset_um = 0.0;
-  Identifier id(start, pass_band, FitOptions{}, nullptr, HandOver::kWait);
-  const MeasuredRevolution exact = window_of(truth);
+  Identifier id(start, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution exact = test::finer_window(cut);
   NoisyWindows noisy(0.03, 1);
   constexpr int kWindows = 8;
   const std::vector<IdentifiedWindow> results = fit_noisy_windows(id, noisy, exact, kWindows);
@@ -396,15 +380,16 @@ TEST(Identifier, TheVariantsAreRefittedWhenAFitGoesOntoAContactEdgeOrOffIt) {
 // afresh. A runout that went far from the seed's now searches afresh too and keeps the better.
 TEST(Identifier, AStepAfterNoisyWindowsIsFoundOnACleanWindow) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
-  Identifier id(truth, pass_band, FitOptions{}, nullptr, HandOver::kWait);
-  const MeasuredRevolution exact = window_of(truth);
+  Identifier id(truth, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWait);
+  const MeasuredRevolution exact = test::exact_window(truth);
   NoisyWindows noisy(0.3, 20261201);
   constexpr int kWindows = 12;
   for (int k = 1; k <= kWindows; ++k) {
     id.submit(noisy(exact), 30 * k, 1000 * k, 30 * k);
   }
   const model::ModelConfig after = three_flute_slot(2.0, -1.0);
-  id.submit(window_of(after), 30 * (kWindows + 1), 1000 * (kWindows + 1), 30 * (kWindows + 1));
+  id.submit(test::exact_window(after), 30 * (kWindows + 1), 1000 * (kWindows + 1),
+            30 * (kWindows + 1));
   std::optional<IdentifiedWindow> last;
   for (int k = 1; k <= kWindows + 1; ++k) {
     last = id.take_due(30 * k);
@@ -419,9 +404,9 @@ TEST(Identifier, AStepAfterNoisyWindowsIsFoundOnACleanWindow) {
 
 TEST(Identifier, RefusesABudgetOutsideZeroToOne) {
   const model::ModelConfig m = three_flute_slot(1.2, 0.4);
-  EXPECT_THROW(Identifier(m, pass_band, FitOptions{}, nullptr, HandOver::kWhenReady, 0.0),
+  EXPECT_THROW(Identifier(m, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWhenReady, 0.0),
                std::invalid_argument);
-  Identifier id(m, pass_band, FitOptions{}, nullptr, HandOver::kWhenReady, 0.5);
+  Identifier id(m, test::ideal_lowpass, FitOptions{}, nullptr, HandOver::kWhenReady, 0.5);
   EXPECT_THROW(id.set_cpu_budget(2.0), std::invalid_argument);
 }
 

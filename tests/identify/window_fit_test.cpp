@@ -21,6 +21,7 @@
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
 #include "core/monitor/pipeline.hpp"
+#include "tests/support/exact_window.hpp"
 #include "tests/support/realistic_cut.hpp"
 #include "tests/support/recording.hpp"
 
@@ -294,26 +295,6 @@ model::ModelConfig small_linear_edge_cut(model::Operation op, int flutes, double
   return m;
 }
 
-// The exact mean revolution of a finer truth than the fitter's (1440 steps and 20 helix discs
-// against 720 and 5), as a window of 30 revolutions sampled exactly.
-MeasuredRevolution finer_truth(const model::ModelConfig& m) {
-  model::ModelConfig truth = m;
-  truth.effects.helix_lag.discs = 20;
-  model::SteadyStateWorkspace ws;
-  const auto& ss = model::evaluate_steady_state(truth, m.process.spindle_rpm, 1440, ws);
-  MeasuredRevolution measured;
-  measured.force_N = {ss.mean.fx_N, ss.mean.fy_N, ss.mean.fz_N};
-  measured.spindle_rpm = m.process.spindle_rpm;
-  measured.revolutions = 30;
-  measured.shared_bins = false;
-  return measured;
-}
-
-// An ideal low-pass at 3.3 kHz: the filter of the fitter-alone tests.
-std::complex<double> ideal_lowpass(double hz) {
-  return {hz < 3300.0 ? 1.0 : 0.0, 0.0};
-}
-
 // The fitter alone, on the exact revolution of a finer truth (1440 steps, 20 discs against the
 // fitter's 720 and 5; no monitor, no noise): the waveform is matched, the radii found, and the
 // runout within its stated uncertainty.
@@ -324,11 +305,11 @@ TEST(WindowFit, FitsTheSteadyStateOfAFinerModel) {
       model::ModelConfig m = small_linear_edge_cut(op, flutes, 1.2, 0.3);
       model::set_effect(m, "dynamometer", true);
       m.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
-      const MeasuredRevolution measured = finer_truth(m);
+      const MeasuredRevolution measured = test::finer_window(m);
       model::ModelConfig start = m;
       start.effects.runout.offset_um = 0.0;
       start.material.linear_edge.k_tc_N_per_mm2 *= 0.7;
-      WindowFitter fitter(start, ideal_lowpass);
+      WindowFitter fitter(start, test::ideal_lowpass);
       const FitResult f = fitter.fit(measured);
       ASSERT_TRUE(f.ok) << f.message;
       const auto pitch = model::flute_pitch_angles_rad(m.tool);
@@ -371,10 +352,10 @@ TEST(WindowFit, AFluteThatCutsNothingBoundsTheRunoutFromBelow) {
   for (const model::Operation op : {model::Operation::kSlot, model::Operation::kDownMilling}) {
     for (int flutes : {2, 3}) {
       const model::ModelConfig m = small_linear_edge_cut(op, flutes, rho_um, 0.3);
-      const MeasuredRevolution measured = finer_truth(m);
+      const MeasuredRevolution measured = test::finer_window(m);
       model::ModelConfig start = m;
       start.effects.runout.offset_um = 0.0;
-      WindowFitter fitter(start, ideal_lowpass);
+      WindowFitter fitter(start, test::ideal_lowpass);
       const FitResult f = fitter.fit(measured);
       ASSERT_TRUE(f.ok) << f.message;
       const char* name = op == model::Operation::kSlot ? "slot" : "down 30 %";
@@ -421,13 +402,13 @@ TEST(WindowFit, AContactEdgeIsToldWhenTheModelMissesAnEffect) {
   const model::ModelConfig m = small_linear_edge_cut(model::Operation::kSlot, 3, 2.0, 0.3);
   model::ModelConfig start = m;
   start.effects.runout.offset_um = 0.0;
-  WindowFitter fitter(start, ideal_lowpass);
+  WindowFitter fitter(start, test::ideal_lowpass);
   for (const double natural_hz : {3000.0, 4000.0}) {
     model::ModelConfig truth = m;
     model::set_effect(truth, "dynamometer", true);
     truth.effects.dynamometer.natural_hz = {natural_hz, natural_hz, 6000.0};
     truth.effects.dynamometer.damping_ratio = {0.04, 0.06, 0.05};
-    const FitResult f = fitter.fit(finer_truth(truth));
+    const FitResult f = fitter.fit(test::finer_window(truth));
     ASSERT_TRUE(f.ok) << f.message;
     const double unexplained = unexplained_fraction(f.residual_rms_N, f.measured_rms_N);
     std::printf("ring at %.0f Hz: rho %s%.3f ± %.3f (truth 2.0), %.0f %% unexplained\n", natural_hz,
@@ -459,7 +440,7 @@ TEST(WindowFit, AFluteThatCutsNothingIsHonestInNoise) {
   const double rho_um = 2.6;
   m.effects.runout.offset_um = rho_um;
   m.effects.runout.angle_rad = 0.3;
-  const MeasuredRevolution exact = finer_truth(m);
+  const MeasuredRevolution exact = test::finer_window(m);
   const auto pos = model::flute_positions(model::tool_radius_um(m),
                                           model::flute_pitch_angles_rad(m.tool), rho_um, 0.3);
   const double deficit_truth_um = pos[0].radius_um - pos[1].radius_um;
@@ -475,7 +456,7 @@ TEST(WindowFit, AFluteThatCutsNothingIsHonestInNoise) {
     }
     model::ModelConfig start = m;
     start.effects.runout.offset_um = 0.0;
-    WindowFitter fitter(start, ideal_lowpass);
+    WindowFitter fitter(start, test::ideal_lowpass);
     const FitResult f = fitter.fit(measured);
     ASSERT_TRUE(f.ok) << f.message;
     const Estimate& d = f.radius_from_ce1_um[1];  // r_CE2 − r_CE1
@@ -524,7 +505,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     } else {
       m.effects.deflection.stiffness_N_per_um = x.truth;
     }
-    MeasuredRevolution measured = finer_truth(m);
+    MeasuredRevolution measured = test::finer_window(m);
     measured.use_axis[2] = false;  // no axial force compared: K_ac cannot be fitted
     model::ModelConfig start = m;
     start.effects.runout.offset_um = 0.0;
@@ -535,7 +516,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     }
     FitOptions options;
     options.extra_parameters = {x.name};
-    WindowFitter fitter(start, ideal_lowpass, options);
+    WindowFitter fitter(start, test::ideal_lowpass, options);
     const FitResult f = fitter.fit(measured);
     ASSERT_TRUE(f.ok) << x.name << ": " << f.message;
     ASSERT_EQ(f.extra.size(), 1u);
