@@ -28,6 +28,7 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.revolutions += s.revolutions;
   total.valid_revolutions += s.valid_revolutions;
   total.idle_revolutions += s.idle_revolutions;
+  total.alert_held_revolutions += s.alert_held_revolutions;
   total.model_builds += s.model_builds;
   total.cutting_revolutions += s.cutting_revolutions;
 }

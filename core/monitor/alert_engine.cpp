@@ -176,6 +176,7 @@ AlertEngine::AlertEngine(const AlertConfig& config) : config_(config) {
   const auto block = static_cast<std::size_t>(std::max(config_.block_revolutions, 1));
   const auto revolutions = block * static_cast<std::size_t>(std::max(config_.baseline_blocks, 1));
   baseline_force_N_.assign(revolutions * kFlutes, 0.0);
+  baseline_rpm_.assign(revolutions, 0.0);
   series_.assign(revolutions, 0.0);
   scratch_.assign(revolutions, 0.0);
   block_medians_.assign(static_cast<std::size_t>(std::max(config_.baseline_blocks, 1)), 0.0);
@@ -188,6 +189,7 @@ void AlertEngine::rebaseline() {
   baseline_ = Baseline{};
   flutes_ = 0;
   baseline_count_ = 0;
+  reforming_ = false;
   block_count_ = 0;
   recent_count_ = 0;
   recent_next_ = 0;
@@ -273,9 +275,22 @@ void AlertEngine::examine(const RevolutionRecord& r) {
     check_runout(f, rev, t);
   }
   if (!baseline_.ready) {
-    add_to_baseline(f);
+    add_to_baseline(f, r.spindle_rpm);
     return;
   }
+  if (!same_speed(r.spindle_rpm, baseline_.spindle_rpm)) {
+    // Another feed per tooth: the shares and the mean force are not comparable with the
+    // baseline's. Held, and the revolution counts towards a baseline at its speed.
+    if (!reforming_) {
+      reforming_ = true;
+      baseline_count_ = 0;
+    }
+    ++held_revolutions_;
+    check_breakage(f, rev, t);
+    add_to_baseline(f, r.spindle_rpm);
+    return;
+  }
+  reforming_ = false;  // back at the baseline's speed before a new one was complete
   const bool collapsing = check_breakage(f, rev, t);
   check_runout_step(f, collapsing, rev, t);
   add_to_block(f, rev, t);
@@ -317,7 +332,16 @@ void AlertEngine::check_runout(const Flutes& f, std::int64_t rev, std::int64_t t
   }
 }
 
-void AlertEngine::add_to_baseline(const Flutes& f) {
+bool AlertEngine::same_speed(double rpm, double reference_rpm) const {
+  const bool known = rpm > 0.0 && std::isfinite(rpm) && reference_rpm > 0.0;
+  return !known || std::fabs(rpm / reference_rpm - 1.0) <= config_.conditions_tolerance;
+}
+
+void AlertEngine::add_to_baseline(const Flutes& f, double rpm) {
+  if (baseline_count_ > 0 && !same_speed(rpm, baseline_rpm_[0])) {
+    baseline_count_ = 0;  // the speed moved on: start again at this one
+  }
+  baseline_rpm_[at(baseline_count_)] = rpm > 0.0 && std::isfinite(rpm) ? rpm : 0.0;
   flutes_ = f.count;
   std::copy(f.force_N.begin(), f.force_N.end(),
             baseline_force_N_.begin() + static_cast<std::ptrdiff_t>(at(baseline_count_) * kFlutes));
@@ -364,6 +388,15 @@ void AlertEngine::finish_baseline() {
   Baseline& base = baseline_;
   base = Baseline{};
   base.flutes = flutes;
+  // The speed: the median of the revolutions' that have one.
+  int known = 0;
+  for (int i = 0; i < n; ++i) {
+    if (baseline_rpm_[at(i)] > 0.0) {
+      series[at(known++)] = baseline_rpm_[at(i)];
+    }
+  }
+  base.spindle_rpm = known > 0 ? median_in_place(series.first(at(known))) : 0.0;
+  reforming_ = false;
   // Mean flute force and its relative rise.
   for (int i = 0; i < n; ++i) {
     series[at(i)] = mean_force(i);

@@ -97,6 +97,17 @@
 //                 τ_j/hysteresis for as long.
 //  sensor         saturated or non-finite samples above `sensor_bad_fraction` of the samples of a
 //                 status interval, or gaps in the stream; cleared at the first clean interval.
+// Conditions: a flute's share of the force and the mean flute force move with the feed per tooth
+// (f_t = f_t,cmd·n_cmd/n at a fixed feed rate: a 10 % slower spindle cuts 11 % thicker chips, and
+// with runout the flutes' shares change with it), so the flute-force baseline holds at one speed.
+// Its revolutions are within `conditions_tolerance` of the first one's speed (the baseline starts
+// again from a revolution beyond it), and it keeps their median speed. A revolution more than that
+// off the baseline's speed is not compared (runout change per revolution and per block, wear drift
+// without estimates: held_revolutions() counts them) and starts a new baseline at its speed; a
+// speed that comes back within the tolerance before the new baseline is complete returns to the
+// old one. Breakage (relative strengths, nearly independent of f_t) and the imbalance runout stay
+// on throughout. Alerts raised stay raised; their clearing detectors restart on the new baseline.
+//
 // Severity: breakage is an alarm, the others warnings, clears and the runout change's identified
 // follow-up are info. rebaseline() forgets both baselines (a new tool) and clears the change
 // alerts at the next revolution.
@@ -184,7 +195,8 @@ struct AlertConfig {
   int estimate_baseline_windows = 10;  ///< fitted windows in the estimates' baseline
   double runout_change_min_um = 0.2;   ///< least relevant change of a radius difference, µm
   double coefficient_increase = 0.10;  ///< limit of a force coefficient's rise over its baseline
-  /// Relative change of the window's speed or feed per tooth that starts a new estimates' baseline.
+  /// Relative change of the window's speed or feed per tooth that starts a new estimates' baseline;
+  /// of a revolution's speed, that holds the flute-force detectors and starts their new baseline.
   double conditions_tolerance = 0.01;
 };
 
@@ -244,6 +256,7 @@ class AlertEngine {
   struct Baseline {
     bool ready = false;
     int flutes = 0;
+    double spindle_rpm = 0.0;                           ///< median speed (0: not known)
     double mean_force_N = 0.0;                          ///< μ_M, median of M
     double rise_sigma = 0.0;                            ///< σ_r of a block's relative rise
     std::array<double, kMaxFlutes> share{};             ///< μ_j, median of s_j
@@ -257,6 +270,9 @@ class AlertEngine {
     double wear_threshold = 0.0;
   };
   [[nodiscard]] const Baseline& baseline() const { return baseline_; }
+  /// Revolutions the flute-force change detectors did not compare with their baseline: the
+  /// speed was more than conditions_tolerance off the baseline's (a new baseline forming).
+  [[nodiscard]] std::int64_t held_revolutions() const { return held_revolutions_; }
 
   /// The estimates' baseline, once complete (for tests and diagnostics).
   struct EstimateBaseline {
@@ -328,7 +344,11 @@ class AlertEngine {
   /// Returns whether a flute is below its breakage limit in this revolution.
   bool check_breakage(const Flutes& f, std::int64_t rev, std::int64_t t);
   void check_runout_step(const Flutes& f, bool collapsing, std::int64_t rev, std::int64_t t);
-  void add_to_baseline(const Flutes& f);
+  /// Adds a revolution at `rpm` (0: not known) to the baseline being formed; restarts it when
+  /// the speed is beyond the tolerance of its first revolution's.
+  void add_to_baseline(const Flutes& f, double rpm);
+  /// Whether `rpm` is within conditions_tolerance of `reference_rpm` (either unknown: yes).
+  [[nodiscard]] bool same_speed(double rpm, double reference_rpm) const;
   void finish_baseline();
   void add_to_block(const Flutes& f, std::int64_t rev, std::int64_t t);
   void check_runout_change(const Block& b, std::int64_t rev, std::int64_t t);
@@ -376,6 +396,9 @@ class AlertEngine {
   int flutes_ = 0;
   int baseline_count_ = 0;
   std::vector<double> baseline_force_N_;
+  std::vector<double> baseline_rpm_;  // the baseline's revolutions' speeds (0: not known)
+  bool reforming_ = false;            // a new baseline forms at another speed
+  std::int64_t held_revolutions_ = 0;
   std::vector<double> series_, scratch_, block_medians_;
   bool rebaselined_ = false;
   // By AlertKind (kRunout 1 … kSensor 5): the newest raise of each kind.

@@ -87,6 +87,9 @@ struct PipelineStatus {
   std::int64_t model_builds = 0;           ///< lockstep model (re)builds: locks and speed changes
   std::int64_t identifications_taken = 0;  ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
+  /// Revolutions the flute-force change detectors held: the speed more than the alerts'
+  /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
+  std::int64_t alert_held_revolutions = 0;
   /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
   /// durations times their speeds, and the samples since its last window at the last speed) —
   /// what "every revolution" is measured against.

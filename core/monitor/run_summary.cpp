@@ -1,6 +1,7 @@
 #include "core/monitor/run_summary.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -202,6 +203,19 @@ nlohmann::json RunSummary::to_json() const {
              " turned while the tracker heard cutting (the others: before a lock, in gaps, or "
              "without their tooth events)");
   }
+  if (status_.alert_held_revolutions > 0) {
+    std::array<char, 384> text{};
+    std::snprintf(
+        text.data(), text.size(),
+        "%lld revolutions ran more than alerts.conditions_tolerance (%g %%) off the speed "
+        "of the flute forces' baseline, at another feed per tooth: runout change and "
+        "wear drift did not compare them (breakage did); a new baseline forms once the "
+        "speed holds for %d revolutions",
+        static_cast<long long>(status_.alert_held_revolutions),
+        100.0 * config_.alerts.conditions_tolerance,
+        config_.alerts.block_revolutions * config_.alerts.baseline_blocks);
+    warn("alerts held", text.data());
+  }
   if (config_.lockstep && revolutions_ > 0 && residual_[0].n == 0) {
     warn("no model residuals",
          "the lockstep model was never aligned with the measured revolutions");
@@ -291,7 +305,8 @@ nlohmann::json RunSummary::to_json() const {
              {"gaps", in.gaps},
              {"out_of_order_blocks", in.out_of_order_blocks},
              {"blocks_rejected", in.blocks_rejected},
-             {"idle_revolutions", status_.idle_revolutions}}},
+             {"idle_revolutions", status_.idle_revolutions},
+             {"alert_held_revolutions", status_.alert_held_revolutions}}},
            {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
   for (const char* key : {"runout", "coefficients", "fit"}) {
     out[key] = identification_.is_object() && identification_.contains(key) ? identification_[key]

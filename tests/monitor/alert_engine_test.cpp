@@ -50,11 +50,13 @@ struct Feed {
   std::int64_t next = 0;
   std::mt19937_64 rng;
   std::normal_distribution<double> normal{0.0, 1.0};
-  Forces noise{};  // AR(1) state per flute, relative
+  Forces noise{};    // AR(1) state per flute, relative
+  double rpm = 0.0;  // the revolutions' speed (0: not known)
 
   void feed(int flutes, const Forces& force_N) {
-    engine.on_revolution(revolution(next++, flutes, force_N),
-                         [&](const Alert& a) { alerts.push_back(a); });
+    RevolutionRecord r = revolution(next++, flutes, force_N);
+    r.spindle_rpm = rpm;
+    engine.on_revolution(r, [&](const Alert& a) { alerts.push_back(a); });
   }
   /// `count` revolutions of flute forces level·(1 + e), e an AR(1) per flute with lag-1
   /// correlation rho and stationary σ `sigma` (relative).
@@ -381,6 +383,77 @@ TEST(AlertEngine, CollapsingFluteRaisesBreakageWithinItsPersistence) {
   chipped.noisy(2000, 3, {1.0, 0.45, 0.8}, 0.02);
   EXPECT_EQ(chipped.count(AlertKind::kBreakage, true), 0);
   EXPECT_EQ(chipped.count(AlertKind::kRunoutChange, true), 1);
+}
+
+/// Two flutes cutting f_t ± 1 µm (a radius difference of 2 µm), K N per µm, at a fixed feed rate
+/// of 4 µm/tooth at 25,000 rpm: f_t = 4·25,000/n.
+Forces two_flutes_at(double rpm, double radius_difference_um = 2.0, double k_N_per_um = 0.25) {
+  const double feed_um = 4.0 * 25000.0 / rpm;
+  return {k_N_per_um * (feed_um + 0.5 * radius_difference_um),
+          k_N_per_um * (feed_um - 0.5 * radius_difference_um)};
+}
+
+// The spindle slows from 25,000 to 20,000 rpm at a fixed feed rate (f_t 4 → 5 µm): the flutes'
+// shares move from ±25 % to ±20 % and the mean force rises 25 %, with the runout and the tool
+// unchanged. Told the speed, the engine holds its flute-force detectors (no runout change, no
+// wear drift), counts the held revolutions, forms a new baseline at 20,000 rpm once the speed
+// holds, and then still raises a real change of the runout. Without the speed (the control) the
+// same revolutions raise both false alarms. A short excursion returns to the old baseline, and
+// a flute that breaks while the speed is off is still an alarm.
+TEST(AlertEngine, ASpeedChangeHoldsTheFluteForceDetectorsAndStartsABaselineThere) {
+  const AlertConfig config;
+  const int baseline = baseline_revolutions(config);
+  const auto ramp = [](Feed& run, bool told) {
+    run.rpm = told ? 25000.0 : 0.0;
+    run.noisy(1000, 2, two_flutes_at(25000.0), 0.01);
+    for (int n = 0; n < 400; ++n) {
+      const double rpm = 25000.0 - 5000.0 * n / 400.0;
+      run.rpm = told ? rpm : 0.0;
+      run.noisy(1, 2, two_flutes_at(rpm), 0.01);
+    }
+    run.rpm = told ? 20000.0 : 0.0;
+    run.noisy(2000, 2, two_flutes_at(20000.0), 0.01);
+  };
+  Feed control({}, 71);
+  ramp(control, false);
+  EXPECT_EQ(control.count(AlertKind::kRunoutChange, true), 1);
+  EXPECT_EQ(control.count(AlertKind::kWearDrift, true), 1);
+  EXPECT_EQ(control.engine.held_revolutions(), 0);
+
+  Feed run({}, 71);
+  ramp(run, true);
+  EXPECT_EQ(run.change_alarms(), 0);
+  ASSERT_TRUE(run.engine.baseline().ready);
+  EXPECT_NEAR(run.engine.baseline().spindle_rpm, 20000.0, 1.0);
+  EXPECT_NEAR(run.engine.baseline().share[0], 0.20, 0.005);
+  // Held: the ramp's revolutions beyond 1 % (below 25,000 · 0.99) and the new baseline's, less
+  // the ramp's last ones within 1 % of 20,000 rpm (12.5 rpm a revolution: at most 16), which
+  // already count towards it.
+  const auto ramp_held = static_cast<std::int64_t>(400.0 * (1.0 - 250.0 / 5000.0));
+  EXPECT_LE(run.engine.held_revolutions(), ramp_held + baseline);
+  EXPECT_GE(run.engine.held_revolutions(), ramp_held + baseline - 17);
+  // A real change at the new speed: the radius difference 2 → 2.8 µm (shares ±20 % → ±28 %).
+  run.noisy(500, 2, two_flutes_at(20000.0, 2.8), 0.01);
+  EXPECT_EQ(run.count(AlertKind::kRunoutChange, true), 1);
+
+  Feed dip({}, 72);
+  dip.rpm = 25000.0;
+  dip.noisy(1000, 2, two_flutes_at(25000.0), 0.01);
+  dip.rpm = 24000.0;
+  dip.noisy(40, 2, two_flutes_at(24000.0), 0.01);
+  dip.rpm = 25000.0;
+  dip.noisy(2000, 2, two_flutes_at(25000.0), 0.01);
+  EXPECT_EQ(dip.change_alarms(), 0);
+  EXPECT_EQ(dip.engine.held_revolutions(), 40);
+  EXPECT_NEAR(dip.engine.baseline().spindle_rpm, 25000.0, 1.0);
+
+  Feed broken({}, 73);
+  broken.rpm = 25000.0;
+  broken.noisy(1000, 3, {1.0, 0.9, 0.8}, 0.02);
+  broken.rpm = 22000.0;
+  broken.noisy(100, 3, {1.1, 0.045, 0.9}, 0.02);
+  EXPECT_EQ(broken.count(AlertKind::kBreakage, true), 1);
+  EXPECT_EQ(broken.engine.held_revolutions(), 100);
 }
 
 // A new baseline (another tool, a re-lock) while a flute is broken clears the breakage, with the

@@ -81,8 +81,9 @@ sim::Scenario steady_cut(double duration_s) {
 }
 
 /// Streams the simulated cut through a pipeline in 1 ms blocks.
-void run(const sim::Scenario& s, PipelineSink& sink) {
+PipelineStatus run(const sim::Scenario& s, PipelineSink& sink, const AlertConfig& alerts = {}) {
   MonitorConfig c;
+  c.alerts = alerts;
   c.model = s.model;
   c.sample_rate_hz = s.sample_rate_hz;
   Pipeline pipeline(c, sink);
@@ -98,6 +99,7 @@ void run(const sim::Scenario& s, PipelineSink& sink) {
                       std::span(fy).first(n), std::span(fz).first(n)});
   }
   pipeline.finish();
+  return pipeline.status();
 }
 
 // Issue 6 §5: a steady 25 s cut (10,500 revolutions), nothing about the tool changing, raises no
@@ -188,6 +190,46 @@ TEST(AlertFalseAlarm, RunoutChangeMidCutIsFound) {
   }
   EXPECT_EQ(out.raised(AlertKind::kWearDrift), 0);
   EXPECT_EQ(out.raised(AlertKind::kBreakage), 0);
+}
+
+// The same cut with the spindle slowing from 25,252 to 20,000 rpm between 1.5 and 1.8 s at the
+// commanded feed rate (the simulator's f_t grows from 3.96 to 5 µm/tooth): the runout and the
+// tool do not change, so no runout change, wear drift or breakage is raised; the revolutions
+// beyond 1 % of the baseline's speed are held (a new baseline would form after 500 of them at
+// 20,000 rpm, more than the cut has). The control — the same cut with the speed not heeded
+// (conditions_tolerance 100 %) — raises a runout change from the flute forces' shares, which move
+// with the feed per tooth.
+TEST(AlertFalseAlarm, ASpeedRampRaisesNoChangeAlert) {
+  sim::Scenario s = steady_cut(3.0);
+  s.spindle.profile = sim::SpindleProfileKind::kRamp;
+  s.spindle.ramp_end_rpm = 20000.0;
+  s.spindle.ramp_start_s = 1.5;
+  s.spindle.ramp_end_s = 1.8;
+  AlertConfig heeded;
+  struct Slow : Counter {
+    std::int64_t revolutions = 0;  // bounded, more than 1 % slower than 25,252 rpm
+    void on_revolution(const RevolutionRecord& r) override {
+      Counter::on_revolution(r);
+      revolutions += r.measured.bounded && r.spindle_rpm < 0.99 * 25252.0 ? 1 : 0;
+    }
+  };
+  Slow out;
+  const PipelineStatus status = run(s, out, heeded);
+  EXPECT_EQ(out.raised(AlertKind::kRunoutChange), 0);
+  EXPECT_EQ(out.raised(AlertKind::kWearDrift), 0);
+  EXPECT_EQ(out.raised(AlertKind::kBreakage), 0);
+  std::printf("%lld revolutions held, %lld more than 1 %% slower\n",
+              static_cast<long long>(status.alert_held_revolutions),
+              static_cast<long long>(out.revolutions));
+  EXPECT_GT(out.revolutions, 400);
+  EXPECT_NEAR(static_cast<double>(status.alert_held_revolutions),
+              static_cast<double>(out.revolutions), 3.0);
+
+  AlertConfig blind;
+  blind.conditions_tolerance = 1.0;
+  Counter control;
+  run(s, control, blind);
+  EXPECT_GE(control.raised(AlertKind::kRunoutChange) + control.raised(AlertKind::kWearDrift), 1);
 }
 
 }  // namespace

@@ -47,6 +47,35 @@ TEST(RunSummary, CallsAFitPoorOnlyWhereTheModelInLockstepRefusesIt) {
   }
 }
 
+// Revolutions the alerts held for another speed are counted and said, with the tolerance and the
+// new baseline's length; none held, nothing said.
+TEST(RunSummary, SaysHowManyRevolutionsTheAlertsHeldForAnotherSpeed) {
+  const auto summary_with = [](std::int64_t held) {
+    MonitorConfig config;
+    config.alerts.conditions_tolerance = 0.02;
+    RunSummary summary(config);
+    PipelineStatus status;
+    status.alert_held_revolutions = held;
+    summary.finish(status);
+    return summary.to_json();
+  };
+  const nlohmann::json held = summary_with(312);
+  EXPECT_EQ(held["counters"]["alert_held_revolutions"], 312);
+  std::string detail;
+  for (const auto& w : held["warnings"]) {
+    if (w["kind"] == "alerts held") {
+      detail = w["detail"].get<std::string>();
+    }
+  }
+  EXPECT_NE(detail.find("312 revolutions ran more than alerts.conditions_tolerance (2 %)"),
+            std::string::npos)
+      << held["warnings"].dump();
+  EXPECT_NE(detail.find("once the speed holds for 500 revolutions"), std::string::npos) << detail;
+  for (const auto& w : summary_with(0)["warnings"]) {
+    EXPECT_NE(w["kind"], "alerts held");
+  }
+}
+
 // A warning's samples are samples: "no steady tooth-passing signal" counts tracker windows,
 // which go into its text instead.
 TEST(RunSummary, AWarningCountsSamplesNotWindows) {
