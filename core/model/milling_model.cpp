@@ -101,16 +101,10 @@ void MillingModel::derive(bool keep_state) {
   path.offset_um = e.runout.enabled ? e.runout.offset_um : 0.0;
   path.offset_angle_rad = e.runout.enabled ? e.runout.angle_rad : 0.0;
 
-  // Engaged immersion range: [000] eq 28 for side milling; a slot engages [0, π] (its walls
-  // come from the earlier passes themselves).
-  engage_from_rad_ = 0.0;
-  engage_to_rad_ = kPi;
-  const double side_rad = std::acos((radius_um - 1e3 * c.process.radial_depth_mm) / radius_um);
-  if (c.process.operation == Operation::kUpMilling) {
-    engage_to_rad_ = side_rad;
-  } else if (c.process.operation == Operation::kDownMilling) {
-    engage_from_rad_ = kPi - side_rad;
-  }
+  // Engaged immersion range: [000] eq 28 for side milling, [0, π] for a slot.
+  const EngagedArc arc = engaged_arc(c);
+  engage_from_rad_ = arc.from_rad;
+  engage_to_rad_ = arc.to_rad;
   const double beta = helix_lag_total_rad(c);
   runout_disc_angles_rad(c, disc_angles_rad_);
   const double margin_rad = 4.0 * d_phi_rad_;

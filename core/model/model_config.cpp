@@ -234,6 +234,18 @@ std::string to_string(RunoutHelix helix) {
   return helix == RunoutHelix::kTipPattern ? "tip_pattern" : "rigid_axis";
 }
 
+EngagedArc engaged_arc(const ModelConfig& c) {
+  const double radius_um = tool_radius_um(c);
+  const double side_rad = std::acos((radius_um - 1e3 * c.process.radial_depth_mm) / radius_um);
+  EngagedArc arc{0.0, std::numbers::pi};
+  if (c.process.operation == Operation::kUpMilling) {
+    arc.to_rad = side_rad;
+  } else if (c.process.operation == Operation::kDownMilling) {
+    arc.from_rad = std::numbers::pi - side_rad;
+  }
+  return arc;
+}
+
 double helix_lag_total_rad(const ModelConfig& c) {
   if (!c.effects.helix_lag.enabled) {
     return 0.0;

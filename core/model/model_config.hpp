@@ -216,6 +216,14 @@ void validate(const ModelConfig& config, const std::string& path = "");
 inline double tool_radius_um(const ModelConfig& c) {
   return c.tool.diameter_mm * 500.0;
 }
+/// The immersion angles a flute's tip engages, [from, to] (rad): [000] eq 28 for side milling
+/// (up: [0, φ_s], down: [π − φ_s, π], cos φ_s = (R − a_e)/R); a slot engages [0, π] (its walls
+/// come from the earlier passes themselves). The helix lag (helix_lag_total_rad) extends it.
+struct EngagedArc {
+  double from_rad = 0.0;
+  double to_rad = 0.0;
+};
+EngagedArc engaged_arc(const ModelConfig& c);
 /// Cumulative pitch angle ψ_j (rad) of each flute, ψ_0 = 0.
 std::vector<double> flute_pitch_angles_rad(const Tool& tool);
 /// The same into `out` (resized to the flute count; no allocation when it already fits).

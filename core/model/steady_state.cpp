@@ -342,15 +342,10 @@ void SteadyStateWorkspace::Impl::configure(const ModelConfig& c, double rpm, int
   path.offset_um = e.runout.enabled ? e.runout.offset_um : 0.0;
   path.offset_angle_rad = e.runout.enabled ? e.runout.angle_rad : 0.0;
 
-  // Engaged immersion: [000] eq 28 for side milling; a slot engages [0, π].
-  double engage_from = 0.0;
-  double engage_to = kPi;
-  const double side_rad = std::acos((radius_um - 1e3 * c.process.radial_depth_mm) / radius_um);
-  if (c.process.operation == Operation::kUpMilling) {
-    engage_to = side_rad;
-  } else if (c.process.operation == Operation::kDownMilling) {
-    engage_from = kPi - side_rad;
-  }
+  // Engaged immersion: [000] eq 28 for side milling, [0, π] for a slot.
+  const EngagedArc arc = engaged_arc(c);
+  const double engage_from = arc.from_rad;
+  const double engage_to = arc.to_rad;
   const double beta = helix_lag_total_rad(c);
   runout_disc_angles_rad(c, disc_angles);
   const double margin = 4.0 * d_phi_rad;

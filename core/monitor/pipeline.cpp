@@ -138,6 +138,7 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   sync_ = SyncAverage(config_.sync_bins, config_.sync_window_revolutions);
   resultant_ = SyncAverageOf<1>(config_.sync_bins, config_.sync_window_revolutions);
   template_average_.reserve(static_cast<std::size_t>(config_.sync_bins));
+  pauses_expected_ = pauses_between_flutes(config_.model);
   if (config_.lockstep) {
     lockstep_ = Lockstep(config_.model, filter_, config_.filter_zero_phase);
   }
@@ -455,7 +456,7 @@ bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
   sync_.end_revolution();
   resultant_.end_revolution();
   resultant_.average(0, template_average_);
-  out = find_tooth_event_template(template_average_, config_.model.tool.flutes);
+  out = find_tooth_event_template(template_average_, config_.model.tool.flutes, pauses_expected_);
   return out.valid;
 }
 

@@ -284,6 +284,7 @@ class Pipeline {
   std::int64_t identifications_rejected_ = 0;
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
+  bool pauses_expected_ = false;  // the commanded cut pauses between flutes (the template's test)
 };
 
 }  // namespace millwatch::monitor

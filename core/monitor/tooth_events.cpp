@@ -9,9 +9,12 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kQuietFraction = 0.1;  // of the force's span above its lowest level (ringing)
-constexpr double kQuietPitch = 0.2;     // a gap this long (fraction of a pitch) is a pause
-constexpr int kStartFit = 32;           // CE1 events kept on the way back to start the filter
-constexpr double kMinPulse = 0.2;       // of the lock's force: around an event, the cut's force
+// Where the cut's geometry leaves a pause between the flutes: a dynamometer's ringing there
+// rebounds to ~15 % of the span (its resonance a little above the 3.3 kHz low-pass).
+constexpr double kPauseQuietFraction = 0.25;
+constexpr double kQuietPitch = 0.2;  // a gap this long (fraction of a pitch) is a pause
+constexpr int kStartFit = 32;        // CE1 events kept on the way back to start the filter
+constexpr double kMinPulse = 0.2;    // of the lock's force: around an event, the cut's force
 // The CE1 events' times are tracked by a fading-memory g-h-k filter (position: the event,
 // velocity: the revolution period, acceleration: the period's change per revolution; gains
 // from one memory factor θ: g = 1 − θ³, h = 1.5·(1 − θ²)(1 − θ), k = 0.5·(1 − θ)³). It
@@ -107,7 +110,22 @@ const char* to_string(ToothEventKind kind) {
   return kind == ToothEventKind::kCentroid ? "pulse_centroid" : "valley";
 }
 
-ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int flutes) {
+bool pauses_between_flutes(const model::ModelConfig& config) {
+  const std::vector<double> psi = model::flute_pitch_angles_rad(config.tool);
+  if (psi.empty()) {
+    return false;
+  }
+  double pitch = kTwoPi - psi.back();  // the last flute's to the first's
+  for (std::size_t j = 1; j < psi.size(); ++j) {
+    pitch = std::min(pitch, psi[j] - psi[j - 1]);
+  }
+  const model::EngagedArc arc = model::engaged_arc(config);
+  const double engaged = arc.to_rad - arc.from_rad + model::helix_lag_total_rad(config);
+  return pitch - engaged >= kQuietPitch * pitch;
+}
+
+ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int flutes,
+                                             bool pauses_expected) {
   ToothEventTemplate t;
   t.flutes = flutes;
   const int bins = static_cast<int>(avg.size());
@@ -155,7 +173,7 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
   // A pause between every pair of pulses makes an interrupted cut.
   const double lo = *std::min_element(avg.begin(), avg.end());
   const double hi = *std::max_element(avg.begin(), avg.end());
-  const double quiet = lo + kQuietFraction * (hi - lo);
+  const double quiet = lo + (pauses_expected ? kPauseQuietFraction : kQuietFraction) * (hi - lo);
   const int min_gap = std::max(2, static_cast<int>(kQuietPitch * bins / flutes));
   std::array<double, kMaxFlutes> gap_centre{};
   bool interrupted = hi > lo;
@@ -171,8 +189,10 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
     interrupted = at(v) <= quiet && left + right + 1 >= min_gap;
     // The middle of the quiet stretch, but never more than a quarter pitch from where the
     // flutes' valleys are on average: a flute that does not cut leaves one long stretch, and
-    // both boundaries in it must stay a pitch apart.
-    const double nominal = fold_at + i * pitch_bins;
+    // both boundaries in it must stay a pitch apart. That place is the one nearest v: `picked`
+    // is sorted, and a window's lowest bin can lie before 0 (v wrapped to the end), which moves
+    // it past the others (two equal minima of a W, the earlier taken).
+    const double nominal = fold_at + std::round((v - fold_at) / pitch_bins) * pitch_bins;
     const double centre = v + 0.5 * (right - left);
     const double off = std::remainder(centre - nominal, static_cast<double>(bins));
     gap_centre[static_cast<std::size_t>(i)] =

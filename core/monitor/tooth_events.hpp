@@ -26,6 +26,7 @@
 #include <limits>
 #include <span>
 
+#include "core/model/model_config.hpp"
 #include "core/monitor/extremum.hpp"
 #include "core/monitor/revolution_features.hpp"
 #include "core/monitor/sample_ring.hpp"
@@ -49,8 +50,15 @@ struct ToothEventTemplate {
 /// Finds the events on the revolution-synchronous average of the in-plane resultant √(Fx²+Fy²)
 /// (uniform angle grid from the tracker's zero). A cut is "interrupted" when every gap between
 /// pulses stays within 10 % of the force's span above its lowest level (the filter's ringing) for
-/// at least 20 % of a pitch.
-ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_average, int flutes);
+/// at least 20 % of a pitch; within 25 % when `pauses_expected` (the commanded cut leaves a pause
+/// between the flutes, pauses_between_flutes(): a dynamometer's ringing there makes the valley
+/// between two pulses a W, whose two minima trade places from flute to flute and revolution to
+/// revolution, while the pulses' centroids stay put).
+ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_average, int flutes,
+                                             bool pauses_expected = false);
+/// Whether the commanded cut leaves a pause between the flutes' cuts: the flutes' pitch exceeds
+/// the engaged arc (model::engaged_arc, with the helix lag) by 20 % of a pitch or more.
+bool pauses_between_flutes(const model::ModelConfig& config);
 
 /// Outcome of one event search.
 struct EventSearch {

@@ -1,6 +1,7 @@
 // find_valley, the search behind every tooth event (the measured ring's and the lockstep model's
 // rows): it finds a clean valley anywhere in its window, and reads its signal only within the
-// samples the caller has.
+// samples the caller has. The template's choice of event (valleys or pulse centroids) and the
+// commanded geometry's pauses between flutes.
 
 #include "core/monitor/tooth_events.hpp"
 
@@ -124,6 +125,58 @@ TEST(FindValley, ReadsOnlyTheSamplesItIsGiven) {
   }
   EXPECT_EQ(outside, 0);
   EXPECT_GT(found, 10000);  // the sweep is not all noise: many of its valleys are found
+}
+
+// Three pulses a revolution, 43 % of each pitch between them a W (two minima at 2 % of the
+// pulses' height, 26° apart, a rebound to 15 % between): the ringing of a dynamometer after
+// an interrupted cut. Above the 10 % of an unknown cut it is no pause (valleys); where the
+// commanded cut pauses, the 25 % it is allowed there makes it one (pulse centroids, each the
+// middle of its symmetric pulse, between the pauses' middles). The W's two minima are equal: the
+// first flute's window takes the earlier, before bin 0, so it sorts last among the flutes'
+// valleys (its pause's middle was once put a quarter pitch off, and the centroids 12° late).
+TEST(ToothEventTemplate, AWBetweenPulsesIsAPauseWhereTheCutPauses) {
+  constexpr int kBins = 360;
+  std::vector<double> avg(kBins);
+  for (int k = 0; k < kBins; ++k) {
+    const double within = std::fmod(k, 120.0);  // degrees into the pitch; pulse centred at 60
+    const double pulse = std::max(0.0, std::cos((within - 60.0) * std::numbers::pi / 68.0));
+    const double gap = within < 60.0 ? within : 120.0 - within;  // from the pause's middle
+    // Minima of 2 % at ±13° from the pause's middle, the rebound of 15 % at its middle.
+    const double w = 0.02 + 0.13 * std::pow(std::cos(gap * std::numbers::pi / 26.0), 2);
+    avg[static_cast<std::size_t>(k)] = gap <= 26.0 ? std::max(pulse, w) : pulse;
+  }
+  const ToothEventTemplate strict = find_tooth_event_template(avg, 3);
+  ASSERT_TRUE(strict.valid);
+  EXPECT_EQ(strict.kind, ToothEventKind::kValley);
+  const ToothEventTemplate paused = find_tooth_event_template(avg, 3, true);
+  ASSERT_TRUE(paused.valid);
+  EXPECT_EQ(paused.kind, ToothEventKind::kCentroid);
+  for (int j = 0; j < 3; ++j) {
+    const double deg = paused.event_rad[static_cast<std::size_t>(j)] * 180.0 / std::numbers::pi;
+    EXPECT_NEAR(std::remainder(deg - 60.0, 120.0), 0.0, 1.0) << j;
+  }
+}
+
+// The commanded cut pauses between flutes when the pitch exceeds the engaged arc (with the helix
+// lag) by a fifth of a pitch: a slot never; 3 flutes down-milling a third of the diameter (arc
+// 70.5° + lag against 120°) and 4 flutes at 10 % (36.9° against 90°) do; 4 flutes up-milling
+// half the diameter (90° against 90°) and 3 flutes at 60 % (101.5° against 120°: 15 %) do not.
+TEST(ToothEventTemplate, TheCommandedGeometrySaysWhereTheFlutesPause) {
+  const auto pauses = [](int flutes, model::Operation op, double diameter_mm, double a_e_mm) {
+    model::ModelConfig c;
+    c.tool.flutes = flutes;
+    c.tool.diameter_mm = diameter_mm;
+    c.process.operation = op;
+    c.process.radial_depth_mm = a_e_mm;
+    return pauses_between_flutes(c);
+  };
+  using model::Operation;
+  EXPECT_FALSE(pauses(2, Operation::kSlot, 0.4, 0.4));
+  EXPECT_TRUE(pauses(1, Operation::kSlot, 0.4, 0.4));  // 360° pitch against a 180° arc
+  EXPECT_TRUE(pauses(3, Operation::kDownMilling, 0.6, 0.2));
+  EXPECT_TRUE(pauses(4, Operation::kUpMilling, 1.0, 0.1));
+  EXPECT_FALSE(pauses(4, Operation::kUpMilling, 1.0, 0.5));
+  EXPECT_FALSE(pauses(3, Operation::kUpMilling, 1.0, 0.6));
 }
 
 }  // namespace
