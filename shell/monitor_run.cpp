@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <complex>
+#include <numbers>
 #include <utility>
 
 #include "core/identify/fit_json.hpp"
@@ -96,6 +97,10 @@ MonitorRun::~MonitorRun() {
 }
 
 void MonitorRun::on_identified(const identify::IdentifiedWindow& w) {
+  {
+    const std::lock_guard lock(scatter_mutex_);
+    scatter_.add(w.fit);
+  }
   if (options_.lcm != nullptr) {
     const std::lock_guard lock(publish_mutex_);
     const runout_estimate_t runout = messaging::runout_estimate(w);
@@ -187,7 +192,22 @@ void MonitorRun::finish() {
     pipeline_->attach_identifier(nullptr);
     identifier_->finish();  // the window in progress and any waiting are fitted
     if (const auto last = identifier_->latest()) {
-      nlohmann::json j = identify::to_json(*last);
+      // The last window's estimates, with σ's no smaller than the windows' scatter: a window
+      // can state a small σ by chance where the force pins the runout poorly.
+      bool widened = false;
+      identify::WindowScatter::Scatter spread;
+      identify::IdentifiedWindow window = *last;
+      {
+        const std::lock_guard lock(scatter_mutex_);
+        window.fit = scatter_.widened(last->fit, widened);
+        spread = scatter_.scatter();
+      }
+      nlohmann::json j = identify::to_json(window);
+      j["fit"]["window_scatter"] = {{"windows", spread.windows},
+                                    {"rho_std_um", spread.rho_um},
+                                    {"gamma_std_deg", spread.gamma_rad * 180.0 / std::numbers::pi},
+                                    {"r_minus_r_ce1_std_um", spread.radius_from_ce1_um},
+                                    {"widened", widened}};
       j["fit"]["windows_fitted"] = identifier_->fitted();
       j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
       j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "core/identify/identifier.hpp"
+#include "core/identify/window_scatter.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
@@ -110,7 +111,9 @@ class MonitorRun {
   bool status_due_ = true;             // the first block always gives a status
   std::int64_t next_status_utime_us_ = 0;
   std::chrono::steady_clock::time_point last_status_wall_;
-  std::mutex publish_mutex_;                          // the identifier's thread publishes too
+  std::mutex publish_mutex_;         // the identifier's thread publishes too
+  std::mutex scatter_mutex_;         // ... and records its windows here
+  identify::WindowScatter scatter_;  // the windows' agreement, for the summary's runout σ
   std::unique_ptr<identify::Identifier> identifier_;  // last: its thread uses the members above
 };
 

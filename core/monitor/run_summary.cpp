@@ -249,6 +249,19 @@ nlohmann::json RunSummary::to_json() const {
              std::to_string(std::lround(100.0 * config_.identification.max_unexplained)) +
              " %): runout and coefficients describe this cut poorly");
   }
+  if (identification_.is_object() && identification_.contains("fit") &&
+      identification_["fit"].contains("window_scatter") &&
+      identification_["fit"]["window_scatter"].value("widened", false)) {
+    const json& spread = identification_["fit"]["window_scatter"];
+    std::array<char, 320> text{};
+    std::snprintf(text.data(), text.size(),
+                  "successive windows' runout estimates scatter more than one window's σ says "
+                  "(ρ by %.3f µm, γ by %.1f° from window to window over %d windows): the σ given "
+                  "are at least that scatter; the force pins this runout poorly",
+                  spread.value("rho_std_um", 0.0), spread.value("gamma_std_deg", 0.0),
+                  spread.value("windows", 0));
+    warn("runout scatters", text.data());
+  }
   json warnings = json::array();
   for (const std::vector<Warning>* list :
        std::array<const std::vector<Warning>*, 2>{&warnings_, &derived_}) {

@@ -76,6 +76,36 @@ TEST(RunSummary, SaysHowManyRevolutionsTheAlertsHeldForAnotherSpeed) {
   }
 }
 
+// Where successive windows' runout scatters beyond one window's σ (the shell widens the σ to it,
+// identify::WindowScatter), the summary says so with the scatter; where not, nothing.
+TEST(RunSummary, SaysWhenTheWindowsRunoutScattersBeyondItsSigma) {
+  const auto warnings_with = [](bool widened) {
+    MonitorConfig config;
+    RunSummary summary(config);
+    summary.set_identification({{"runout", {{"rho_um", 5.98}, {"rho_std_um", 1.278}}},
+                                {"fit",
+                                 {{"unexplained_fraction", 0.05},
+                                  {"window_scatter",
+                                   {{"windows", 16},
+                                    {"rho_std_um", 1.278},
+                                    {"gamma_std_deg", 29.7},
+                                    {"widened", widened}}}}}});
+    return summary.to_json()["warnings"];
+  };
+  std::string detail;
+  for (const auto& w : warnings_with(true)) {
+    if (w["kind"] == "runout scatters") {
+      detail = w["detail"].get<std::string>();
+    }
+  }
+  EXPECT_NE(detail.find("ρ by 1.278 µm, γ by 29.7° from window to window over 16 windows"),
+            std::string::npos)
+      << detail;
+  for (const auto& w : warnings_with(false)) {
+    EXPECT_NE(w["kind"], "runout scatters");
+  }
+}
+
 // A warning's samples are samples: "no steady tooth-passing signal" counts tracker windows,
 // which go into its text instead.
 TEST(RunSummary, AWarningCountsSamplesNotWindows) {

@@ -1,0 +1,107 @@
+#include "core/identify/window_scatter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace millwatch::identify {
+namespace {
+
+double median_of(std::vector<double>& v) {
+  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), middle, v.end());
+  const double upper = *middle;
+  if (v.size() % 2 == 1) {
+    return upper;
+  }
+  return 0.5 * (upper + *std::max_element(v.begin(), middle));
+}
+
+/// Appends `x` to a series of at most WindowScatter::kWindows values (the oldest dropped).
+void keep(std::vector<double>& series, double x) {
+  if (series.size() == WindowScatter::kWindows) {
+    series.erase(series.begin());
+  }
+  series.push_back(x);
+}
+
+}  // namespace
+
+double successive_scatter(const std::vector<double>& values, std::vector<double>& scratch) {
+  if (values.size() < 4) {
+    return 0.0;
+  }
+  scratch.clear();
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    scratch.push_back(values[i] - values[i - 1]);
+  }
+  const double centre = median_of(scratch);
+  for (double& d : scratch) {
+    d = std::fabs(d - centre);
+  }
+  return 1.4826 * median_of(scratch) / std::numbers::sqrt2;
+}
+
+void WindowScatter::add(const FitResult& fit) {
+  if (!fit.ok) {
+    return;
+  }
+  if (fit.radius_from_ce1_um.size() != radius_from_ce1_um_.size()) {
+    rho_um_.clear();
+    gamma_rad_.clear();
+    radius_from_ce1_um_.assign(fit.radius_from_ce1_um.size(), {});
+  }
+  keep(rho_um_, fit.rho_um.value);
+  // γ unwrapped against the window before: its differences are turns apart at most by noise.
+  double gamma = fit.gamma_rad.value;
+  if (!gamma_rad_.empty()) {
+    const double twice_pi = 2.0 * std::numbers::pi;
+    gamma = gamma_rad_.back() + std::remainder(gamma - gamma_rad_.back(), twice_pi);
+  }
+  keep(gamma_rad_, gamma);
+  for (std::size_t j = 0; j < radius_from_ce1_um_.size(); ++j) {
+    keep(radius_from_ce1_um_[j], fit.radius_from_ce1_um[j].value);
+  }
+}
+
+WindowScatter::Scatter WindowScatter::scatter() const {
+  Scatter s;
+  s.windows = windows();
+  s.radius_from_ce1_um.assign(radius_from_ce1_um_.size(), 0.0);
+  if (s.windows < kLeastWindows) {
+    return s;
+  }
+  std::vector<double> scratch;
+  s.rho_um = successive_scatter(rho_um_, scratch);
+  s.gamma_rad = successive_scatter(gamma_rad_, scratch);
+  for (std::size_t j = 0; j < radius_from_ce1_um_.size(); ++j) {
+    s.radius_from_ce1_um[j] = successive_scatter(radius_from_ce1_um_[j], scratch);
+  }
+  return s;
+}
+
+FitResult WindowScatter::widened(const FitResult& fit, bool& widened_out) const {
+  FitResult out = fit;
+  widened_out = false;
+  const Scatter s = scatter();
+  const auto widen = [&](Estimate& e, double spread) {
+    if (spread > 1.5 * e.sigma) {
+      widened_out = true;
+    }
+    e.sigma = std::max(e.sigma, spread);
+  };
+  widen(out.rho_um, s.rho_um);
+  widen(out.gamma_rad, s.gamma_rad);
+  if (out.radius_from_ce1_um.size() == s.radius_from_ce1_um.size()) {
+    for (std::size_t j = 0; j < s.radius_from_ce1_um.size(); ++j) {
+      widen(out.radius_from_ce1_um[j], s.radius_from_ce1_um[j]);
+      if (j < out.cutting_radius_um.size()) {
+        out.cutting_radius_um[j].sigma =
+            std::max(out.cutting_radius_um[j].sigma, s.radius_from_ce1_um[j]);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace millwatch::identify
