@@ -143,6 +143,20 @@ std::string summary_text(const json& j) {
                      lower_bound ? "; at a flute's contact edge: a flute cuts nothing beyond it, "
                                    "so the force bounds the runout from below only"
                                  : "");
+    // What the force pins best: CE1's cutting radius against each flute's, as the alerts state
+    // it (for two flutes 2ρ·cos γ; ρ·sin γ only through second-order effects of the model).
+    const json& radii = runout.value("r_minus_r_ce1_um", json::array());
+    const json& radii_std = runout.value("r_minus_r_ce1_std_um", json::array());
+    if (radii.is_array() && radii.size() >= 2 && radii_std.size() == radii.size()) {
+      s += "  radii         ";
+      for (std::size_t k = 1; k < radii.size(); ++k) {
+        if (radii[k].is_number() && radii_std[k].is_number()) {
+          s += fmt::format("{}r_CE1 − r_CE{} {:.3f} ± {:.3f} µm", k > 1 ? ", " : "", k + 1,
+                           -radii[k].get<double>(), radii_std[k].get<double>());
+        }
+      }
+      s += radii.size() == 2 ? " (= 2ρ·cos γ: what the force pins)\n" : "\n";
+    }
   }
   const json& alerts = j.value("alerts", json::array());
   if (alerts.empty()) {

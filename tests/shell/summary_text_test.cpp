@@ -66,6 +66,30 @@ TEST(SummaryText, TheRunoutSaysWhenItIsALowerBound) {
       << bound;
 }
 
+// CE1's cutting radius against each flute's, which the force pins best (as the alerts state it),
+// follows the runout: for two flutes with what it is.
+TEST(SummaryText, TheRadiiFollowTheRunout) {
+  nlohmann::json j = summary(41, 41);
+  j["runout"] = {{"rho_um", 3.053},
+                 {"rho_std_um", 0.216},
+                 {"gamma_deg", -77.1},
+                 {"gamma_std_deg", 3.5},
+                 {"r_minus_r_ce1_um", {0.0, -1.366}},
+                 {"r_minus_r_ce1_std_um", {0.0, 0.041}}};
+  const std::string two = summary_text(j);
+  EXPECT_NE(two.find("  radii         r_CE1 − r_CE2 1.366 ± 0.041 µm (= 2ρ·cos γ: what the "
+                     "force pins)\n"),
+            std::string::npos)
+      << two;
+  j["runout"]["r_minus_r_ce1_um"] = {0.0, 0.5, -1.25};
+  j["runout"]["r_minus_r_ce1_std_um"] = {0.0, 0.02, 0.03};
+  const std::string three = summary_text(j);
+  EXPECT_NE(three.find("  radii         r_CE1 − r_CE2 -0.500 ± 0.020 µm, r_CE1 − r_CE3 1.250 ± "
+                       "0.030 µm\n"),
+            std::string::npos)
+      << three;
+}
+
 // A warning is printed whole: its reason comes last.
 TEST(SummaryText, PrintsAWarningWhole) {
   nlohmann::json j = summary(41, 41);
