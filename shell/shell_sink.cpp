@@ -38,6 +38,18 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
     case monitor::PipelineEventKind::kLockAcquired:
       spdlog::info("{}: spindle locked at {:.1f} rpm (t = {:.3f} s)", source_, e.value, t_s);
       return;
+    case monitor::PipelineEventKind::kAlertsHeld:
+      spdlog::info(
+          "{}: alerts: the speed, {:.1f} rpm, is off the flute-force baseline's {} rpm "
+          "(t = {:.3f} s): {}",
+          source_, e.value, e.count, t_s, e.detail);
+      return;
+    case monitor::PipelineEventKind::kAlertsArmed:
+      spdlog::info(
+          "{}: alerts: {} ({:.1f} rpm, t = {:.3f} s): runout change and wear drift compare "
+          "with it",
+          source_, e.detail, e.value, t_s);
+      return;
     case monitor::PipelineEventKind::kModelAligned:
       spdlog::info("{}: model aligned (correlation {:.3f})", source_, e.value);
       return;

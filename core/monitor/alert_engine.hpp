@@ -273,6 +273,8 @@ class AlertEngine {
   /// Revolutions the flute-force change detectors did not compare with their baseline: the
   /// speed was more than conditions_tolerance off the baseline's (a new baseline forming).
   [[nodiscard]] std::int64_t held_revolutions() const { return held_revolutions_; }
+  /// Whether the flute-force change detectors hold now (a new baseline forming at another speed).
+  [[nodiscard]] bool holding() const { return reforming_; }
 
   /// The estimates' baseline, once complete (for tests and diagnostics).
   struct EstimateBaseline {

@@ -92,6 +92,10 @@ std::string_view to_string(PipelineEventKind kind) {
       return "cutting stopped";
     case PipelineEventKind::kCuttingResumed:
       return "cutting resumed";
+    case PipelineEventKind::kAlertsHeld:
+      return "alerts held";
+    case PipelineEventKind::kAlertsArmed:
+      return "alerts armed";
     case PipelineEventKind::kRecordTooShort:
       return "record too short";
     case PipelineEventKind::kNoSteadySignal:
@@ -632,6 +636,7 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   last_rpm_ = r.spindle_rpm;
   sink_.on_revolution(r);
   alerts_.on_revolution(r, [this](const Alert& a) { sink_.on_alert(a); });
+  tell_alert_state(input_sample(first), r.spindle_rpm);
   // Every window of revolutions as it fills, whatever the block size: a block holding more than
   // a window's revolutions (calibrate's 4,096 samples at 20 kHz and 30,000 rpm: 100) must not
   // leave the windows between its ends unfitted.
@@ -642,6 +647,27 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, last_revolution(),
                           utime_at(ring_.newest()));
   }
+}
+
+void Pipeline::tell_alert_state(std::int64_t sample, double rpm) {
+  const AlertEngine::Baseline& base = alerts_.baseline();
+  const bool holding = alerts_.holding();
+  if (holding && !alerts_holding_) {
+    event(PipelineEventKind::kAlertsHeld, sample, std::llround(base.spindle_rpm), rpm,
+          "runout change and wear drift hold until a baseline forms at the new speed or the "
+          "speed comes back");
+  }
+  if (base.ready && (!alerts_armed_ || base.spindle_rpm != alerts_baseline_rpm_)) {
+    event(PipelineEventKind::kAlertsArmed, sample, 0, base.spindle_rpm,
+          alerts_armed_ ? "a new flute-force baseline at this speed"
+                        : "the flute-force baseline formed");
+  } else if (base.ready && alerts_holding_ && !holding) {
+    event(PipelineEventKind::kAlertsArmed, sample, 0, base.spindle_rpm,
+          "the speed came back to the flute-force baseline's");
+  }
+  alerts_holding_ = holding;
+  alerts_armed_ = base.ready;
+  alerts_baseline_rpm_ = base.spindle_rpm;
 }
 
 PipelineStatus Pipeline::status() const {

@@ -64,7 +64,13 @@ enum class PipelineEventKind {
   kRecordTooShort,  ///< value: seconds the configured windows need; count: samples of the
                     ///< longest stretch between breaks in the stream
   kNoSteadySignal,  ///< cutting seen, but no two successive windows agreed (count: windows)
-  kNoTemplate       ///< locked, but the revolution's tooth events could not be told apart
+  kNoTemplate,      ///< locked, but the revolution's tooth events could not be told apart
+  /// The flute-force change detectors hold (AlertEngine): the revolution's speed (value, rpm) is
+  /// more than alerts.conditions_tolerance off their baseline's (count: that speed, rpm rounded).
+  kAlertsHeld,
+  /// The flute-force change detectors compare again: a baseline formed (the first, or one at a
+  /// new speed) or the speed came back to the baseline's (detail says which); value: its speed.
+  kAlertsArmed
 };
 
 std::string_view to_string(PipelineEventKind kind);
@@ -223,6 +229,8 @@ class Pipeline {
   void submit_window();
   /// The identified parameters due at this revolution, if any, go to the model.
   void take_identification();
+  /// Tells the alert engine's flute-force state changes (kAlertsHeld, kAlertsArmed).
+  void tell_alert_state(std::int64_t sample, double rpm);
   void event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
              std::string_view detail, std::int64_t block_seq = 0);
 
@@ -285,6 +293,10 @@ class Pipeline {
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
   bool pauses_expected_ = false;  // the commanded cut pauses between flutes (the template's test)
+  // The alert engine's flute-force state after the last revolution (for kAlertsHeld/Armed).
+  bool alerts_holding_ = false;
+  bool alerts_armed_ = false;
+  double alerts_baseline_rpm_ = 0.0;
 };
 
 }  // namespace millwatch::monitor

@@ -102,7 +102,9 @@ void RunSummary::add(const PipelineEvent& e) {
     case PipelineEventKind::kModelUpdated:
     case PipelineEventKind::kCuttingStopped:
     case PipelineEventKind::kCuttingResumed:
-      return;  // normal operation, not a warning
+    case PipelineEventKind::kAlertsArmed:
+    case PipelineEventKind::kAlertsHeld:  // counted in the status: its own warning
+      return;                             // normal operation, not a warning
     default:
       break;
   }

@@ -208,9 +208,15 @@ TEST(AlertFalseAlarm, ASpeedRampRaisesNoChangeAlert) {
   AlertConfig heeded;
   struct Slow : Counter {
     std::int64_t revolutions = 0;  // bounded, more than 1 % slower than 25,252 rpm
+    std::vector<PipelineEvent> alert_events;
     void on_revolution(const RevolutionRecord& r) override {
       Counter::on_revolution(r);
       revolutions += r.measured.bounded && r.spindle_rpm < 0.99 * 25252.0 ? 1 : 0;
+    }
+    void on_event(const PipelineEvent& e) override {
+      if (e.kind == PipelineEventKind::kAlertsHeld || e.kind == PipelineEventKind::kAlertsArmed) {
+        alert_events.push_back(e);
+      }
     }
   };
   Slow out;
@@ -224,6 +230,16 @@ TEST(AlertFalseAlarm, ASpeedRampRaisesNoChangeAlert) {
   EXPECT_GT(out.revolutions, 400);
   EXPECT_NEAR(static_cast<double>(status.alert_held_revolutions),
               static_cast<double>(out.revolutions), 3.0);
+  // Told as it happens: armed by the first baseline (500 revolutions, before the ramp), then
+  // held once the speed is 1 % below it.
+  ASSERT_EQ(out.alert_events.size(), 2U);
+  EXPECT_EQ(out.alert_events[0].kind, PipelineEventKind::kAlertsArmed);
+  EXPECT_NEAR(out.alert_events[0].value, 25252.0, 1.0);
+  EXPECT_LT(out.alert_events[0].utime_us, 1'500'000);
+  EXPECT_EQ(out.alert_events[1].kind, PipelineEventKind::kAlertsHeld);
+  EXPECT_EQ(out.alert_events[1].count, 25252);
+  EXPECT_LT(out.alert_events[1].value, 0.99 * 25252.0);
+  EXPECT_GT(out.alert_events[1].value, 0.98 * 25252.0);
 
   AlertConfig blind;
   blind.conditions_tolerance = 1.0;

@@ -1,6 +1,7 @@
 // What the shells log of the pipeline's events and alerts says what happened with the figures
 // that belong to it: a missing tooth-event template is logged with the lock's speed (it has no
-// sample count), and a sensor alert before the first revolution says so.
+// sample count), the alerts held and armed with the speeds, and a sensor alert before the first
+// revolution says so.
 
 #include "shell/shell_sink.hpp"
 
@@ -55,6 +56,38 @@ TEST(ShellSink, ToothEventsNotFoundIsLoggedWithTheLockNotASampleCount) {
   EXPECT_EQ(log.text(),
             "cut.csv: tooth events not found at t = 1.250 s (sample 62500, locked at 25252.0 "
             "rpm): the synchronous average shows no distinct tooth events\n");
+}
+
+// The alerts' flute-force detectors held (the speed off their baseline's) and armed again are
+// logged with both speeds, and are no warning of the summary (the held revolutions are counted
+// in the status instead).
+TEST(ShellSink, AlertsHeldAndArmedAreLoggedWithTheSpeeds) {
+  monitor::MonitorConfig config;
+  monitor::RunSummary summary(config);
+  ShellSink sink(summary, "daq");
+  LogCapture log;
+  monitor::PipelineEvent held;
+  held.kind = monitor::PipelineEventKind::kAlertsHeld;
+  held.utime_us = 854000;
+  held.value = 39299.9;
+  held.count = 39700;
+  held.detail = "runout change and wear drift hold";
+  sink.on_event(held);
+  monitor::PipelineEvent armed;
+  armed.kind = monitor::PipelineEventKind::kAlertsArmed;
+  armed.utime_us = 2100000;
+  armed.value = 36000.0;
+  armed.detail = "a new flute-force baseline at this speed";
+  sink.on_event(armed);
+  EXPECT_EQ(log.text(),
+            "daq: alerts: the speed, 39299.9 rpm, is off the flute-force baseline's 39700 rpm "
+            "(t = 0.854 s): runout change and wear drift hold\n"
+            "daq: alerts: a new flute-force baseline at this speed (36000.0 rpm, t = 2.100 s): "
+            "runout change and wear drift compare with it\n");
+  for (const auto& w : summary.to_json()["warnings"]) {
+    EXPECT_NE(w["kind"], "alerts held") << w.dump();
+    EXPECT_NE(w["kind"], "alerts armed") << w.dump();
+  }
 }
 
 TEST(ShellSink, ASensorAlertBeforeTheFirstRevolutionSaysSo) {
