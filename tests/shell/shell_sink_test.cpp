@@ -84,7 +84,8 @@ TEST(ShellSink, AlertsHeldAndArmedAreLoggedWithTheSpeeds) {
             "(t = 0.854 s): runout change and wear drift hold\n"
             "daq: alerts: a new flute-force baseline at this speed (36000.0 rpm, t = 2.100 s): "
             "runout change and wear drift compare with it\n");
-  for (const auto& w : summary.to_json()["warnings"]) {
+  const nlohmann::json json = summary.to_json();  // kept: a range over a temporary's member dangles
+  for (const auto& w : json["warnings"]) {
     EXPECT_NE(w["kind"], "alerts held") << w.dump();
     EXPECT_NE(w["kind"], "alerts armed") << w.dump();
   }
