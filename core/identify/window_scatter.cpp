@@ -4,18 +4,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/monitor/change_detector.hpp"
+
 namespace millwatch::identify {
 namespace {
-
-double median_of(std::vector<double>& v) {
-  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), middle, v.end());
-  const double upper = *middle;
-  if (v.size() % 2 == 1) {
-    return upper;
-  }
-  return 0.5 * (upper + *std::max_element(v.begin(), middle));
-}
 
 /// Appends `x` to a series of at most WindowScatter::kWindows values (the oldest dropped).
 void keep(std::vector<double>& series, double x) {
@@ -26,21 +18,6 @@ void keep(std::vector<double>& series, double x) {
 }
 
 }  // namespace
-
-double successive_scatter(const std::vector<double>& values, std::vector<double>& scratch) {
-  if (values.size() < 4) {
-    return 0.0;
-  }
-  scratch.clear();
-  for (std::size_t i = 1; i < values.size(); ++i) {
-    scratch.push_back(values[i] - values[i - 1]);
-  }
-  const double centre = median_of(scratch);
-  for (double& d : scratch) {
-    d = std::fabs(d - centre);
-  }
-  return 1.4826 * median_of(scratch) / std::numbers::sqrt2;
-}
 
 void WindowScatter::add(const FitResult& fit) {
   if (!fit.ok) {
@@ -71,7 +48,8 @@ WindowScatter::Scatter WindowScatter::scatter() const {
   if (s.windows < kLeastWindows) {
     return s;
   }
-  std::vector<double> scratch;
+  std::vector<double> scratch(rho_um_.size());
+  using monitor::successive_scatter;
   s.rho_um = successive_scatter(rho_um_, scratch);
   s.gamma_rad = successive_scatter(gamma_rad_, scratch);
   for (std::size_t j = 0; j < radius_from_ce1_um_.size(); ++j) {

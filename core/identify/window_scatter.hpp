@@ -5,9 +5,9 @@
 // chance while successive windows scatter far more (a 2-flute slot with a flute idle: ρ 1.9 to
 // 11.7 µm from window to window, the last one 5.98 ± 0.68 µm). WindowScatter keeps the last
 // kWindows fitted windows' ρ, γ and radius differences r_j − r_CE1 and gives, per quantity, the σ
-// of one window about the cut's value from successive windows' differences, 1.4826·MAD/√2 (as
-// the alerts' estimate baseline: blind to a slow trend and to a single step). widened() states a
-// window with each σ at least that scatter.
+// of one window about the cut's value from successive windows' differences
+// (monitor::successive_scatter, as the alerts' estimate baseline: blind to a slow trend and to a
+// single step). widened() states a window with each σ at least that scatter.
 
 #include <cstddef>
 #include <vector>
@@ -15,10 +15,6 @@
 #include "core/identify/window_fit.hpp"
 
 namespace millwatch::identify {
-
-/// σ of one value about the series' level from its successive differences d_i = x_{i+1} − x_i:
-/// 1.4826·median|d − median d|/√2. 0 with fewer than 3 differences. `scratch` is reused.
-double successive_scatter(const std::vector<double>& values, std::vector<double>& scratch);
 
 class WindowScatter {
  public:

@@ -90,6 +90,11 @@ double two_sided_quantile(double p) {
   return normal_upper_quantile(std::clamp(0.5 * p, 1e-300, 0.25));
 }
 
+/// A revolution's speed, or 0 when it has none (not measured, not finite).
+double known_rpm(double rpm) {
+  return rpm > 0.0 && std::isfinite(rpm) ? rpm : 0.0;
+}
+
 }  // namespace
 
 std::string_view to_string(AlertKind kind) {
@@ -333,7 +338,7 @@ void AlertEngine::check_runout(const Flutes& f, std::int64_t rev, std::int64_t t
 }
 
 bool AlertEngine::same_speed(double rpm, double reference_rpm) const {
-  const bool known = rpm > 0.0 && std::isfinite(rpm) && reference_rpm > 0.0;
+  const bool known = known_rpm(rpm) > 0.0 && reference_rpm > 0.0;
   return !known || std::fabs(rpm / reference_rpm - 1.0) <= config_.conditions_tolerance;
 }
 
@@ -341,7 +346,7 @@ void AlertEngine::add_to_baseline(const Flutes& f, double rpm) {
   if (baseline_count_ > 0 && !same_speed(rpm, baseline_rpm_[0])) {
     baseline_count_ = 0;  // the speed moved on: start again at this one
   }
-  baseline_rpm_[at(baseline_count_)] = rpm > 0.0 && std::isfinite(rpm) ? rpm : 0.0;
+  baseline_rpm_[at(baseline_count_)] = known_rpm(rpm);
   flutes_ = f.count;
   std::copy(f.force_N.begin(), f.force_N.end(),
             baseline_force_N_.begin() + static_cast<std::ptrdiff_t>(at(baseline_count_) * kFlutes));
@@ -1015,11 +1020,10 @@ void AlertEngine::finish_estimate_baseline() {
       series[at(i)] = value(recent_window(i));
     }
     median_out = median_in_place(series);
-    for (int i = 0; i + 1 < n; ++i) {
-      series[at(i)] = value(recent_window(i)) - value(recent_window(i + 1));
+    for (int i = 0; i < n; ++i) {  // the median reordered them
+      series[at(i)] = value(recent_window(i));
     }
-    const double scatter =
-        robust_summary(series.first(at(n - 1)), scratch).sigma / std::numbers::sqrt2;
+    const double scatter = successive_scatter(series.first(at(n)), scratch);
     for (int i = 0; i < n; ++i) {
       series[at(i)] = sigma_stat(recent_window(i));
     }

@@ -59,6 +59,21 @@ double median_in_place(std::span<double> values) {
   return 0.5 * (upper + *std::max_element(values.begin(), mid));
 }
 
+double successive_scatter(std::span<const double> values, std::span<double> scratch) {
+  if (values.size() < 2 || scratch.size() < values.size() - 1) {
+    return 0.0;
+  }
+  const std::span<double> d = scratch.first(values.size() - 1);
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    d[i] = values[i + 1] - values[i];
+  }
+  const double centre = median_in_place(d);
+  for (double& x : d) {
+    x = std::fabs(x - centre);
+  }
+  return 1.4826 * median_in_place(d) / std::numbers::sqrt2;
+}
+
 RobustSummary robust_summary(std::span<const double> values, std::span<double> scratch) {
   RobustSummary s;
   const std::size_t n = values.size();

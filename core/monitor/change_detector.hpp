@@ -84,6 +84,12 @@ RobustSummary robust_summary(std::span<const double> values, std::span<double> s
 /// Median of `values` (reordered in place); 0 for an empty span. Nothing is allocated.
 double median_in_place(std::span<double> values);
 
+/// σ of one value of a series about its level from the successive differences
+/// d_i = x_{i+1} − x_i: 1.4826·median|d − median d|/√2 — blind to a slow trend and to a single
+/// step (windows of a cut before and after a change). 0 with no difference, or when `scratch`
+/// holds fewer than values.size() − 1 elements (overwritten). Nothing is allocated.
+double successive_scatter(std::span<const double> values, std::span<double> scratch);
+
 /// σ of the median of `block` consecutive values of a stationary series whose single values
 /// have σ = `sigma` and lag-1 autocorrelation ρ, taken as AR(1):
 ///   σ_block = 1.2533 · σ · √((1 + ρ)/(1 − ρ)) / √block,
