@@ -178,6 +178,9 @@ runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w) {
     m.method +=
         "; at a flute's contact edge: offset_um is a lower bound (a flute cuts nothing "
         "beyond it)";
+    if (f.edge_flute > 0) {
+      m.method += ", and so is r_CE1 − r_CE" + std::to_string(f.edge_flute + 1);
+    }
   }
   m.offset_um = f.rho_um.value;
   m.angle_rad = f.gamma_rad.value;

@@ -65,6 +65,9 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
                            {"flute_labelling", f.flute_labelling},
                            // At a flute's contact edge ρ is the least runout the force allows.
                            {"rho_is_lower_bound", f.runout_at_contact_edge}};
+  if (f.edge_flute > 0) {  // r_CE1 − r of that flute (CE number) is a lower bound too
+    runout["edge_flute"] = f.edge_flute + 1;
+  }
   if (f.config.tool.flutes >= 2) {  // the geometric α: one flute has none
     runout["alpha_deg"] = number(f.alpha_deg.value);
     runout["alpha_std_deg"] = number(f.alpha_deg.sigma);

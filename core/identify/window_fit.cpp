@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/model/dynamometer.hpp"
 #include "core/model/flute_positions.hpp"
@@ -356,6 +357,31 @@ struct WindowFitter::Impl {
         model::set_parameters(owner->coefficient_map,
                               key.segment(2 + n_extra, owner->coefficient_map.size()), config);
       }
+    }
+
+    /// The flute that cuts least at the key's values, and whether it cuts nothing: its largest
+    /// chip at every slot of the bottom disc in every revolution of the cycle (the runout is
+    /// the same on every disc) is below a ten-thousandth of the feed (sub-nanometre: the
+    /// solver's rounding at an edge left 2·10⁻⁸ µm).
+    [[nodiscard]] std::pair<int, bool> least_cutting_flute(const Eigen::VectorXd& key) {
+      apply(key);
+      const model::SteadyState& st = model::evaluate_steady_state(
+          config, rpm, setting.steps, workspace, model::SteadyStateOutput::kMean);
+      int least = 0;
+      double least_um = std::numeric_limits<double>::infinity();
+      for (int j = 0; j < config.tool.flutes; ++j) {
+        double largest_um = 0.0;
+        for (int m = 0; m < st.cycle_revolutions; ++m) {
+          for (int b = 0; b < setting.steps; ++b) {
+            largest_um = std::max(largest_um, workspace.chip_um(j, b, m));
+          }
+        }
+        if (largest_um < least_um) {
+          least_um = largest_um;
+          least = j;
+        }
+      }
+      return {least, least_um <= 1e-4 * config.process.feed_per_tooth_um};
     }
 
     /// The model's columns for the shared nonlinear values (θ without the alignments).
@@ -904,16 +930,19 @@ struct WindowFitter::Impl {
   }
 
   /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter,
-  /// from its changes to `rp` and `rm` (a step either way) and the fit's degrees of freedom
-  /// (kContactEdgeRatio and below). At an ordinary minimum the two changes are ±J·h to first
-  /// order.
+  /// from its changes to `rp` and `rm` (a step either way), the fit's degrees of freedom and
+  /// whether the model leaves a flute `idle` there (kContactEdgeRatio and below). At an
+  /// ordinary minimum the two changes are ±J·h to first order.
   [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
                                             const Eigen::VectorXd& r, const Eigen::VectorXd& rp,
-                                            const Eigen::VectorXd& rm, double dof) {
+                                            const Eigen::VectorXd& rm, double dof, bool idle) {
     const double up = (rp - r).norm();
     const double down = (r - rm).norm();
     if (!(std::max(up, down) > kContactEdgeRatio * std::min(up, down))) {
       return false;
+    }
+    if (idle) {  // a kink, and a flute that cuts nothing: the step across starts it cutting
+      return true;
     }
     // The step onto the steep side raises the cost by more than one value's variance RSS/dof.
     const double rss = r.squaredNorm();
@@ -979,9 +1008,11 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   Eigen::VectorXd seed;
   const Eigen::VectorXd* seed_ptr = nullptr;
   if (previous != nullptr && previous->ok) {
-    seed = initial_theta(previous->config,
-                         previous->rho_um.value * std::cos(previous->gamma_rad.value),
-                         previous->rho_um.value * std::sin(previous->gamma_rad.value),
+    // The previous model's runout (on a contact edge the stated ρ is only the least allowed).
+    const auto& runout = previous->config.effects.runout;
+    const double rho = runout.enabled ? runout.offset_um : previous->rho_um.value;
+    const double gamma = runout.enabled ? runout.angle_rad : previous->gamma_rad.value;
+    seed = initial_theta(previous->config, rho * std::cos(gamma), rho * std::sin(gamma),
                          previous->alignment_rad.value);
     seed_ptr = &seed;
   }
@@ -1044,6 +1075,18 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   }
   const Eigen::VectorXd r = p.residual(theta);
   const Eigen::VectorXd coefficients = p.last_coefficients;
+  // The flute that cuts least at the solution (the first cut's), and whether the model leaves
+  // one idle in any cut (the contact-edge test below).
+  std::pair<int, bool> least_cutting{-1, false};
+  if (options.fit_runout) {
+    const Eigen::VectorXd key = theta.head(ns);
+    for (auto& part : p.parts) {
+      const auto [flute, idle] = part->least_cutting_flute(key);
+      if (least_cutting.first < 0 || (idle && !least_cutting.second)) {
+        least_cutting = {flute, idle};
+      }
+    }
+  }
   const Eigen::Index nt = theta.size();
   const Eigen::Index nc = coefficients.size();
   const int mres = p.residual_size();
@@ -1064,10 +1107,11 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       if (i < 2 && options.fit_runout) {
         out.runout_at_contact_edge =
             out.runout_at_contact_edge ||
-            at_contact_edge(p, theta, r, rp, rm,
-                            std::max(1.0, static_cast<double>(mres - nt - nc)));
+            at_contact_edge(p, theta, r, rp, rm, std::max(1.0, static_cast<double>(mres - nt - nc)),
+                            least_cutting.second);
       }
     }
+    out.edge_flute = out.runout_at_contact_edge ? least_cutting.first : -1;
     if (nc > 0) {
       j.rightCols(nc) = p.coefficient_jacobian(theta);
       // Coefficients the linear solve left at 0 (no axis sees them) are not parameters.
@@ -1382,6 +1426,30 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     out.radius_from_ce1_um.push_back(
         through_runout("r_ce" + std::to_string(jf2 + 1) + "_minus_r_ce1_um", r0[jf2] - r0[0],
                        dr.row(jf2) - dr.row(0)));
+  }
+  if (out.runout_at_contact_edge) {
+    // On an edge the force pins the radii (the idle flute's deficit from below), not ρ·sin γ,
+    // which deflection or the prior may leave anywhere: ρ is stated as the least the radii
+    // allow. From r_j² = R² + ρ² + 2Rρ·cos(γ + ψ_j), |r_0 − r_j| ≤ 2Rρ·c_j/(r_0 + r_j) ≤
+    // ρ·c_j·R/(R − ρ) with the chord c_j = 2·|sin(ψ_j/2)|, so ρ ≥ qR/(R + q), q = |r_0 − r_j|/c_j.
+    // The model keeps the fit's runout (`config`): it is the force's.
+    Estimate least;
+    least.value = -1.0;
+    for (int jf2 = 1; jf2 < flutes; ++jf2) {
+      const double chord = 2.0 * std::fabs(std::sin(0.5 * pitch[static_cast<std::size_t>(jf2)]));
+      if (chord < 1e-6) {
+        continue;
+      }
+      const double q = std::fabs(r0[jf2] - r0[0]) / chord;
+      const double bound = q * radius / (radius + q);
+      if (bound > least.value) {
+        const double slope = radius * radius / ((radius + q) * (radius + q));  // d bound / d q
+        least = through_runout("rho_um", bound, (dr.row(jf2) - dr.row(0)) * (slope / chord));
+      }
+    }
+    if (least.value >= 0.0 && least.value < out.rho_um.value) {
+      out.rho_um = least;
+    }
   }
   if (flutes >= 2) {
     // The geometric cutting-edge phase angle: how far the edge after CE2 follows CE2, in degrees

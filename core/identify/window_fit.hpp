@@ -105,7 +105,10 @@ struct FitOptions {
 /// differ by their second order, does not — a PHM 2010 window, 81 % unexplained, read a ratio
 /// of 4.1 there) and changes it by more than kContactEdgeSignificance of the measured harmonics
 /// (not the model's rounding). On the edges of simulated cuts the ratio read 9–20 (linear edge
-/// law) and 10³–10⁴ (power law); at ordinary minima 1.0–1.5.
+/// law) and 10³–10⁴ (power law); at ordinary minima 1.0–1.5. Where the fitted model leaves a
+/// flute idle (its chip 0 everywhere), the ratio alone decides: with deflection bending the
+/// flute that cuts, or a step weak beside the noise, the other two tests missed fits just past
+/// the edge (ratio 75–370; a 2-flute slot stated r_CE1 − r_CE2 3.84 ± 0.06 µm for 5.97).
 inline constexpr double kContactEdgeRatio = 4.0;
 inline constexpr double kContactEdgeSignificance = 1e-3;
 
@@ -122,18 +125,24 @@ struct FitResult {
   bool ok = false;
   std::string message;        ///< why not, or how the fit ended
   model::ModelConfig config;  ///< the configuration with every fitted value in place
-  Estimate rho_um;            ///< tool-centre offset ρ ([000] eq 9), at the tool tip
-  Estimate gamma_rad;         ///< its direction relative to flute 0 (CE1), in (−π, π]
-  Estimate alignment_rad;     ///< model angle minus tracker angle
+  /// Tool-centre offset ρ ([000] eq 9), at the tool tip; on a contact edge the least ρ the
+  /// fitted radii allow (ρ·sin γ is not pinned there), the model's own in `config`.
+  Estimate rho_um;
+  Estimate gamma_rad;      ///< its direction relative to flute 0 (CE1), in (−π, π]
+  Estimate alignment_rad;  ///< model angle minus tracker angle
   /// The fit ended on a flute's contact edge: at the runout found a flute just stops cutting.
   /// Towards less runout that flute cuts and the force changes steeply with the runout (its
   /// edge force and chip start at once); beyond, the flute idle, the force hardly changes, and
   /// nothing but the weak prior holds the fit back. The force then bounds the runout from one
   /// side only: the idle flute's radius lies at least the largest chip below the flute's before
-  /// it (exactly), and ρ is about the least runout the force allows (the edge is a line in
+  /// it (exactly), and ρ is stated as the least runout those radii allow (the edge is a line in
   /// (u, v), the truth beyond it); their σ, and γ's, are the steep side's. Told from an ordinary
-  /// minimum by the runout's one-sided differences (kContactEdgeRatio and below).
+  /// minimum by the runout's one-sided differences and an idle flute in the fitted model
+  /// (kContactEdgeRatio and below).
   bool runout_at_contact_edge = false;
+  /// On a contact edge, the flute there (0-based, 0 = CE1; the one the fitted model cuts least
+  /// with): r_CE1 − r of this flute is what the force bounds from below. −1 off an edge.
+  int edge_flute = -1;
   /// Each flute's cutting radius r_j = |O→edge j| (µm) and r_j − r_0, with σ.
   std::vector<Estimate> cutting_radius_um;
   std::vector<Estimate> radius_from_ce1_um;

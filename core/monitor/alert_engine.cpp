@@ -825,6 +825,7 @@ bool AlertEngine::read_window(const identify::IdentifiedWindow& w, WindowEstimat
   e.rho_um = fit.rho_um.value;
   e.rho_sigma_um = fit.rho_um.sigma;
   e.rho_lower_bound = fit.runout_at_contact_edge;
+  e.edge_flute = fit.runout_at_contact_edge ? fit.edge_flute : -1;
   e.gamma_rad = fit.gamma_rad.value;
   e.gamma_sigma_rad = fit.gamma_rad.sigma;
   e.coefficients = std::min(static_cast<int>(fit.coefficients.size()), kMaxCoefficients);
@@ -964,13 +965,13 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
       runout_.streak = 0;
       write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t, u, limit,
                          "radius_deficit_per_feed"),
-                    "runout high: %s %.3f ± %.3f µm = %.1f ± %.1f %% of f_t %.2f µm (first "
+                    "runout high: %s %s%.3f ± %.3f µm = %.1f ± %.1f %% of f_t %.2f µm (first "
                     "window %.1f %% → %.1f %%; limit %.0f %%, at 100 %% flute %d stops cutting); "
                     "ρ %s%.2f ± %.2f µm at γ %.1f ± %.1f°",
-                    pair, deficit, sigma, percent(u), percent(sigma_u), ft,
-                    percent(runout_first_ratio_), percent(u), percent(limit), shorter + 1,
-                    at_least(e.rho_lower_bound), e.rho_um, e.rho_sigma_um, degrees(e.gamma_rad),
-                    degrees(e.gamma_sigma_rad));
+                    pair, at_least(shorter == e.edge_flute), deficit, sigma, percent(u),
+                    percent(sigma_u), ft, percent(runout_first_ratio_), percent(u), percent(limit),
+                    shorter + 1, at_least(e.rho_lower_bound), e.rho_um, e.rho_sigma_um,
+                    degrees(e.gamma_rad), degrees(e.gamma_sigma_rad));
     }
     return;
   }

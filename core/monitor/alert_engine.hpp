@@ -330,6 +330,7 @@ class AlertEngine {
         radius_sigma_stat_um{};
     double rho_um = 0.0, rho_sigma_um = 0.0, gamma_rad = 0.0, gamma_sigma_rad = 0.0;
     bool rho_lower_bound = false;  ///< at a flute's contact edge (FitResult)
+    int edge_flute = -1;           ///< the flute there (FitResult), −1 off an edge
     int coefficients = 0;
     std::array<double, kMaxCoefficients> coefficient{}, coefficient_sigma_stat{};
   };

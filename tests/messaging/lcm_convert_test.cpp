@@ -49,6 +49,11 @@ TEST(LcmConvert, ARunoutThatIsALowerBoundSaysSo) {
   EXPECT_EQ(m.method,
             "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "
             "edge: offset_um is a lower bound (a flute cuts nothing beyond it)");
+  w.fit.edge_flute = 1;
+  EXPECT_EQ(runout_estimate(w).method,
+            "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "
+            "edge: offset_um is a lower bound (a flute cuts nothing beyond it), and so is "
+            "r_CE1 − r_CE2");
 }
 
 TEST(LcmConvert, AFailedFitSaysWhy) {

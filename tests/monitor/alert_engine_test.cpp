@@ -710,19 +710,22 @@ TEST(AlertEngine, RunoutHighFollowsTheEstimateWithItsSigmaAndHysteresis) {
 
 // A fit on a flute's contact edge (FitResult::runout_at_contact_edge: a flute cuts nothing, the
 // force bounds the runout from below only) raises runout high as any other, its lower bound
-// above the limit; the message says ρ is a lower bound ("ρ ≥").
+// above the limit; the message says ρ and the edge flute's radius difference are lower bounds
+// ("≥").
 TEST(AlertEngine, RunoutHighSaysWhenTheRunoutIsALowerBound) {
   AlertEngine engine;
   std::vector<Alert> alerts;
   for (int i = 0; i < 2; ++i) {
     identify::IdentifiedWindow w = fitted(29 + 30 * i, -3.0, 0.04, 1100.0, 8.0, 0.01);
     w.fit.runout_at_contact_edge = true;  // r_CE1 − r_CE2 = f_t: flute 2 just stops cutting
+    w.fit.edge_flute = 1;
     engine.on_identification(w, [&](const Alert& a) { alerts.push_back(a); });
   }
   ASSERT_EQ(alerts.size(), 1u);
   const std::string message = alerts[0].message.data();
   std::printf("%s\n", message.c_str());
   EXPECT_EQ(alerts[0].kind, AlertKind::kRunout);
+  EXPECT_NE(message.find("runout high: r_CE1 − r_CE2 ≥ 3.000 ± "), std::string::npos) << message;
   EXPECT_NE(message.find("; ρ ≥ 1.50 ± 0.02 µm at γ"), std::string::npos) << message;
 }
 

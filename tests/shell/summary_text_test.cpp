@@ -88,6 +88,14 @@ TEST(SummaryText, TheRadiiFollowTheRunout) {
                        "0.030 µm\n"),
             std::string::npos)
       << three;
+  // On a contact edge the edge flute's difference is a lower bound (and only that one).
+  j["runout"]["rho_is_lower_bound"] = true;
+  j["runout"]["edge_flute"] = 3;
+  const std::string edge = summary_text(j);
+  EXPECT_NE(edge.find("  radii         r_CE1 − r_CE2 -0.500 ± 0.020 µm, r_CE1 − r_CE3 ≥ 1.250 ± "
+                      "0.030 µm (flute 3 cuts nothing beyond it: a lower bound)\n"),
+            std::string::npos)
+      << edge;
 }
 
 // A warning is printed whole: its reason comes last.
