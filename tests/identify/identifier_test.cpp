@@ -160,7 +160,7 @@ TEST(Identifier, ARunoutStepIsFoundInTheNextWindow) {
 
 // Live with a CPU budget of 0.25: after each fit of t s of CPU the worker takes no window for
 // 3t s of wall time. Windows submitted every 2 ms until three fits are done: every window is
-// fitted or skipped for the budget (none superseded, none lost), and no fit starts before the
+// fitted, skipped for the budget or (rarely) superseded, none lost, and no fit starts before the
 // previous one's rest is over — checked on the times the worker measured, not on a stopwatch.
 TEST(Identifier, LiveWithACpuBudgetItRestsAfterEachFitAndCountsTheWindowsItSkips) {
   const model::ModelConfig truth = three_flute_slot(1.2, 0.4);
@@ -187,8 +187,10 @@ TEST(Identifier, LiveWithACpuBudgetItRestsAfterEachFitAndCountsTheWindowsItSkips
   }
   id.finish();
   ASSERT_GE(id.fitted(), 3);
-  EXPECT_EQ(id.fitted() + id.skipped_for_budget(), submitted);
-  EXPECT_EQ(id.superseded(), 0);
+  // A worker slow to wake after its rest (both cores busy, as under ctest -j2: 3 of 43 once)
+  // may find a second window submitted meanwhile: the older is superseded, and counted.
+  EXPECT_EQ(id.fitted() + id.skipped_for_budget() + id.superseded(), submitted);
+  EXPECT_LT(id.superseded(), id.skipped_for_budget());
   EXPECT_GT(id.skipped_for_budget(), 0);
   const std::lock_guard lock(m);
   ASSERT_EQ(static_cast<std::int64_t>(results.size()), id.fitted());
