@@ -134,9 +134,9 @@ tool_alert_t tool_alert(const monitor::Alert& a, std::int64_t seq) {
   return t;
 }
 
-pipeline_status2_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
+pipeline_status3_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
                                    std::int64_t published, std::int64_t dropped) {
-  pipeline_status2_t p;
+  pipeline_status3_t p;
   p.utime = s.utime_us;
   p.seq = seq;
   p.samples_in = s.input.samples_in;
@@ -153,6 +153,10 @@ pipeline_status2_t pipeline_status(const monitor::PipelineStatus& s, std::int64_
   p.idle_revolutions = s.idle_revolutions;
   p.cutting_revolutions = s.cutting_revolutions;
   p.model_builds = s.model_builds;
+  p.identifications_taken = s.identifications_taken;
+  p.identifications_rejected = s.identifications_rejected;
+  p.alert_held_revolutions = s.alert_held_revolutions;
+  p.alerts_holding = s.alerts_holding;
   p.messages_published = published;
   p.messages_dropped = dropped;
   p.spindle_rpm = s.spindle_rpm;

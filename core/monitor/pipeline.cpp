@@ -680,6 +680,7 @@ PipelineStatus Pipeline::status() const {
   s.identifications_taken = identifications_taken_;
   s.identifications_rejected = identifications_rejected_;
   s.alert_held_revolutions = alerts_.held_revolutions();
+  s.alerts_holding = alerts_holding_;
   s.cutting_revolutions = cutting_revolutions_ + finished_tail_revolutions_;
   s.utime_us = input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1));
   const auto& e = tracker_.estimate();

@@ -96,6 +96,7 @@ struct PipelineStatus {
   /// Revolutions the flute-force change detectors held: the speed more than the alerts'
   /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
   std::int64_t alert_held_revolutions = 0;
+  bool alerts_holding = false;  ///< they hold now (AlertEngine::holding())
   /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
   /// durations times their speeds, and the samples since its last window at the last speed) —
   /// what "every revolution" is measured against.

@@ -21,7 +21,7 @@ struct Received {
   std::vector<flute_peaks2_t> peaks;
   std::vector<model_residual_t> residuals;
   std::vector<spindle_state2_t> spindle;
-  std::vector<pipeline_status2_t> status;
+  std::vector<pipeline_status3_t> status;
   std::vector<tool_alert_t> alerts;
   std::vector<sync_average2_t> sync;
   void on_periods(const lcm::ReceiveBuffer*, const std::string&, const tooth_periods2_t* m) {
@@ -36,7 +36,7 @@ struct Received {
   void on_spindle(const lcm::ReceiveBuffer*, const std::string&, const spindle_state2_t* m) {
     spindle.push_back(*m);
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status2_t* m) {
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status3_t* m) {
     status.push_back(*m);
   }
   void on_alert(const lcm::ReceiveBuffer*, const std::string&, const tool_alert_t* m) {
@@ -102,9 +102,9 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   s.duration_s = 0.6;
   s.spindle.actual_rpm = 25252.0;
   Direct direct;
+  monitor::PipelineStatus status;
   {
     LcmOutput out(lcm, ch, &direct);
-    monitor::PipelineStatus status;
     ASSERT_TRUE(monitor_cut(out, s, monitor_config(s), 1000, status));
     out.publish_status(status);
     ASSERT_TRUE(out.drain());
@@ -155,6 +155,8 @@ TEST(LcmOutput, PublishesEveryOutputAsDecodableMessagesOnMemq) {
   ASSERT_FALSE(rx.status.empty());
   EXPECT_EQ(rx.status.back().samples_processed, 30000);
   EXPECT_EQ(rx.status.back().state, "measuring");
+  EXPECT_EQ(rx.status.back().alert_held_revolutions, status.alert_held_revolutions);
+  EXPECT_EQ(rx.status.back().identifications_taken, status.identifications_taken);
   EXPECT_FALSE(rx.alerts.empty());  // [000]'s runout is strong: a runout alert
   EXPECT_EQ(rx.alerts[0].kind, tool_alert_t::KIND_RUNOUT);
 }
