@@ -194,20 +194,25 @@ void MonitorRun::finish() {
     if (const auto last = identifier_->latest()) {
       // The last window's estimates, with σ's no smaller than the windows' scatter: a window
       // can state a small σ by chance where the force pins the runout poorly.
-      bool widened = false;
+      identify::WindowScatter::Widening how;
       identify::WindowScatter::Scatter spread;
       identify::IdentifiedWindow window = *last;
       {
         const std::lock_guard lock(scatter_mutex_);
-        window.fit = scatter_.widened(last->fit, widened);
+        window.fit = scatter_.widened(last->fit, how);
         spread = scatter_.scatter();
       }
       nlohmann::json j = identify::to_json(window);
+      constexpr double kDeg = 180.0 / std::numbers::pi;
       j["fit"]["window_scatter"] = {{"windows", spread.windows},
                                     {"rho_std_um", spread.rho_um},
-                                    {"gamma_std_deg", spread.gamma_rad * 180.0 / std::numbers::pi},
+                                    {"gamma_std_deg", spread.gamma_rad * kDeg},
                                     {"r_minus_r_ce1_std_um", spread.radius_from_ce1_um},
-                                    {"widened", widened}};
+                                    {"widened", how.by_scatter},
+                                    {"rho_drift_um", spread.rho_drift_um},
+                                    {"gamma_drift_deg", spread.gamma_drift_rad * kDeg},
+                                    {"radius_drift_um", spread.radius_drift_um},
+                                    {"widened_by_drift", how.by_drift}};
       j["fit"]["windows_fitted"] = identifier_->fitted();
       j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
       j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due

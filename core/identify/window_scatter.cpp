@@ -17,6 +17,14 @@ void keep(std::vector<double>& series, double x) {
   series.push_back(x);
 }
 
+/// The median of the newest `k` values minus the oldest `k`'s.
+double quarter_drift(const std::vector<double>& series, std::size_t k, std::vector<double>& work) {
+  work.assign(series.begin(), series.begin() + static_cast<std::ptrdiff_t>(k));
+  const double oldest = monitor::median_in_place(work);
+  work.assign(series.end() - static_cast<std::ptrdiff_t>(k), series.end());
+  return monitor::median_in_place(work) - oldest;
+}
+
 }  // namespace
 
 void WindowScatter::add(const FitResult& fit) {
@@ -55,16 +63,38 @@ WindowScatter::Scatter WindowScatter::scatter() const {
   for (std::size_t j = 0; j < radius_from_ce1_um_.size(); ++j) {
     s.radius_from_ce1_um[j] = successive_scatter(radius_from_ce1_um_[j], scratch);
   }
+  if (s.windows < kLeastDriftWindows) {
+    return s;
+  }
+  const std::size_t k = rho_um_.size() / 4;
+  std::vector<double> work;
+  s.rho_drift_um = quarter_drift(rho_um_, k, work);
+  s.gamma_drift_rad = quarter_drift(gamma_rad_, k, work);
+  for (const auto& series : radius_from_ce1_um_) {
+    s.radius_drift_um = std::max(s.radius_drift_um, std::fabs(quarter_drift(series, k, work)));
+  }
+  // The two medians' difference for a level without drift: each median of k values with the
+  // windows' scatter (monitor::ar1_block_median_sigma, uncorrelated windows).
+  const double sampling_um =
+      std::numbers::sqrt2 * monitor::ar1_block_median_sigma(s.rho_um, 0.0, static_cast<int>(k));
+  s.rho_drifts = std::fabs(s.rho_drift_um) > 3.0 * sampling_um &&
+                 std::fabs(s.rho_drift_um) > 2.0 * s.radius_drift_um;
   return s;
 }
 
-FitResult WindowScatter::widened(const FitResult& fit, bool& widened_out) const {
+FitResult WindowScatter::widened(const FitResult& fit, Widening& how) const {
   FitResult out = fit;
-  widened_out = false;
+  how = {};
   const Scatter s = scatter();
+  if (s.rho_drifts && std::fabs(s.rho_drift_um) > fit.rho_um.sigma) {
+    how.by_drift = true;
+    out.rho_um.sigma = std::fabs(s.rho_drift_um);
+    out.gamma_rad.sigma =
+        std::min(std::numbers::pi, std::max(out.gamma_rad.sigma, std::fabs(s.gamma_drift_rad)));
+  }
   const auto widen = [&](Estimate& e, double spread) {
     if (spread > 1.5 * e.sigma) {
-      widened_out = true;
+      how.by_scatter = true;
     }
     e.sigma = std::max(e.sigma, spread);
   };

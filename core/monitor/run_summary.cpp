@@ -251,10 +251,10 @@ nlohmann::json RunSummary::to_json() const {
              std::to_string(std::lround(100.0 * config_.identification.max_unexplained)) +
              " %): runout and coefficients describe this cut poorly");
   }
-  if (identification_.is_object() && identification_.contains("fit") &&
-      identification_["fit"].contains("window_scatter") &&
-      identification_["fit"]["window_scatter"].value("widened", false)) {
-    const json& spread = identification_["fit"]["window_scatter"];
+  const bool scattered = identification_.is_object() && identification_.contains("fit") &&
+                         identification_["fit"].contains("window_scatter");
+  const json spread = scattered ? identification_["fit"]["window_scatter"] : json::object();
+  if (scattered && spread.value("widened", false)) {
     std::array<char, 320> text{};
     std::snprintf(text.data(), text.size(),
                   "successive windows' runout estimates scatter more than one window's σ says "
@@ -263,6 +263,18 @@ nlohmann::json RunSummary::to_json() const {
                   spread.value("rho_std_um", 0.0), spread.value("gamma_std_deg", 0.0),
                   spread.value("windows", 0));
     warn("runout scatters", text.data());
+  }
+  if (scattered && spread.value("widened_by_drift", false)) {
+    std::array<char, 480> text{};
+    std::snprintf(text.data(), text.size(),
+                  "ρ moved by %+.3f µm (γ by %+.1f°) from the oldest quarter of the last %d "
+                  "windows to the newest, while the radius differences moved by %.3f µm at "
+                  "most: ρ·sin γ, which the force pins only through second-order effects, "
+                  "follows something the model lacks (flank wear, for one); the σ of ρ and γ "
+                  "given are at least their drift; read the radii",
+                  spread.value("rho_drift_um", 0.0), spread.value("gamma_drift_deg", 0.0),
+                  spread.value("windows", 0), spread.value("radius_drift_um", 0.0));
+    warn("runout drifts", text.data());
   }
   json warnings = json::array();
   for (const std::vector<Warning>* list :

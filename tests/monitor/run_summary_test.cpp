@@ -78,9 +78,10 @@ TEST(RunSummary, SaysHowManyRevolutionsTheAlertsHeldForAnotherSpeed) {
 }
 
 // Where successive windows' runout scatters beyond one window's σ (the shell widens the σ to it,
-// identify::WindowScatter), the summary says so with the scatter; where not, nothing.
-TEST(RunSummary, SaysWhenTheWindowsRunoutScattersBeyondItsSigma) {
-  const auto warnings_with = [](bool widened) {
+// identify::WindowScatter), the summary says so with the scatter; where ρ drifts while the radii
+// hold (the σ widened to the drift), it says that, with the drifts; where neither, nothing.
+TEST(RunSummary, SaysWhenTheWindowsRunoutScattersOrDriftsBeyondItsSigma) {
+  const auto warnings_with = [](bool widened, bool drift) {
     MonitorConfig config;
     RunSummary summary(config);
     summary.set_identification({{"runout", {{"rho_um", 5.98}, {"rho_std_um", 1.278}}},
@@ -90,21 +91,34 @@ TEST(RunSummary, SaysWhenTheWindowsRunoutScattersBeyondItsSigma) {
                                    {{"windows", 16},
                                     {"rho_std_um", 1.278},
                                     {"gamma_std_deg", 29.7},
-                                    {"widened", widened}}}}}});
+                                    {"widened", widened},
+                                    {"rho_drift_um", 2.219},
+                                    {"gamma_drift_deg", -101.9},
+                                    {"radius_drift_um", 0.030},
+                                    {"widened_by_drift", drift}}}}}});
     return summary.to_json()["warnings"];
   };
-  std::string detail;
-  for (const auto& w : warnings_with(true)) {
-    if (w["kind"] == "runout scatters") {
-      detail = w["detail"].get<std::string>();
+  const auto detail_of = [](const nlohmann::json& warnings, const std::string& kind) {
+    for (const auto& w : warnings) {
+      if (w["kind"] == kind) {
+        return w["detail"].get<std::string>();
+      }
     }
-  }
-  EXPECT_NE(detail.find("ρ by 1.278 µm, γ by 29.7° from window to window over 16 windows"),
+    return std::string();
+  };
+  const std::string scatter = detail_of(warnings_with(true, false), "runout scatters");
+  EXPECT_NE(scatter.find("ρ by 1.278 µm, γ by 29.7° from window to window over 16 windows"),
             std::string::npos)
-      << detail;
-  for (const auto& w : warnings_with(false)) {
-    EXPECT_NE(w["kind"], "runout scatters");
-  }
+      << scatter;
+  EXPECT_EQ(detail_of(warnings_with(true, false), "runout drifts"), "");
+  const std::string drift = detail_of(warnings_with(false, true), "runout drifts");
+  EXPECT_NE(drift.find("ρ moved by +2.219 µm (γ by -101.9°) from the oldest quarter of the last "
+                       "16 windows to the newest, while the radius differences moved by 0.030 µm "
+                       "at most"),
+            std::string::npos)
+      << drift;
+  EXPECT_EQ(detail_of(warnings_with(false, true), "runout scatters"), "");
+  EXPECT_TRUE(warnings_with(false, false).empty());
 }
 
 // A warning's samples are samples: "no steady tooth-passing signal" counts tracker windows,
