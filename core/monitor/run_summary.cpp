@@ -187,7 +187,7 @@ nlohmann::json RunSummary::to_json() const {
   const bool explained = !warnings_.empty();  // the pipeline said why nothing was measured
   if (revolutions_ == 0 && samples > 0 && !explained) {
     warn("no revolutions", "no revolution was measured; α, periods and peaks are absent");
-  } else if (bounded_ > 0 && valid_ < bounded_ / 2) {
+  } else if (bounded_ > 0 && 10 * valid_ < 9 * bounded_) {  // more than a tenth lost
     warn("flute events missing",
          std::to_string(bounded_ - valid_) + " of " + std::to_string(bounded_) +
              " revolutions had a flute without its tooth event (a flute that does not cut, or "

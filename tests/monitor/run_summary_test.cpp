@@ -186,5 +186,38 @@ TEST(RunSummary, AOneFluteToolHasNoAlphaOrDeltaFyAndSaysWhy) {
   EXPECT_NEAR(two["delta_fy_N"].get<double>(), 0.1, 1e-12);
 }
 
+// Revolutions that lost a tooth event count in peaks but not in α: the summary warns once more
+// than a tenth of them did (a 6-flute cut after a speed ramp lost one in five with no warning,
+// the threshold being half), and not for a few.
+TEST(RunSummary, WarnsWhenMoreThanATenthOfTheRevolutionsLostAnEvent) {
+  const auto warnings_with = [](int lost) {
+    MonitorConfig config;
+    RunSummary summary(config);
+    for (int i = 0; i < 100; ++i) {
+      RevolutionRecord r;
+      r.revolution = i;
+      r.spindle_rpm = 25000.0;
+      r.measured.bounded = true;
+      r.measured.valid = i >= lost;
+      r.measured.alpha_deg = 180.0;
+      summary.add(r);
+    }
+    summary.finish(PipelineStatus{});
+    return summary.to_json()["warnings"];
+  };
+  const auto missing = [](const nlohmann::json& warnings) {
+    for (const auto& w : warnings) {
+      if (w["kind"] == "flute events missing") {
+        return w["detail"].get<std::string>();
+      }
+    }
+    return std::string();
+  };
+  EXPECT_EQ(missing(warnings_with(10)), "");
+  const std::string twenty = missing(warnings_with(20));
+  EXPECT_EQ(twenty.rfind("20 of 100 revolutions had a flute without its tooth event", 0), 0u)
+      << twenty;
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
