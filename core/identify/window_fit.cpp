@@ -931,17 +931,19 @@ struct WindowFitter::Impl {
 
   /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter,
   /// from its changes to `rp` and `rm` (a step either way), the fit's degrees of freedom and
-  /// whether the model leaves a flute `idle` there (kContactEdgeRatio and below). At an
-  /// ordinary minimum the two changes are ±J·h to first order.
+  /// whether the model leaves a flute idle there (`idle()`, asked only past the ratio test;
+  /// kContactEdgeRatio and below). At an ordinary minimum the two changes are ±J·h to first
+  /// order.
+  template <typename Idle>
   [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
                                             const Eigen::VectorXd& r, const Eigen::VectorXd& rp,
-                                            const Eigen::VectorXd& rm, double dof, bool idle) {
+                                            const Eigen::VectorXd& rm, double dof, Idle&& idle) {
     const double up = (rp - r).norm();
     const double down = (r - rm).norm();
     if (!(std::max(up, down) > kContactEdgeRatio * std::min(up, down))) {
       return false;
     }
-    if (idle) {  // a kink, and a flute that cuts nothing: the step across starts it cutting
+    if (idle()) {  // a kink, and a flute that cuts nothing: the step across starts it cutting
       return true;
     }
     // The step onto the steep side raises the cost by more than one value's variance RSS/dof.
@@ -1076,17 +1078,21 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   const Eigen::VectorXd r = p.residual(theta);
   const Eigen::VectorXd coefficients = p.last_coefficients;
   // The flute that cuts least at the solution (the first cut's), and whether the model leaves
-  // one idle in any cut (the contact-edge test below).
+  // one idle in any cut (the contact-edge test below): a model evaluation, made only for a fit
+  // the one-sided differences put near an edge.
   std::pair<int, bool> least_cutting{-1, false};
-  if (options.fit_runout) {
-    const Eigen::VectorXd key = theta.head(ns);
-    for (auto& part : p.parts) {
-      const auto [flute, idle] = part->least_cutting_flute(key);
-      if (least_cutting.first < 0 || (idle && !least_cutting.second)) {
-        least_cutting = {flute, idle};
+  const auto least_cutting_flute = [&]() -> const std::pair<int, bool>& {
+    if (least_cutting.first < 0) {
+      const Eigen::VectorXd key = theta.head(ns);
+      for (auto& part : p.parts) {
+        const auto [flute, idle] = part->least_cutting_flute(key);
+        if (least_cutting.first < 0 || (idle && !least_cutting.second)) {
+          least_cutting = {flute, idle};
+        }
       }
     }
-  }
+    return least_cutting;
+  };
   const Eigen::Index nt = theta.size();
   const Eigen::Index nc = coefficients.size();
   const int mres = p.residual_size();
@@ -1108,10 +1114,10 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
         out.runout_at_contact_edge =
             out.runout_at_contact_edge ||
             at_contact_edge(p, theta, r, rp, rm, std::max(1.0, static_cast<double>(mres - nt - nc)),
-                            least_cutting.second);
+                            [&] { return least_cutting_flute().second; });
       }
     }
-    out.edge_flute = out.runout_at_contact_edge ? least_cutting.first : -1;
+    out.edge_flute = out.runout_at_contact_edge ? least_cutting_flute().first : -1;
     if (nc > 0) {
       j.rightCols(nc) = p.coefficient_jacobian(theta);
       // Coefficients the linear solve left at 0 (no axis sees them) are not parameters.
