@@ -182,8 +182,11 @@ runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w) {
     m.method +=
         "; at a flute's contact edge: offset_um is a lower bound (a flute cuts nothing "
         "beyond it)";
-    if (f.edge_flute > 0) {
-      m.method += ", and so is r_CE1 − r_CE" + std::to_string(f.edge_flute + 1);
+    if (f.edge_flute == 1 && f.config.tool.flutes == 2) {
+      m.method += ", and so is r_CE1 − r_CE2";
+    } else if (f.edge_flute >= 0) {
+      m.method += "; CE" + std::to_string(f.edge_flute + 1) +
+                  " cuts nothing: its radius lies at least a chip below the flute's before it";
     }
   }
   m.offset_um = f.rho_um.value;

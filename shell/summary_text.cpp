@@ -148,18 +148,25 @@ std::string summary_text(const json& j) {
     const json& radii = runout.value("r_minus_r_ce1_um", json::array());
     const json& radii_std = runout.value("r_minus_r_ce1_std_um", json::array());
     if (radii.is_array() && radii.size() >= 2 && radii_std.size() == radii.size()) {
-      // On a contact edge the edge flute's difference is bounded from below only.
+      // On a contact edge the idle flute's deficit is bounded from below only: for two flutes
+      // r_CE1 − r_CE2 itself.
       const auto edge = lower_bound ? runout.value("edge_flute", 0) : 0;
+      const bool two_bound = radii.size() == 2 && edge == 2;
       s += "  radii         ";
       for (std::size_t k = 1; k < radii.size(); ++k) {
         if (radii[k].is_number() && radii_std[k].is_number()) {
           s += fmt::format("{}r_CE1 − r_CE{} {}{:.3f} ± {:.3f} µm", k > 1 ? ", " : "", k + 1,
-                           edge == static_cast<int>(k + 1) ? "≥ " : "", -radii[k].get<double>(),
+                           two_bound ? "≥ " : "", -radii[k].get<double>(),
                            radii_std[k].get<double>());
         }
       }
-      if (edge > 0) {
-        s += fmt::format(" (flute {} cuts nothing beyond it: a lower bound)\n", edge);
+      if (two_bound) {
+        s += " (flute 2 cuts nothing beyond it: a lower bound)\n";
+      } else if (edge > 0) {
+        s += fmt::format(
+            " (flute {} cuts nothing: its radius lies at least a chip below the "
+            "flute's before it)\n",
+            edge);
       } else {
         s += radii.size() == 2 ? " (= 2ρ·cos γ: what the force pins)\n" : "\n";
       }

@@ -65,7 +65,7 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
                            {"flute_labelling", f.flute_labelling},
                            // At a flute's contact edge ρ is the least runout the force allows.
                            {"rho_is_lower_bound", f.runout_at_contact_edge}};
-  if (f.edge_flute > 0) {  // r_CE1 − r of that flute (CE number) is a lower bound too
+  if (f.edge_flute >= 0) {  // the idle flute (CE number): its deficit is a lower bound
     runout["edge_flute"] = f.edge_flute + 1;
   }
   if (f.config.tool.flutes >= 2) {  // the geometric α: one flute has none

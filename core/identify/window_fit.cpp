@@ -943,19 +943,20 @@ struct WindowFitter::Impl {
     if (!(std::max(up, down) > kContactEdgeRatio * std::min(up, down))) {
       return false;
     }
-    if (idle()) {  // a kink, and a flute that cuts nothing: the step across starts it cutting
-      return true;
-    }
-    // The step onto the steep side raises the cost by more than one value's variance RSS/dof.
+    // The step onto the steep side raises the cost by more than one value's variance RSS/dof;
+    // or, with a kink, the model leaves a flute idle: the step across starts it cutting, and the
+    // change need only stand above the model's rounding by less (kContactEdgeIdleSignificance).
     const double rss = r.squaredNorm();
     const double steep_cost = (up > down ? rp : rm).squaredNorm() - rss;
-    if (!(steep_cost > rss / dof)) {
+    const bool steep = steep_cost > rss / dof;
+    if (!steep && !idle()) {
       return false;
     }
     Eigen::VectorXd y, b0;
     Eigen::MatrixXd a;
     p.assemble(theta, y, b0, a);
-    return std::max(up, down) > kContactEdgeSignificance * y.norm();  // the measured harmonics
+    return std::max(up, down) >
+           (steep ? kContactEdgeSignificance : kContactEdgeIdleSignificance) * y.norm();
   }
 
   /// Refits from `theta` with another setting (a variant of the model's approximations).
@@ -1117,7 +1118,11 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
                             [&] { return least_cutting_flute().second; });
       }
     }
-    out.edge_flute = out.runout_at_contact_edge ? least_cutting_flute().first : -1;
+    // The flute there, where the model leaves it idle (an edge found by the cost alone has its
+    // flute still cutting a little).
+    out.edge_flute = out.runout_at_contact_edge && least_cutting_flute().second
+                         ? least_cutting_flute().first
+                         : -1;
     if (nc > 0) {
       j.rightCols(nc) = p.coefficient_jacobian(theta);
       // Coefficients the linear solve left at 0 (no axis sees them) are not parameters.
@@ -1433,29 +1438,19 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
         through_runout("r_ce" + std::to_string(jf2 + 1) + "_minus_r_ce1_um", r0[jf2] - r0[0],
                        dr.row(jf2) - dr.row(0)));
   }
-  if (out.runout_at_contact_edge) {
-    // On an edge the force pins the radii (the idle flute's deficit from below), not ρ·sin γ,
-    // which deflection or the prior may leave anywhere: ρ is stated as the least the radii
-    // allow. From r_j² = R² + ρ² + 2Rρ·cos(γ + ψ_j), |r_0 − r_j| ≤ 2Rρ·c_j/(r_0 + r_j) ≤
-    // ρ·c_j·R/(R − ρ) with the chord c_j = 2·|sin(ψ_j/2)|, so ρ ≥ qR/(R + q), q = |r_0 − r_j|/c_j.
-    // The model keeps the fit's runout (`config`): it is the force's.
-    Estimate least;
-    least.value = -1.0;
-    for (int jf2 = 1; jf2 < flutes; ++jf2) {
-      const double chord = 2.0 * std::fabs(std::sin(0.5 * pitch[static_cast<std::size_t>(jf2)]));
-      if (chord < 1e-6) {
-        continue;
-      }
-      const double q = std::fabs(r0[jf2] - r0[0]) / chord;
-      const double bound = q * radius / (radius + q);
-      if (bound > least.value) {
-        const double slope = radius * radius / ((radius + q) * (radius + q));  // d bound / d q
-        least = through_runout("rho_um", bound, (dr.row(jf2) - dr.row(0)) * (slope / chord));
-      }
-    }
-    if (least.value >= 0.0 && least.value < out.rho_um.value) {
-      out.rho_um = least;
-    }
+  if (out.edge_flute >= 0 && flutes == 2 && r0[0] != r0[1]) {
+    // Two flutes, one idle: the force pins u = (r_CE1 − r_CE2)/2 from below, not v = ρ·sin γ,
+    // which deflection or the prior may leave anywhere (a 2-flute slot stated ρ 5.98 µm at 71°
+    // for 3.0 at 5.7°). Stated instead: the least ρ those radii allow — max over γ of
+    // |r_CE1 − r_CE2| is 2ρ exactly, so ρ ≥ |r_CE1 − r_CE2|/2 — at the γ that reaches it, 0 (or
+    // π), with σ 90°: any γ within a quarter turn of it allows a larger ρ. The model keeps the
+    // fit's runout (`config`): it is the force's.
+    const double sign = r0[0] > r0[1] ? 1.0 : -1.0;
+    out.rho_um = through_runout("rho_um", 0.5 * sign * (r0[0] - r0[1]),
+                                0.5 * sign * (dr.row(0) - dr.row(1)));
+    out.gamma_rad.value = sign > 0.0 ? 0.0 : kPi;
+    out.gamma_rad.sigma = out.gamma_rad.sigma_stat = 0.5 * kPi;
+    out.gamma_rad.sigma_sys = 0.0;
   }
   if (flutes >= 2) {
     // The geometric cutting-edge phase angle: how far the edge after CE2 follows CE2, in degrees

@@ -106,11 +106,15 @@ struct FitOptions {
 /// of 4.1 there) and changes it by more than kContactEdgeSignificance of the measured harmonics
 /// (not the model's rounding). On the edges of simulated cuts the ratio read 9–20 (linear edge
 /// law) and 10³–10⁴ (power law); at ordinary minima 1.0–1.5. Where the fitted model leaves a
-/// flute idle (its chip 0 everywhere), the ratio alone decides: with deflection bending the
-/// flute that cuts, or a step weak beside the noise, the other two tests missed fits just past
-/// the edge (ratio 75–370; a 2-flute slot stated r_CE1 − r_CE2 3.84 ± 0.06 µm for 5.97).
+/// flute idle (its chip 0 everywhere), the cost test is not asked and the significance is
+/// kContactEdgeIdleSignificance: with deflection bending the flute that cuts, or a step weak
+/// beside the noise, they missed fits just past the edge (ratio 75–370; a 2-flute slot stated
+/// r_CE1 − r_CE2 3.84 ± 0.06 µm for 5.97).
 inline constexpr double kContactEdgeRatio = 4.0;
 inline constexpr double kContactEdgeSignificance = 1e-3;
+/// The same where the fitted model leaves a flute idle (a fit just past the edge, deflection on,
+/// read 1.1·10⁻⁴: WindowFit.AFluteIdleUnderDeflectionIsBoundedFromBelow).
+inline constexpr double kContactEdgeIdleSignificance = 1e-5;
 
 /// One estimated parameter.
 struct Estimate {
@@ -125,8 +129,9 @@ struct FitResult {
   bool ok = false;
   std::string message;        ///< why not, or how the fit ended
   model::ModelConfig config;  ///< the configuration with every fitted value in place
-  /// Tool-centre offset ρ ([000] eq 9), at the tool tip; on a contact edge the least ρ the
-  /// fitted radii allow (ρ·sin γ is not pinned there), the model's own in `config`.
+  /// Tool-centre offset ρ ([000] eq 9), at the tool tip. Two flutes, one idle (edge_flute):
+  /// the least ρ the fitted radii allow, |r_CE1 − r_CE2|/2, at γ 0 ± 90° (ρ·sin γ is not
+  /// pinned there); the model's own runout is in `config`.
   Estimate rho_um;
   Estimate gamma_rad;      ///< its direction relative to flute 0 (CE1), in (−π, π]
   Estimate alignment_rad;  ///< model angle minus tracker angle
@@ -135,13 +140,14 @@ struct FitResult {
   /// edge force and chip start at once); beyond, the flute idle, the force hardly changes, and
   /// nothing but the weak prior holds the fit back. The force then bounds the runout from one
   /// side only: the idle flute's radius lies at least the largest chip below the flute's before
-  /// it (exactly), and ρ is stated as the least runout those radii allow (the edge is a line in
-  /// (u, v), the truth beyond it); their σ, and γ's, are the steep side's. Told from an ordinary
-  /// minimum by the runout's one-sided differences and an idle flute in the fitted model
-  /// (kContactEdgeRatio and below).
+  /// it (exactly), and ρ is about the least runout the force allows (the edge is a line in
+  /// (u, v), the truth beyond it; with two flutes stated as exactly that, rho_um); their σ are
+  /// the steep side's. Told from an ordinary minimum by the runout's one-sided differences and
+  /// an idle flute in the fitted model (kContactEdgeRatio and below).
   bool runout_at_contact_edge = false;
-  /// On a contact edge, the flute there (0-based, 0 = CE1; the one the fitted model cuts least
-  /// with): r_CE1 − r of this flute is what the force bounds from below. −1 off an edge.
+  /// On a contact edge, the flute the fitted model leaves idle (0-based, 0 = CE1): its radius
+  /// lies at least a chip below the flute's before it (for two flutes, r_CE1 − r_CE2 is bounded
+  /// from below). −1 off an edge, or on one whose flute still cuts a little.
   int edge_flute = -1;
   /// Each flute's cutting radius r_j = |O→edge j| (µm) and r_j − r_0, with σ.
   std::vector<Estimate> cutting_radius_um;

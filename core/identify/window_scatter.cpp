@@ -34,9 +34,11 @@ void WindowScatter::add(const FitResult& fit) {
   if (fit.radius_from_ce1_um.size() != radius_from_ce1_um_.size()) {
     rho_um_.clear();
     gamma_rad_.clear();
+    on_edge_.clear();
     radius_from_ce1_um_.assign(fit.radius_from_ce1_um.size(), {});
   }
   keep(rho_um_, fit.rho_um.value);
+  keep(on_edge_, fit.runout_at_contact_edge ? 1.0 : 0.0);
   // γ unwrapped against the window before: its differences are turns apart at most by noise.
   double gamma = fit.gamma_rad.value;
   if (!gamma_rad_.empty()) {
@@ -77,7 +79,11 @@ WindowScatter::Scatter WindowScatter::scatter() const {
   // windows' scatter (monitor::ar1_block_median_sigma, uncorrelated windows).
   const double sampling_um =
       std::numbers::sqrt2 * monitor::ar1_block_median_sigma(s.rho_um, 0.0, static_cast<int>(k));
-  s.rho_drifts = std::fabs(s.rho_drift_um) > 3.0 * sampling_um &&
+  // On a contact edge ρ is the least the radii allow, elsewhere the fit's: a record mixing the
+  // two is no drift.
+  const bool one_kind =
+      std::all_of(on_edge_.begin(), on_edge_.end(), [&](double e) { return e == on_edge_.back(); });
+  s.rho_drifts = one_kind && std::fabs(s.rho_drift_um) > 3.0 * sampling_um &&
                  std::fabs(s.rho_drift_um) > 2.0 * s.radius_drift_um;
   return s;
 }

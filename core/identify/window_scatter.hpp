@@ -17,7 +17,8 @@
 // the oldest quarter's by more than 3σ of that difference (the scatter's), by more than the
 // window's σ and by more than twice the largest drift of a radius difference (a change of the
 // runout that the radii see would move them as much), widened() takes ρ's and γ's σ to at least
-// their drifts.
+// their drifts — unless the windows kept mix fits on a contact edge (ρ stated as a bound) with
+// others.
 
 #include <cstddef>
 #include <vector>
@@ -63,6 +64,7 @@ class WindowScatter {
 
  private:
   std::vector<double> rho_um_, gamma_rad_;
+  std::vector<double> on_edge_;  // 1: the window's fit was on a contact edge
   std::vector<std::vector<double>> radius_from_ce1_um_;  // [flute][window]
 };
 

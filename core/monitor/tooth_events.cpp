@@ -435,6 +435,7 @@ bool ToothEventTracker::start(const ToothEventTemplate& tmpl, const signal::Phas
   revolution_.found[0] = true;
   revolution_.quiet[0] = false;
   barren_revolutions_ = 0;
+  coasted_revolutions_ = 0;
   gone_in_revolution_ = 0;
   sequence_ = 0;
   needed_ = static_cast<std::int64_t>(start);
@@ -532,7 +533,9 @@ void ToothEventTracker::close_revolution() {
   }
   last_closed_ = static_cast<std::int64_t>(std::floor(r.event_sample[n]));
   barren_revolutions_ = any || r.no_data ? 0 : barren_revolutions_ + 1;
-  if (barren_revolutions_ >= config_.lost_after || !(period_ > 4.0 * flutes)) {
+  coasted_revolutions_ = r.found[n] || r.no_data ? 0 : coasted_revolutions_ + 1;
+  if (barren_revolutions_ >= config_.lost_after || coasted_revolutions_ >= kCoastRevolutions ||
+      !(period_ > 4.0 * flutes)) {
     active_ = false;
   }
   ++turn_;

@@ -213,6 +213,11 @@ EventSearch find_centroid(const Signal& detect, std::int64_t oldest, std::int64_
   return out;
 }
 
+/// Revolutions in a row with samples but without their closing CE1 event after which the
+/// tooth events are lost (ToothEventTracker::advance): the revolution's bounds were the g-h-k
+/// filter's extrapolation all along.
+inline constexpr int kCoastRevolutions = 6;
+
 struct ToothEventConfig {
   int flutes = 2;
   double sample_rate_hz = 50000.0;
@@ -254,7 +259,10 @@ class ToothEventTracker {
 
   /// Measures every revolution whose samples are in the ring, calling sink(RevolutionEvents)
   /// for each, in order. Stops (active() false) once lost_after revolutions in a row had no
-  /// event found.
+  /// event found, or kCoastRevolutions had samples but not their closing CE1 event (the
+  /// revolution's bounds are then the filter's guess: a 6-flute cut after a speed ramp coasted
+  /// 90 revolutions on the ramp's rate, to 16,500 rpm for 13,000, counting 8 turns it did not
+  /// make).
   template <typename Sink>
   void advance(const SampleRing& ring, Sink&& sink) {
     while (active_) {
@@ -307,6 +315,7 @@ class ToothEventTracker {
   int next_flute_ = 0;            // flute of the next event
   int events_in_revolution_ = 0;  // events of the current revolution so far (incl. its CE1)
   int barren_revolutions_ = 0;    // revolutions in a row without any event found
+  int coasted_revolutions_ = 0;   // ... with samples but without their closing CE1 event
   int gone_in_revolution_ = 0;    // events of the current revolution without samples (a gap)
   std::int64_t turn_ = 0;
   std::int64_t sequence_ = 0;

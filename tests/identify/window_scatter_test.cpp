@@ -119,7 +119,7 @@ WindowScatter windows_moving(std::array<double, 2> from, std::array<double, 2> t
 // 0.84 → 3.05 µm for a runout of 0.8 µm, r_CE1 − r_CE2 within 0.04 µm, the last window ± 0.22):
 // the drift is found (the quarters' medians 3/4 of the way apart) and the last window's σ of ρ
 // and γ are widened to it. A step of the runout that the radii see, as large, is no drift; nor
-// is a steady runout.
+// are edge windows then others, nor a steady runout.
 TEST(WindowScatter, RhoDriftingWhileTheRadiiHoldWidensItsSigma) {
   FitResult last;
   const WindowScatter drifting = windows_moving({0.7, 0.4}, {0.7, 3.0}, 48, last);
@@ -141,6 +141,14 @@ TEST(WindowScatter, RhoDriftingWhileTheRadiiHoldWidensItsSigma) {
   const WindowScatter stepped = windows_moving({0.7, 0.4}, {1.9, 0.4}, 48, last);
   EXPECT_GT(stepped.scatter().radius_drift_um, 1.5);
   EXPECT_FALSE(stepped.scatter().rho_drifts);
+  // Windows on a contact edge (ρ stated as the radii's bound) then off it: no drift either.
+  WindowScatter mixed;
+  for (int i = 0; i < 48; ++i) {
+    FitResult w2 = window(i < 24 ? 0.7 : 2.0, 0.0, -1.4, 0.05);
+    w2.runout_at_contact_edge = i < 24;
+    mixed.add(w2);
+  }
+  EXPECT_FALSE(mixed.scatter().rho_drifts);
   const WindowScatter steady = windows_moving({0.7, 0.4}, {0.7, 0.4}, 48, last);
   EXPECT_FALSE(steady.scatter().rho_drifts);
   EXPECT_EQ(steady.widened(last, how).rho_um.sigma, 0.2);

@@ -50,6 +50,12 @@ TEST(LcmConvert, ARunoutThatIsALowerBoundSaysSo) {
   EXPECT_EQ(m.method,
             "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "
             "edge: offset_um is a lower bound (a flute cuts nothing beyond it)");
+  w.fit.edge_flute = 2;  // three flutes: CE3 idle, its deficit to CE2 the bound
+  EXPECT_EQ(runout_estimate(w).method,
+            "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "
+            "edge: offset_um is a lower bound (a flute cuts nothing beyond it); CE3 cuts "
+            "nothing: its radius lies at least a chip below the flute's before it");
+  w.fit.config.tool.flutes = 2;
   w.fit.edge_flute = 1;
   EXPECT_EQ(runout_estimate(w).method,
             "window fit (flute 0 = CE1, the flute with the largest cut); at a flute's contact "

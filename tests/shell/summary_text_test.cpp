@@ -88,14 +88,24 @@ TEST(SummaryText, TheRadiiFollowTheRunout) {
                        "0.030 µm\n"),
             std::string::npos)
       << three;
-  // On a contact edge the edge flute's difference is a lower bound (and only that one).
+  // On a contact edge the idle flute is named: with three flutes its deficit to the flute
+  // before it is the bound (not r_CE1 − r_CE3); with two, r_CE1 − r_CE2 is.
   j["runout"]["rho_is_lower_bound"] = true;
   j["runout"]["edge_flute"] = 3;
   const std::string edge = summary_text(j);
-  EXPECT_NE(edge.find("  radii         r_CE1 − r_CE2 -0.500 ± 0.020 µm, r_CE1 − r_CE3 ≥ 1.250 ± "
-                      "0.030 µm (flute 3 cuts nothing beyond it: a lower bound)\n"),
+  EXPECT_NE(edge.find("  radii         r_CE1 − r_CE2 -0.500 ± 0.020 µm, r_CE1 − r_CE3 1.250 ± "
+                      "0.030 µm (flute 3 cuts nothing: its radius lies at least a chip below the "
+                      "flute's before it)\n"),
             std::string::npos)
       << edge;
+  j["runout"]["r_minus_r_ce1_um"] = {0.0, -3.839};
+  j["runout"]["r_minus_r_ce1_std_um"] = {0.0, 0.102};
+  j["runout"]["edge_flute"] = 2;
+  const std::string two_edge = summary_text(j);
+  EXPECT_NE(two_edge.find("  radii         r_CE1 − r_CE2 ≥ 3.839 ± 0.102 µm (flute 2 cuts nothing "
+                          "beyond it: a lower bound)\n"),
+            std::string::npos)
+      << two_edge;
 }
 
 // A warning is printed whole: its reason comes last.
