@@ -68,7 +68,12 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
       spdlog::info("{}: cutting stopped (t = {:.3f} s)", source_, t_s);
       return;
     case monitor::PipelineEventKind::kLockLost:
-      spdlog::info("{}: spindle lock lost (t = {:.3f} s): {}", source_, t_s, e.detail);
+      if (e.count > 0) {  // the tooth events' speed against the tracker's
+        spdlog::info("{}: spindle lock lost (t = {:.3f} s): {}: {:.0f} rpm against {} rpm", source_,
+                     t_s, e.detail, e.value, e.count);
+      } else {
+        spdlog::info("{}: spindle lock lost (t = {:.3f} s): {}", source_, t_s, e.detail);
+      }
       return;
     case monitor::PipelineEventKind::kRecordTooShort:
       spdlog::warn("{}: record too short: {:.4f} s of samples, {:.4f} s needed; {}", source_,

@@ -15,7 +15,11 @@ constexpr int kDetectChannel = 3;
 constexpr double kMaxBridgedGap_s = 0.05;    // shorter gaps keep the lock
 constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest revolution analysed
 constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
-constexpr int kIdleToStop = 3;               // idle revolutions in a row: cutting has stopped
+// Relative: the tooth events' revolution speed against a consistent tracker window's, beyond
+// which the events follow minima that are not the flutes' (a 6-flute cut after a speed ramp:
+// the events' filter ran on to 16,500 rpm for 13,000, counting 8 turns the spindle did not make).
+constexpr double kEventSpeedDisagreement = 0.03;
+constexpr int kIdleToStop = 3;  // idle revolutions in a row: cutting has stopped
 // Past the low-pass, the stages after it take every stride-th sample, at no less than this rate
 // and no fewer samples per revolution (at the commanded speed) than the synchronous average has
 // bins: the filter leaves nothing above a few cut-offs (order 4 at 3.3 kHz: −74 dB at 27.8 kHz),
@@ -419,6 +423,16 @@ void Pipeline::on_tracker_update() {
     phase_.valid = false;
   }
   sink_.on_spindle(u);
+  // The tooth events' own speed checked against a consistent window's (the FFT's harmonics):
+  // events that ran off are lost, and a fresh lock (below) finds them again at this speed.
+  if (e.valid && e.consistent && events_.active() && last_rpm_ > 0.0 &&
+      std::fabs(last_rpm_ - e.spindle_rpm) > kEventSpeedDisagreement * e.spindle_rpm) {
+    events_.stop();
+    // The detail outlives the call (a sink may keep the view): the speeds go in value, count.
+    event(PipelineEventKind::kLockLost, input_sample(center), std::llround(e.spindle_rpm),
+          last_rpm_, "the tooth events' speed left a consistent spindle tracker window's");
+    last_rpm_ = 0.0;
+  }
   // A lock starts the tooth events, unless they run already (they follow the cut on their own)
   // or the window's centre is still within what they measured before losing it.
   if (e.valid && !events_.active() &&

@@ -56,7 +56,8 @@ enum class PipelineEventKind {
   kNonFinite,       ///< count: samples replaced in the block
   kSaturated,       ///< count: samples at the range in the block
   kLockAcquired,    ///< value: spindle rpm; count: revolutions found before the lock
-  kLockLost,        ///< detail: why
+  kLockLost,        ///< detail: why; the tooth events' speed leaving the tracker's: value,
+                    ///< their rpm; count, the tracker's (rounded)
   kModelAligned,    ///< value: alignment correlation
   kModelUpdated,    ///< identified parameters taken by the model; value: unexplained fraction
   kCuttingStopped,  ///< value: the revolution's peak force, N

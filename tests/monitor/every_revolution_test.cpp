@@ -500,6 +500,49 @@ TEST(EveryRevolution, RingingBetweenPulsesDoesNotHideThePause) {
   }
 }
 
+// Tooth events that run off: a 6-flute end mill down-milling at half its diameter through a
+// 4.5–6 kHz dynamometer, the spindle ramping 11,000 → 13,000 rpm, with a narrow valley search
+// (0.2 pitch): after the ramp the closing CE1 events went missing or fell on the ringing's
+// other minima, and the events' filter ran on the ramp's rate to 16,500 rpm, stating 210
+// revolutions where the spindle turned 202. Now a consistent tracker window that disagrees
+// with the events' speed by more than 3 % loses them, and the next lock finds them afresh.
+TEST(EveryRevolution, ToothEventsThatLeaveTheSpindleSpeedAreLost) {
+  Shape k{"6-flute down 50 %", 6, 2.0, model::Operation::kDownMilling, 1.0, 12000.0, 333300.0, 1.5};
+  sim::Scenario s = shape_scenario(k);
+  s.duration_s = 1.0;
+  s.model.tool.helix_deg = 40.0;
+  s.model.process.feed_per_tooth_um = 4.0;
+  s.model.process.axial_depth_mm = 0.2;
+  s.model.effects.runout.angle_rad = 4.0;
+  s.model.effects.dynamometer.enabled = true;
+  s.model.effects.dynamometer.natural_hz = {4500.0, 4600.0, 6000.0};
+  s.model.effects.dynamometer.damping_ratio = {0.06, 0.06, 0.06};
+  s.spindle.profile = sim::SpindleProfileKind::kRamp;
+  s.spindle.actual_rpm = 11000.0;
+  s.spindle.ramp_end_rpm = 13000.0;
+  s.spindle.ramp_start_s = 0.3;
+  s.spindle.ramp_end_s = 0.6;
+  const Recording r = test::record(s);
+  MonitorConfig c = test::monitor_for(s);
+  c.search_fraction_of_pitch = 0.2;
+  Collector out;
+  Pipeline p(c, out);
+  test::replay(p, r, 4096);
+  double fastest_rpm = 0.0;
+  for (const auto& rev : out.revolutions) {
+    fastest_rpm = std::max(fastest_rpm, rev.spindle_rpm);
+  }
+  const int turned = static_cast<int>(r.truth.size());
+  std::printf("%zu revolutions stated of %d turned, the fastest at %.0f rpm; %d locks lost\n",
+              out.revolutions.size(), turned, fastest_rpm, out.count(PipelineEventKind::kLockLost));
+  EXPECT_LE(static_cast<int>(out.revolutions.size()), turned);
+  EXPECT_LT(fastest_rpm, 13000.0 * 1.06);  // caught within a tracker hop of its drift
+  const PipelineEvent* lost = out.first(PipelineEventKind::kLockLost);
+  ASSERT_NE(lost, nullptr);
+  EXPECT_EQ(lost->count, 13000);  // the tracker's speed, the events' beyond 3 % of it
+  EXPECT_GT(std::fabs(lost->value - 13000.0), 0.03 * 13000.0);
+}
+
 // Issue 6 §8: per-flute peaks against the simulated truth, 3 and 4 flutes in side milling at
 // 20 and 50 kHz (the force returns to zero between teeth in the first two).
 TEST(EveryRevolution, PerFlutePeaksMatchTheTruthInSideMilling) {
