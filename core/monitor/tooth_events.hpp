@@ -260,9 +260,10 @@ class ToothEventTracker {
   /// Measures every revolution whose samples are in the ring, calling sink(RevolutionEvents)
   /// for each, in order. Stops (active() false) once lost_after revolutions in a row had no
   /// event found, or kCoastRevolutions had samples but not their closing CE1 event (the
-  /// revolution's bounds are then the filter's guess: a 6-flute cut after a speed ramp coasted
-  /// 90 revolutions on the ramp's rate, to 16,500 rpm for 13,000, counting 8 turns it did not
-  /// make).
+  /// revolution's bounds are then the filter's guess; the other flutes' events would keep it
+  /// going for ever: 30 revolutions in ToothEventTracker.GivesUpRevolutionsWhose…). Events that
+  /// are found but are not the flutes' are the pipeline's to catch, against the spindle
+  /// tracker's speed (kEventSpeedDisagreement).
   template <typename Sink>
   void advance(const SampleRing& ring, Sink&& sink) {
     while (active_) {

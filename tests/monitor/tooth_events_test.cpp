@@ -1,7 +1,8 @@
 // find_valley, the search behind every tooth event (the measured ring's and the lockstep model's
 // rows): it finds a clean valley anywhere in its window, and reads its signal only within the
 // samples the caller has. The template's choice of event (valleys or pulse centroids) and the
-// commanded geometry's pauses between flutes.
+// commanded geometry's pauses between flutes. The tracker gives up revolutions whose bounds it
+// can only guess.
 
 #include "core/monitor/tooth_events.hpp"
 
@@ -15,6 +16,8 @@
 #include <numbers>
 #include <random>
 #include <vector>
+
+#include "core/monitor/sample_ring.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -177,6 +180,53 @@ TEST(ToothEventTemplate, TheCommandedGeometrySaysWhereTheFlutesPause) {
   EXPECT_TRUE(pauses(4, Operation::kUpMilling, 1.0, 0.1));
   EXPECT_FALSE(pauses(4, Operation::kUpMilling, 1.0, 0.5));
   EXPECT_FALSE(pauses(3, Operation::kUpMilling, 1.0, 0.6));
+}
+
+// Two flutes, 120 samples a revolution, valleys of (1.2 − cos 2θ)² at 0 and π. From revolution
+// 10 on, CE1's valley is gone (a hump over ±0.45π, CE2's valley kept): the revolutions that
+// follow have no bounds, only the filter's extrapolation, and the tracker stops after
+// kCoastRevolutions of them instead of stating bounds it never measured (CE2's events would
+// otherwise keep it going for ever: lost_after counts revolutions without any event).
+TEST(ToothEventTracker, GivesUpRevolutionsWhoseClosingCe1EventItCannotFind) {
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  constexpr int kPeriod = 120;
+  constexpr int kRevolutions = 40;
+  constexpr int kGoneFrom = 10;
+  SampleRing ring(4, kPeriod * kRevolutions);
+  for (std::int64_t n = 0; n < kPeriod * kRevolutions; ++n) {
+    const double theta = kTwoPi * static_cast<double>(n) / kPeriod;
+    const double off_ce1 = std::remainder(theta, kTwoPi);  // angle from CE1's valley
+    double detect = std::pow(1.2 - std::cos(2.0 * theta), 2.0);
+    if (n >= kGoneFrom * kPeriod && std::fabs(off_ce1) < 0.45 * std::numbers::pi) {
+      detect = 4.84 + 0.5 * std::cos(off_ce1);
+    }
+    const std::array<double, 4> row{0.0, 0.0, 0.0, detect};
+    ring.push(n, row.data());
+  }
+  ToothEventConfig config;
+  config.flutes = 2;
+  config.sample_rate_hz = 50000.0;
+  ToothEventTracker tracker(config);
+  ToothEventTemplate tmpl;
+  tmpl.flutes = 2;
+  tmpl.kind = ToothEventKind::kValley;
+  tmpl.event_rad = {0.0, std::numbers::pi};
+  tmpl.boundary_rad = tmpl.event_rad;
+  tmpl.valid = true;
+  signal::PhaseModel phase;
+  phase.sample_rate_hz = config.sample_rate_hz;
+  phase.spindle_hz = config.sample_rate_hz / kPeriod;
+  phase.valid = true;
+  ASSERT_TRUE(tracker.start(tmpl, phase, 5.0 * kPeriod, 0, ring, 3));
+  int valid = 0, unbounded = 0;
+  tracker.advance(ring, [&](const RevolutionEvents& r) {
+    valid += r.valid ? 1 : 0;
+    unbounded += r.bounded ? 0 : 1;
+  });
+  EXPECT_FALSE(tracker.active());
+  EXPECT_GE(valid, kGoneFrom - 2);  // every revolution before, but those the start walked past
+  // The revolution that closes on the first missing CE1 event, and the coasted ones after it.
+  EXPECT_EQ(unbounded, kCoastRevolutions);
 }
 
 }  // namespace
