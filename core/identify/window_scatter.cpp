@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
 
 #include "core/monitor/change_detector.hpp"
 
@@ -10,18 +11,20 @@ namespace millwatch::identify {
 namespace {
 
 /// Appends `x` to a series of at most WindowScatter::kWindows values (the oldest dropped).
-void keep(std::vector<double>& series, double x) {
+template <typename T>
+void keep(std::vector<T>& series, T x) {
   if (series.size() == WindowScatter::kWindows) {
     series.erase(series.begin());
   }
   series.push_back(x);
 }
 
-/// The median of the newest `k` values minus the oldest `k`'s.
-double quarter_drift(const std::vector<double>& series, std::size_t k, std::vector<double>& work) {
-  work.assign(series.begin(), series.begin() + static_cast<std::ptrdiff_t>(k));
+/// The median of the newest `k` values minus the oldest `k`'s (`scratch`: at least k values).
+double quarter_drift(const std::vector<double>& series, std::size_t k, std::span<double> scratch) {
+  const std::span<double> work = scratch.first(k);
+  std::copy_n(series.begin(), k, work.begin());
   const double oldest = monitor::median_in_place(work);
-  work.assign(series.end() - static_cast<std::ptrdiff_t>(k), series.end());
+  std::copy_n(series.end() - static_cast<std::ptrdiff_t>(k), k, work.begin());
   return monitor::median_in_place(work) - oldest;
 }
 
@@ -38,7 +41,7 @@ void WindowScatter::add(const FitResult& fit) {
     radius_from_ce1_um_.assign(fit.radius_from_ce1_um.size(), {});
   }
   keep(rho_um_, fit.rho_um.value);
-  keep(on_edge_, fit.runout_at_contact_edge ? 1.0 : 0.0);
+  keep(on_edge_, fit.runout_at_contact_edge);
   // γ unwrapped against the window before: its differences are turns apart at most by noise.
   double gamma = fit.gamma_rad.value;
   if (!gamma_rad_.empty()) {
@@ -69,11 +72,10 @@ WindowScatter::Scatter WindowScatter::scatter() const {
     return s;
   }
   const std::size_t k = rho_um_.size() / 4;
-  std::vector<double> work;
-  s.rho_drift_um = quarter_drift(rho_um_, k, work);
-  s.gamma_drift_rad = quarter_drift(gamma_rad_, k, work);
+  s.rho_drift_um = quarter_drift(rho_um_, k, scratch);
+  s.gamma_drift_rad = quarter_drift(gamma_rad_, k, scratch);
   for (const auto& series : radius_from_ce1_um_) {
-    s.radius_drift_um = std::max(s.radius_drift_um, std::fabs(quarter_drift(series, k, work)));
+    s.radius_drift_um = std::max(s.radius_drift_um, std::fabs(quarter_drift(series, k, scratch)));
   }
   // The two medians' difference for a level without drift: each median of k values with the
   // windows' scatter (monitor::ar1_block_median_sigma, uncorrelated windows).
@@ -82,7 +84,7 @@ WindowScatter::Scatter WindowScatter::scatter() const {
   // On a contact edge ρ is the least the radii allow, elsewhere the fit's: a record mixing the
   // two is no drift.
   const bool one_kind =
-      std::all_of(on_edge_.begin(), on_edge_.end(), [&](double e) { return e == on_edge_.back(); });
+      std::all_of(on_edge_.begin(), on_edge_.end(), [&](bool e) { return e == on_edge_.back(); });
   s.rho_drifts = one_kind && std::fabs(s.rho_drift_um) > 3.0 * sampling_um &&
                  std::fabs(s.rho_drift_um) > 2.0 * s.radius_drift_um;
   return s;

@@ -64,7 +64,7 @@ class WindowScatter {
 
  private:
   std::vector<double> rho_um_, gamma_rad_;
-  std::vector<double> on_edge_;  // 1: the window's fit was on a contact edge
+  std::vector<bool> on_edge_;                            // the window's fit was on a contact edge
   std::vector<std::vector<double>> radius_from_ce1_um_;  // [flute][window]
 };
 

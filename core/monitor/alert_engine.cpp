@@ -825,7 +825,7 @@ bool AlertEngine::read_window(const identify::IdentifiedWindow& w, WindowEstimat
   e.rho_um = fit.rho_um.value;
   e.rho_sigma_um = fit.rho_um.sigma;
   e.rho_lower_bound = fit.runout_at_contact_edge;
-  e.edge_flute = fit.runout_at_contact_edge ? fit.edge_flute : -1;
+  e.edge_flute = fit.edge_flute;  // −1 off an edge
   e.gamma_rad = fit.gamma_rad.value;
   e.gamma_sigma_rad = fit.gamma_rad.sigma;
   e.coefficients = std::min(static_cast<int>(fit.coefficients.size()), kMaxCoefficients);
