@@ -11,6 +11,10 @@
 #include "core/signal/fftw_planner.hpp"
 #include "core/signal/harmonic_floors.hpp"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace millwatch::signal {
 namespace {
 
@@ -21,38 +25,83 @@ double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
 
-/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample
-/// (phasor recursions, run side by side: two independent chains in flight). The complex products
-/// are written out as std::complex computes them for finite values.
+/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample.
+/// In blocks of kBlock samples: within a block, sample j's phasors come from a table (a dot
+/// product per block, no chain between samples); each block's sums are then turned by the
+/// block's phasor, a recursion over blocks (renormalised on the unit circle now and then). A
+/// phasor recursion per sample waited on its own multiply and add at every sample.
+/// a·b written out as std::complex computes it for finite values (without the call that checks
+/// for infinities and NaN).
+std::complex<double> times(std::complex<double> a, std::complex<double> b) {
+  return {a.real() * b.real() - a.imag() * b.imag(), a.real() * b.imag() + a.imag() * b.real()};
+}
+
 std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycles_a,
                                           double cycles_b) {
-  const std::complex<double> step_a = std::polar(1.0, -kTwoPi * cycles_a);
-  const std::complex<double> step_b = std::polar(1.0, -kTwoPi * cycles_b);
-  const double sar = step_a.real(), sai = step_a.imag(), sbr = step_b.real(), sbi = step_b.imag();
-  double ar = 1.0, ai = 0.0, br = 1.0, bi = 0.0;  // the phasors
-  double sum_ar = 0.0, sum_ai = 0.0, sum_br = 0.0, sum_bi = 0.0;
-  for (std::size_t n = 0; n < x.size(); ++n) {
-    sum_ar += x[n] * ar;
-    sum_ai += x[n] * ai;
-    sum_br += x[n] * br;
-    sum_bi += x[n] * bi;
-    const double ar2 = ar * sar - ai * sai;
-    const double ai2 = ar * sai + ai * sar;
-    const double br2 = br * sbr - bi * sbi;
-    const double bi2 = br * sbi + bi * sbr;
-    ar = ar2;
-    ai = ai2;
-    br = br2;
-    bi = bi2;
-    if ((n & 1023) == 1023) {  // keep the phasors on the unit circle
-      const double na = std::hypot(ar, ai), nb = std::hypot(br, bi);
-      ar /= na;
-      ai /= na;
-      br /= nb;
-      bi /= nb;
+  constexpr std::size_t kBlock = 16;
+  // The table: per offset j, the phasors of a and b, interleaved (re a, re b, im a, im b) so
+  // that one SSE2 pair holds a's and b's.
+  alignas(16) std::array<double, 4 * kBlock> table{};
+  {
+    const std::complex<double> step_a = std::polar(1.0, -kTwoPi * cycles_a);
+    const std::complex<double> step_b = std::polar(1.0, -kTwoPi * cycles_b);
+    std::complex<double> pa(1.0, 0.0), pb(1.0, 0.0);
+    for (std::size_t j = 0; j < kBlock; ++j) {
+      table[4 * j] = pa.real();
+      table[4 * j + 1] = pb.real();
+      table[4 * j + 2] = pa.imag();
+      table[4 * j + 3] = pb.imag();
+      pa = times(pa, step_a);
+      pb = times(pb, step_b);
     }
   }
-  return {std::complex<double>(sum_ar, sum_ai), std::complex<double>(sum_br, sum_bi)};
+  const auto block_dot = [&table](const double* v, std::size_t n, double out[4]) {
+#if defined(__SSE2__)
+    __m128d re = _mm_setzero_pd(), im = _mm_setzero_pd();    // (a, b)
+    __m128d re2 = _mm_setzero_pd(), im2 = _mm_setzero_pd();  // odd j: a second chain
+    std::size_t j = 0;
+    for (; j + 2 <= n; j += 2) {
+      const __m128d x0 = _mm_set1_pd(v[j]);
+      const __m128d x1 = _mm_set1_pd(v[j + 1]);
+      re = _mm_add_pd(re, _mm_mul_pd(x0, _mm_load_pd(&table[4 * j])));
+      im = _mm_add_pd(im, _mm_mul_pd(x0, _mm_load_pd(&table[4 * j + 2])));
+      re2 = _mm_add_pd(re2, _mm_mul_pd(x1, _mm_load_pd(&table[4 * j + 4])));
+      im2 = _mm_add_pd(im2, _mm_mul_pd(x1, _mm_load_pd(&table[4 * j + 6])));
+    }
+    if (j < n) {
+      const __m128d x0 = _mm_set1_pd(v[j]);
+      re = _mm_add_pd(re, _mm_mul_pd(x0, _mm_load_pd(&table[4 * j])));
+      im = _mm_add_pd(im, _mm_mul_pd(x0, _mm_load_pd(&table[4 * j + 2])));
+    }
+    _mm_storeu_pd(out, _mm_add_pd(re, re2));
+    _mm_storeu_pd(out + 2, _mm_add_pd(im, im2));
+#else
+    out[0] = out[1] = out[2] = out[3] = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      for (std::size_t c = 0; c < 4; ++c) {
+        out[c] += v[j] * table[4 * j + c];
+      }
+    }
+#endif
+  };
+  const std::complex<double> block_step_a = std::polar(1.0, -kTwoPi * cycles_a * kBlock);
+  const std::complex<double> block_step_b = std::polar(1.0, -kTwoPi * cycles_b * kBlock);
+  std::complex<double> pa(1.0, 0.0), pb(1.0, 0.0);  // the block's first sample's phasors
+  std::complex<double> sum_a(0.0, 0.0), sum_b(0.0, 0.0);
+  std::size_t blocks = 0;
+  for (std::size_t from = 0; from < x.size(); from += kBlock, ++blocks) {
+    double s[4];  // Σ x·cos and Σ x·(−sin) within the block, for a and b
+    block_dot(x.data() + from, std::min(kBlock, x.size() - from), s);
+    sum_a += times(pa, {s[0], s[2]});
+    sum_b += times(pb, {s[1], s[3]});
+    pa = times(pa, block_step_a);
+    pb = times(pb, block_step_b);
+    if ((blocks & 63) == 63) {  // keep the phasors on the unit circle
+      pa /= std::abs(pa);
+      pb /= std::abs(pb);
+    }
+  }
+  return {sum_a, sum_b};
 }
 
 }  // namespace
@@ -171,6 +220,12 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
     hann_[n] = 0.5 - 0.5 * std::cos(kTwoPi * static_cast<double>(n) / static_cast<double>(window_));
   }
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
+  // The highest bin update() reads: the harmonics' peaks up to the highest speed searched and
+  // their floors two spindle frequencies beyond, with a few bins of interpolation and lobe.
+  const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
+  magnitude_bins_ =
+      std::min(magnitude_.size(),
+               static_cast<std::size_t>(std::ceil((harmonics_ + 2) * f_max / bin_hz)) + 8);
   floors_.resize(fft_size_ / 2 + 1);
   past_.assign(window_ / hop_ + 2, Past{});
   fft_in_ = fftw_alloc_real(fft_size_);
@@ -272,7 +327,8 @@ void SpindleTracker::update() {
   }
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
-  for (std::size_t k = 0; k < magnitude_.size(); ++k) {
+  // Only the bins the search and the floors can reach (the rest stay 0, never read).
+  for (std::size_t k = 0; k < magnitude_bins_; ++k) {
     magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
   }
 

@@ -158,7 +158,8 @@ class SpindleTracker {
   std::vector<double> ring_;  // the last window_ samples
   std::vector<double> hann_;
   std::vector<double> magnitude_;
-  HarmonicFloors floors_;  // the harmonics' noise floors (update())
+  std::size_t magnitude_bins_ = 0;  // magnitude_'s bins update() computes (and reads)
+  HarmonicFloors floors_;           // the harmonics' noise floors (update())
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
   fftw_plan plan_ = nullptr;
