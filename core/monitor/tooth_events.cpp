@@ -136,7 +136,8 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
   // One valley per tooth period, and all at the same place in their periods: the average
   // folded onto one pitch (the mean of its N pitch-long segments) has its lowest point where
   // the flutes' valleys are on average, and each flute's valley is the lowest bin within a
-  // quarter pitch of there. (The deepest minima alone can mix two kinds of valley — after a
+  // quarter pitch of there — of a W's two arms about as deep, the one there (nearest_basin()).
+  // (The deepest minima alone can mix two kinds of valley — after a
   // pulse's ringing rebound and before the next pulse, equally deep — from flute to flute.)
   const double pitch_bins = static_cast<double>(bins) / flutes;
   const auto pitch_whole = static_cast<int>(std::ceil(pitch_bins));
@@ -163,6 +164,9 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
         best = k;
       }
     }
+    // Of a W's two arms about as deep, the one where the flutes' valleys are on average.
+    best = static_cast<long>(nearest_basin(at, std::lround(centre), best, from, to,
+                                           std::max(1L, std::lround(pitch_bins / 7.0))));
     picked.push_back(static_cast<int>(((best % bins) + bins) % bins));
   }
   std::sort(picked.begin(), picked.end());

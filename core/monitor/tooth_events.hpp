@@ -105,10 +105,62 @@ std::int64_t first_minimum(const Signal& detect, std::int64_t from, std::int64_t
   return low_odd < low_even || (low_odd == low_even && best_odd < best_even) ? best_odd : best_even;
 }
 
+/// A ridge this high (fraction of the search window's span, its highest sample over its lowest)
+/// parts two valleys: the arms of a W-shaped valley (a dynamometer's ringing, ~15° apart on a
+/// six-flute tool) stand apart by several percent; the ripple of noise along a valley's floor
+/// by far less.
+inline constexpr double kBasinRidge = 0.01;
+/// ...and a valley that much shallower than the window's lowest is a shoulder, not an arm.
+inline constexpr double kBasinDepth = 0.2;
+
+/// The valley of [from, to] the prediction `center` lies in: the bottom n of the basin reached
+/// by walking downhill from `center`, where it lies inside the window, is the lowest sample
+/// within ± width of itself (a valley the fit sees as one), a ridge higher than kBasinRidge of
+/// the window's span parts it from `lowest` (the window's lowest sample) and it is within
+/// kBasinDepth of the span as deep; otherwise `lowest`. Where a W's two arms are about as deep,
+/// the lowest sample flips between them from one revolution to the next with the noise (a
+/// flute's period ±15°); the arm the tracked event follows stays followed. Reads `detect` within
+/// [from − width, to + width].
+template <typename Signal>
+std::int64_t nearest_basin(const Signal& detect, std::int64_t center, std::int64_t lowest,
+                           std::int64_t from, std::int64_t to, std::int64_t width) {
+  if (center <= from || center >= to || center == lowest) {
+    return lowest;
+  }
+  std::int64_t n = center;
+  const std::int64_t step = detect(center - 1) < detect(center) ? -1 : 1;
+  while (n + step >= from && n + step <= to && detect(n + step) < detect(n)) {
+    n += step;
+  }
+  if (n == lowest || n == from || n == to) {
+    return lowest;
+  }
+  // A valley the fit sees as one: the lowest within ± width (the ripple of sparse samples on
+  // a steep flank is no second valley).
+  for (std::int64_t k = n - width; k <= n + width; ++k) {
+    if (detect(k) < detect(n)) {
+      return lowest;
+    }
+  }
+  double ridge = detect(n);
+  for (std::int64_t k = std::min(n, lowest); k <= std::max(n, lowest); ++k) {
+    ridge = std::max(ridge, detect(k));
+  }
+  double top = ridge;
+  for (std::int64_t k = from; k <= to; ++k) {
+    top = std::max(top, detect(k));
+  }
+  const double span = top - detect(lowest);
+  return ridge - detect(n) > kBasinRidge * span && detect(n) - detect(lowest) < kBasinDepth * span
+             ? n
+             : lowest;
+}
+
 /// A valley of `detect` (callable on absolute sample n ∈ [oldest, newest]) within ± half
-/// samples of `predicted`, refined by a cubic over ± fit_half samples. Found only when the
-/// smallest sample is interior to the search window and the fit is curved upwards. Reads
-/// `detect` within [oldest, newest] only.
+/// samples of `predicted`, refined by a cubic over ± fit_half samples: the valley the
+/// prediction lies in (nearest_basin(): of two parted by a ridge, not the deeper one). Found
+/// only when its lowest sample is interior to the search window and the fit is curved upwards.
+/// Reads `detect` within [oldest, newest] only.
 template <typename Signal>
 EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t newest,
                         double predicted, std::int64_t half, int fit_half) {
@@ -124,7 +176,9 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     out.status = EventSearch::Status::kGone;
     return out;
   }
-  const std::int64_t best = first_minimum(detect, center - half, center + half);
+  const std::int64_t best =
+      nearest_basin(detect, center, first_minimum(detect, center - half, center + half),
+                    center - half, center + half, fit_half);
   const bool interior = best > center - half && best < center + half;
   // Fit around the prediction when the data agree with it: a window chosen by the noisy
   // minimum itself leans towards the flatter side of an asymmetric valley (a bias of noise).

@@ -80,6 +80,45 @@ TEST(FindValley, FindsACleanValleyAnywhereInItsWindow) {
   }
 }
 
+// A W: two parabolic arms 16 samples apart, parted by a ridge at 6 % of the window's span.
+// Where the arms are about as deep (the right one shallower by 10⁻⁴ of the span: the ringing of a
+// dynamometer between pulses), the valley found is the arm the prediction lies in — the lowest
+// sample would flip between them with the noise. An arm shallower by a third of the span is a
+// shoulder: the lowest is taken. So is a one-sample dip on a steep flank (no valley a fit of
+// ± 3 samples sees as one).
+TEST(FindValley, KeepsTheArmOfAWItsPredictionLiesIn) {
+  const std::int64_t center = 1000, half = 20;
+  const int fit = 3;
+  // Samples for a search around any prediction within ± 10 of the centre.
+  const std::int64_t oldest = center - half - 3 * fit - 10, newest = center + half + 3 * fit + 10;
+  const auto w = [&](double right_bottom) {
+    return [=](std::int64_t n) {
+      const double u = static_cast<double>(n - center);
+      return std::min((u + 8.0) * (u + 8.0), (u - 8.0) * (u - 8.0) + right_bottom);
+    };
+  };
+  const double span = 28.0 * 28.0;  // the window's edge, 28 samples from the left arm
+  for (const double side : {-1.0, 1.0}) {
+    const double predicted = static_cast<double>(center) + side * 6.5;
+    const EventSearch e = find_valley(w(1e-4 * span), oldest, newest, predicted, half, fit);
+    ASSERT_EQ(e.status, EventSearch::Status::kFound) << side;
+    EXPECT_NEAR(e.position, static_cast<double>(center) + side * 8.0, 1e-6) << side;
+  }
+  const EventSearch shoulder =
+      find_valley(w(span / 3.0), oldest, newest, static_cast<double>(center) + 6.5, half, fit);
+  ASSERT_EQ(shoulder.status, EventSearch::Status::kFound);
+  EXPECT_NEAR(shoulder.position, static_cast<double>(center) - 8.0, 1e-6);
+  // A flank with a dip of one sample (a ripple of sparse samples), the valley 6 samples before.
+  const auto dip = [&](std::int64_t n) {
+    const double u = static_cast<double>(n - center);
+    return (u + 6.0) * (u + 6.0) - (n == center ? 20.0 : 0.0);
+  };
+  const EventSearch sparse =
+      find_valley(dip, oldest, newest, static_cast<double>(center), half, fit);
+  ASSERT_EQ(sparse.status, EventSearch::Status::kFound);
+  EXPECT_NEAR(sparse.position, static_cast<double>(center) - 6.0, 1e-6);
+}
+
 // Signals with ripples, a slope, a slow wave and noise (a fixed seed): the fit re-centres on
 // its vertex up to three times, a fit's width each, and a vertex that kept walking used to take
 // the fit past the samples the search was given — up to a fit's width beyond them, on about one
