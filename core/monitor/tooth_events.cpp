@@ -12,6 +12,11 @@ constexpr double kQuietFraction = 0.1;  // of the force's span above its lowest 
 // Where the cut's geometry leaves a pause between the flutes: a dynamometer's ringing there
 // rebounds to ~15 % of the span (its resonance a little above the 3.3 kHz low-pass).
 constexpr double kPauseQuietFraction = 0.25;
+// Two arms of a W in the synchronous average count as about as deep within this fraction of
+// the window's span (a 6-flute cut through a 4.5 kHz dynamometer at 13,000 rpm: 0.3–2 %):
+// well below the quiet level that makes a stretch a pause (10 %), so that an arm taken for a
+// valley still says whether the cut pauses there.
+constexpr double kTemplateBasinDepth = 0.05;
 constexpr double kQuietPitch = 0.2;  // a gap this long (fraction of a pitch) is a pause
 constexpr int kStartFit = 32;        // CE1 events kept on the way back to start the filter
 constexpr double kMinPulse = 0.2;    // of the lock's force: around an event, the cut's force
@@ -170,7 +175,8 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
     }
     // Of a W's two arms about as deep, the one where the flutes' valleys are on average.
     best = static_cast<long>(nearest_basin(at, std::lround(centre), best, from, to,
-                                           std::max(1L, std::lround(pitch_bins / 7.0))));
+                                           std::max(1L, std::lround(pitch_bins / 7.0)),
+                                           kTemplateBasinDepth));
     picked.push_back(static_cast<int>(((best % bins) + bins) % bins));
   }
   std::sort(picked.begin(), picked.end());
@@ -199,7 +205,7 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> avg, int fl
     // flutes' valleys are on average: a flute that does not cut leaves one long stretch, and
     // both boundaries in it must stay a pitch apart. That place is the one nearest v: `picked`
     // is sorted, and a window's lowest bin can lie before 0 (v wrapped to the end), which moves
-    // it past the others (two equal minima of a W, the earlier taken).
+    // it past the others (two equal minima of a W: the one nearer the flutes' mean valley).
     const double nominal = fold_at + std::round((v - fold_at) / pitch_bins) * pitch_bins;
     const double centre = v + 0.5 * (right - left);
     const double off = std::remainder(centre - nominal, static_cast<double>(bins));

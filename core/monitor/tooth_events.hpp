@@ -117,13 +117,14 @@ inline constexpr double kBasinDepth = 0.2;
 /// by walking downhill from `center`, where it lies inside the window, is the lowest sample
 /// within ± width of itself (a valley the fit sees as one), a ridge higher than kBasinRidge of
 /// the window's span parts it from `lowest` (the window's lowest sample) and it is within
-/// kBasinDepth of the span as deep; otherwise `lowest`. Where a W's two arms are about as deep,
+/// `depth` of the span as deep; otherwise `lowest`. Where a W's two arms are about as deep,
 /// the lowest sample flips between them from one revolution to the next with the noise (a
 /// flute's period ±15°); the arm the tracked event follows stays followed. Reads `detect` within
 /// [from − width, to + width].
 template <typename Signal>
 std::int64_t nearest_basin(const Signal& detect, std::int64_t center, std::int64_t lowest,
-                           std::int64_t from, std::int64_t to, std::int64_t width) {
+                           std::int64_t from, std::int64_t to, std::int64_t width,
+                           double depth = kBasinDepth) {
   if (center <= from || center >= to || center == lowest) {
     return lowest;
   }
@@ -151,7 +152,7 @@ std::int64_t nearest_basin(const Signal& detect, std::int64_t center, std::int64
     top = std::max(top, detect(k));
   }
   const double span = top - detect(lowest);
-  return ridge - detect(n) > kBasinRidge * span && detect(n) - detect(lowest) < kBasinDepth * span
+  return ridge - detect(n) > kBasinRidge * span && detect(n) - detect(lowest) < depth * span
              ? n
              : lowest;
 }
@@ -176,9 +177,13 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     out.status = EventSearch::Status::kGone;
     return out;
   }
+  const std::int64_t lowest = first_minimum(detect, center - half, center + half);
+  // A lowest sample on the window's edge says the valley lies beyond it: not found, whatever
+  // ripple lies nearer the prediction.
   const std::int64_t best =
-      nearest_basin(detect, center, first_minimum(detect, center - half, center + half),
-                    center - half, center + half, fit_half);
+      lowest == center - half || lowest == center + half
+          ? lowest
+          : nearest_basin(detect, center, lowest, center - half, center + half, fit_half);
   const bool interior = best > center - half && best < center + half;
   // Fit around the prediction when the data agree with it: a window chosen by the noisy
   // minimum itself leans towards the flatter side of an asymmetric valley (a bias of noise).

@@ -80,12 +80,13 @@ TEST(FindValley, FindsACleanValleyAnywhereInItsWindow) {
   }
 }
 
-// A W: two parabolic arms 16 samples apart, parted by a ridge at 6 % of the window's span.
-// Where the arms are about as deep (the right one shallower by 10⁻⁴ of the span: the ringing of a
-// dynamometer between pulses), the valley found is the arm the prediction lies in — the lowest
-// sample would flip between them with the noise. An arm shallower by a third of the span is a
-// shoulder: the lowest is taken. So is a one-sample dip on a steep flank (no valley a fit of
-// ± 3 samples sees as one).
+// A W: two parabolic arms 16 samples apart, parted by a ridge of 64 (about a sixth of the
+// window's span). Where the arms are about as deep (the right one shallower by 0.04: the
+// ringing of a dynamometer between pulses), the valley found is the arm the prediction lies in
+// — the lowest sample would flip between them with the noise. An arm shallower by 150 (29 % of
+// the span) is a shoulder: the lowest is taken. So is a one-sample dip on a steep flank (no
+// valley a fit of ± 3 samples sees as one); and a window whose lowest sample is on its edge
+// finds no valley, whatever arm lies nearer the prediction.
 TEST(FindValley, KeepsTheArmOfAWItsPredictionLiesIn) {
   const std::int64_t center = 1000, half = 20;
   const int fit = 3;
@@ -97,17 +98,22 @@ TEST(FindValley, KeepsTheArmOfAWItsPredictionLiesIn) {
       return std::min((u + 8.0) * (u + 8.0), (u - 8.0) * (u - 8.0) + right_bottom);
     };
   };
-  const double span = 28.0 * 28.0;  // the window's edge, 28 samples from the left arm
   for (const double side : {-1.0, 1.0}) {
     const double predicted = static_cast<double>(center) + side * 6.5;
-    const EventSearch e = find_valley(w(1e-4 * span), oldest, newest, predicted, half, fit);
+    const EventSearch e = find_valley(w(0.04), oldest, newest, predicted, half, fit);
     ASSERT_EQ(e.status, EventSearch::Status::kFound) << side;
     EXPECT_NEAR(e.position, static_cast<double>(center) + side * 8.0, 1e-6) << side;
   }
   const EventSearch shoulder =
-      find_valley(w(span / 3.0), oldest, newest, static_cast<double>(center) + 6.5, half, fit);
+      find_valley(w(150.0), oldest, newest, static_cast<double>(center) + 6.5, half, fit);
   ASSERT_EQ(shoulder.status, EventSearch::Status::kFound);
   EXPECT_NEAR(shoulder.position, static_cast<double>(center) - 8.0, 1e-6);
+  // A window from u = −5 to 17 around a prediction at u = 6: its lowest sample is on its left
+  // edge (9, the deeper arm's flank; the valley lies beyond), the right arm inside is 12 deep.
+  // The valley is not in this window: not found, as when the lowest sample alone decided.
+  const EventSearch beyond =
+      find_valley(w(12.0), oldest, newest, static_cast<double>(center) + 6.0, 11, fit);
+  EXPECT_EQ(beyond.status, EventSearch::Status::kNotFound);
   // A flank with a dip of one sample (a ripple of sparse samples), the valley 6 samples before.
   const auto dip = [&](std::int64_t n) {
     const double u = static_cast<double>(n - center);
