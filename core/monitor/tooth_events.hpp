@@ -179,12 +179,11 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
   }
   const std::int64_t lowest = first_minimum(detect, center - half, center + half);
   // A lowest sample on the window's edge says the valley lies beyond it: not found, whatever
-  // ripple lies nearer the prediction.
+  // ripple lies nearer the prediction. Inside, the valley the prediction lies in (inside too).
+  const bool interior = lowest > center - half && lowest < center + half;
   const std::int64_t best =
-      lowest == center - half || lowest == center + half
-          ? lowest
-          : nearest_basin(detect, center, lowest, center - half, center + half, fit_half);
-  const bool interior = best > center - half && best < center + half;
+      interior ? nearest_basin(detect, center, lowest, center - half, center + half, fit_half)
+               : lowest;
   // Fit around the prediction when the data agree with it: a window chosen by the noisy
   // minimum itself leans towards the flatter side of an asymmetric valley (a bias of noise).
   // Then re-centre on the vertex until the window sits on it, so that the result does not

@@ -25,17 +25,17 @@ double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
 
-/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample.
-/// In blocks of kBlock samples: within a block, sample j's phasors come from a table (a dot
-/// product per block, no chain between samples); each block's sums are then turned by the
-/// block's phasor, a recursion over blocks (renormalised on the unit circle now and then). A
-/// phasor recursion per sample waited on its own multiply and add at every sample.
 /// a·b written out as std::complex computes it for finite values (without the call that checks
 /// for infinities and NaN).
 std::complex<double> times(std::complex<double> a, std::complex<double> b) {
   return {a.real() * b.real() - a.imag() * b.imag(), a.real() * b.imag() + a.imag() * b.real()};
 }
 
+/// DTFTs of x at two frequencies (cycles per sample), evaluated at the block's first sample.
+/// In blocks of kBlock samples: within a block, sample j's phasors come from a table (a dot
+/// product per block, no chain between samples); each block's sums are then turned by the
+/// block's phasor, a recursion over blocks (renormalised on the unit circle now and then). A
+/// phasor recursion per sample waited on its own multiply and add at every sample.
 std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycles_a,
                                           double cycles_b) {
   constexpr std::size_t kBlock = 16;
