@@ -506,6 +506,9 @@ void Pipeline::start_events() {
   sync_revolutions_since_report_ = 0;
   window_rpm_sum_ = 0.0;
   window_rpm_count_ = 0;
+  // The last lock's speed (events stopped for an idle spell keep it) is no speed of this one:
+  // neither the status nor the events' speed check may read it before a revolution here.
+  last_rpm_ = 0.0;
   lock_revolution_ = revolution_base_ + revolutions_;
   stats_.clear_window();
   alerts_.rebaseline();
