@@ -425,12 +425,17 @@ void Pipeline::on_tracker_update() {
   sink_.on_spindle(u);
   // The tooth events' own speed checked against a consistent window's (the FFT's harmonics):
   // events that ran off are lost, and a fresh lock (below) finds them again at this speed.
-  if (e.valid && e.consistent && events_.active() && last_rpm_ > 0.0 &&
-      std::fabs(last_rpm_ - e.spindle_rpm) > kEventSpeedDisagreement * e.spindle_rpm) {
+  // Both at the window's centre: through a ramp the newest revolution runs ahead of it by half
+  // a window (a 40,000 rpm/s jump: 700 rpm at 11,000 rpm).
+  const double events_rpm = e.valid && e.consistent && events_.active()
+                                ? events_rpm_at(static_cast<double>(center))
+                                : 0.0;
+  if (events_rpm > 0.0 &&
+      std::fabs(events_rpm - e.spindle_rpm) > kEventSpeedDisagreement * e.spindle_rpm) {
     events_.stop();
     // The detail outlives the call (a sink may keep the view): the speeds go in value, count.
     event(PipelineEventKind::kLockLost, input_sample(center), std::llround(e.spindle_rpm),
-          last_rpm_, "the tooth events' speed left a consistent spindle tracker window's");
+          events_rpm, "the tooth events' speed left a consistent spindle tracker window's");
     last_rpm_ = 0.0;
   }
   // A lock starts the tooth events, unless they run already (they follow the cut on their own)
@@ -509,6 +514,7 @@ void Pipeline::start_events() {
   // The last lock's speed (events stopped for an idle spell keep it) is no speed of this one:
   // neither the status nor the events' speed check may read it before a revolution here.
   last_rpm_ = 0.0;
+  recent_speeds_.fill({});
   lock_revolution_ = revolution_base_ + revolutions_;
   stats_.clear_window();
   alerts_.rebaseline();
@@ -517,6 +523,15 @@ void Pipeline::start_events() {
   event(PipelineEventKind::kLockAcquired, input_sample(anchor), 0, 60.0 * phase_.spindle_hz,
         "spindle locked");
   events_.advance(ring_, [this](const RevolutionEvents& r) { on_revolution(r); });
+}
+
+double Pipeline::events_rpm_at(double n) const {
+  for (const RevolutionSpeed& r : recent_speeds_) {
+    if (r.rpm > 0.0 && r.from <= n && n <= r.to) {
+      return r.rpm;
+    }
+  }
+  return 0.0;
 }
 
 void Pipeline::follow_speed(double spindle_hz) {
@@ -651,6 +666,8 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   r.utime_us = utime_at(first) - static_cast<std::int64_t>(std::llround(tooth_delay_s_ * 1e6));
   stats_.add(r);
   last_rpm_ = r.spindle_rpm;
+  recent_speeds_[recent_speeds_next_] = {ev.event_sample[0], ev.event_sample[n], r.spindle_rpm};
+  recent_speeds_next_ = (recent_speeds_next_ + 1) % recent_speeds_.size();
   sink_.on_revolution(r);
   alerts_.on_revolution(r, [this](const Alert& a) { sink_.on_alert(a); });
   tell_alert_state(input_sample(first), r.spindle_rpm);

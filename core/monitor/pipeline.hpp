@@ -223,6 +223,9 @@ class Pipeline {
   /// Turns heard while cutting since the tracker's last window, not counted by it yet.
   [[nodiscard]] double heard_since_update() const;
   void start_events();
+  /// The tooth events' speed (rpm) over the revolution holding measuring sample n, 0 if none of
+  /// the last revolutions since the lock holds it.
+  [[nodiscard]] double events_rpm_at(double n) const;
   bool build_template(std::int64_t anchor, ToothEventTemplate& out);
   void on_revolution(const RevolutionEvents& events);
   /// The lockstep model follows the spindle speed (rebuilt when it moved by more than 0.2 %).
@@ -277,6 +280,13 @@ class Pipeline {
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;
   double last_rpm_ = 0.0;
+  // The last revolutions' spans (measuring samples) and speeds: the tooth events' speed at a
+  // tracker window's centre, which a ramp leaves far from the newest revolution's.
+  struct RevolutionSpeed {
+    double from = 0.0, to = 0.0, rpm = 0.0;
+  };
+  std::array<RevolutionSpeed, 32> recent_speeds_{};
+  std::size_t recent_speeds_next_ = 0;
   bool realigned_ = false;  // the model was aligned again on a full window of the average
   std::int64_t spindle_seq_ = 0;
   std::int64_t sync_revolutions_since_report_ = 0;

@@ -371,6 +371,9 @@ class ToothEventTracker {
   double anchor_ = 0.0;
   double period_ = 0.0;
   double period_rate_ = 0.0;
+  double typical_miss_ = 0.0;     // running mean of the CE1 events' |miss| of their prediction
+  double last_beyond_ = 0.0;      // the last miss if beyond the typical one (0 if not)
+  int fast_revolutions_ = 0;      // revolutions left on the short memory after a manoeuvre
   int next_flute_ = 0;            // flute of the next event
   int events_in_revolution_ = 0;  // events of the current revolution so far (incl. its CE1)
   int barren_revolutions_ = 0;    // revolutions in a row without any event found
