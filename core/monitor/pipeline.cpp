@@ -374,6 +374,7 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
   }
   if (events_.active() && last >= events_.needed_sample()) {
     events_.advance(ring_, [this](const RevolutionEvents& e) { on_revolution(e); });
+    say_events_lost();
   }
   if (last >= next_health_check_) {
     alerts_.on_input(input_.counters(), utime_at(last),
@@ -523,6 +524,18 @@ void Pipeline::start_events() {
   event(PipelineEventKind::kLockAcquired, input_sample(anchor), 0, 60.0 * phase_.spindle_hz,
         "spindle locked");
   events_.advance(ring_, [this](const RevolutionEvents& r) { on_revolution(r); });
+  say_events_lost();
+}
+
+void Pipeline::say_events_lost() {
+  // Events that stopped on their own (the pipeline's own stops say why where they happen): the
+  // state falls back to tracking and the next lock measures the revolutions since.
+  const ToothEventLoss loss = events_.take_loss();
+  if (loss != ToothEventLoss::kNone) {
+    event(PipelineEventKind::kLockLost, input_sample(events_.last_closed_sample()), 0, last_rpm_,
+          to_string(loss));
+    last_rpm_ = 0.0;
+  }
 }
 
 double Pipeline::events_rpm_at(double n) const {

@@ -356,10 +356,25 @@ bool ToothEventTracker::pulse_around(const SampleRing& ring, double position, do
   return false;
 }
 
+std::string_view to_string(ToothEventLoss loss) {
+  switch (loss) {
+    case ToothEventLoss::kNone:
+      return "the tooth events run";
+    case ToothEventLoss::kBarren:
+      return "the tooth events were lost: revolutions in a row without any valley found";
+    case ToothEventLoss::kCoasted:
+      return "the tooth events were lost: revolutions in a row without their closing CE1 event";
+    case ToothEventLoss::kPeriod:
+      return "the tooth events were lost: their revolution period left the tool's";
+  }
+  return "the tooth events were lost";
+}
+
 bool ToothEventTracker::start(const ToothEventTemplate& tmpl, const signal::PhaseModel& phase,
                               double anchor_sample, std::int64_t earliest_sample,
                               const SampleRing& ring, int detect_channel) {
   active_ = false;
+  loss_ = ToothEventLoss::kNone;
   if (!tmpl.valid || tmpl.flutes != config_.flutes || !phase.valid || ring.empty()) {
     return false;
   }
@@ -594,9 +609,13 @@ void ToothEventTracker::close_revolution() {
   last_closed_ = static_cast<std::int64_t>(std::floor(r.event_sample[n]));
   barren_revolutions_ = any || r.no_data ? 0 : barren_revolutions_ + 1;
   coasted_revolutions_ = r.found[n] || r.no_data ? 0 : coasted_revolutions_ + 1;
-  if (barren_revolutions_ >= config_.lost_after || coasted_revolutions_ >= kCoastRevolutions ||
-      !(period_ > 4.0 * flutes)) {
+  const ToothEventLoss loss = barren_revolutions_ >= config_.lost_after   ? ToothEventLoss::kBarren
+                              : coasted_revolutions_ >= kCoastRevolutions ? ToothEventLoss::kCoasted
+                              : !(period_ > 4.0 * flutes)                 ? ToothEventLoss::kPeriod
+                                                                          : ToothEventLoss::kNone;
+  if (loss != ToothEventLoss::kNone) {
     active_ = false;
+    loss_ = loss;
   }
   ++turn_;
   events_in_revolution_ = 1;

@@ -25,6 +25,8 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <string_view>
+#include <utility>
 
 #include "core/model/model_config.hpp"
 #include "core/monitor/extremum.hpp"
@@ -276,6 +278,17 @@ EventSearch find_centroid(const Signal& detect, std::int64_t oldest, std::int64_
 /// filter's extrapolation all along.
 inline constexpr int kCoastRevolutions = 6;
 
+/// Why the tooth events stopped on their own (ToothEventTracker::take_loss()).
+enum class ToothEventLoss {
+  kNone,
+  kBarren,   ///< lost_after revolutions in a row without any event found
+  kCoasted,  ///< kCoastRevolutions in a row without their closing CE1 event
+  kPeriod,   ///< the filter's period left what a revolution of this tool can be
+};
+
+/// What a user reads for a loss (a literal: it outlives any sink).
+std::string_view to_string(ToothEventLoss loss);
+
 struct ToothEventConfig {
   int flutes = 2;
   double sample_rate_hz = 50000.0;
@@ -313,7 +326,13 @@ class ToothEventTracker {
   /// allocated. Returns false when not even the anchor's event is found.
   bool start(const ToothEventTemplate& tmpl, const signal::PhaseModel& phase, double anchor_sample,
              std::int64_t earliest_sample, const SampleRing& ring, int detect_channel);
-  void stop() { active_ = false; }
+  /// Stops following (the caller's own reason: no loss to take).
+  void stop() {
+    active_ = false;
+    loss_ = ToothEventLoss::kNone;
+  }
+  /// Why the events stopped on their own since the last call (kNone if they did not), once.
+  ToothEventLoss take_loss() { return std::exchange(loss_, ToothEventLoss::kNone); }
 
   /// Measures every revolution whose samples are in the ring, calling sink(RevolutionEvents)
   /// for each, in order. Stops (active() false) once lost_after revolutions in a row had no
@@ -359,6 +378,7 @@ class ToothEventTracker {
   int detect_ = 3;
   double min_pulse_ = 0.0;  // detect level an event's neighbourhood must reach
   bool active_ = false;
+  ToothEventLoss loss_ = ToothEventLoss::kNone;
   std::int64_t needed_ = 0;
   std::int64_t earliest_ = 0;
   std::int64_t last_closed_ = INT64_MIN;

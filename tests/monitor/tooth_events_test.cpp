@@ -272,6 +272,9 @@ TEST(ToothEventTracker, GivesUpRevolutionsWhoseClosingCe1EventItCannotFind) {
   EXPECT_GE(valid, kGoneFrom - 2);  // every revolution before, but those the start walked past
   // The revolution that closes on the first missing CE1 event, and the coasted ones after it.
   EXPECT_EQ(unbounded, kCoastRevolutions);
+  // Stopped on its own, and says why, once.
+  EXPECT_EQ(tracker.take_loss(), ToothEventLoss::kCoasted);
+  EXPECT_EQ(tracker.take_loss(), ToothEventLoss::kNone);
 }
 
 }  // namespace
