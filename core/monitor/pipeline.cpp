@@ -373,8 +373,7 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
     on_tracker_update();
   }
   if (events_.active() && last >= events_.needed_sample()) {
-    events_.advance(ring_, [this](const RevolutionEvents& e) { on_revolution(e); });
-    say_events_lost();
+    advance_events();
   }
   if (last >= next_health_check_) {
     alerts_.on_input(input_.counters(), utime_at(last),
@@ -523,11 +522,11 @@ void Pipeline::start_events() {
   idle_ = false;
   event(PipelineEventKind::kLockAcquired, input_sample(anchor), 0, 60.0 * phase_.spindle_hz,
         "spindle locked");
-  events_.advance(ring_, [this](const RevolutionEvents& r) { on_revolution(r); });
-  say_events_lost();
+  advance_events();
 }
 
-void Pipeline::say_events_lost() {
+void Pipeline::advance_events() {
+  events_.advance(ring_, [this](const RevolutionEvents& r) { on_revolution(r); });
   // Events that stopped on their own (the pipeline's own stops say why where they happen): the
   // state falls back to tracking and the next lock measures the revolutions since.
   const ToothEventLoss loss = events_.take_loss();

@@ -223,8 +223,9 @@ class Pipeline {
   /// Turns heard while cutting since the tracker's last window, not counted by it yet.
   [[nodiscard]] double heard_since_update() const;
   void start_events();
-  /// A kLockLost event when the tooth events stopped on their own.
-  void say_events_lost();
+  /// The tooth events over the ring's new samples, and a kLockLost event if they stopped on
+  /// their own.
+  void advance_events();
   /// The tooth events' speed (rpm) over the revolution holding measuring sample n, 0 if none of
   /// the last revolutions since the lock holds it.
   [[nodiscard]] double events_rpm_at(double n) const;

@@ -30,15 +30,14 @@ constexpr double kMinPulse = 0.2;    // of the lock's force: around an event, th
 // +0.56 %), the ramps of EveryRevolution erred by up to 56 rpm (now 31), while the PHM cut's
 // speed jitters ± 1.1 rpm over its revolutions (was ± 0.5).
 constexpr double kMemory = 0.75;
-// (With the manoeuvres below, a 2-flute cut ramping 24,000 → 26,000 rpm in 0.2 s at 50 kHz is
-// stated within 35 rpm of the spindle over each revolution, RMS 4.0 rpm, where θ = 0.75 alone
-// erred by up to 63 rpm, RMS 11.0; the PHM cuts' speeds are unchanged.)
 // A manoeuvre (a ramp's start or end: the CE1 event off its prediction by more than
 // kManoeuvre times the filter's typical miss) shortens the memory to kFastMemory for
 // kFastRevolutions revolutions, so that the filter takes up or drops the period's change in
 // about two revolutions instead of four; the typical miss (a running mean of |miss|, each term
 // capped at kManoeuvre times it, so that a ramp does not inflate it) keeps the steady cut's
-// jitter as low as before.
+// jitter as low as before. A 2-flute cut ramping 24,000 → 26,000 rpm in 0.2 s at 50 kHz is then
+// stated within 35 rpm of the spindle over each revolution, RMS 4.0 rpm, where θ = 0.75 alone
+// erred by up to 63 rpm, RMS 11.0; the PHM cuts' speeds are unchanged.
 constexpr double kFastMemory = 0.5;
 constexpr double kManoeuvre = 4.0;
 constexpr int kFastRevolutions = 3;
