@@ -78,6 +78,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
   // only the revolution's bounds, both CE1 events (a flute that did not cut peaks near 0).
   auto valid_or_nan = [&](double v) { return m.valid ? v : nan; };
   auto bounded_or_nan = [&](double v) { return m.bounded ? v : nan; };
+  const double rpm = r.spindle_rpm > 0.0 ? r.spindle_rpm : nan;  // 0: not measured
   if (file_) {
     std::string& s = line_;
     s.clear();
@@ -86,7 +87,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
       s += "{\"revolution\":" + std::to_string(r.revolution) + ",\"t_s\":";
       append_json_number(s, t_s);
       s += ",\"spindle_rpm\":";
-      append_json_number(s, r.spindle_rpm);
+      append_json_number(s, rpm);
       s += std::string(",\"valid\":") + (m.valid ? "true" : "false") +
            ",\"cutting\":" + (cutting_ ? "true" : "false") + ",\"period_s\":[";
       for (int j = 0; j < flutes; ++j) {
@@ -136,7 +137,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
       s += std::to_string(r.revolution) + ",";
       append_number(s, t_s);
       s += ",";
-      append_number(s, r.spindle_rpm);
+      append_number(s, rpm);
       s += std::string(",") + (m.valid ? "1" : "0") + "," + (cutting_ ? "1" : "0");
       for (int j = 0; j < flutes; ++j) {
         s += ",";
@@ -177,7 +178,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
       Row row;
       row.revolution = r.revolution;
       row.t_s = t_s;
-      row.spindle_rpm = r.spindle_rpm;
+      row.spindle_rpm = rpm;
       row.valid = m.valid;
       row.bounded = m.bounded;
       row.alpha_deg = m.alpha_deg;

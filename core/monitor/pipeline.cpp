@@ -677,7 +677,9 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   valid_revolutions_ += r.measured.valid ? 1 : 0;
   r.utime_us = utime_at(first) - static_cast<std::int64_t>(std::llround(tooth_delay_s_ * 1e6));
   stats_.add(r);
-  last_rpm_ = r.spindle_rpm;
+  if (r.spindle_rpm > 0.0) {
+    last_rpm_ = r.spindle_rpm;  // the last measured speed (one coasting revolution states none)
+  }
   recent_speeds_[recent_speeds_next_] = {ev.event_sample[0], ev.event_sample[n], r.spindle_rpm};
   recent_speeds_next_ = (recent_speeds_next_ + 1) % recent_speeds_.size();
   sink_.on_revolution(r);

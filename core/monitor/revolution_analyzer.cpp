@@ -62,6 +62,20 @@ AngleMap angle_map(const RevolutionEvents& e, const ToothEventTemplate& t) {
   return m;
 }
 
+double measured_rpm(const RevolutionEvents& e, const RevolutionMeasurement& m,
+                    double sample_rate_hz) {
+  // A revolution whose closing CE1 event was not found coasts on the events' filter: its period
+  // is the filter's prediction, not a measurement (the revolutions the events take to give up
+  // on a cut that ended or changed), so it states no speed.
+  if (!e.found[static_cast<std::size_t>(e.flutes)]) {
+    return 0.0;
+  }
+  if (e.period_samples > 0.0) {
+    return 60.0 * sample_rate_hz / e.period_samples;
+  }
+  return m.period_s > 0.0 ? 60.0 / m.period_s : 0.0;
+}
+
 RevolutionAnalyzer::RevolutionAnalyzer(const MonitorConfig& config,
                                        std::size_t max_revolution_samples)
     : sample_rate_hz_(config.sample_rate_hz),
@@ -82,8 +96,7 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   m.valid = events.valid;
   m.bounded = events.bounded;
   measure_revolution([&](std::int64_t s) { return ring.row(s); }, sample_rate_hz_, m);
-  out.spindle_rpm = events.period_samples > 0.0 ? 60.0 * sample_rate_hz_ / events.period_samples
-                                                : 60.0 / m.period_s;
+  out.spindle_rpm = measured_rpm(events, m, sample_rate_hz_);
 
   out.model_valid = false;
   out.sectors = 0;

@@ -37,6 +37,11 @@ struct AngleMap {
 /// fewer than two were found).
 AngleMap angle_map(const RevolutionEvents& events, const ToothEventTemplate& tmpl);
 
+/// The revolution's speed from its tooth events (rpm): 60·f_s over the events' filtered period,
+/// or 0 — not measured — when its closing CE1 event was not found.
+double measured_rpm(const RevolutionEvents& e, const RevolutionMeasurement& m,
+                    double sample_rate_hz);
+
 class RevolutionAnalyzer {
  public:
   RevolutionAnalyzer() = default;

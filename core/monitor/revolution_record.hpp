@@ -15,7 +15,8 @@ struct RevolutionRecord {
   std::int64_t revolution = 0;  ///< revolutions reported since the pipeline started
   std::int64_t utime_us = 0;    ///< time of the revolution's first event (filter delay removed)
   /// This revolution's own speed from its tooth events: 60/T with T filtered over the last
-  /// revolutions (measured.period_s is the raw T).
+  /// revolutions (measured.period_s is the raw T); 0 when not measured (its closing CE1 event
+  /// was not found, and the period would be the filter's prediction).
   double spindle_rpm = 0.0;
   ToothEventKind event_kind = ToothEventKind::kValley;
   RevolutionMeasurement measured;

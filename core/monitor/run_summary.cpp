@@ -39,7 +39,9 @@ RunSummary::RunSummary(const MonitorConfig& config)
 
 void RunSummary::add(const RevolutionRecord& r) {
   ++revolutions_;
-  rpm_.add(r.spindle_rpm);
+  if (r.spindle_rpm > 0.0) {  // 0: not measured
+    rpm_.add(r.spindle_rpm);
+  }
   const auto& m = r.measured;
   if (!m.bounded) {
     return;

@@ -42,8 +42,10 @@ struct Window : monitor::PipelineSink {
   double alpha_deg = 0.0;   // the monitor's α over its last window ([001] eq 36)
   double delta_fy_N = 0.0;  // and ΔF_y,max
   void on_revolution(const monitor::RevolutionRecord& r) override {
-    rpm_sum += r.spindle_rpm;
-    ++revolutions;
+    if (r.spindle_rpm > 0.0) {  // 0: a revolution that coasted states no speed
+      rpm_sum += r.spindle_rpm;
+      ++revolutions;
+    }
     if (r.window_revolutions > 0) {
       alpha_deg = r.alpha_mean_deg;
       delta_fy_N = r.delta_fy_mean_N;

@@ -219,5 +219,26 @@ TEST(RunSummary, WarnsWhenMoreThanATenthOfTheRevolutionsLostAnEvent) {
       << twenty;
 }
 
+// The summary's speed is the mean of the revolutions' measured speeds: a revolution that coasted
+// (its closing CE1 missed) states none (0) and does not pull the mean towards 0.
+TEST(RunSummary, SpeedIsTheMeanOfTheMeasuredSpeedsAlone) {
+  MonitorConfig config;
+  RunSummary summary(config);
+  for (int i = 0; i < 10; ++i) {
+    RevolutionRecord r;
+    r.revolution = i;
+    r.spindle_rpm = i < 3 ? 0.0 : 25000.0 + 10.0 * (i % 2 == 0 ? 1.0 : -1.0);
+    r.measured.bounded = i >= 3;
+    r.measured.valid = i >= 3;
+    r.measured.alpha_deg = 180.0;
+    summary.add(r);
+  }
+  summary.finish(PipelineStatus{});
+  const nlohmann::json j = summary.to_json();
+  EXPECT_NEAR(j["spindle_rpm"].get<double>(), 25000.0 - 10.0 / 7.0, 1e-9);
+  EXPECT_LT(j["spindle_rpm_std"].get<double>(), 11.0);
+  EXPECT_EQ(j["spindle_rpm_source"], "revolutions");
+}
+
 }  // namespace
 }  // namespace millwatch::monitor

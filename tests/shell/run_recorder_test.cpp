@@ -1,6 +1,7 @@
 // The replay's per-revolution rows and the synchronous average it keeps for the plots, fed by
 // hand: which values a row carries for a valid, a bounded and an unbounded revolution (the
-// summary's rules), and a bin of the average that no sample reached.
+// summary's rules) and one without a measured speed, and a bin of the average that no sample
+// reached.
 
 #include "shell/run_recorder.hpp"
 
@@ -59,6 +60,9 @@ TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
   rec.on_revolution(revolution(0, true, true));    // every event
   rec.on_revolution(revolution(1, false, true));   // both CE1 events, flute 2's missing
   rec.on_revolution(revolution(2, false, false));  // not even its bounds
+  monitor::RevolutionRecord coasted = revolution(3, false, false);
+  coasted.spindle_rpm = 0.0;  // its closing CE1 missed: the events' filter measured no speed
+  rec.on_revolution(coasted);
   rec.commit();
   std::ifstream in(path);
   std::string line;
@@ -77,7 +81,7 @@ TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
   while (std::getline(in, line)) {
     rows.push_back(fields(line));
   }
-  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(rows.size(), 4u);
   EXPECT_EQ(rows[0][column("t_s")], "0.014694");
   EXPECT_EQ(rows[0][column("alpha_deg")], "170");
   EXPECT_EQ(rows[0][column("period_s_2")], "0.0027");
@@ -90,8 +94,10 @@ TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
   EXPECT_EQ(rows[1][column("peak_resultant_N_2")], "8.5");
   EXPECT_EQ(rows[2][column("peak_resultant_N_1")], "");
   EXPECT_EQ(rows[2][column("spindle_rpm")], "10421.5");
+  EXPECT_EQ(rows[3][column("spindle_rpm")], "");  // absent, not 0
   // What the plots keep: the bounded revolutions, α only where valid.
-  ASSERT_EQ(rec.rows().size(), 3u);
+  ASSERT_EQ(rec.rows().size(), 4u);
+  EXPECT_TRUE(std::isnan(rec.rows()[3].spindle_rpm));
   EXPECT_TRUE(rec.rows()[1].bounded);
   EXPECT_FALSE(rec.rows()[1].valid);
   EXPECT_FALSE(rec.rows()[2].bounded);
