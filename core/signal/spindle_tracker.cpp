@@ -227,7 +227,7 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
       std::min(magnitude_.size(),
                static_cast<std::size_t>(std::ceil((harmonics_ + 2) * f_max / bin_hz)) + 8);
   floors_.resize(fft_size_ / 2 + 1);
-  past_.assign(window_ / hop_ + 2, Past{});
+  past_.assign(2 * (window_ / hop_) + 3, Past{});  // two windows back: a ramp's three windows
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
   {
@@ -268,6 +268,25 @@ const SpindleTracker::Past* SpindleTracker::window_ago(std::int64_t center) cons
     }
   }
   return nullptr;
+}
+
+bool SpindleTracker::on_a_ramp(const Past& earlier, double hz, std::int64_t center) const {
+  // A ramp changes the speed by more than lock_agreement in a window (at 10,000 rpm, 10
+  // revolutions' window: beyond 1,700 rpm/s): three windows a window apart on one straight line
+  // of speed, both pairs' tooth phases as the mean speeds predict (exact on a linear ramp).
+  // Three random speeds rarely fall on a line, and two phase checks pass by chance more rarely.
+  const Past* before = window_ago(earlier.center);
+  if (before == nullptr || !before->cutting) {
+    return false;
+  }
+  const double fs = config_.sample_rate_hz;
+  const double dt1_s = static_cast<double>(earlier.center - before->center) / fs;
+  const double dt_s = static_cast<double>(center - earlier.center) / fs;
+  const double predicted_hz = earlier.hz + (earlier.hz - before->hz) / dt1_s * dt_s;
+  const double phase_predicted =
+      before->tooth_phase_rad + kTwoPi * config_.flutes * 0.5 * (earlier.hz + before->hz) * dt1_s;
+  return std::fabs(hz - predicted_hz) <= config_.lock_agreement * hz &&
+         std::fabs(wrap_pi(earlier.tooth_phase_rad - phase_predicted)) <= config_.lock_phase_rad;
 }
 
 int SpindleTracker::process(std::span<const double> samples) {
@@ -457,8 +476,9 @@ void SpindleTracker::update() {
     const double predicted = earlier->tooth_phase_rad + kTwoPi * z * 0.5 * (f + earlier->hz) * dt;
     e.agreement = std::fabs(f - earlier->hz) / f;
     e.phase_error_rad = wrap_pi(phiz - predicted);
-    e.consistent = e.agreement <= config_.lock_agreement &&
-                   std::fabs(e.phase_error_rad) <= config_.lock_phase_rad;
+    const bool phase_agrees = std::fabs(e.phase_error_rad) <= config_.lock_phase_rad;
+    e.consistent = phase_agrees && (e.agreement <= config_.lock_agreement ||
+                                    on_a_ramp(*earlier, f, e.center_sample));
   }
   remember(true, f, phiz, e.center_sample);
 

@@ -24,9 +24,11 @@
 // no samples with it (relative speed difference, and the tooth-harmonic phase against the one
 // the earlier window predicts at this window's centre at the mean of the two speeds, exact on a
 // linear ramp). The tracker locks only on a consistent estimate: two such cutting windows whose
-// speeds agree within lock_agreement and whose tooth phases agree within lock_phase_rad. A
-// stopping or starting spindle, or weak irregular cutting, gives windows that disagree: no
-// lock, no speed.
+// speeds agree within lock_agreement and whose tooth phases agree within lock_phase_rad — or,
+// on a ramp that moves the speed by more than that in a window, three windows a window apart
+// whose speeds lie on one line within lock_agreement and whose two pairs of tooth phases each
+// agree. A stopping or starting spindle, or weak irregular cutting, gives windows that disagree:
+// no lock, no speed.
 // While locked, the phase model (signal::PhaseModel, in input samples) is re-anchored at the
 // newest sample every window, continuous there, corrected by part of the window's tooth-phase
 // error (modulo one pitch, so a weak fundamental cannot flip the flute), with the speed's rate
@@ -88,8 +90,9 @@ struct SpindleEstimate {
   bool valid = false;     ///< locked: a current, consistent speed estimate
   bool cutting = false;   ///< periodic force: the strongest harmonic min_snr_db above the floor
   bool relocked = false;  ///< this update started a new lock (new angle reference)
-  /// This window agrees with the one a window earlier (speed within lock_agreement, tooth phase
-  /// within lock_phase_rad); false until a cutting stretch is two windows long.
+  /// This window agrees with the one a window earlier (speed within lock_agreement, or on the
+  /// line of a ramp through the two windows before; tooth phase within lock_phase_rad); false
+  /// until a cutting stretch is two windows long.
   bool consistent = false;
   double spindle_hz = 0.0;  ///< this window's speed (meaningful when cutting)
   double spindle_rpm = 0.0;
@@ -147,6 +150,7 @@ class SpindleTracker {
   struct Past;
   void remember(bool cutting, double hz, double tooth_phase_rad, std::int64_t center);
   [[nodiscard]] const Past* window_ago(std::int64_t center) const;
+  [[nodiscard]] bool on_a_ramp(const Past& earlier, double hz, std::int64_t center) const;
   double magnitude_at(double f_hz) const;
   void release();
 
