@@ -53,6 +53,19 @@ sim::Scenario slot(double sample_rate_hz, double duration_s) {
   return s;
 }
 
+/// slot() at 50 kHz for `duration_s`, the spindle ramping from `from_rpm` at `rpm_per_s` from
+/// the first sample for `ramp_s` (then steady), commanded at the ramp's middle.
+sim::Scenario slot_on_a_ramp(double duration_s, double from_rpm, double rpm_per_s, double ramp_s) {
+  sim::Scenario s = slot(50000.0, duration_s);
+  s.spindle.profile = sim::SpindleProfileKind::kRamp;
+  s.spindle.actual_rpm = from_rpm;
+  s.spindle.ramp_end_rpm = from_rpm + rpm_per_s * ramp_s;
+  s.spindle.ramp_start_s = 0.0;
+  s.spindle.ramp_end_s = ramp_s;
+  s.model.process.spindle_rpm = from_rpm + 0.5 * rpm_per_s * ramp_s;
+  return s;
+}
+
 struct RampFigures {
   int measured = 0;
   int present = 0;
@@ -106,7 +119,7 @@ TEST(EveryRevolution, ASpeedRampIsMeasuredRevolutionByRevolution) {
 }
 
 // A cut that starts on a ramp (5,000 and 10,000 rpm/s from 23,000 rpm, commanded at the ramp's
-// middle): the lock comes 14 and 27 revolutions in, and the tooth events walk back to the first
+// middle): the lock comes 13 and 22 revolutions in, and the tooth events walk back to the first
 // revolution and measure forward from a fit to the CE1 events found on the way. Over 14 a
 // straight line was fitted (a parabola's end slope is noisy over few events): its period is the
 // span's middle one, 7 revolutions of the ramp ahead of the first (0.39 % off, 90 rpm). A
@@ -115,13 +128,7 @@ TEST(EveryRevolution, ASpeedRampIsMeasuredRevolutionByRevolution) {
 // (0.025 %, 0.036 %).
 TEST(EveryRevolution, ACutStartedOnARampIsBackFilledAtItsOwnSpeed) {
   for (const double rate : {5000.0, 10000.0}) {
-    sim::Scenario s = slot(50000.0, 0.3);
-    s.spindle.profile = sim::SpindleProfileKind::kRamp;
-    s.spindle.actual_rpm = 23000.0;
-    s.spindle.ramp_end_rpm = 23000.0 + rate * 0.5;
-    s.spindle.ramp_start_s = 0.0;
-    s.spindle.ramp_end_s = 0.5;
-    s.model.process.spindle_rpm = 23000.0 + rate * 0.25;
+    const sim::Scenario s = slot_on_a_ramp(0.3, 23000.0, rate, 0.5);
     const Recording r = test::record(s);
     Collector out;
     Pipeline p(test::monitor_for(s), out);
@@ -154,13 +161,7 @@ TEST(EveryRevolution, ACutStartedOnARampIsBackFilledAtItsOwnSpeed) {
 // takes three windows on one line of speed for a ramp: locked at 0.13 s, every revolution
 // measured from the first, each within 0.5 % of the spindle's speed (0.28 %).
 TEST(EveryRevolution, ASlowSpindleRampingFromTheStartIsMeasuredFromItsFirstRevolution) {
-  sim::Scenario s = slot(50000.0, 0.8);
-  s.spindle.profile = sim::SpindleProfileKind::kRamp;
-  s.spindle.actual_rpm = 10000.0;
-  s.spindle.ramp_end_rpm = 12400.0;
-  s.spindle.ramp_start_s = 0.0;
-  s.spindle.ramp_end_s = 0.6;
-  s.model.process.spindle_rpm = 11200.0;
+  const sim::Scenario s = slot_on_a_ramp(0.8, 10000.0, 4000.0, 0.6);
   const Recording r = test::record(s);
   Collector out;
   Pipeline p(test::monitor_for(s), out);
