@@ -20,6 +20,10 @@ constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model fol
 // the events' filter ran on to 16,500 rpm for 13,000, counting 8 turns the spindle did not make).
 constexpr double kEventSpeedDisagreement = 0.03;
 constexpr int kIdleToStop = 3;  // idle revolutions in a row: cutting has stopped
+// An in-plane channel whose synchronous range over the lock's windows is below this fraction of
+// the other's carries no cutting force (in a cut the two are within a factor of a few).
+constexpr double kFlatChannel = 0.02;
+constexpr const char* kNoDistinctEvents = "the synchronous average shows no distinct tooth events";
 // Past the low-pass, the stages after it take every stride-th sample, at no less than this rate
 // and no fewer samples per revolution (at the commanded speed) than the synchronous average has
 // bins: the filter leaves nothing above a few cut-offs (order 4 at 3.3 kHz: −74 dB at 27.8 kHz),
@@ -270,8 +274,8 @@ void Pipeline::hand_over(std::string_view why) {
 
 void Pipeline::finish() {
   flush_tail();
-  if (ever_locked_) {
-    return;
+  if (ever_locked_ || tracker_locked_) {
+    return;  // measured, or a kNoTemplate said why not
   }
   // Say why nothing was measured.
   const signal::TrackerTiming t = signal::tracker_timing(tracker_config(config_));
@@ -447,7 +451,7 @@ void Pipeline::on_tracker_update() {
   }
 }
 
-bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
+const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
   // The revolution-synchronous average, on the tracker's angle, over the two windows that
   // agreed on the lock (or template_revolutions around the lock's window centre, if more), and
   // the tooth events on it.
@@ -459,7 +463,7 @@ bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
   const std::int64_t hi =
       std::min(ring_.newest(), anchor + static_cast<std::int64_t>(std::ceil(half)));
   if (hi - lo < static_cast<std::int64_t>(phase_.samples_per_revolution())) {
-    return false;
+    return kNoDistinctEvents;
   }
   sync_.clear();
   resultant_.clear();
@@ -478,18 +482,38 @@ bool Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
   }
   sync_.end_revolution();
   resultant_.end_revolution();
+  // The tooth events are the in-plane resultant's: with one of its channels dead (an amplifier
+  // off, a cable out) they would be the other channel's zero crossings, and every speed, period
+  // and α from them wrong (a real cut with Fy zeroed: 12,400-17,800 rpm stated for 10,422).
+  // The synchronous average's range: the cut's periodic force, the noise averaged down (a dead
+  // channel's amplifier noise alone would be a sizeable share of a micro-cut's raw range).
+  std::array<double, 2> range_N{};
+  for (int c = 0; c < 2; ++c) {
+    sync_.average(c, template_average_);
+    const auto [lowest, highest] =
+        std::minmax_element(template_average_.begin(), template_average_.end());
+    range_N[static_cast<std::size_t>(c)] = *highest - *lowest;
+  }
+  if (range_N[1] < kFlatChannel * range_N[0]) {
+    return "fy carries no cutting force (its synchronous range is below 2 % of fx's): the tooth "
+           "events need both in-plane channels";
+  }
+  if (range_N[0] < kFlatChannel * range_N[1]) {
+    return "fx carries no cutting force (its synchronous range is below 2 % of fy's): the tooth "
+           "events need both in-plane channels";
+  }
   resultant_.average(0, template_average_);
   out = find_tooth_event_template(template_average_, config_.model.tool.flutes, pauses_expected_);
-  return out.valid;
+  return out.valid ? nullptr : kNoDistinctEvents;
 }
 
 void Pipeline::start_events() {
+  tracker_locked_ = true;
   const signal::SpindleEstimate& e = tracker_.estimate();
   const std::int64_t anchor = stream_start_ + e.center_sample * decimation_;
   ToothEventTemplate tmpl;
-  if (!build_template(anchor, tmpl)) {
-    event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm,
-          "the synchronous average shows no distinct tooth events");
+  if (const char* why = build_template(anchor, tmpl); why != nullptr) {
+    event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm, why);
     return;
   }
   if (config_.lockstep) {

@@ -229,7 +229,8 @@ class Pipeline {
   /// The tooth events' speed (rpm) over the revolution holding measuring sample n, 0 if none of
   /// the last revolutions since the lock holds it.
   [[nodiscard]] double events_rpm_at(double n) const;
-  bool build_template(std::int64_t anchor, ToothEventTemplate& out);
+  /// The tooth-event template at a lock; nullptr, or why there is none (a literal).
+  const char* build_template(std::int64_t anchor, ToothEventTemplate& out);
   void on_revolution(const RevolutionEvents& events);
   /// The lockstep model follows the spindle speed (rebuilt when it moved by more than 0.2 %).
   void follow_speed(double spindle_hz);
@@ -277,7 +278,8 @@ class Pipeline {
   std::int64_t idle_revolutions_ = 0;
   bool idle_ = false;  // the last revolution had no cutting force
   int idle_streak_ = 0;
-  bool ever_locked_ = false;
+  bool ever_locked_ = false;     // the tooth events started at least once
+  bool tracker_locked_ = false;  // the tracker locked at least once (kNoTemplate said the rest)
   std::int64_t inconsistent_windows_ = 0;  // cutting windows that did not agree, since a lock
   double cutting_revolutions_ = 0.0;
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -634,6 +635,33 @@ TEST(EveryRevolution, ToothEventsLostOnTheirOwnAreSaid) {
   }
   EXPECT_LE(after, 5);
   EXPECT_NE(p.status().state, "measuring");
+}
+
+// A dead in-plane channel (an amplifier off, a cable out: Fy exactly 0, or its amplifier's noise
+// alone). The tracker still hears the cut on Fx and locks, but the tooth events are the in-plane
+// resultant's valleys: on Fx² alone they are Fx's zero crossings, and a real cut (PHM 2010 cut
+// 315 with Fy zeroed) stated 20 revolutions of ~17 turned, at 12,400-17,800 rpm for 10,422. The
+// lock's synchronous average shows the channel carries no cutting force: no events, said why.
+TEST(EveryRevolution, AnInPlaneChannelWithoutCuttingForceIsSaidAndNothingMeasuredOnIt) {
+  const sim::Scenario s = slot(50000.0, 0.5);
+  for (const bool noisy : {false, true}) {
+    Recording r = test::record(s);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> amplifier_noise(0.0, 0.015);
+    for (double& fy : r.fy) {
+      fy = noisy ? amplifier_noise(rng) : 0.0;
+    }
+    Collector out;
+    Pipeline p(test::monitor_for(s), out);
+    test::replay(p, r, 1000);
+    const PipelineEvent* refused = out.first(PipelineEventKind::kNoTemplate);
+    ASSERT_NE(refused, nullptr) << noisy;
+    EXPECT_EQ(std::string(refused->detail).rfind("fy carries no cutting force", 0), 0u)
+        << refused->detail;
+    EXPECT_TRUE(out.revolutions.empty()) << noisy;
+    EXPECT_EQ(out.count(PipelineEventKind::kNoSteadySignal), 0) << noisy;
+    EXPECT_NEAR(refused->value, 25252.0, 0.002 * 25252.0);  // the tracker's lock on Fx
+  }
 }
 
 /// The 6-flute cut above at 333.3 kHz with a narrow valley search (0.2 pitch), the spindle
