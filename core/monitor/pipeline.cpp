@@ -31,6 +31,13 @@ constexpr const char* kNoDistinctEvents = "the synchronous average shows no dist
 // fits) stays as well filled. A 333.3 kHz cut at 25,000 rpm measures at 111.1 kHz.
 constexpr double kMeasuringRate_hz = 50000.0;
 
+/// The first sample of a checked block with `flag` (its first sample if none has).
+std::int64_t first_flagged(const CheckedBlock& c, SampleFlag flag) {
+  const auto at = std::find_if(c.flags.begin(), c.flags.end(),
+                               [flag](std::uint8_t f) { return (f & flag) != 0; });
+  return c.first_sample + (at == c.flags.end() ? 0 : at - c.flags.begin());
+}
+
 InputCheckConfig input_config(const MonitorConfig& c) {
   InputCheckConfig i;
   i.sample_rate_hz = c.sample_rate_hz;
@@ -239,11 +246,11 @@ bool Pipeline::process(const SampleBlock& block) {
   const std::int64_t nonfinite = c.nonfinite_samples;
   const std::int64_t saturated = c.saturated_samples;
   if (nonfinite > 0) {
-    event(PipelineEventKind::kNonFinite, c.first_sample, nonfinite, 0.0,
+    event(PipelineEventKind::kNonFinite, first_flagged(c, kFlagNonFinite), nonfinite, 0.0,
           "replaced by the channel's last good value", block.seq);
   }
   if (saturated > 0) {
-    event(PipelineEventKind::kSaturated, c.first_sample, saturated, 0.0,
+    event(PipelineEventKind::kSaturated, first_flagged(c, kFlagSaturated), saturated, 0.0,
           "at or beyond the charge amplifier's range", block.seq);
   }
 

@@ -400,8 +400,8 @@ TEST(Pipeline, MeasuredRmsIsTheResultantsInNewtons) {
 TEST(Pipeline, BadSamplesGapsAndBadBlocksAreCountedAndSurvived) {
   const sim::Scenario s = cut_at_50khz(true);
   Recording r = record(s);
-  r.fx[25000] = std::numeric_limits<double>::quiet_NaN();
-  r.fy[35000] = std::numeric_limits<double>::infinity();
+  r.fx[25437] = std::numeric_limits<double>::quiet_NaN();
+  r.fy[35612] = std::numeric_limits<double>::infinity();
   MonitorConfig c = monitor_for(s);
   c.saturation_N = {1.5, 1.5, 1.5};  // the largest forces hit this "range"
   Collector out;
@@ -428,6 +428,14 @@ TEST(Pipeline, BadSamplesGapsAndBadBlocksAreCountedAndSurvived) {
   EXPECT_EQ(out.count(PipelineEventKind::kBlockRejected), 2);
   EXPECT_EQ(out.count(PipelineEventKind::kGap), 3);
   EXPECT_EQ(out.count(PipelineEventKind::kNonFinite), 2);
+  // Each at its own sample, not its block's first (sample 25,000 had been named for 25,437).
+  std::vector<std::int64_t> nonfinite_at;
+  for (const auto& e : out.events) {
+    if (e.kind == PipelineEventKind::kNonFinite) {
+      nonfinite_at.push_back(e.sample);
+    }
+  }
+  EXPECT_EQ(nonfinite_at, (std::vector<std::int64_t>{25437, 35612}));
   // Short gaps are bridged: the spindle kept its lock through all of them.
   EXPECT_EQ(out.count(PipelineEventKind::kLockAcquired), 1);
   EXPECT_EQ(out.count(PipelineEventKind::kLockLost), 0);
