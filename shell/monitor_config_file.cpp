@@ -104,10 +104,15 @@ void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& sou
   if (!(source_hz > 0.0) || !config.json.is_object()) {
     return;
   }
+  if (config.json.contains("sample_rate_hz") && !(config_hz > 0.0)) {
+    return;  // not a rate: parse_monitor_config() names what is wrong with it
+  }
   if (config_hz > 0.0 && source.rate_stated() &&
       std::fabs(source_hz - config_hz) > 1e-3 * config_hz) {
-    spdlog::warn("{}: the recording states {:.6g} Hz, {} says {:.6g} Hz; using the recording's",
-                 input, source_hz, config.name, config_hz);
+    spdlog::warn(
+        "{}: the recording's rate is {:.6g} Hz (stated, or its time column's steps), {} "
+        "says {:.6g} Hz; using the recording's",
+        input, source_hz, config.name, config_hz);
   }
   if (config_hz <= 0.0 || source.rate_stated()) {
     config.json["sample_rate_hz"] = source_hz;

@@ -1,7 +1,10 @@
 #include "shell/recording_source.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <array>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -18,6 +21,11 @@ namespace millwatch::shell {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Relative: a rate against the time column's, beyond which they are not the same rate (48 kHz
+// for 50, 100 for 50); within it the stated or configured rate is the exact one where the
+// printed times are rounded.
+constexpr double kRateTolerance = 1e-3;
 
 std::string hz(double rate_hz) {
   char text[32];
@@ -40,8 +48,24 @@ class TextSource : public RecordingSource {
                                                        : RecordingFormat::kDelimited;
     rate_stated_ = layout.rate_stated;
     double rate = layout.sample_rate_hz;
-    if (!rate_stated_ && o.config_rate_hz > 0.0) {
-      rate = o.config_rate_hz;
+    // A rate stated or configured that the time column belies (by more than its rounding can)
+    // would drop or misplace every sample: the time column's steps are the samples' own.
+    const auto belied = [&](double rate_hz) {
+      return layout.time_rate_hz > 0.0 &&
+             std::fabs(rate_hz / layout.time_rate_hz - 1.0) > kRateTolerance;
+    };
+    if (rate_stated_ && belied(rate)) {
+      spdlog::warn(
+          "{}: the file states {}, but its time column steps at {}; read at the time "
+          "column's",
+          path.string(), hz(rate), hz(layout.time_rate_hz));
+      rate = layout.time_rate_hz;
+    } else if (!rate_stated_ && o.config_rate_hz > 0.0) {
+      if (belied(o.config_rate_hz)) {
+        rate_stated_ = true;  // the time column's rate beats the configuration's (said there)
+      } else {
+        rate = o.config_rate_hz;  // exact, where the printed times are rounded
+      }
     }
     if (!(rate > 0.0)) {
       throw std::runtime_error(path.string() + ": " +
@@ -56,7 +80,7 @@ class TextSource : public RecordingSource {
           " (t " + (layout.column[0] >= 0 ? layout.label[0] : std::string("from the row number")) +
           ", fx " + layout.label[1] + ", fy " + layout.label[2] + ", fz " + layout.label[3] + ")";
     }
-    if (rate_stated_) {
+    if (layout.rate_stated) {
       description_ += ", " + hz(layout.sample_rate_hz) + " stated";
     }
     reader_ = std::make_unique<CsvCutReader>(in_, layout, rate, o.on_bad);

@@ -54,9 +54,11 @@ class RecordingSource {
   /// What bad_records() counts: "lines", "events" or "samples".
   [[nodiscard]] const char* record_unit() const;
   /// The rate the recording is read at: the one it states, else the configuration's, else what
-  /// its time shows (LCM logs: the first block's).
+  /// its time shows (LCM logs: the first block's); a stated or configured rate that its time
+  /// column belies (beyond 0.1 %) gives way to the time column's.
   [[nodiscard]] double sample_rate_hz() const { return rate_hz_; }
-  /// The rate is stated by the file, and beats the configuration's.
+  /// The rate is the file's (stated, or its time column's against a configuration it belies),
+  /// and beats the configuration's.
   [[nodiscard]] bool rate_stated() const { return rate_stated_; }
 
  protected:

@@ -347,7 +347,8 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
   }
   std::vector<std::string_view> fields;
   if (map.empty() && first == kMillwatchHeader) {
-    l.sample_rate_hz = estimate_rate(in, l);  // millwatch's own CSV
+    l.time_rate_hz = estimate_rate(in, l);  // millwatch's own CSV
+    l.sample_rate_hz = l.time_rate_hz;
     return l;
   }
   const std::string_view opening =
@@ -423,8 +424,11 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
       }
     }
   }
-  if (l.column[0] >= 0 && !l.rate_stated) {
-    l.sample_rate_hz = estimate_rate(in, l);
+  if (l.column[0] >= 0) {
+    l.time_rate_hz = estimate_rate(in, l);
+    if (!l.rate_stated) {
+      l.sample_rate_hz = l.time_rate_hz;
+    }
   }
   return l;
 }

@@ -44,6 +44,7 @@ struct TextLayout {
   std::int64_t header_lines = 1;      ///< lines before the first sample
   double sample_rate_hz = 0.0;        ///< stated by the file or estimated from its time (0: none)
   bool rate_stated = false;           ///< stated (DynoWare's preamble), not estimated
+  double time_rate_hz = 0.0;          ///< estimated from the time column (0: none usable)
   std::vector<std::string> channels;  ///< the header's names
   std::vector<std::pair<std::string, std::string>> preamble;  ///< DynoWare's `key:` lines
 };

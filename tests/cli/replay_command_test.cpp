@@ -251,6 +251,39 @@ TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
   EXPECT_FALSE(fs::exists(dir / "s3.json"));  // no partial summary
 }
 
+// A sidecar whose sample rate the CSV's time column belies (100 kHz said, the times step at
+// 50 kHz) is read at the time column's rate, with a warning: before, every other sample was a
+// "gap" (0.5 s of a 1 s cut, 24,999 gaps and a sensor alert) and α moved. A rate that is no rate
+// is refused with the field named, as the daemon's check refuses it (replay had read over it).
+TEST(ReplayCommand, ARateTheTimeColumnBeliesGivesWayAndOneThatIsNoRateIsRefused) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const ReplayRun right = replay(csv.string(), dir / "right.json");
+  ASSERT_EQ(right.exit_code, 0) << right.log;
+  nlohmann::json sidecar = nlohmann::json::parse(std::ifstream(dir / "cut.json"));
+  sidecar["sample_rate_hz"] = 100000.0;
+  std::ofstream(dir / "fast.json") << sidecar.dump();
+  fs::copy_file(csv, dir / "fast.csv");
+  const ReplayRun fast = replay((dir / "fast.csv").string(), dir / "fast_summary.json");
+  ASSERT_EQ(fast.exit_code, 0) << fast.log;
+  EXPECT_NE(fast.log.find("the recording's rate is 50000 Hz (stated, or its time column's steps)"),
+            std::string::npos)
+      << fast.log;
+  EXPECT_NE(fast.log.find("fast.json says 100000 Hz; using the recording's"), std::string::npos)
+      << fast.log;
+  EXPECT_EQ(fast.summary["samples"], right.summary["samples"]);
+  EXPECT_EQ(fast.summary["dropped_samples"], 0);
+  EXPECT_EQ(fast.summary["alpha_deg"]["mean"], right.summary["alpha_deg"]["mean"]);
+  for (const char* bad : {"\"fifty\"", "0", "null"}) {
+    sidecar["sample_rate_hz"] = nlohmann::json::parse(bad);
+    std::ofstream(dir / "bad.json") << sidecar.dump();
+    fs::copy_file(csv, dir / "bad.csv", fs::copy_options::overwrite_existing);
+    const ReplayRun r = replay((dir / "bad.csv").string(), dir / "bad_summary.json");
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_NE(r.log.find("bad.json: sample_rate_hz: "), std::string::npos) << bad << r.log;
+  }
+}
+
 /// The simulated cut's raw blocks in an LCM log, as lcm-logger records them.
 fs::path write_log(const fs::path& dir, double duration_s) {
   sim::Scenario s;

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -15,6 +17,8 @@
 #include <vector>
 
 #include "shell/csv_cut_reader.hpp"
+#include "shell/recording_source.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -94,6 +98,23 @@ TEST(TextLayout, DynoWareExportIsReadByContentWithItsRateAndChannels) {
   EXPECT_EQ(r.fx[7], 7.0);
   EXPECT_EQ(r.fy[7], -7.0);
   EXPECT_EQ(r.fz[7], 14.0);
+}
+
+// A preamble whose rate the Time column belies (20 kHz stated, the times step at 10 kHz) is read
+// at the Time column's: at the stated rate every sample was a block of its own, "older than
+// expected", and all but every other one rejected.
+TEST(TextLayout, DynoWareRateTheTimeColumnBeliesGivesWayToIt) {
+  std::string text = dynoware();
+  const std::string stated = "Sampling rate [Hz]:,10000";
+  text.replace(text.find(stated), stated.size(), "Sampling rate [Hz]:,20000");
+  const std::filesystem::path path = test::fresh_temp_dir() / "belied.txt";
+  std::ofstream(path) << text;
+  const auto source = open_recording(path, RecordingOptions{});
+  EXPECT_NEAR(source->sample_rate_hz(), 10000.0, 1e-6);
+  EXPECT_TRUE(source->rate_stated());
+  const auto block = source->next(100);
+  ASSERT_TRUE(block.has_value());
+  EXPECT_EQ(block->fx_N.size(), 10u);  // one block: every sample where the rate puts it
 }
 
 TEST(TextLayout, DynoWareUnitsAreConvertedToNewtons) {
