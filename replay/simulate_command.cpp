@@ -1,5 +1,6 @@
 #include "replay/simulate_command.hpp"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <array>
@@ -137,20 +138,27 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
 
 int run_simulate(const SimulateOptions& o) {
   sim::Scenario scenario;
+  // The overrides go into the scenario before it is read, so that they are checked as the
+  // file's own values are (a duration beyond the limit, a ramp past the record's end).
+  std::string overridden;
   try {
-    scenario = sim::scenario_from_json(read_json_file(o.scenario_path));
+    nlohmann::json j = read_json_file(o.scenario_path);
+    if (j.is_object() && o.duration_s > 0.0) {
+      j["recording"]["duration_s"] = o.duration_s;
+      overridden += fmt::format(" --duration {}", o.duration_s);
+    }
+    if (j.is_object() && o.seed >= 0) {
+      j["recording"]["seed"] = o.seed;
+      overridden += fmt::format(" --seed {}", o.seed);
+    }
+    scenario = sim::scenario_from_json(j);
   } catch (const config::ConfigError& e) {
-    spdlog::error("{}: {}", o.scenario_path, e.what());
+    spdlog::error("{}{}: {}", o.scenario_path, overridden.empty() ? "" : " with" + overridden,
+                  e.what());
     return 2;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
-  }
-  if (o.duration_s > 0.0) {
-    scenario.duration_s = o.duration_s;
-  }
-  if (o.seed >= 0) {
-    scenario.seed = static_cast<std::uint64_t>(o.seed);
   }
   const std::filesystem::path csv_path = o.output_csv;
   std::filesystem::path sidecar_path = csv_path;

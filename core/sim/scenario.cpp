@@ -76,6 +76,11 @@ Scenario scenario_from_json(const nlohmann::json& j) {
     s.duration_s = rec.number("duration_s", s.duration_s, positive(3600.0, "s"));
     s.seed = static_cast<std::uint64_t>(rec.integer64("seed", 1, 0, INT64_MAX));
     rec.finish();
+    if (s.duration_s * s.sample_rate_hz < 1.0) {
+      config::fail("recording.duration_s", "value " + config::format_number(s.duration_s) +
+                                               " s is shorter than one sample at " +
+                                               config::format_number(s.sample_rate_hz) + " Hz");
+    }
   }
   s.spindle = read_spindle(r.object("spindle"), s.duration_s);
   {

@@ -79,8 +79,18 @@ TEST(SimulateCommand, BadScenarioFailsCleanlyWithoutPartialOutput) {
   struct Case {
     std::string json;
     std::string expected;
+    std::string options = "";  // on the command line
   };
   const Case cases[] = {
+      // The command line's overrides are checked as the file's values are (a --duration of 1e9
+      // had died of bad_alloc, 3601 s had run for minutes, 1e-9 s written a recording of no
+      // sample).
+      {"{}", "with --duration 1000000000: recording.duration_s: value 1000000000 is out of range",
+       "--duration 1e9"},
+      {"{}", "with --duration 3601: recording.duration_s: value 3601 is out of range (0, 3600] s",
+       "--duration 3601"},
+      {"{}", "recording.duration_s: value 1e-09 s is shorter than one sample at 50000 Hz",
+       "--duration 1e-9"},
       {R"({"model": {"tool": {"diameter_mm": -0.4}}})",
        "model.tool.diameter_mm: value -0.4 is out of range (0, 50] mm"},
       {R"({"model": {"tool": {"flutes": 0}}})",
@@ -97,7 +107,7 @@ TEST(SimulateCommand, BadScenarioFailsCleanlyWithoutPartialOutput) {
     const fs::path scenario = write_file(dir / ("bad" + std::to_string(i) + ".json"), c.json);
     const fs::path csv = dir / ("out" + std::to_string(i) + ".csv");
     const auto r = test::run_command(test::millwatch_cli() + " simulate " + scenario.string() +
-                                     " -o " + csv.string());
+                                     " -o " + csv.string() + " " + c.options);
     EXPECT_NE(r.exit_code, 0) << c.json;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(scenario.filename().string()), std::string::npos) << r.output;
