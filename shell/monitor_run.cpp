@@ -204,15 +204,21 @@ void MonitorRun::finish() {
       }
       nlohmann::json j = identify::to_json(window);
       constexpr double kDeg = 180.0 / std::numbers::pi;
-      j["fit"]["window_scatter"] = {{"windows", spread.windows},
-                                    {"rho_std_um", spread.rho_um},
-                                    {"gamma_std_deg", spread.gamma_rad * kDeg},
-                                    {"r_minus_r_ce1_std_um", spread.radius_from_ce1_um},
-                                    {"widened", how.by_scatter},
-                                    {"rho_drift_um", spread.rho_drift_um},
-                                    {"gamma_drift_deg", spread.gamma_drift_rad * kDeg},
-                                    {"radius_drift_um", spread.radius_drift_um},
-                                    {"widened_by_drift", how.by_drift}};
+      // Too few windows state no scatter (null, not 0: "no scatter" would read as "steady").
+      using Scatter = identify::WindowScatter;
+      const bool scatters = spread.windows >= Scatter::kLeastWindows;
+      const bool drifts = spread.windows >= Scatter::kLeastDriftWindows;
+      const auto known = [](bool k, const nlohmann::json& v) { return k ? v : nlohmann::json(); };
+      j["fit"]["window_scatter"] = {
+          {"windows", spread.windows},
+          {"rho_std_um", known(scatters, spread.rho_um)},
+          {"gamma_std_deg", known(scatters, spread.gamma_rad * kDeg)},
+          {"r_minus_r_ce1_std_um", known(scatters, spread.radius_from_ce1_um)},
+          {"widened", how.by_scatter},
+          {"rho_drift_um", known(drifts, spread.rho_drift_um)},
+          {"gamma_drift_deg", known(drifts, spread.gamma_drift_rad * kDeg)},
+          {"radius_drift_um", known(drifts, spread.radius_drift_um)},
+          {"widened_by_drift", how.by_drift}};
       j["fit"]["windows_fitted"] = identifier_->fitted();
       j["fit"]["windows_dropped"] = identifier_->superseded();  // live, behind the windows
       j["fit"]["results_late"] = identifier_->late();           // live, taken after they were due
