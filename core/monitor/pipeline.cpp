@@ -12,7 +12,13 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr int kRingChannels = 4;  // fx, fy, fz, Fx² + Fy²
 constexpr int kDetectChannel = 3;
-constexpr double kMaxBridgedGap_s = 0.05;    // shorter gaps keep the lock
+constexpr double kMaxBridgedGap_s = 0.05;  // shorter gaps keep the lock
+// Gaps of at most a quarter of the low-pass's cut-off period (at least a sample) are filled on
+// the line between their neighbours: a tooth harmonic at the cut-off moves by under 15 % of its
+// amplitude there, the tooth-passing frequency by under 1 %.
+constexpr double kFilledGapCutoffs = 0.25;
+constexpr const char* kFilledGap =
+    "filled on the line between its neighbours (shorter than a quarter of the low-pass's period)";
 constexpr double kSlowestFraction = 0.4;     // of the commanded speed: longest revolution analysed
 constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model follows the speed
 // Relative: the tooth events' revolution speed against a consistent tracker window's, beyond
@@ -165,6 +171,12 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
   alerts_ = AlertEngine(config_.alerts);
   tooth_delay_s_ = config_.filter_zero_phase ? 0.0 : filter_.group_delay_s(commanded_hz * flutes);
   max_bridged_gap_ = static_cast<std::int64_t>(kMaxBridgedGap_s * config_.sample_rate_hz);
+  max_filled_gap_ = std::max<std::int64_t>(
+      1, static_cast<std::int64_t>(kFilledGapCutoffs / config_.filter_cutoff_hz *
+                                   config_.sample_rate_hz));
+  for (auto& channel : gap_fill_) {
+    channel.assign(static_cast<std::size_t>(max_filled_gap_), 0.0);
+  }
 }
 
 void Pipeline::event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
@@ -234,8 +246,12 @@ bool Pipeline::process(const SampleBlock& block) {
     return false;
   }
   if (c.gap_samples > 0) {
-    event(PipelineEventKind::kGap, c.first_sample, c.gap_samples, 0.0, c.problem, block.seq);
-    if (c.gap_samples <= max_bridged_gap_ && last_sample_ >= 0) {
+    const bool fill = c.gap_samples <= max_filled_gap_ && last_sample_ >= 0 && !c.fx_N.empty();
+    event(PipelineEventKind::kGap, c.first_sample, c.gap_samples, 0.0,
+          fill ? kFilledGap : c.problem, block.seq);
+    if (fill) {
+      fill_gap(c);
+    } else if (c.gap_samples <= max_bridged_gap_ && last_sample_ >= 0) {
       bridge_gap(c.first_sample);
     } else {
       restart_stream(c.first_sample);
@@ -260,7 +276,30 @@ bool Pipeline::process(const SampleBlock& block) {
       [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
              const double* fz) { downstream_run(n, run, fx, fy, fz); });
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
+  if (count > 0) {
+    last_reading_ = {c.fx_N[count - 1], c.fy_N[count - 1], c.fz_N[count - 1]};
+  }
   return true;
+}
+
+void Pipeline::fill_gap(const CheckedBlock& c) {
+  // The few missing samples on the line from the last reading to the block's first, through
+  // the filters as if read: far below the low-pass's reach, where restarting the filters (a
+  // bridged gap) would leave milliseconds of their settling, and the tooth events with them.
+  const auto gap = static_cast<std::size_t>(c.gap_samples);
+  const std::array<double, 3> next = {c.fx_N[0], c.fy_N[0], c.fz_N[0]};
+  for (std::size_t k = 0; k < gap; ++k) {
+    const double w = static_cast<double>(k + 1) / static_cast<double>(gap + 1);
+    for (std::size_t a = 0; a < 3; ++a) {
+      gap_fill_[a][k] = last_reading_[a] + w * (next[a] - last_reading_[a]);
+    }
+  }
+  conditioner_.push_block(
+      c.first_sample - c.gap_samples, std::span(gap_fill_[0]).first(gap),
+      std::span(gap_fill_[1]).first(gap), std::span(gap_fill_[2]).first(gap),
+      [this](std::int64_t n) { return run_limit(n); },
+      [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
+             const double* fz) { downstream_run(n, run, fx, fy, fz); });
 }
 
 void Pipeline::flush_tail() {

@@ -195,6 +195,7 @@ class Pipeline {
  private:
   void restart_stream(std::int64_t first_sample);
   void bridge_gap(std::int64_t first_sample);
+  void fill_gap(const CheckedBlock& c);
   /// Processes the samples still held and checks the input since the last health check.
   void flush_tail();
   /// The number of the last revolution reported (a reload's successor numbers on).
@@ -297,6 +298,9 @@ class Pipeline {
   std::int64_t sync_revolutions_since_report_ = 0;
   std::int64_t next_health_check_ = 0;
   std::int64_t max_bridged_gap_ = 0;
+  std::int64_t max_filled_gap_ = 1;              // samples: filled by fill_gap()
+  std::array<std::vector<double>, 3> gap_fill_;  // its samples (max_filled_gap_ each)
+  std::array<double, 3> last_reading_{};         // the last checked sample (instrument frame)
   double tooth_delay_s_ = 0.0;
   RevolutionRecord record_;  // scratch for the revolution being analysed
   identify::Identifier* identifier_ = nullptr;
