@@ -205,6 +205,13 @@ int replay_one(const ReplayOptions& o) {
     std::printf("%s", summary_text(j).c_str());
   }
   std::fflush(stdout);
+  if (in_plane.samples() == 0 && source->bad_records() > 0) {
+    // Not a cut without cutting: a file this reader could not read (a column map past its
+    // columns, a trailing delimiter on every row).
+    spdlog::error("{}: no sample could be read: all {} {} were bad (the first are named above)",
+                  input.string(), source->bad_records(), source->record_unit());
+    return 2;
+  }
   return 0;
 }
 

@@ -76,6 +76,18 @@ void check_complete(const ColumnMap& m, const std::string& path) {
                                   "optional)");
     }
   }
+  // One column read as two quantities (fx=1,fy=1) would measure a cut that was not recorded.
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t k = i + 1; k < 4; ++k) {
+      const ColumnSpec& a = m.column[i];
+      const ColumnSpec& b = m.column[k];
+      if (a.given() && b.given() && a.index == b.index && a.source == b.source) {
+        throw std::invalid_argument(path + ": " + ColumnMap::kKeys[i] + " and " +
+                                    ColumnMap::kKeys[k] + " both read " + a.describe_source() +
+                                    " (each needs its own column)");
+      }
+    }
+  }
 }
 
 }  // namespace

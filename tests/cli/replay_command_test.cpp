@@ -165,6 +165,29 @@ TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
   EXPECT_GT(r.summary["revolutions"].get<int>(), 150);  // it kept measuring
 }
 
+// A file of which no row can be read (here a trailing comma on every row: five fields where the
+// header has four) is a failed replay, said as such; it had passed with exit code 0 and a
+// summary of 0 samples.
+TEST(ReplayCommand, AFileWithNoReadableRowFails) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  std::ifstream in(csv);
+  std::stringstream out;
+  std::string line;
+  std::getline(in, line);
+  out << line << '\n';
+  while (std::getline(in, line)) {
+    out << line << ",\n";
+  }
+  in.close();
+  std::ofstream(csv) << out.str();
+  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  EXPECT_EQ(r.exit_code, 2) << r.log;
+  EXPECT_NE(r.log.find("cut.csv: no sample could be read: all 50000 lines were bad"),
+            std::string::npos)
+      << r.log;
+}
+
 // A damaged time column: each bad time is reported by line and what is wrong with it, and its
 // row skipped like any bad row (a one-sample gap); the rest of the cut is measured. (A time of
 // 1e300 used to reach the pipeline as utime −2⁶³ and overflow in InputCheck under UBSan.)

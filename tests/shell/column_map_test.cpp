@@ -62,6 +62,13 @@ TEST(ColumnMap, ErrorsNameTheEntry) {
   EXPECT_EQ(error_of("fx"), "columns: \"fx\" is not key=column (e.g. t=Time,fx=Fx,fy=Fy,fz=Fz)");
   EXPECT_EQ(error_of(""), "columns: no columns named (e.g. t=Time,fx=Fx,fy=Fy,fz=Fz)");
   EXPECT_EQ(error_of("fx=1,fy=2,fz=*2"), "columns: fz: no column named");
+  // One column read as two quantities: a cut that was not recorded (Fy a copy of Fx).
+  EXPECT_EQ(error_of("fx=1,fy=1,fz=3"),
+            "columns: fx and fy both read 1 (each needs its own column)");
+  EXPECT_EQ(error_of("t=Time,fx=Fx,fy=Fy,fz=Time"),
+            "columns: t and fz both read Time (each needs its own column)");
+  EXPECT_EQ(error_of("fx=1,fy=1*2,fz=3"),
+            "columns: fx and fy both read 1 (each needs its own column)");
 }
 
 TEST(ColumnMap, JsonTextOrObject) {
