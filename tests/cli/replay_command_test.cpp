@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -38,6 +39,19 @@ nlohmann::json base_scenario() {
   return {{"recording", {{"sample_rate_hz", 50000.0}, {"duration_s", 1.0}, {"seed", 5}}},
           {"spindle", {{"actual_rpm", 25252.0}}},
           {"noise", {{"enabled", true}}}};
+}
+
+/// Rewrites a text file line by line: edit(line number from 1, line) gives the new line.
+void rewrite_lines(const fs::path& path,
+                   const std::function<std::string(int, const std::string&)>& edit) {
+  std::ifstream in(path);
+  std::stringstream out;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    out << edit(n, line) << '\n';
+  }
+  in.close();
+  std::ofstream(path) << out.str();
 }
 
 struct ReplayRun {
@@ -137,23 +151,15 @@ TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulate(dir, "cut", base_scenario());
   // Spoil lines 1001 (a word), 20001 (3 columns) and 30001 (NaN force) of the file.
-  std::ifstream in(csv);
-  std::stringstream out;
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
+  rewrite_lines(csv, [](int n, const std::string& line) -> std::string {
     if (n == 1001) {
-      line = "0.01998,abc,1,2";
-    } else if (n == 20001) {
-      line = "0.39998,1,2";
-    } else if (n == 30001) {
-      line = line.substr(0, line.find(',')) + ",nan,0,0";
+      return "0.01998,abc,1,2";
     }
-    out << line << '\n';
-  }
-  in.close();
-  std::ofstream(csv) << out.str();
+    if (n == 20001) {
+      return "0.39998,1,2";
+    }
+    return n == 30001 ? line.substr(0, line.find(',')) + ",nan,0,0" : line;
+  });
   const ReplayRun r = replay(csv.string(), dir / "summary.json");
   ASSERT_EQ(r.exit_code, 0) << r.log;
   EXPECT_NE(r.log.find(":1001: a force is not a number"), std::string::npos) << r.log;
@@ -171,16 +177,7 @@ TEST(ReplayCommand, BadCsvLinesAreReportedByLineAndCountedNotFatal) {
 TEST(ReplayCommand, AFileWithNoReadableRowFails) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path csv = simulate(dir, "cut", base_scenario());
-  std::ifstream in(csv);
-  std::stringstream out;
-  std::string line;
-  std::getline(in, line);
-  out << line << '\n';
-  while (std::getline(in, line)) {
-    out << line << ",\n";
-  }
-  in.close();
-  std::ofstream(csv) << out.str();
+  rewrite_lines(csv, [](int n, const std::string& line) { return n == 1 ? line : line + ","; });
   const ReplayRun r = replay(csv.string(), dir / "summary.json");
   EXPECT_EQ(r.exit_code, 2) << r.log;
   EXPECT_NE(r.log.find("cut.csv: no sample could be read: all 50000 lines were bad"),

@@ -245,7 +245,7 @@ TEST(MatCutReader, ErrorsNameTheVariable) {
             (dir / "other.mat").string() +
                 ": fx: A (2×2 double) is a matrix; name a column "
                 "(A(:,1)) or a row");
-  EXPECT_EQ(error_of(dir / "other.mat", "fx=A(:,3),fy=b,fz=b", 100.0),
+  EXPECT_EQ(error_of(dir / "other.mat", "fx=A(:,3),fy=b,fz=A(:,1)", 100.0),
             (dir / "other.mat").string() + ": fx: A(:,3): A (2×2 double) has 2 columns");
   EXPECT_EQ(error_of(dir / "other.mat", "fx=A(:,1),fy=A(:,2),fz=zz", 100.0),
             (dir / "other.mat").string() +
