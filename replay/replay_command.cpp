@@ -65,6 +65,11 @@ std::string progress_text(double fraction, double sample_time_s, double wall_s) 
 
 int replay_one(const ReplayOptions& o) {
   const fs::path input = o.inputs.front();
+  // The summary is written last: a folder that is not there must not cost the whole replay.
+  if (const fs::path folder = fs::path(o.summary).parent_path();
+      !o.summary.empty() && !folder.empty() && !fs::is_directory(folder)) {
+    throw std::runtime_error("--summary " + o.summary + ": no folder " + folder.string());
+  }
   const RecordingFormat format = detect_recording_format(input);
   const bool lcm_log = format == RecordingFormat::kLcmLog;
   // The configuration: the sidecar's cut under --config's overrides.

@@ -79,6 +79,14 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
     throw std::runtime_error(sidecar.string() + ": sidecar not found" + where +
                              " (describe the cut with --sidecar or --config)");
   }
+  if (sources.sidecar.empty() && fs::is_regular_file(sidecar) && fs::file_size(sidecar) == 0) {
+    // `millwatch replay cut.csv --json > cut.json`: the shell empties the default sidecar first.
+    throw std::runtime_error(sidecar.string() + ": empty, and read as " +
+                             sources.input.filename().string() +
+                             "'s sidecar (the default, beside it); was it the target of a "
+                             "--json redirection? Give --sidecar or --config" +
+                             " (or write the summary with --summary FILE)");
+  }
   const nlohmann::json side = read_json_file(sidecar);
   try {
     out.json = monitor::monitor_json_from_sidecar(side, file.monitor);

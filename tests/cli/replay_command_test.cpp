@@ -269,6 +269,21 @@ TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
             std::string::npos)
       << r.log;
   EXPECT_FALSE(fs::exists(dir / "s3.json"));  // no partial summary
+  // `replay cut.csv --json > cut.json`: the shell empties the default sidecar before replay
+  // reads it; said as such, not as a JSON syntax error at line 1.
+  std::ofstream(dir / "emptied.json").close();
+  fs::copy_file(csv, dir / "emptied.csv");
+  r = replay((dir / "emptied.csv").string(), dir / "s4.json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.log.find("emptied.json: empty, and read as emptied.csv's sidecar"), std::string::npos)
+      << r.log;
+  // A summary's folder that is not there fails before the replay, not after it.
+  const auto missing =
+      test::run_command(test::millwatch_cli() + " replay --no-identify " + csv.string() +
+                        " --summary " + (dir / "nowhere" / "s.json").string() + " 2>&1");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find(": no folder "), std::string::npos) << missing.output;
+  EXPECT_EQ(missing.output.find("spindle locked"), std::string::npos) << missing.output;
 }
 
 // A sidecar whose sample rate the CSV's time column belies (100 kHz said, the times step at
