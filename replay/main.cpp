@@ -7,8 +7,10 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <exception>
 #include <memory>
+#include <string>
 
 #include "replay/calibrate_command.hpp"
 #include "replay/diagnose_command.hpp"
@@ -21,6 +23,31 @@ namespace {
 
 // How a subcommand ends: an exception is logged as an error and the program exits with code 2;
 // a non-zero return exits with that code (CLI11 turns CLI::RuntimeError into the exit code).
+/// A number at least `lowest` (exclusive when `open`), said plainly: CLI11's PositiveNumber
+/// and NonNegativeNumber print their range to DBL_MAX, 309 digits.
+CLI::Validator number_from(double lowest, bool open) {
+  return CLI::Validator(
+      [lowest, open](std::string& text) -> std::string {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || !std::isfinite(v)) {
+          return "\"" + text + "\" is not a number";
+        }
+        if (open ? !(v > lowest) : !(v >= lowest)) {
+          return text + " is not a " + (open ? "positive" : "non-negative") + " number";
+        }
+        return {};
+      },
+      open ? "POSITIVE" : "NON-NEGATIVE");
+}
+const CLI::Validator kPositive = number_from(0.0, true);
+const CLI::Validator kNonNegative = number_from(0.0, false);
+
 template <class Body>
 void run_subcommand(Body&& body) {
   int rc = 0;
@@ -47,9 +74,8 @@ void add_simulate_command(CLI::App& app) {
                   "Output CSV; the sidecar is written beside it")
       ->required();
   cmd->add_option("--duration", options->duration_s, "Override the recording's duration (s)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", options->seed, "Override the noise seed")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kPositive);
+  cmd->add_option("--seed", options->seed, "Override the noise seed")->check(kNonNegative);
   cmd->add_option("--truth-json", options->truth_json,
                   "Where the truth (per revolution: speed, chip load, runout, wear) goes "
                   "(default: beside the CSV, CUT.truth.json)");
@@ -92,7 +118,7 @@ void add_replay_command(CLI::App& app) {
                 "No identification of runout and coefficients (the model in lockstep keeps the "
                 "configured parameters; faster)");
   cmd->add_option("--speed", o->speed, "Pace: k times real time (default: as fast as possible)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)");
   cmd->add_option("--publish", o->publish_url,
                   "Publish the results on LCM at this URL (e.g. udpm://239.255.76.67:7667?ttl=0)");
@@ -117,12 +143,12 @@ void add_publish_command(CLI::App& app) {
   cmd->add_option("--url", o->url, "LCM URL");
   cmd->add_option("--channel", o->channel, "Channel of the raw blocks");
   cmd->add_option("--speed", o->speed, "Pace: k times real time, 0 as fast as possible")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--block", o->block_samples,
                   "Samples per message (at most 2000 keeps it under 64 KiB)")
       ->check(CLI::Range(1, 2000));
   cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   cmd->add_option("--start-utime", o->start_utime_s, "Add this many seconds to every utime");
   cmd->callback([o] { run_subcommand([&o] { return run_publish(*o); }); });
 }

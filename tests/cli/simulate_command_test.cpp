@@ -120,6 +120,23 @@ TEST(SimulateCommand, BadScenarioFailsCleanlyWithoutPartialOutput) {
   }
 }
 
+// A number option that is not one says so in a line (CLI11's own check printed its range up to
+// DBL_MAX, 309 digits).
+TEST(SimulateCommand, ANumberOptionThatIsNoneSaysSoPlainly) {
+  const std::string scenario = (test::source_dir() / "config" / "demo.json").string();
+  const std::pair<const char*, const char*> cases[] = {
+      {"--duration 0", "--duration: 0 is not a positive number"},
+      {"--duration abc", "--duration: \"abc\" is not a number"},
+      {"--seed -3", "--seed: -3 is not a non-negative number"}};
+  for (const auto& [option, said] : cases) {
+    const auto r = test::run_command(test::millwatch_cli() + " simulate " + scenario + " " +
+                                     option + " -o /tmp/never.csv 2>&1");
+    EXPECT_NE(r.exit_code, 0) << option;
+    EXPECT_NE(r.output.find(said), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("17976931348623157"), std::string::npos) << r.output;
+  }
+}
+
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
   const auto r = test::run_command(test::millwatch_cli() + " simulate " +
                                    (test::source_dir() / "config" / "demo.json").string() +
