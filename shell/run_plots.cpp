@@ -284,11 +284,19 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     }
     write_file(abs / "spectrum.csv", data);
     add_png("spectrum.png");
+    // Welch's segments (Hann, half overlapping): what of the record they cover.
+    const std::size_t total = rec.raw()[0].size();
+    const auto segment = static_cast<std::size_t>(
+        f.size() > 1 ? std::llround(rec.raw_rate_hz() / f[1]) : static_cast<long long>(total));
+    const std::size_t segments =
+        segment > 0 && total >= segment ? 1 + (total - segment) / (segment / 2) : 0;
+    const std::size_t covered = segments > 0 ? segment + (segments - 1) * (segment / 2) : 0;
     script += fmt::format(
-        "set title \"{} — force spectrum ({} samples as recorded, {:.1f} Hz resolution)\"\n"
+        "set title \"{} — force spectrum ({} of the {} samples as recorded, in {} Hann "
+        "segment(s) of {}; {:.1f} Hz resolution)\"\n"
         "set xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
         "set format y '10^{{%L}}'\nset xrange [0:{}]\nset key bottom right\n",
-        head, rec.raw()[0].size(), f.size() > 1 ? f[1] : 0.0, num(f_max));
+        head, covered, total, segments, segment, f.size() > 1 ? f[1] : 0.0, num(f_max));
     if (tooth_hz > 0.0) {
       for (int k = 1; k * tooth_hz <= f_max; ++k) {
         script += fmt::format(
