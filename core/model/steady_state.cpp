@@ -643,6 +643,12 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
     if (gap >= 0.0) {
       uhi = u;
     }
+    // A law whose normal force falls with the chip (coefficients a fit tries on its way: G is
+    // then not convex, G' may be negative) sends the step out of the bracket, and it ran off to
+    // u = −1e293 (100 underflowing exponentials an element): bisect instead.
+    if (!(next >= ulo && next <= uhi)) {
+      next = 0.5 * (ulo + uhi);
+    }
     u = next;
   }
   d.h_um = std::exp(u);

@@ -437,10 +437,11 @@ TEST(ReplayFormats, CampaignOfThePhmWindowsShowsTheForcesRisingWithWear) {
   // The per-cut summaries are there too, and the table on stdout has a row per cut.
   EXPECT_EQ(read_json(dir / "summaries" / "c1_cut158_window.json")["revolutions"],
             std::stoi(cut[1][column("revolutions")]));
-  // Two identification windows (0.1 s) state no scatter between windows: null, not 0.
+  // Three identification windows (0.1 s, fewer than 4) state no scatter between windows: null, not
+  // 0.
   const auto spread =
       read_json(dir / "summaries" / "c1_cut315_window.json")["fit"]["window_scatter"];
-  EXPECT_EQ(spread["windows"], 2) << spread.dump();
+  EXPECT_EQ(spread["windows"], 3) << spread.dump();
   EXPECT_TRUE(spread["rho_std_um"].is_null()) << spread.dump();
   EXPECT_TRUE(spread["rho_drift_um"].is_null()) << spread.dump();
   EXPECT_EQ(lines_of(r.output).size(), 4u) << r.output;

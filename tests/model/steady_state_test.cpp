@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cfenv>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -941,6 +942,38 @@ TEST(SteadyState, DeflectionTakesTheSmallestRootToRoundingForEachLaw) {
       EXPECT_GT(near_h_min, 0);  // F_n falls at h_min: balances just above it exist
     }
   }
+}
+
+// A law whose normal force falls with the chip — coefficients a fit tries on its way (PHM cut
+// 1's diagnosis) — makes the balance G(h) = h + F_n(h)/k − h_r non-convex, with G' < 0: Halley's
+// step left the bracket and ran to u = ln h = −1e293, a hundred underflowing exponentials an
+// element (the diagnosis took 62 s, 24 s now). The step stays in the bracket: the chips are
+// finite, within [0, h_r], and nothing underflows.
+TEST(SteadyState, DeflectionStaysInItsBracketForAFallingNormalForce) {
+  ModelConfig c;
+  c.effects.helix_lag.enabled = false;
+  c.effects.accumulation.enabled = false;
+  c.effects.dynamometer.enabled = false;
+  c.material.law = ForceLawKind::kLinearEdge;
+  c.material.linear_edge.k_nc_N_per_mm2 = -40000.0;  // F_n falls 1.6 N per µm of chip
+  c.effects.deflection.stiffness_N_per_um = 0.05;
+  const int steps = 360;
+  SteadyStateWorkspace ws;
+  std::feclearexcept(FE_ALL_EXCEPT);
+  evaluate_steady_state(c, 25000.0, steps, ws);
+  EXPECT_FALSE(std::fetestexcept(FE_UNDERFLOW));
+  int cutting = 0;
+  for (int j = 0; j < 2; ++j) {
+    for (int b = 0; b < steps; ++b) {
+      const double hr = ws.rigid_chip_um(j, b);
+      const double h = ws.chip_um(j, b);
+      ASSERT_TRUE(std::isfinite(h)) << j << " " << b;
+      ASSERT_GE(h, 0.0);
+      ASSERT_LE(h, std::max(hr, 0.0) * (1.0 + 1e-12) + 1e-300) << j << " " << b;
+      cutting += hr > 0.0 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(cutting, 100);
 }
 
 // physics-notes: at 10 µm/tooth the rigid chips of the two flutes are 13.0 and 7.0 µm; the
