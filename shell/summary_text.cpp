@@ -118,6 +118,9 @@ std::string summary_text(const json& j) {
   }
   if (has_number(j, "delta_fy_N")) {
     s += fmt::format("  delta Fy      {:.3f} N", num(j, "delta_fy_N"));
+    if (has_number(j, "delta_fy_N_std")) {
+      s += fmt::format(" ± {:.3f}", num(j, "delta_fy_N_std"));  // over the revolutions
+    }
     const json& model = j.value("model", json::object());
     if (has_number(model, "delta_fy_N")) {
       s += fmt::format("   (model {:.3f} N)", num(model, "delta_fy_N"));

@@ -313,6 +313,7 @@ nlohmann::json RunSummary::to_json() const {
            {"tooth_period_s", periods},
            {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
            {"delta_fy_N", two_edges ? number_or_null(delta_fy_.mean()) : json(nullptr)},
+           {"delta_fy_N_std", two_edges ? number_or_null(delta_fy_.stddev()) : json(nullptr)},
            {"residual_rms_N", residual},
            {"model",
             {{"alpha_deg", two_edges ? number_or_null(model_alpha_.mean()) : json(nullptr)},
