@@ -207,6 +207,17 @@ nlohmann::json RunSummary::to_json() const {
              " turned while the tracker heard cutting (the others: before a lock, in gaps, or "
              "without their tooth events)");
   }
+  // More revolutions than the spindle turned: the tooth events counted features that are not
+  // the flutes' (each revolution's speed, periods and α with them).
+  if (status_.cutting_revolutions > 0.0 &&
+      static_cast<double>(revolutions_) > 1.1 * status_.cutting_revolutions + 2.0) {
+    warn("revolutions over-counted",
+         std::to_string(revolutions_) + " revolutions measured of about " +
+             std::to_string(std::llround(status_.cutting_revolutions)) +
+             " the spindle turned while the tracker heard cutting: the tooth events followed "
+             "features that are not the flutes' (a dead or swapped channel?); their speeds, "
+             "periods and α are not the cut's");
+  }
   if (status_.alert_held_revolutions > 0) {
     std::array<char, 384> text{};
     std::snprintf(

@@ -240,6 +240,33 @@ TEST(RunSummary, SpeedIsTheMeanOfTheMeasuredSpeedsAlone) {
   EXPECT_EQ(j["spindle_rpm_source"], "revolutions");
 }
 
+// More revolutions measured than the spindle turned while cutting is said: the tooth events
+// followed something else (PHM cut 315 with its Fy dead once stated 20 of ~17 with no word).
+TEST(RunSummary, SaysWhenMoreRevolutionsWereMeasuredThanTurned) {
+  const auto warned = [](int measured) {
+    MonitorConfig config;
+    RunSummary summary(config);
+    for (int i = 0; i < measured; ++i) {
+      RevolutionRecord r;
+      r.revolution = i;
+      r.spindle_rpm = 25000.0;
+      summary.add(r);
+    }
+    PipelineStatus status;
+    status.cutting_revolutions = 100.0;
+    summary.finish(status);
+    const nlohmann::json j = summary.to_json();
+    for (const auto& w : j["warnings"]) {
+      if (w["kind"] == "revolutions over-counted") {
+        return true;
+      }
+    }
+    return false;
+  };
+  EXPECT_FALSE(warned(101));
+  EXPECT_TRUE(warned(120));
+}
+
 // ΔFy comes with its spread over the revolutions (as α and the speed do): real cut 315 states
 // 3.951 N ± 1.450, which a bare 3.951 hid.
 TEST(RunSummary, DeltaFyComesWithItsSpread) {
