@@ -1293,16 +1293,25 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   last_bad_ = bad;
   last_samples_ = samples;
   last_gaps_ = c.gaps;
-  const bool trouble = fraction > config_.sensor_bad_fraction || new_gaps > 0;
+  const bool trouble = fraction > config_.sensor_bad_fraction || new_gaps > 0 || dead_channel_ >= 0;
   if (trouble && !sensor_.active) {
     sensor_.active = true;
     // The revolution the alert comes at: the last one reported (−1: none yet).
-    write_message(emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_,
-                       utime_us, fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
-                  "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
-                  "%.3f %%), %lld new gaps",
-                  percent(fraction), percent(config_.sensor_bad_fraction),
-                  static_cast<long long>(new_gaps));
+    Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
+                    fraction, config_.sensor_bad_fraction, "bad_sample_fraction");
+    if (dead_channel_ >= 0) {
+      write_message(a,
+                    "sensor trouble: %s carries no cutting force while %s does (a dead amplifier "
+                    "or cable?); %.3f %% of recent samples saturated or not finite, %lld new gaps",
+                    dead_channel_ == 0 ? "fx" : "fy", dead_channel_ == 0 ? "fy" : "fx",
+                    percent(fraction), static_cast<long long>(new_gaps));
+    } else {
+      write_message(a,
+                    "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
+                    "%.3f %%), %lld new gaps",
+                    percent(fraction), percent(config_.sensor_bad_fraction),
+                    static_cast<long long>(new_gaps));
+    }
   } else if (!trouble && sensor_.active && new_samples > 0) {
     sensor_.active = false;
     write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, last_revolution_, utime_us,

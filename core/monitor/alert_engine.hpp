@@ -223,6 +223,9 @@ class AlertEngine {
     examine(w);
     flush(sink);
   }
+  /// An in-plane channel that carries no cutting force while the other does (0 fx, 1 fy; -1:
+  /// none): sensor trouble from the next on_input() on, until it is -1 again.
+  void set_dead_channel(int channel) { dead_channel_ = channel; }
   /// Examines the input counters since the previous call.
   template <typename Sink>
   void on_input(const InputCounters& c, std::int64_t utime_us, Sink&& sink) {
@@ -457,6 +460,7 @@ class AlertEngine {
   int wear_coefficient_ = 0;
 
   std::int64_t last_bad_ = 0, last_samples_ = 0, last_gaps_ = 0;
+  int dead_channel_ = -1;
   std::array<Alert, 8> pending_{};
   int pending_count_ = 0;
 };

@@ -30,6 +30,12 @@ constexpr int kIdleToStop = 3;  // idle revolutions in a row: cutting has stoppe
 // the other's carries no cutting force (in a cut the two are within a factor of a few).
 constexpr double kFlatChannel = 0.02;
 constexpr const char* kNoDistinctEvents = "the synchronous average shows no distinct tooth events";
+constexpr const char* kDeadFx =
+    "fx carries no cutting force (its synchronous range is below 2 % of fy's): the tooth events "
+    "need both in-plane channels";
+constexpr const char* kDeadFy =
+    "fy carries no cutting force (its synchronous range is below 2 % of fx's): the tooth events "
+    "need both in-plane channels";
 // Past the low-pass, the stages after it take every stride-th sample, at no less than this rate
 // and no fewer samples per revolution (at the commanded speed) than the synchronous average has
 // bins: the filter leaves nothing above a few cut-offs (order 4 at 3.3 kHz: −74 dB at 27.8 kHz),
@@ -541,12 +547,10 @@ const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& ou
     range_N[static_cast<std::size_t>(c)] = *highest - *lowest;
   }
   if (range_N[1] < kFlatChannel * range_N[0]) {
-    return "fy carries no cutting force (its synchronous range is below 2 % of fx's): the tooth "
-           "events need both in-plane channels";
+    return kDeadFy;
   }
   if (range_N[0] < kFlatChannel * range_N[1]) {
-    return "fx carries no cutting force (its synchronous range is below 2 % of fy's): the tooth "
-           "events need both in-plane channels";
+    return kDeadFx;
   }
   resultant_.average(0, template_average_);
   out = find_tooth_event_template(template_average_, config_.model.tool.flutes, pauses_expected_);
@@ -558,7 +562,9 @@ void Pipeline::start_events() {
   const signal::SpindleEstimate& e = tracker_.estimate();
   const std::int64_t anchor = stream_start_ + e.center_sample * decimation_;
   ToothEventTemplate tmpl;
-  if (const char* why = build_template(anchor, tmpl); why != nullptr) {
+  const char* why = build_template(anchor, tmpl);
+  alerts_.set_dead_channel(why == kDeadFx ? 0 : why == kDeadFy ? 1 : -1);
+  if (why != nullptr) {
     event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm, why);
     return;
   }

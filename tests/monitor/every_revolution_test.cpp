@@ -703,6 +703,15 @@ TEST(EveryRevolution, AnInPlaneChannelWithoutCuttingForceIsSaidAndNothingMeasure
     EXPECT_TRUE(out.revolutions.empty()) << noisy;
     EXPECT_EQ(out.count(PipelineEventKind::kNoSteadySignal), 0) << noisy;
     EXPECT_NEAR(refused->value, 25252.0, 0.002 * 25252.0);  // the tracker's lock on Fx
+    // Live, the operator hears it as sensor trouble, naming the channel.
+    bool alerted = false;
+    for (const Alert& a : out.alerts) {
+      alerted = alerted ||
+                (a.kind == AlertKind::kSensor && a.active &&
+                 std::string(a.message.data()).find("fy carries no cutting force while fx does") !=
+                     std::string::npos);
+    }
+    EXPECT_TRUE(alerted) << noisy;
   }
 }
 
