@@ -104,7 +104,7 @@ std::string_view to_string(PipelineEventKind kind) {
     case PipelineEventKind::kGap:
       return "gap in the samples";
     case PipelineEventKind::kNonFinite:
-      return "non-finite samples";
+      return "non-finite or implausible samples";
     case PipelineEventKind::kSaturated:
       return "saturated samples";
     case PipelineEventKind::kLockAcquired:
@@ -269,7 +269,7 @@ bool Pipeline::process(const SampleBlock& block) {
   const std::int64_t saturated = c.saturated_samples;
   if (nonfinite > 0) {
     event(PipelineEventKind::kNonFinite, first_flagged(c, kFlagNonFinite), nonfinite, 0.0,
-          "replaced by the channel's last good value", block.seq);
+          "NaN, infinite or beyond ±1e6 N: replaced by the channel's last good value", block.seq);
   }
   if (saturated > 0) {
     event(PipelineEventKind::kSaturated, first_flagged(c, kFlagSaturated), saturated, 0.0,
