@@ -179,14 +179,38 @@ std::string report_text(const nlohmann::json& j, const identify::CalibrationResu
                          ? fmt::format("{:.2f} %", 100.0 * c["unexplained_fraction"].get<double>())
                          : "—");
   }
-  s += "\n  coefficient           joint model fit          classic regression (mean force)\n";
+  // The classic regression gives linear-edge coefficients: beside the joint fit's where its law
+  // is that one, in a block of their own otherwise (a column of dashes said nothing of why).
+  bool side_by_side = false;
+  for (const identify::Estimate& e : r.joint.fit.coefficients) {
+    side_by_side =
+        side_by_side || (j.contains("coefficients") && j["coefficients"].contains(e.name) &&
+                         j["coefficients"][e.name]["classic"].is_number());
+  }
+  s += side_by_side
+           ? "\n  coefficient           joint model fit          classic regression (mean force)\n"
+           : "\n  coefficient           joint model fit\n";
   for (const identify::Estimate& e : r.joint.fit.coefficients) {  // in the law's order
     if (j.contains("coefficients") && j["coefficients"].contains(e.name)) {
       const std::string& name = e.name;
       const nlohmann::json& v = j["coefficients"][name];
-      s += fmt::format("  {:<20} {:>10} ± {:<9} {:>10} {}\n", name, num(v["value"], "{:.3f}"),
-                       num(v["std"], "{:.3f}"), num(v["classic"], "{:.3f}"),
-                       v["classic_std"].is_number() ? "± " + num(v["classic_std"], "{:.3f}") : "");
+      s += fmt::format("  {:<20} {:>10} ± ", name, num(v["value"], "{:.3f}"));
+      s += side_by_side ? fmt::format("{:<9}", num(v["std"], "{:.3f}")) : num(v["std"], "{:.3f}");
+      if (side_by_side) {
+        s +=
+            fmt::format(" {:>10} {}", num(v["classic"], "{:.3f}"),
+                        v["classic_std"].is_number() ? "± " + num(v["classic_std"], "{:.3f}") : "");
+      }
+      s += "\n";
+    }
+  }
+  const nlohmann::json& classic_fit = j["classic"];
+  if (!side_by_side && classic_fit.value("ok", false) && classic_fit.contains("coefficients")) {
+    s += "\n  classic regression (mean force), linear-edge coefficients (the joint fit's law is "
+         "another)\n";
+    for (const auto& [name, v] : classic_fit["coefficients"].items()) {
+      s += fmt::format("  {:<20} {:>10} ± {}\n", name, num(v["value"], "{:.3f}"),
+                       num(v["std"], "{:.3f}"));
     }
   }
   if (j.contains("runout")) {

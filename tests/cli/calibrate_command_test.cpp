@@ -3,6 +3,7 @@
 // noise, quantisation, actual speed 1 % low), calibrated, and the preset used by the replay and
 // accepted by the daemon; bad input refused naming what and where.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -244,6 +245,46 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
                           (dir / "gone.json").string() + ": material preset not found"),
             std::string::npos)
       << r.output;
+}
+
+}  // namespace
+}  // namespace millwatch
+
+namespace millwatch {
+namespace {
+
+// Under another law than the linear edge ([000]'s power law here) the classic regression's
+// linear-edge coefficients have no row of the joint fit's to stand beside: they come in a block
+// of their own, where the text had shown a column of dashes with no reason (--json had them).
+TEST(CalibrateCommandPowerLaw, PrintsTheClassicRegressionApart) {
+  const fs::path dir = test::fresh_temp_dir();
+  nlohmann::json preset =
+      read_json(test::source_dir() / "config" / "presets" / "cpti_masrani2023.json");
+  std::string calibrate = test::millwatch_cli();
+  calibrate += " calibrate --no-progress";
+  for (const int feed : {3, 5, 7}) {
+    preset.merge_patch({{"recording", {{"sample_rate_hz", 50000.0}, {"duration_s", 0.4}}},
+                        {"model", {{"process", {{"feed_per_tooth_um", feed}}}}}});
+    const fs::path scenario = dir / fmt::format("pl{}.scenario.json", feed);
+    const fs::path csv = dir / fmt::format("pl{}.csv", feed);
+    write_file(scenario, preset.dump());
+    const auto s = test::run_command(fmt::format("{} simulate {} -o {}", test::millwatch_cli(),
+                                                 scenario.string(), csv.string()));
+    ASSERT_EQ(s.exit_code, 0) << s.output;
+    calibrate += " ";
+    calibrate += csv.string();
+  }
+  calibrate += " 2>/dev/null";
+  const auto r = test::run_command(calibrate);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("power_law law"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  coefficient           joint model fit\n"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("classic regression (mean force), linear-edge coefficients"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("  k_tc_N_per_mm2 "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(" — "), std::string::npos) << r.output;
 }
 
 }  // namespace
