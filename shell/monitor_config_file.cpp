@@ -69,6 +69,11 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
     sidecar.replace_extension(".json");
     if (!fs::exists(sidecar) && !sources.config.empty()) {
       sidecar.clear();  // no sidecar beside the recording: --config describes the cut alone
+    } else if (!sources.config.empty() && fs::is_regular_file(sidecar) &&
+               fs::file_size(sidecar) == 0) {
+      // `replay cut.csv --config c.json --json > cut.json`: the shell emptied it just now.
+      spdlog::warn("{}: empty, left out (--config describes the cut)", sidecar.string());
+      sidecar.clear();
     }
   }
   out.json = file.monitor;
@@ -84,8 +89,8 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
     throw std::runtime_error(sidecar.string() + ": empty, and read as " +
                              sources.input.filename().string() +
                              "'s sidecar (the default, beside it); was it the target of a "
-                             "--json redirection? Give --sidecar or --config" +
-                             " (or write the summary with --summary FILE)");
+                             "--json redirection? Write the summary with --summary FILE, or "
+                             "describe the cut with --sidecar or --config");
   }
   const nlohmann::json side = read_json_file(sidecar);
   try {

@@ -22,11 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Relative: a rate against the time column's, beyond which they are not the same rate (48 kHz
-// for 50, 100 for 50); within it the stated or configured rate is the exact one where the
-// printed times are rounded.
-constexpr double kRateTolerance = 1e-3;
-
 std::string hz(double rate_hz) {
   char text[32];
   std::snprintf(text, sizeof text, "%.6g Hz", rate_hz);
@@ -48,12 +43,10 @@ class TextSource : public RecordingSource {
                                                        : RecordingFormat::kDelimited;
     rate_stated_ = layout.rate_stated;
     double rate = layout.sample_rate_hz;
-    // A rate stated or configured that the time column belies (by more than its rounding can)
-    // would drop or misplace every sample: the time column's steps are the samples' own.
-    const auto belied = [&](double rate_hz) {
-      return layout.time_rate_hz > 0.0 &&
-             std::fabs(rate_hz / layout.time_rate_hz - 1.0) > kRateTolerance;
-    };
+    // A rate stated or configured that the time column belies (one that puts a row of its
+    // leading run more than half a sample off) would drop or misplace samples all through the
+    // file: the time column's steps are the samples' own.
+    const auto belied = [&](double rate_hz) { return misplaces_rows(layout, rate_hz); };
     if (rate_stated_ && belied(rate)) {
       spdlog::warn(
           "{}: the file states {}, but its time column steps at {}; read at the time "
@@ -62,6 +55,7 @@ class TextSource : public RecordingSource {
       rate = layout.time_rate_hz;
     } else if (!rate_stated_ && o.config_rate_hz > 0.0) {
       if (belied(o.config_rate_hz)) {
+        rate = layout.time_rate_hz;
         rate_stated_ = true;  // the time column's rate beats the configuration's (said there)
       } else {
         rate = o.config_rate_hz;  // exact, where the printed times are rounded

@@ -16,6 +16,9 @@ namespace {
 constexpr std::string_view kMillwatchHeader = "t_s,fx_N,fy_N,fz_N";
 constexpr int kMaxPreambleLines = 200;
 constexpr int kRateRows = 2000;  // rows read ahead to estimate the rate from a time column
+// Rows without a gap from the start it takes for the time column to belie a stated or
+// configured rate (fewer: too little of the record to tell).
+constexpr std::size_t kLeastBeliefRows = 200;
 
 std::string lower(std::string_view s) {
   std::string out(s);
@@ -211,8 +214,11 @@ void read_dynoware(std::istream& in, const std::string& name, const std::string&
   }
 }
 
-/// Rate from the time column: the first rows read ahead, then `in` goes back.
-double estimate_rate(std::istream& in, const TextLayout& l) {
+/// Rate from the time column: the first rows read ahead, then `in` goes back. Also keeps, in
+/// l.lead_times_s, the leading run of the times without a gap (every step positive and under
+/// 1.9 medians: printed times rounded to half a step still count), and from it, where it is
+/// long enough to belie a rate, l.time_rate_hz.
+double estimate_rate(std::istream& in, TextLayout& l) {
   const std::streampos start = in.tellg();
   if (start < 0) {
     return 0.0;
@@ -244,6 +250,13 @@ double estimate_rate(std::istream& in, const TextLayout& l) {
   }
   std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
   const double median = dt[dt.size() / 2];
+  std::size_t run = 1;
+  while (run < t.size() && t[run] > t[run - 1] && t[run] - t[run - 1] < 1.9 * median) {
+    ++run;
+  }
+  l.lead_times_s.assign(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(run));
+  l.time_rate_hz =
+      run >= kLeastBeliefRows ? static_cast<double>(run - 1) / (t[run - 1] - t[0]) : 0.0;
   // Over the longest run of steady steps from the start: printed times are rounded.
   std::size_t k = 1;
   while (k < t.size() && t[k] - t[k - 1] > 0.5 * median && t[k] - t[k - 1] < 1.5 * median) {
@@ -347,8 +360,7 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
   }
   std::vector<std::string_view> fields;
   if (map.empty() && first == kMillwatchHeader) {
-    l.time_rate_hz = estimate_rate(in, l);  // millwatch's own CSV
-    l.sample_rate_hz = l.time_rate_hz;
+    l.sample_rate_hz = estimate_rate(in, l);  // millwatch's own CSV
     return l;
   }
   const std::string_view opening =
@@ -425,12 +437,27 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
     }
   }
   if (l.column[0] >= 0) {
-    l.time_rate_hz = estimate_rate(in, l);
+    const double estimated = estimate_rate(in, l);
     if (!l.rate_stated) {
-      l.sample_rate_hz = l.time_rate_hz;
+      l.sample_rate_hz = estimated;
     }
   }
   return l;
+}
+
+bool misplaces_rows(const TextLayout& l, double rate_hz) {
+  if (l.time_rate_hz <= 0.0 || !(rate_hz > 0.0)) {
+    return false;
+  }
+  // The reader's own test: a row more than half a sample off where the rate puts it opens a
+  // new block (a gap, or a block "older than expected").
+  const std::vector<double>& t = l.lead_times_s;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (std::fabs(t[i] - t[0] - static_cast<double>(i) / rate_hz) > 0.5 / rate_hz) {
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace millwatch::shell

@@ -40,12 +40,15 @@ struct TextLayout {
   std::array<double, 4> scale = {1.0, 1.0, 1.0, 1.0};
   /// How messages name the four quantities: `Fx (column 2)`.
   std::array<std::string, 4> label = {"t_s", "fx_N", "fy_N", "fz_N"};
-  int needed_columns = 4;             ///< a row with fewer is bad
-  std::int64_t header_lines = 1;      ///< lines before the first sample
-  double sample_rate_hz = 0.0;        ///< stated by the file or estimated from its time (0: none)
-  bool rate_stated = false;           ///< stated (DynoWare's preamble), not estimated
-  double time_rate_hz = 0.0;          ///< estimated from the time column (0: none usable)
-  std::vector<std::string> channels;  ///< the header's names
+  int needed_columns = 4;         ///< a row with fewer is bad
+  std::int64_t header_lines = 1;  ///< lines before the first sample
+  double sample_rate_hz = 0.0;    ///< stated by the file or estimated from its time (0: none)
+  bool rate_stated = false;       ///< stated (DynoWare's preamble), not estimated
+  /// The time column's rate over its leading run of rows without a gap (0: none, or fewer
+  /// than 200 rows), and those rows' times (s): what can belie a stated or configured rate.
+  double time_rate_hz = 0.0;
+  std::vector<double> lead_times_s;
+  std::vector<std::string> channels;                          ///< the header's names
   std::vector<std::pair<std::string, std::string>> preamble;  ///< DynoWare's `key:` lines
 };
 
@@ -53,6 +56,10 @@ struct TextLayout {
 /// @throws std::runtime_error "NAME:LINE: ..." for a text that is none of the above, a column
 /// the map names but the header lacks, a DynoWare export without its channel row.
 TextLayout read_text_layout(std::istream& in, const std::string& name, const ColumnMap& columns);
+
+/// Whether reading at `rate_hz` would put a row of the time column's leading run more than half
+/// a sample off its time (the reader would then break the run into gaps or reject its blocks).
+bool misplaces_rows(const TextLayout& l, double rate_hz);
 
 /// Splits a row at `delimiter` (' ': runs of blanks) into trimmed fields without quotes.
 void split_fields(std::string_view line, char delimiter, std::vector<std::string_view>& out);

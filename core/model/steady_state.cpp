@@ -608,7 +608,9 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
   auto converged = [&](double u_at, double h, double s, const ForceLaw::NormalSlope& fs) {
     d.h_um = h * (1.0 - s + 0.5 * s * s);
     d.log_h_um = u_at - s;
-    d.dh_dhr = 1.0 / (1.0 + fs.d_du_N / h * inv_k);  // 1/(1 + F_n'(h)/k), F_n' at the last step
+    // 1/(1 + F_n'(h)/k), F_n' at the last step; in [0, 1] for a law whose force grows with the
+    // chip, held there for one that falls (a fit's trial coefficients: bisected, above).
+    d.dh_dhr = std::clamp(1.0 / (1.0 + fs.d_du_N / h * inv_k), 0.0, 1.0);
     return d;
   };
   for (int it = 0; it < 100; ++it) {

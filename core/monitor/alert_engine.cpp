@@ -1294,8 +1294,13 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   last_samples_ = samples;
   last_gaps_ = c.gaps;
   const bool trouble = fraction > config_.sensor_bad_fraction || new_gaps > 0 || dead_channel_ >= 0;
-  if (trouble && !sensor_.active) {
+  // Raised, or raised already for bad samples or gaps when a dead channel is found: said again,
+  // naming the channel.
+  const bool newly_dead =
+      sensor_.active && dead_channel_ >= 0 && dead_channel_ != dead_channel_said_;
+  if ((trouble && !sensor_.active) || newly_dead) {
     sensor_.active = true;
+    dead_channel_said_ = dead_channel_;
     // The revolution the alert comes at: the last one reported (−1: none yet).
     Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
                     fraction, config_.sensor_bad_fraction, "bad_sample_fraction");
@@ -1314,6 +1319,7 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
     }
   } else if (!trouble && sensor_.active && new_samples > 0) {
     sensor_.active = false;
+    dead_channel_said_ = -1;
     write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, last_revolution_, utime_us,
                        fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
                   "sensor trouble cleared: %.3f %% bad samples, no new gaps", percent(fraction));

@@ -461,6 +461,7 @@ class AlertEngine {
 
   std::int64_t last_bad_ = 0, last_samples_ = 0, last_gaps_ = 0;
   int dead_channel_ = -1;
+  int dead_channel_said_ = -1;  // the dead channel the active sensor alert names (-1: none)
   std::array<Alert, 8> pending_{};
   int pending_count_ = 0;
 };

@@ -563,7 +563,9 @@ void Pipeline::start_events() {
   const std::int64_t anchor = stream_start_ + e.center_sample * decimation_;
   ToothEventTemplate tmpl;
   const char* why = build_template(anchor, tmpl);
-  alerts_.set_dead_channel(why == kDeadFx ? 0 : why == kDeadFy ? 1 : -1);
+  if (why == nullptr || why == kDeadFx || why == kDeadFy) {  // the channels were looked at
+    alerts_.set_dead_channel(why == kDeadFx ? 0 : why == kDeadFy ? 1 : -1);
+  }
   if (why != nullptr) {
     event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm, why);
     return;

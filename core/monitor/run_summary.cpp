@@ -38,6 +38,10 @@ RunSummary::RunSummary(const MonitorConfig& config)
     : config_(config), flutes_(config.model.tool.flutes) {}
 
 void RunSummary::add(const RevolutionRecord& r) {
+  if (revolutions_ == 0) {
+    first_revolution_utime_us_ = r.utime_us;
+  }
+  last_revolution_utime_us_ = r.utime_us;
   ++revolutions_;
   if (r.spindle_rpm > 0.0) {  // 0: not measured
     rpm_.add(r.spindle_rpm);
@@ -207,16 +211,23 @@ nlohmann::json RunSummary::to_json() const {
              " turned while the tracker heard cutting (the others: before a lock, in gaps, or "
              "without their tooth events)");
   }
-  // More revolutions than the spindle turned: the tooth events counted features that are not
-  // the flutes' (each revolution's speed, periods and α with them).
-  if (status_.cutting_revolutions > 0.0 &&
-      static_cast<double>(revolutions_) > 1.1 * status_.cutting_revolutions + 2.0) {
+  // More revolutions than the spindle turned between the first and the last (at the tracker's
+  // speed, not theirs): the tooth events counted features that are not the flutes' (each
+  // revolution's speed, periods and α with them). Not the turns heard while cutting: the events
+  // measure on through windows too weak for the tracker to call cutting.
+  const double turned =
+      tracker_rpm_.n > 0
+          ? 1.0 + 1e-6 *
+                      static_cast<double>(last_revolution_utime_us_ - first_revolution_utime_us_) *
+                      tracker_rpm_.mean() / 60.0
+          : 0.0;
+  if (turned > 0.0 && static_cast<double>(revolutions_) > 1.1 * turned + 2.0) {
     warn("revolutions over-counted",
-         std::to_string(revolutions_) + " revolutions measured of about " +
-             std::to_string(std::llround(status_.cutting_revolutions)) +
-             " the spindle turned while the tracker heard cutting: the tooth events followed "
-             "features that are not the flutes' (a dead or swapped channel?); their speeds, "
-             "periods and α are not the cut's");
+         std::to_string(revolutions_) + " revolutions measured where the spindle turned about " +
+             std::to_string(std::llround(turned)) +
+             " (at the tracker's speed): the tooth events followed features that are not the "
+             "flutes' (a dead or swapped channel?); their speeds, periods and α are not the "
+             "cut's");
   }
   if (status_.alert_held_revolutions > 0) {
     std::array<char, 384> text{};

@@ -77,6 +77,7 @@ class RunSummary {
   std::int64_t valid_ = 0;
   std::int64_t bounded_ = 0;
   Running rpm_, tracker_rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
+  std::int64_t first_revolution_utime_us_ = 0, last_revolution_utime_us_ = 0;
   std::array<Running, kMaxFlutes> period_{};
   std::array<std::array<Running, 3>, kMaxFlutes> peak_{};
   std::array<Running, kMaxFlutes> peak_resultant_{};

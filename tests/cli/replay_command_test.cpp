@@ -277,6 +277,12 @@ TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.log.find("emptied.json: empty, and read as emptied.csv's sidecar"), std::string::npos)
       << r.log;
+  // With --config describing the cut the emptied file is left out, as a missing one is.
+  std::ofstream(dir / "monitor.json") << R"({"monitor": {"sample_rate_hz": 50000}})";
+  r = replay((dir / "emptied.csv").string() + " --config " + (dir / "monitor.json").string(),
+             dir / "s5.json");
+  EXPECT_EQ(r.exit_code, 0) << r.log;
+  EXPECT_NE(r.log.find("emptied.json: empty, left out"), std::string::npos) << r.log;
   // A summary's folder that is not there fails before the replay, not after it.
   const auto missing =
       test::run_command(test::millwatch_cli() + " replay --no-identify " + csv.string() +

@@ -590,19 +590,25 @@ TEST(AlertEngine, RebaselineClearsChangeAlertsAndAcceptsTheNewLevel) {
   EXPECT_NEAR(run.engine.baseline().share[0], 0.08, 0.003);
 }
 
-TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
+/// An engine fed input counters alone, and the alerts it gave.
+struct InputRun {
   AlertEngine engine;
   std::vector<Alert> alerts;
-  auto sink = [&](const Alert& a) { alerts.push_back(a); };
   InputCounters c;
-  c.samples_in = 25000;
-  engine.on_input(c, 0, sink);
-  c.samples_in = 50000;
-  c.samples_flagged = 100;
-  c.gaps = 1;
-  engine.on_input(c, 500000, sink);
-  c.samples_in = 75000;
-  engine.on_input(c, 1000000, sink);
+  void input(std::int64_t samples_in, std::int64_t utime_us) {
+    c.samples_in = samples_in;
+    engine.on_input(c, utime_us, [this](const Alert& a) { alerts.push_back(a); });
+  }
+};
+
+TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
+  InputRun run;
+  run.input(25000, 0);
+  run.c.samples_flagged = 100;
+  run.c.gaps = 1;
+  run.input(50000, 500000);
+  run.input(75000, 1000000);
+  const std::vector<Alert>& alerts = run.alerts;
   ASSERT_EQ(alerts.size(), 2u);
   EXPECT_TRUE(alerts[0].active);
   // Before any revolution: not revolution 0, which is the first revolution's number.
@@ -612,6 +618,29 @@ TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
             std::string::npos)
       << alerts[0].message.data();
   EXPECT_FALSE(alerts[1].active);
+}
+
+// A dead in-plane channel is sensor trouble that names the channel: raised on its own, and said
+// again when the alert stood already for a gap (it had kept the gap's text alone); cleared once
+// the channel carries force again and the input is clean.
+TEST(AlertEngine, ADeadChannelIsSensorTroubleNamingIt) {
+  InputRun run;
+  run.c.gaps = 1;
+  run.input(25000, 0);  // raised for the gap
+  run.engine.set_dead_channel(1);
+  run.input(50000, 500000);   // said again, naming fy
+  run.input(75000, 1000000);  // nothing new
+  run.engine.set_dead_channel(-1);
+  run.input(100000, 1500000);  // cleared
+  const std::vector<Alert>& alerts = run.alerts;
+  ASSERT_EQ(alerts.size(), 3u);
+  EXPECT_TRUE(alerts[0].active);
+  EXPECT_EQ(std::string(alerts[0].message.data()).find("fy"), std::string::npos);
+  EXPECT_TRUE(alerts[1].active);
+  EXPECT_NE(std::string(alerts[1].message.data()).find("fy carries no cutting force while fx does"),
+            std::string::npos)
+      << alerts[1].message.data();
+  EXPECT_FALSE(alerts[2].active);
 }
 
 /// An identified window of a 2-flute cut (commanded 25,000 rpm, f_t as given): the radius

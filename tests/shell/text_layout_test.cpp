@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -107,14 +108,37 @@ TEST(TextLayout, DynoWareRateTheTimeColumnBeliesGivesWayToIt) {
   std::string text = dynoware();
   const std::string stated = "Sampling rate [Hz]:,10000";
   text.replace(text.find(stated), stated.size(), "Sampling rate [Hz]:,20000");
+  for (int i = 10; i < 300; ++i) {  // 300 rows: enough of the record to belie a rate
+    text += std::to_string(5.0 + i * 1e-4) + ",1,9,2,3\n";
+  }
   const std::filesystem::path path = test::fresh_temp_dir() / "belied.txt";
   std::ofstream(path) << text;
   const auto source = open_recording(path, RecordingOptions{});
   EXPECT_NEAR(source->sample_rate_hz(), 10000.0, 1e-6);
   EXPECT_TRUE(source->rate_stated());
-  const auto block = source->next(100);
+  const auto block = source->next(1000);
   ASSERT_TRUE(block.has_value());
-  EXPECT_EQ(block->fx_N.size(), 10u);  // one block: every sample where the rate puts it
+  EXPECT_EQ(block->fx_N.size(), 300u);  // one block: every sample where the rate puts it
+}
+
+// Times printed to 10 µs at 51.2 kHz (the PHM files' format at a standard DAQ rate): the steps
+// are 20 µs and now and then 10 or 30 µs. The stated rate puts every row within half a sample
+// of its time, so it stands; a median step (50 kHz) would have broken the file into gaps.
+TEST(TextLayout, RoundedTimesDoNotBelieTheirRate) {
+  std::string text =
+      "DynoWare,Version 2.5.1.2\nSampling rate [Hz]:,51200\nTime,Fx,Fy,Fz\ns,N,N,N\n";
+  for (int i = 0; i < 2000; ++i) {
+    char time[32];
+    std::snprintf(time, sizeof time, "%.5f", i / 51200.0);
+    text += std::string(time) + ",1,2,3\n";
+  }
+  const std::filesystem::path path = test::fresh_temp_dir() / "rounded.txt";
+  std::ofstream(path) << text;
+  const auto source = open_recording(path, RecordingOptions{});
+  EXPECT_DOUBLE_EQ(source->sample_rate_hz(), 51200.0);
+  const auto block = source->next(4000);
+  ASSERT_TRUE(block.has_value());
+  EXPECT_EQ(block->fx_N.size(), 2000u);
 }
 
 TEST(TextLayout, DynoWareUnitsAreConvertedToNewtons) {
