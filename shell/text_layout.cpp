@@ -152,6 +152,13 @@ void apply_map(TextLayout& l, const ColumnMap& map, const std::string& name,
                                spec.source + "\" for " + ColumnMap::kKeys[q] +
                                " (columns: " + join(l.channels) + ")");
     }
+    for (std::size_t earlier = 0; earlier < q; ++earlier) {
+      if (l.column[earlier] == c) {  // by name and by index, or two names of one column
+        throw std::runtime_error(name + ": columns: " + ColumnMap::kKeys[earlier] + " and " +
+                                 ColumnMap::kKeys[q] + " both read " + l.label[earlier] +
+                                 " (each needs its own column)");
+      }
+    }
     l.column[q] = c;
     l.scale[q] = spec.scale;
     const auto uc = static_cast<std::size_t>(c);

@@ -232,6 +232,11 @@ TEST(TextLayout, MillwatchCsvNeedsNoMapAndOtherTextsSayWhatToDo) {
       << e;
   EXPECT_EQ(error_of("Time,Fx,Fy,Fz\n", parse_column_map("t=Time,fx=Fx,fy=Fy,fz=Force_z")),
             "mem.csv:1: no column \"Force_z\" for fz (columns: Time, Fx, Fy, Fz)");
+  // One column by its name and by its index (or two spellings of its name): read twice.
+  EXPECT_EQ(error_of("Time,Fx,Fy,Fz\n", parse_column_map("t=Time,fx=Fx,fy=2,fz=Fz")),
+            "mem.csv: columns: fx and fy both read Fx (column 2) (each needs its own column)");
+  EXPECT_EQ(error_of("Time,Fx,Fy,Fz\n", parse_column_map("t=Time,fx=Fx,fy=fx,fz=Fz")),
+            "mem.csv: columns: fx and fy both read Fx (column 2) (each needs its own column)");
   EXPECT_EQ(error_of("1,2,3\n", parse_column_map("fx=a,fy=b,fz=c")),
             "mem.csv: no header row: name the columns by their index (fx=2, ...)");
   EXPECT_EQ(error_of(""), "mem.csv:1: the file is empty");
