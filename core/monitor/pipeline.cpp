@@ -277,10 +277,7 @@ bool Pipeline::process(const SampleBlock& block) {
   }
 
   const std::size_t count = c.fx_N.size();
-  conditioner_.push_block(
-      c.first_sample, c.fx_N, c.fy_N, c.fz_N, [this](std::int64_t n) { return run_limit(n); },
-      [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
-             const double* fz) { downstream_run(n, run, fx, fy, fz); });
+  condition(c.first_sample, c.fx_N, c.fy_N, c.fz_N);
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
   if (count > 0) {
     last_reading_ = {c.fx_N[count - 1], c.fy_N[count - 1], c.fz_N[count - 1]};
@@ -300,12 +297,17 @@ void Pipeline::fill_gap(const CheckedBlock& c) {
       gap_fill_[a][k] = last_reading_[a] + w * (next[a] - last_reading_[a]);
     }
   }
+  condition(c.first_sample - c.gap_samples, std::span(gap_fill_[0]).first(gap),
+            std::span(gap_fill_[1]).first(gap), std::span(gap_fill_[2]).first(gap));
+}
+
+void Pipeline::condition(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
+                         std::span<const double> fz) {
   conditioner_.push_block(
-      c.first_sample - c.gap_samples, std::span(gap_fill_[0]).first(gap),
-      std::span(gap_fill_[1]).first(gap), std::span(gap_fill_[2]).first(gap),
-      [this](std::int64_t n) { return run_limit(n); },
-      [this](std::int64_t n, std::size_t run, const double* fx, const double* fy,
-             const double* fz) { downstream_run(n, run, fx, fy, fz); });
+      first, fx, fy, fz, [this](std::int64_t n) { return run_limit(n); },
+      [this](std::int64_t n, std::size_t run, const double* x, const double* y, const double* z) {
+        downstream_run(n, run, x, y, z);
+      });
 }
 
 void Pipeline::flush_tail() {

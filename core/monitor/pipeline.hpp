@@ -20,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -196,6 +197,9 @@ class Pipeline {
   void restart_stream(std::int64_t first_sample);
   void bridge_gap(std::int64_t first_sample);
   void fill_gap(const CheckedBlock& c);
+  /// Checked samples (instrument frame) from sample `first` through the conditioner and on.
+  void condition(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
+                 std::span<const double> fz);
   /// Processes the samples still held and checks the input since the last health check.
   void flush_tail();
   /// The number of the last revolution reported (a reload's successor numbers on).
