@@ -67,13 +67,20 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
   if (sidecar.empty() && detect_recording_format(sources.input) != RecordingFormat::kLcmLog) {
     sidecar = sources.input;
     sidecar.replace_extension(".json");
+    // `replay cut.csv --json > cut.json`: the shell empties the default sidecar before replay
+    // reads it.
+    const bool emptied = fs::is_regular_file(sidecar) && fs::file_size(sidecar) == 0;
     if (!fs::exists(sidecar) && !sources.config.empty()) {
       sidecar.clear();  // no sidecar beside the recording: --config describes the cut alone
-    } else if (!sources.config.empty() && fs::is_regular_file(sidecar) &&
-               fs::file_size(sidecar) == 0) {
-      // `replay cut.csv --config c.json --json > cut.json`: the shell emptied it just now.
+    } else if (emptied && !sources.config.empty()) {
       spdlog::warn("{}: empty, left out (--config describes the cut)", sidecar.string());
       sidecar.clear();
+    } else if (emptied) {
+      throw std::runtime_error(sidecar.string() + ": empty, and read as " +
+                               sources.input.filename().string() +
+                               "'s sidecar (the default, beside it); was it the target of a "
+                               "--json redirection? Write the summary with --summary FILE, or "
+                               "describe the cut with --sidecar or --config");
     }
   }
   out.json = file.monitor;
@@ -83,14 +90,6 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
   if (!fs::exists(sidecar)) {
     throw std::runtime_error(sidecar.string() + ": sidecar not found" + where +
                              " (describe the cut with --sidecar or --config)");
-  }
-  if (sources.sidecar.empty() && fs::is_regular_file(sidecar) && fs::file_size(sidecar) == 0) {
-    // `millwatch replay cut.csv --json > cut.json`: the shell empties the default sidecar first.
-    throw std::runtime_error(sidecar.string() + ": empty, and read as " +
-                             sources.input.filename().string() +
-                             "'s sidecar (the default, beside it); was it the target of a "
-                             "--json redirection? Write the summary with --summary FILE, or "
-                             "describe the cut with --sidecar or --config");
   }
   const nlohmann::json side = read_json_file(sidecar);
   try {
