@@ -31,6 +31,27 @@ bool warns_model_does_not_fit(const nlohmann::json& warnings) {
   return false;
 }
 
+/// The detail of the first warning of `kind` ("" if there is none).
+std::string detail_of(const nlohmann::json& warnings, const std::string& kind) {
+  for (const auto& w : warnings) {
+    if (w["kind"] == kind) {
+      return w["detail"].get<std::string>();
+    }
+  }
+  return "";
+}
+
+/// Revolution n of a 2-flute cut at `rpm`, both CE1 events found (bounded), valid as told, α 180°.
+RevolutionRecord revolution(int n, double rpm = 25000.0, bool valid = true) {
+  RevolutionRecord r;
+  r.revolution = n;
+  r.spindle_rpm = rpm;
+  r.measured.bounded = true;
+  r.measured.valid = valid;
+  r.measured.alpha_deg = 180.0;
+  return r;
+}
+
 TEST(RunSummary, CallsAFitPoorOnlyWhereTheModelInLockstepRefusesIt) {
   // 30 % of the RMS is 9 % of the variance: taken (≤ 20 %), not poor.
   EXPECT_FALSE(warns_model_does_not_fit(warnings_for(0.30))) << warnings_for(0.30).dump();
@@ -61,12 +82,7 @@ TEST(RunSummary, SaysHowManyRevolutionsTheAlertsHeldForAnotherSpeed) {
   };
   const nlohmann::json held = summary_with(312);
   EXPECT_EQ(held["counters"]["alert_held_revolutions"], 312);
-  std::string detail;
-  for (const auto& w : held["warnings"]) {
-    if (w["kind"] == "alerts held") {
-      detail = w["detail"].get<std::string>();
-    }
-  }
+  const std::string detail = detail_of(held["warnings"], "alerts held");
   EXPECT_NE(detail.find("312 revolutions ran more than alerts.conditions_tolerance (2 %)"),
             std::string::npos)
       << held["warnings"].dump();
@@ -97,14 +113,6 @@ TEST(RunSummary, SaysWhenTheWindowsRunoutScattersOrDriftsBeyondItsSigma) {
                                     {"radius_drift_um", 0.030},
                                     {"widened_by_drift", drift}}}}}});
     return summary.to_json()["warnings"];
-  };
-  const auto detail_of = [](const nlohmann::json& warnings, const std::string& kind) {
-    for (const auto& w : warnings) {
-      if (w["kind"] == kind) {
-        return w["detail"].get<std::string>();
-      }
-    }
-    return std::string();
   };
   const std::string scatter = detail_of(warnings_with(true, false), "runout scatters");
   EXPECT_NE(scatter.find("ρ by 1.278 µm, γ by 29.7° from window to window over 16 windows"),
@@ -194,27 +202,13 @@ TEST(RunSummary, WarnsWhenMoreThanATenthOfTheRevolutionsLostAnEvent) {
     MonitorConfig config;
     RunSummary summary(config);
     for (int i = 0; i < 100; ++i) {
-      RevolutionRecord r;
-      r.revolution = i;
-      r.spindle_rpm = 25000.0;
-      r.measured.bounded = true;
-      r.measured.valid = i >= lost;
-      r.measured.alpha_deg = 180.0;
-      summary.add(r);
+      summary.add(revolution(i, 25000.0, i >= lost));
     }
     summary.finish(PipelineStatus{});
     return summary.to_json()["warnings"];
   };
-  const auto missing = [](const nlohmann::json& warnings) {
-    for (const auto& w : warnings) {
-      if (w["kind"] == "flute events missing") {
-        return w["detail"].get<std::string>();
-      }
-    }
-    return std::string();
-  };
-  EXPECT_EQ(missing(warnings_with(10)), "");
-  const std::string twenty = missing(warnings_with(20));
+  EXPECT_EQ(detail_of(warnings_with(10), "flute events missing"), "");
+  const std::string twenty = detail_of(warnings_with(20), "flute events missing");
   EXPECT_EQ(twenty.rfind("20 of 100 revolutions had a flute without its tooth event", 0), 0u)
       << twenty;
 }
@@ -225,12 +219,9 @@ TEST(RunSummary, SpeedIsTheMeanOfTheMeasuredSpeedsAlone) {
   MonitorConfig config;
   RunSummary summary(config);
   for (int i = 0; i < 10; ++i) {
-    RevolutionRecord r;
-    r.revolution = i;
-    r.spindle_rpm = i < 3 ? 0.0 : 25000.0 + 10.0 * (i % 2 == 0 ? 1.0 : -1.0);
+    RevolutionRecord r =
+        revolution(i, i < 3 ? 0.0 : 25000.0 + 10.0 * (i % 2 == 0 ? 1.0 : -1.0), i >= 3);
     r.measured.bounded = i >= 3;
-    r.measured.valid = i >= 3;
-    r.measured.alpha_deg = 180.0;
     summary.add(r);
   }
   summary.finish(PipelineStatus{});
@@ -263,12 +254,7 @@ TEST(RunSummary, SaysWhenMoreRevolutionsWereMeasuredThanTurned) {
     status.cutting_revolutions = 60.0;  // a weak cut: the tracker heard cutting for 0.6 s
     summary.finish(status);
     const nlohmann::json j = summary.to_json();
-    for (const auto& w : j["warnings"]) {
-      if (w["kind"] == "revolutions over-counted") {
-        return true;
-      }
-    }
-    return false;
+    return !detail_of(j["warnings"], "revolutions over-counted").empty();
   };
   EXPECT_FALSE(warned(101));
   EXPECT_TRUE(warned(120));
@@ -280,12 +266,7 @@ TEST(RunSummary, DeltaFyComesWithItsSpread) {
   MonitorConfig config;
   RunSummary summary(config);
   for (int i = 0; i < 3; ++i) {
-    RevolutionRecord r;
-    r.revolution = i;
-    r.spindle_rpm = 25000.0;
-    r.measured.bounded = true;
-    r.measured.valid = true;
-    r.measured.alpha_deg = 180.0;
+    RevolutionRecord r = revolution(i);
     r.measured.delta_fy_N = 1.0 + i;
     summary.add(r);
   }
