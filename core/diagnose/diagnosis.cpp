@@ -12,6 +12,7 @@
 
 #include "core/diagnose/catalogue.hpp"
 #include "core/diagnose/record_spectrum.hpp"
+#include "core/diagnose/speed_scatter.hpp"
 #include "core/identify/window_fit.hpp"
 #include "core/model/steady_state.hpp"
 
@@ -608,6 +609,11 @@ class Engine {
       rpm = 0.5 * (lo + hi);
       sigma = sigma_at(rpm);
     }
+    // Not below what the record's own scatter says (speed_scatter.hpp): the curvature's σ takes
+    // what the harmonics leave for the white noise of the floor, while on a real cut the
+    // revolutions differ by more (PHM 2010 c1_cut315: ±0.0084 rpm from the curvature, ±0.051 rpm
+    // from the scatter of its segments' delays).
+    sigma = std::max(sigma, rpm * segment_speed_sigma_rel(y, fs_, rpm / 60.0, k_all));
     // Not below what the search resolved (a noise floor of 0 gives σ 0, a clean record's
     // rounding can stop the search short of a tenth of σ): the last interval's RMS.
     sigma = std::max(sigma, (hi - lo) / std::sqrt(12.0));
