@@ -54,6 +54,7 @@ class CalibrationSink : public monitor::PipelineSink {
 struct MonitoredCut {
   identify::CalibrationCut cut;
   std::int64_t revolutions = 0;
+  double max_unexplained = 0.2;  ///< its configuration's identification.max_unexplained
 };
 
 MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_file,
@@ -145,6 +146,7 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     return zero_phase ? std::complex<double>(std::norm(h), 0.0) : h;
   };
   out.cut.windows = windows.windows();
+  out.max_unexplained = config.identification.max_unexplained;
   spdlog::info("{}: {} at {:g} um per tooth: {} windows of {} revolutions", input.string(),
                source->description(), feed_um, out.cut.windows.size(),
                config.sync_window_revolutions);
@@ -250,6 +252,10 @@ std::string report_text(const nlohmann::json& j, const identify::CalibrationResu
   s += fmt::format("  classic regression: {}\n",
                    classic["ok"].get<bool>() ? classic["note"].get<std::string>()
                                              : "none: " + classic["reason"].get<std::string>());
+  s += r.warnings.empty() ? "  warnings: none\n" : "  warnings:\n";
+  for (const std::string& w : r.warnings) {
+    s += "    " + w + "\n";
+  }
   return s;
 }
 
@@ -280,11 +286,15 @@ int run_calibrate(const CalibrateOptions& o) {
   const ConfigFile config_file = read_config_file(o.config);
   std::vector<identify::CalibrationCut> cuts;
   ProgressLine progress(o.progress, 0.0, 0.25);
-  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
-    cuts.push_back(monitor_cut(o, config_file, i, progress).cut);
-  }
   identify::CalibrationOptions options;
   options.tared = o.tared;
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    MonitoredCut m = monitor_cut(o, config_file, i, progress);
+    // The strictest of the cuts' configurations (one, as a rule: --config's or the sidecars').
+    options.max_unexplained_variance =
+        i == 0 ? m.max_unexplained : std::min(options.max_unexplained_variance, m.max_unexplained);
+    cuts.push_back(std::move(m.cut));
+  }
   identify::CalibrationResult r;
   progress.show(fmt::format("calibrate: fitting {} cuts jointly  ({:.1f} s)", cuts.size(),
                             progress.elapsed_s()));
@@ -297,6 +307,9 @@ int run_calibrate(const CalibrateOptions& o) {
   progress.done();
   if (!r.ok) {
     throw std::runtime_error("calibration failed: " + r.message);
+  }
+  for (const std::string& w : r.warnings) {
+    spdlog::warn("calibration: {}", w);
   }
   const nlohmann::json j = identify::to_json(r);
   if (!o.output.empty()) {

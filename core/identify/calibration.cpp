@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 
@@ -220,6 +221,35 @@ CalibrationResult calibrate(const std::vector<CalibrationCut>& cuts,
   out.classic = average_force_regression(means);
   out.ok = out.joint.fit.ok;
   out.message = out.joint.fit.message;
+  if (out.ok) {
+    out.warnings = calibration_warnings(out.joint.fit, options.max_unexplained_variance);
+  }
+  return out;
+}
+
+std::vector<std::string> calibration_warnings(const FitResult& fit,
+                                              double max_unexplained_variance) {
+  std::vector<std::string> out;
+  char text[400];
+  const double u = unexplained_fraction(fit.residual_rms_N, fit.measured_rms_N);
+  if (u * u > max_unexplained_variance) {
+    std::snprintf(text, sizeof text,
+                  "the fit leaves %.1f %% of the measured force unexplained (RMS; %.0f %% of its "
+                  "variance, above %.0f %%): the model does not describe these cuts, and its "
+                  "coefficients are not the material's",
+                  100.0 * u, 100.0 * u * u, 100.0 * max_unexplained_variance);
+    out.emplace_back(text);
+  }
+  for (const Estimate& e : fit.coefficients) {
+    const bool tangential_or_normal = e.name.rfind("k_t", 0) == 0 || e.name.rfind("k_n", 0) == 0;
+    if (tangential_or_normal && e.value + 2.0 * e.sigma < 0.0) {
+      std::snprintf(text, sizeof text,
+                    " = %.4g ± %.2g: a tangential or normal force coefficient below zero pulls "
+                    "the tool into the cut; the fit stands in for what the model lacks",
+                    e.value, e.sigma);
+      out.push_back(e.name + text);
+    }
+  }
   return out;
 }
 
@@ -232,6 +262,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
   nlohmann::json j = to_json(w);
   j["ok"] = r.ok;
   j["message"] = r.message;
+  j["warnings"] = r.warnings;
   j["tared"] = r.tared;
   j["mean_force_fitted"] = r.tared;
   if (j.contains("runout")) {
@@ -339,6 +370,7 @@ nlohmann::json material_preset(const CalibrationResult& r, const std::string& ma
           {"coefficients", coefficients},
           {"runout", runout},
           {"fit", fit},
+          {"warnings", r.warnings},
           {"provenance", prov}};
 }
 

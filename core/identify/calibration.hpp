@@ -75,6 +75,9 @@ struct CalibrationOptions {
   FitOptions fit;
   bool tared = false;  ///< the channels were tared before each cut: fit the mean too
   double max_speed_change = 0.005;
+  /// The share of the force's variance the joint fit may leave unexplained before the result
+  /// warns that the model does not describe the cuts (identification.max_unexplained's).
+  double max_unexplained_variance = 0.2;
 };
 
 /// What the calibration says about one cut.
@@ -97,7 +100,16 @@ struct CalibrationResult {
   JointFitResult joint;
   std::vector<CalibratedCut> cuts;
   AverageForceRegression classic;
+  /// Why the coefficients are not the material's, one sentence each (calibration_warnings()).
+  std::vector<std::string> warnings;
 };
+
+/// What makes a joint fit's coefficients unfit for a material preset: the fit leaves more of the
+/// force's variance unexplained than max_unexplained_variance (the model does not describe the
+/// cuts), or a tangential or normal coefficient (k_t…, k_n…) lies below zero by more than 2σ —
+/// a force pulling the tool into the cut, the fit standing in for what the model lacks.
+std::vector<std::string> calibration_warnings(const FitResult& fit,
+                                              double max_unexplained_variance);
 
 /// @throws std::invalid_argument naming the cut: no window, or a tool, law or effects that
 ///         differ from the first cut's
@@ -106,13 +118,15 @@ CalibrationResult calibrate(const std::vector<CalibrationCut>& cuts,
 
 /// The calibration as `millwatch calibrate --json` prints it: "coefficients" {name: {value,
 /// std, classic, classic_std}}, "runout" (as the replay summary's), "cuts" [per cut: file, feeds,
-/// speed, revolutions, fit quality], "classic" (lines, note), "fit". Every number finite or null.
+/// speed, revolutions, fit quality], "classic" (lines, note), "fit", "warnings" [sentences].
+/// Every number finite or null.
 nlohmann::json to_json(const CalibrationResult& result);
 
 /// The material preset: {"format": "millwatch-material/1", "material": {the model
 /// configuration's "material" section with the fitted coefficients}, "coefficients" {σ, for
 /// information}, "runout" {…, information only: the monitor identifies it on every window},
-/// "fit", "provenance"}. The replay and the daemon take its "material" (README, "Calibration").
+/// "fit", "warnings" (calibration_warnings(), empty when none), "provenance"}. The replay and the
+/// daemon take its "material" (README, "Calibration").
 nlohmann::json material_preset(const CalibrationResult& result, const std::string& material_name,
                                const nlohmann::json& provenance);
 
