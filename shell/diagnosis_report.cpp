@@ -146,10 +146,20 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
 std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
   std::string out;
   for (const auto& p : ps) {
-    out += (out.empty() ? "" : ", ") + p.name + (p.lower_bound ? " ≥ " : " = ") +
+    if (!p.determined) {
+      out += (out.empty() ? "" : ", ") + p.name +
+             fmt::format(" = {:.4g} (not determined: the record does not pin it)", p.value);
+      continue;
+    }
+    out += (out.empty() ? "" : ", ") + p.name +
+           (p.lower_bound   ? " ≥ "
+            : p.upper_bound ? " ≤ "
+                            : " = ") +
            (p.at_bound.empty()
                 ? value_sigma(p.value, p.sigma) +
-                      (p.lower_bound ? " (a flute cuts nothing beyond it: a lower bound)" : "")
+                      (p.lower_bound   ? " (a flute cuts nothing beyond it: a lower bound)"
+                       : p.upper_bound ? " (a flute cuts nothing beyond it: an upper bound)"
+                                       : "")
                 : fmt::format("{:.4g} (at its {} physical bound: held)", p.value, p.at_bound));
   }
   return out.empty() ? "—" : out;
@@ -181,7 +191,12 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
                                   s.residual_rms_N[1] / std::max(d.noise_floor_N[1], 1e-300));
     md += fmt::format(
         "| {} | {} | {} | {:.4f} ({:.2f} %) | {:.4f} ({:.2f} %) | {:.2f} | {:.1f} | {} | {} |\n", i,
-        i == 0 ? "(starting model)" : s.added, i == 0 ? "—" : parameter_text(s.parameters),
+        i == 0 ? "(starting model)" : s.added,
+        i == 0 ? "—"
+               : (s.sigma_statistical_only && !s.parameters.empty()
+                      ? parameter_text(s.parameters) + " (σ statistical only)"
+                      : parameter_text(s.parameters)) +
+                     (s.newly_held.empty() ? "" : "; now held: " + parameter_text(s.newly_held)),
         s.residual_rms_N[0], s.residual_percent[0], s.residual_rms_N[1], s.residual_percent[1],
         ratio, s.criterion, i == 0 ? "—" : fmt::format("{:.1f}", s.gain),
         s.runner_up.empty() ? "—"

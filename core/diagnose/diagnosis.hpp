@@ -88,6 +88,13 @@ struct Parameter {
   /// The value is the least the force allows, not a measurement: ρ of a fit on a flute's contact
   /// edge (identify::FitResult::runout_at_contact_edge), a flute cutting nothing beyond it.
   bool lower_bound = false;
+  /// The value is the most the force allows: the radius difference r_j − r_CE1 of a flute j
+  /// idle at a contact edge (its radius lies at least the largest chip below the flute's before
+  /// it).
+  bool upper_bound = false;
+  /// false: the record does not pin it (identify::Estimate::determined); the value is where the
+  /// fit left it, sigma 0, not an estimate.
+  bool determined = true;
 };
 
 /// The physical range of a dynamometer's damping ratio ζ: a piezoelectric dynamometer clamped
@@ -158,10 +165,18 @@ struct Stage {
   std::array<double, 2> residual_percent{};  ///< of the measured RMS over the band
   double criterion = 0.0;
   int free_parameters = 0;
-  double gain = 0.0;                       ///< criterion gained over the previous model
+  double gain = 0.0;  ///< criterion gained over the previous model
+  /// The window fit's parameters (and the coefficients) carry statistical σ only, without the
+  /// spread over the model's variants: uncertainties off, or the winner's refit with them failed
+  /// or ended on a worse optimum than the fit the choice scored, which then stands. (Never for
+  /// parameters the fit does not give: the speed, the chain's, the change time.)
+  bool sigma_statistical_only = false;
   std::string runner_up;                   ///< the next best candidate ("" if none)
   double margin_over_runner_up = 0.0;      ///< its criterion minus the winner's
   std::vector<CandidateScore> candidates;  ///< every candidate scored at this step
+  /// Parameters of effects added before that this step's refit pushed out of their physical
+  /// range and that are held at the bound from here on (their value changed here).
+  std::vector<Parameter> newly_held;
   Localisation localisation;
   ModelView view;
 };

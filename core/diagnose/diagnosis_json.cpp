@@ -12,13 +12,26 @@ nlohmann::json axes(const std::array<double, 2>& v) {
 nlohmann::json parameters(const std::vector<Parameter>& ps) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& p : ps) {
-    if (p.at_bound.empty()) {
+    if (!p.determined) {  // not an estimate: no σ
+      j[p.name] = {{"value", p.value},
+                   {"sigma", nullptr},
+                   {"determined", false},
+                   {"note",
+                    "not determined: the record does not pin it (the force does not depend on "
+                    "it there, or only together with parameters the data cannot tell apart); "
+                    "the value is where the fit left it"}};
+    } else if (p.at_bound.empty()) {
       j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
       if (p.lower_bound) {
         j[p.name]["lower_bound"] = true;
         j[p.name]["note"] =
             "at a flute's contact edge: a flute cuts nothing beyond it, the force "
             "bounds the value from below only";
+      } else if (p.upper_bound) {
+        j[p.name]["upper_bound"] = true;
+        j[p.name]["note"] =
+            "at a flute's contact edge: a flute cuts nothing beyond it, the force "
+            "bounds the value from above only";
       }
     } else {  // a bound, not an estimate: no σ
       j[p.name] = {{"value", p.value},
@@ -92,6 +105,8 @@ nlohmann::json to_json(const Stage& s) {
       {"localisation", localisation(s.localisation)}};
   if (!s.added.empty()) {
     j["gain"] = s.gain;
+    j["sigma_statistical_only"] = s.sigma_statistical_only;
+    j["newly_held"] = parameters(s.newly_held);
     j["runner_up"] = s.runner_up.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.runner_up);
     j["margin_over_runner_up"] = s.margin_over_runner_up;
   }

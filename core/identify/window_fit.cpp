@@ -1171,6 +1171,15 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   const Eigen::MatrixXd cov_free = s2 * col_scale.cwiseInverse().asDiagonal() * svd.matrixV() *
                                    inv2.asDiagonal() * svd.matrixV().transpose() *
                                    col_scale.cwiseInverse().asDiagonal();
+  // Pinned: fitted, and its σ not beyond 10⁶ of what the data's sensitivity to it alone would
+  // give (σ·‖J_i‖/s = √(V·S⁻²·Vᵀ)_ii in the scaled problem, 1 for a parameter no other one
+  // mimics): a variance from the singular-value floor above is a direction the data do not see.
+  std::vector<bool> pinned(static_cast<std::size_t>(nt + nc), false);
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const double scaled_var =
+        (svd.matrixV().row(a).cwiseAbs2().transpose().cwiseProduct(inv2)).sum();
+    pinned[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])] = scaled_var <= 1e12;
+  }
   Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(nt + nc, nt + nc);
   for (Eigen::Index a = 0; a < nf; ++a) {
     for (Eigen::Index b = 0; b < nf; ++b) {
@@ -1327,6 +1336,22 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   for (int i = 0; i < ne; ++i) {
     out.extra.push_back(
         estimate(extra_map.parameters[static_cast<std::size_t>(i)].name, 2 + i, theta[2 + i]));
+    // Or a σ beyond a thousand times the parameter's magnitude (its value, or its typical
+    // magnitude where that is larger): a column the force hardly sees (the stiffness of a cut
+    // without runout, whose flutes' chips it leaves equal: ±4e7 N/µm at 1 N/µm). Not h_min for
+    // a vanished column: the chip regime switches on the angle grid, so its force is piecewise
+    // constant and its column zero at the fitted point, which the fit's steps across the grid
+    // still pin (its σ then the chip-thickness floor's).
+    Estimate& e = out.extra.back();
+    const model::ParameterInfo& info = extra_map.parameters[static_cast<std::size_t>(i)];
+    const bool vanished = !pinned[static_cast<std::size_t>(2 + i)] && cov(2 + i, 2 + i) == 0.0;
+    const double magnitude = std::max(std::fabs(e.value), info.scale);
+    if ((!pinned[static_cast<std::size_t>(2 + i)] &&
+         !(vanished && info.id == model::ParameterId::kHmin)) ||
+        e.sigma_stat > 1e3 * magnitude) {
+      e.determined = false;
+      e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
+    }
   }
   std::vector<std::string> names(static_cast<std::size_t>(nt + nc));
   names[0] = "rho_um";

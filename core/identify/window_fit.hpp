@@ -123,6 +123,11 @@ struct Estimate {
   double sigma = 0.0;       ///< total: statistical and systematic in quadrature
   double sigma_stat = 0.0;  ///< from the Jacobian and the residual
   double sigma_sys = 0.0;   ///< spread over the model variants
+  /// false: the record does not pin it — the force does not depend on it there, or only
+  /// together with other parameters in a way the data cannot tell apart (its σ would be many
+  /// orders of magnitude beyond anything physical). The value is where the fit left it and the
+  /// σs are 0: not an estimate.
+  bool determined = true;
 };
 
 struct FitResult {

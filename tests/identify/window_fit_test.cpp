@@ -581,6 +581,7 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
         x.name, e.value, e.sigma, x.truth, f.rho_um.value, f.rho_um.sigma, f.residual_rms_N[1],
         f.measured_rms_N[1], f.evaluations);
     EXPECT_EQ(e.name, x.name);
+    EXPECT_TRUE(e.determined) << x.name;
     EXPECT_GT(e.sigma, 0.0);
     EXPECT_NEAR(e.value, x.truth, std::max(2.0 * e.sigma, 0.0));
     EXPECT_NEAR(e.value, x.truth, 0.1 * x.truth);
@@ -594,6 +595,42 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     EXPECT_EQ(f.config.material.power_law.k_ac_Nmm, start.material.power_law.k_ac_Nmm);
     // k_tc, k_nc (and the ploughing regime's k_tp, k_np with the minimum chip thickness).
     EXPECT_EQ(f.coefficients.size(), h_min ? 4u : 2u) << x.name;
+  }
+}
+
+// A parameter the record does not pin is said to be so, not given a σ: without runout the
+// flutes cut equal chips, and the tool's deflection (a force-proportional shift of the tool
+// centre, the same for every flute) leaves them equal — the stiffness changes nothing the
+// synchronous force shows. Its σ had come out of the singular-value floor as ~1e11 N/µm (or 0
+// where its column vanished); now it is not determined, with no σ. With runout (the test above)
+// it is pinned.
+TEST(WindowFit, SaysAParameterTheRecordDoesNotPinIsNotDetermined) {
+  model::ModelConfig m = model::without_effects(model::ModelConfig{});
+  m.process.feed_per_tooth_um = 2.0;
+  model::set_effect(m, "deflection", true);
+  m.effects.deflection.stiffness_N_per_um = 0.5;
+  MeasuredRevolution measured = test::finer_window(m);
+  measured.use_axis[2] = false;
+  model::ModelConfig start = m;
+  start.effects.deflection.stiffness_N_per_um = 1.0;
+  FitOptions options;
+  options.fit_runout = false;
+  options.extra_parameters = {"stiffness_N_per_um"};
+  WindowFitter fitter(start, test::ideal_lowpass, options);
+  const FitResult f = fitter.fit(measured);
+  ASSERT_TRUE(f.ok) << f.message;
+  ASSERT_EQ(f.extra.size(), 1u);
+  const Estimate& e = f.extra[0];
+  std::printf("stiffness %.3f ± %.3g N/um, determined %d; residual %.2e of %.3f N\n", e.value,
+              e.sigma, e.determined ? 1 : 0, f.residual_rms_N[1], f.measured_rms_N[1]);
+  EXPECT_FALSE(e.determined);
+  EXPECT_EQ(e.sigma, 0.0);
+  EXPECT_EQ(e.sigma_stat, 0.0);
+  EXPECT_EQ(e.sigma_sys, 0.0);
+  // The coefficients, which the force does pin, are estimates as before.
+  for (const Estimate& c : f.coefficients) {
+    EXPECT_TRUE(c.determined) << c.name;
+    EXPECT_GT(c.sigma_stat, 0.0) << c.name;
   }
 }
 
