@@ -80,6 +80,10 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
   }
   for (const Estimate& e : f.extra) {
     coefficients[e.name] = {{"value", number(e.value)}, {"std", number(e.sigma)}};
+    if (!e.determined) {  // where the fit left it, not an estimate: no σ
+      coefficients[e.name]["std"] = nullptr;
+      coefficients[e.name]["determined"] = false;
+    }
   }
   return {{"runout", runout}, {"coefficients", coefficients}, {"fit", fit}};
 }

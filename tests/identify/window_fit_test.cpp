@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/identify/fit_json.hpp"
 #include "core/model/abeni_runout.hpp"
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
@@ -627,6 +628,12 @@ TEST(WindowFit, SaysAParameterTheRecordDoesNotPinIsNotDetermined) {
   EXPECT_EQ(e.sigma, 0.0);
   EXPECT_EQ(e.sigma_stat, 0.0);
   EXPECT_EQ(e.sigma_sys, 0.0);
+  // The summaries' JSON (fit_json): the value where the fit left it, no σ.
+  IdentifiedWindow w;
+  w.fit = f;
+  const nlohmann::json j = to_json(w)["coefficients"]["stiffness_N_per_um"];
+  EXPECT_TRUE(j["std"].is_null()) << j.dump();
+  EXPECT_EQ(j["determined"], false) << j.dump();
   // The coefficients, which the force does pin, are estimates as before.
   for (const Estimate& c : f.coefficients) {
     EXPECT_TRUE(c.determined) << c.name;
