@@ -209,7 +209,9 @@ force_coefficients_t force_coefficients(const identify::IdentifiedWindow& w) {
     return m;
   }
   for (const identify::Estimate& e : w.fit.coefficients) {
-    if (!std::isfinite(e.value) || !std::isfinite(e.sigma)) {
+    // A coefficient the window does not pin has no σ to send (0 would claim it exact): left out,
+    // as the summary's "determined": false says.
+    if (!std::isfinite(e.value) || !std::isfinite(e.sigma) || !e.determined) {
       continue;
     }
     m.name.push_back(e.name);

@@ -194,7 +194,7 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
         i == 0 ? "(starting model)" : s.added,
         i == 0 ? "—"
                : (s.sigma_statistical_only && !s.parameters.empty()
-                      ? parameter_text(s.parameters) + " (σ statistical only)"
+                      ? parameter_text(s.parameters) + " (the window fit's σ statistical only)"
                       : parameter_text(s.parameters)) +
                      (s.newly_held.empty() ? "" : "; now held: " + parameter_text(s.newly_held)),
         s.residual_rms_N[0], s.residual_percent[0], s.residual_rms_N[1], s.residual_percent[1],

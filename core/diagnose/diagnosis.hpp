@@ -90,7 +90,7 @@ struct Parameter {
   bool lower_bound = false;
   /// The value is the most the force allows: the radius difference r_j − r_CE1 of a flute j
   /// idle at a contact edge (its radius lies at least the largest chip below the flute's before
-  /// it).
+  /// it, so r_j − r_CE1 is at most its value).
   bool upper_bound = false;
   /// false: the record does not pin it (identify::Estimate::determined); the value is where the
   /// fit left it, sigma 0, not an estimate.
@@ -166,10 +166,11 @@ struct Stage {
   double criterion = 0.0;
   int free_parameters = 0;
   double gain = 0.0;  ///< criterion gained over the previous model
-  /// The window fit's parameters (and the coefficients) carry statistical σ only, without the
-  /// spread over the model's variants: uncertainties off, or the winner's refit with them failed
-  /// or ended on a worse optimum than the fit the choice scored, which then stands. (Never for
-  /// parameters the fit does not give: the speed, the chain's, the change time.)
+  /// The window fit's parameters (runout, the dynamometer's, the stiffness, the wear land; and
+  /// the coefficients) carry statistical σ only, without the spread over the model's variants:
+  /// uncertainties off, or the winner's refit with them failed or ended on a worse optimum than
+  /// the fit the choice scored, which then stands. Never set for an effect none of whose
+  /// parameters the fit gives (the speed, the drift, the hum); the report says which σ it means.
   bool sigma_statistical_only = false;
   std::string runner_up;                   ///< the next best candidate ("" if none)
   double margin_over_runner_up = 0.0;      ///< its criterion minus the winner's

@@ -242,7 +242,7 @@ std::vector<std::string> calibration_warnings(const FitResult& fit,
   }
   for (const Estimate& e : fit.coefficients) {
     const bool tangential_or_normal = e.name.rfind("k_t", 0) == 0 || e.name.rfind("k_n", 0) == 0;
-    if (tangential_or_normal && e.value + 2.0 * e.sigma < 0.0) {
+    if (tangential_or_normal && e.determined && e.value + 2.0 * e.sigma < 0.0) {
       std::snprintf(text, sizeof text,
                     " = %.4g ± %.2g: a tangential or normal force coefficient below zero pulls "
                     "the tool into the cut; the fit stands in for what the model lacks",
@@ -339,6 +339,9 @@ nlohmann::json material_preset(const CalibrationResult& r, const std::string& ma
   if (report.contains("coefficients")) {
     for (const auto& [name, value] : report["coefficients"].items()) {
       coefficients[name] = {{"value", value["value"]}, {"std", value["std"]}};
+      if (value.contains("determined")) {
+        coefficients[name]["determined"] = value["determined"];
+      }
     }
   }
   nlohmann::json runout = report.value("runout", nlohmann::json::object());

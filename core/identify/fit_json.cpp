@@ -73,17 +73,21 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
     runout["alpha_std_deg"] = number(f.alpha_deg.sigma);
   }
   nlohmann::json coefficients = nlohmann::json::object();
-  for (const Estimate& e : f.coefficients) {
-    if (e.sigma > 0.0) {  // a coefficient no compared axis sees was not fitted: left out
-      coefficients[e.name] = {{"value", number(e.value)}, {"std", number(e.sigma)}};
-    }
-  }
-  for (const Estimate& e : f.extra) {
+  // Where the fit left it, not an estimate: no σ.
+  const auto add = [&](const Estimate& e) {
     coefficients[e.name] = {{"value", number(e.value)}, {"std", number(e.sigma)}};
-    if (!e.determined) {  // where the fit left it, not an estimate: no σ
+    if (!e.determined) {
       coefficients[e.name]["std"] = nullptr;
       coefficients[e.name]["determined"] = false;
     }
+  };
+  for (const Estimate& e : f.coefficients) {
+    if (e.sigma > 0.0 || !e.determined) {  // one no compared axis sees was not fitted: left out
+      add(e);
+    }
+  }
+  for (const Estimate& e : f.extra) {
+    add(e);
   }
   return {{"runout", runout}, {"coefficients", coefficients}, {"fit", fit}};
 }

@@ -26,6 +26,9 @@ double thread_cpu_s() {
 /// `r` with the systematic part of `s`'s estimates (same quantity) added in quadrature.
 void carry_systematic(const FitResult& s, FitResult& r) {
   auto carry = [](const Estimate& from, Estimate& to) {
+    if (!to.determined || !from.determined) {
+      return;  // not an estimate (no σ to add to), or none to carry
+    }
     to.sigma_sys = from.sigma_sys;
     to.sigma = std::hypot(to.sigma_stat, to.sigma_sys);
   };

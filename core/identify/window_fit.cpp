@@ -1353,6 +1353,14 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
     }
   }
+  // A coefficient the data do not pin (a direction of the floor's variance) is no estimate
+  // either; its value stays the fit's, as the model uses it.
+  const auto undetermined_if_unpinned = [&](Estimate& e, Eigen::Index i) {
+    if (!pinned[static_cast<std::size_t>(i)]) {
+      e.determined = false;
+      e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
+    }
+  };
   std::vector<std::string> names(static_cast<std::size_t>(nt + nc));
   names[0] = "rho_um";
   names[1] = "gamma_rad";
@@ -1371,6 +1379,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       names[static_cast<std::size_t>(2 + ne + i)] = n;
       if (cov(2 + ne + i, 2 + ne + i) > 0.0) {
         out.coefficients.push_back(estimate(n, 2 + ne + i, theta[2 + ne + i]));
+        undetermined_if_unpinned(out.coefficients.back(), 2 + ne + i);
       } else {
         // No axis compared sees it (K_ac without fz): not fitted, as configured. Levenberg–
         // Marquardt's damped solve may have moved it by rounding.
@@ -1383,6 +1392,7 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     names[static_cast<std::size_t>(nt + c)] = n;
     if (cov(nt + c, nt + c) > 0.0) {
       out.coefficients.push_back(estimate(n, nt + c, coefficients[c]));
+      undetermined_if_unpinned(out.coefficients.back(), nt + c);
     }
   }
   for (Eigen::Index a = 0; a < nt + nc; ++a) {

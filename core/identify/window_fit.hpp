@@ -126,7 +126,8 @@ struct Estimate {
   /// false: the record does not pin it — the force does not depend on it there, or only
   /// together with other parameters in a way the data cannot tell apart (its σ would be many
   /// orders of magnitude beyond anything physical). The value is where the fit left it and the
-  /// σs are 0: not an estimate.
+  /// σs are 0: not an estimate. Set for the extra parameters and the coefficients; ρ and γ say
+  /// what the data leave open their own way (γ's σ capped at π, the contact edge's bound).
   bool determined = true;
 };
 

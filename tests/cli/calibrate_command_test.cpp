@@ -254,9 +254,6 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
 namespace millwatch {
 namespace {
 
-// Under another law than the linear edge ([000]'s power law here) the classic regression's
-// linear-edge coefficients have no row of the joint fit's to stand beside: they come in a block
-// of their own, where the text had shown a column of dashes with no reason (--json had them).
 // A real cut the model does not describe (PHM 2010 c1_cut158, a worn 3-flute ball-nose, at its
 // 49.8 µm per tooth): the fit leaves 79 % of the force unexplained and puts k_nc at −2350 ±
 // 19 N/mm². The coefficients had gone into the material preset without a word; now the report,
@@ -285,6 +282,9 @@ TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   ASSERT_EQ(p["warnings"].size(), 2U) << p.dump(1);
 }
 
+// Under another law than the linear edge ([000]'s power law here) the classic regression's
+// linear-edge coefficients have no row of the joint fit's to stand beside: they come in a block
+// of their own, where the text had shown a column of dashes with no reason (--json had them).
 TEST(CalibrateCommandPowerLaw, PrintsTheClassicRegressionApart) {
   const fs::path dir = test::fresh_temp_dir();
   nlohmann::json preset =

@@ -38,7 +38,11 @@ double waveform(std::size_t a, double phi) {
 // records within ±10 % (3.7σ of that mean). Without the leave-one-out template's correction
 // (speed_scatter.cpp) it was 1.14 over 1,000 records.
 TEST(SegmentSpeedSigma, IsTheCramerRaoBoundInWhiteNoise) {
-  constexpr std::size_t kSamples = 16000;  // 320 revolutions, 16 segments of 20
+  // 48.48… samples a revolution (a segment of whole revolutions holds a non-whole number of
+  // samples) and a mean of 5 N, which the segments' harmonics must not see.
+  constexpr double kSpindleHere_hz = 412.5;
+  constexpr double kThetaHere = 2.0 * std::numbers::pi * kSpindleHere_hz / kFs_hz;
+  constexpr std::size_t kSamples = 16000;  // 330 revolutions, 16 segments of 20–21
   constexpr double kNoise_N = 0.5;
   double sum_k2a2 = 0.0;
   for (std::size_t a = 0; a < 2; ++a) {
@@ -48,7 +52,7 @@ TEST(SegmentSpeedSigma, IsTheCramerRaoBoundInWhiteNoise) {
   }
   const auto n = static_cast<double>(kSamples);
   const double bound_rel =
-      std::sqrt(24.0 * kNoise_N * kNoise_N / (n * (n * n - 1.0) * sum_k2a2)) / kTheta;
+      std::sqrt(24.0 * kNoise_N * kNoise_N / (n * (n * n - 1.0) * sum_k2a2)) / kThetaHere;
   constexpr int kRecords = 200;
   double sum_ratio2 = 0.0;
   for (int r = 0; r < kRecords; ++r) {
@@ -58,11 +62,11 @@ TEST(SegmentSpeedSigma, IsTheCramerRaoBoundInWhiteNoise) {
     for (std::size_t a = 0; a < 2; ++a) {
       x[a].resize(kSamples);
       for (std::size_t i = 0; i < kSamples; ++i) {
-        x[a][i] = 5.0 + waveform(a, kTheta * static_cast<double>(i)) + noise(rng);
+        x[a][i] = 5.0 + waveform(a, kThetaHere * static_cast<double>(i)) + noise(rng);
       }
     }
     int segments = 0;
-    const double sigma_rel = segment_speed_sigma_rel(x, kFs_hz, kSpindle_hz, 3, &segments);
+    const double sigma_rel = segment_speed_sigma_rel(x, kFs_hz, kSpindleHere_hz, 3, &segments);
     ASSERT_EQ(segments, 16);
     sum_ratio2 += (sigma_rel / bound_rel) * (sigma_rel / bound_rel);
   }
