@@ -204,6 +204,9 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
   }
   md += "\nForce coefficients of the final model: " + parameter_text(stages.back()->coefficients) +
         ".\n";
+  if (!d.sigma_caveat.empty()) {
+    md += "\n" + d.sigma_caveat + "\n";
+  }
   if (!d.at_bound.empty()) {
     md += fmt::format(
         "\nOn a physical bound (a clamped piezoelectric dynamometer's range: damping ratio "

@@ -199,6 +199,9 @@ struct Diagnosis {
   std::vector<CandidateScore> final_candidates;
   std::string stop_reason;
   std::string verdict;  ///< one sentence
+  /// Where the final model leaves the residual above the noise floor: that every σ is given its
+  /// step's model, and what the model lacks biases its parameters beyond them ("" at the floor).
+  std::string sigma_caveat;
   model::ModelConfig final_model;
   /// The final model's parameters held at a physical bound (kDampingRatioMin/Max), with the bound.
   std::vector<Parameter> at_bound;

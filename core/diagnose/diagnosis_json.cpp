@@ -136,6 +136,8 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"noise_floor_N", axes(d.noise_floor_N)},
           {"measured_rms_N", axes(d.measured_rms_N)},
           {"verdict", d.verdict},
+          {"sigma_caveat",
+           d.sigma_caveat.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.sigma_caveat)},
           {"parameters_at_bound", parameters(d.at_bound)},
           {"damping_ratio_range", {kDampingRatioMin, kDampingRatioMax}},
           {"natural_hz_range", {kNaturalHzMin, kNaturalHzMax}},

@@ -163,6 +163,9 @@ TEST(DiagnoseCommand, OnARealCutEveryNumberSaysWhatItIs) {
   }
   EXPECT_EQ(verdict.find("brought") == std::string::npos, rose) << verdict;
   EXPECT_EQ(verdict.find("one axis rose") != std::string::npos, rose) << verdict;
+  // The final model leaves over 30× the noise floor: its σ are said to be the model's.
+  ASSERT_TRUE(j["sigma_caveat"].is_string()) << j.dump().substr(0, 400);
+  EXPECT_NE(j["sigma_caveat"].get<std::string>().find("× the noise floor"), std::string::npos);
 }
 
 TEST(DiagnoseCommand, BadInputGivesAClearError) {

@@ -80,6 +80,8 @@ TEST(Diagnose, NegativeControlAddsNothing) {
   print(d);
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_TRUE(d.named_effects.empty()) << d.verdict;
+  // The model describes the record to its noise: its σ need no caveat.
+  EXPECT_TRUE(d.sigma_caveat.empty()) << d.sigma_caveat;
 }
 
 }  // namespace
