@@ -39,6 +39,14 @@ double wrap_pi(double a) {
 }
 
 /// The model's settings a fit runs with: the variants of the systematic estimate change these.
+/// The flute that cuts least in a model: which, whether it cuts nothing (idle), and its largest
+/// chip as a share of the largest flute's.
+struct LeastCutting {
+  int flute = -1;
+  bool idle = false;
+  double share = 1.0;
+};
+
 struct Setting {
   int steps = 720;
   int fewer_harmonics = 0;  // harmonics left out at the top of each cut's K
@@ -363,12 +371,13 @@ struct WindowFitter::Impl {
     /// chip at every slot of the bottom disc in every revolution of the cycle (the runout is
     /// the same on every disc) is below a ten-thousandth of the feed (sub-nanometre: the
     /// solver's rounding at an edge left 2·10⁻⁸ µm).
-    [[nodiscard]] std::pair<int, bool> least_cutting_flute(const Eigen::VectorXd& key) {
+    [[nodiscard]] LeastCutting least_cutting_flute(const Eigen::VectorXd& key) {
       apply(key);
       const model::SteadyState& st = model::evaluate_steady_state(
           config, rpm, setting.steps, workspace, model::SteadyStateOutput::kMean);
       int least = 0;
       double least_um = std::numeric_limits<double>::infinity();
+      double most_um = 0.0;
       for (int j = 0; j < config.tool.flutes; ++j) {
         double largest_um = 0.0;
         for (int m = 0; m < st.cycle_revolutions; ++m) {
@@ -376,12 +385,14 @@ struct WindowFitter::Impl {
             largest_um = std::max(largest_um, workspace.chip_um(j, b, m));
           }
         }
+        most_um = std::max(most_um, largest_um);
         if (largest_um < least_um) {
           least_um = largest_um;
           least = j;
         }
       }
-      return {least, least_um <= 1e-4 * config.process.feed_per_tooth_um};
+      return {least, least_um <= 1e-4 * config.process.feed_per_tooth_um,
+              most_um > 0.0 ? least_um / most_um : 0.0};
     }
 
     /// The model's columns for the shared nonlinear values (θ without the alignments).
@@ -931,8 +942,8 @@ struct WindowFitter::Impl {
 
   /// Whether the residual `r` at `theta` sits on a flute's contact edge along one parameter,
   /// from its changes to `rp` and `rm` (a step either way), the fit's degrees of freedom and
-  /// whether the model leaves a flute idle there (`idle()`, asked only past the ratio test;
-  /// kContactEdgeRatio and below). At an ordinary minimum the two changes are ±J·h to first
+  /// the model's least-cutting flute there (`idle()`: LeastCutting, asked only past the ratio
+  /// test; kContactEdgeRatio and below). At an ordinary minimum the two changes are ±J·h to first
   /// order.
   template <typename Idle>
   [[nodiscard]] static bool at_contact_edge(Problem& p, const Eigen::VectorXd& theta,
@@ -949,7 +960,14 @@ struct WindowFitter::Impl {
     const double rss = r.squaredNorm();
     const double steep_cost = (up > down ? rp : rm).squaredNorm() - rss;
     const bool steep = steep_cost > rss / dof;
-    if (!steep && !idle()) {
+    if (!steep && !idle().idle) {
+      return false;
+    }
+    // An edge is where a flute stops cutting: one whose largest chip is at least half the
+    // largest flute's is nowhere near it, whatever the cost's asymmetry says (a model that
+    // leaves most of the force unexplained has kinks of its own: PHM c1_cut315's ball-nose, its
+    // radii 0.4 µm apart against chips of up to 14 µm, had read "ρ ≥ 0.25 µm").
+    if (steep && !idle().idle && idle().share > kContactEdgeMaxChipShare) {
       return false;
     }
     Eigen::VectorXd y, b0;
@@ -1081,16 +1099,19 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   // The flute that cuts least at the solution (the first cut's), and whether the model leaves
   // one idle in any cut (the contact-edge test below): a model evaluation, made only for a fit
   // the one-sided differences put near an edge.
-  std::pair<int, bool> least_cutting{-1, false};
-  const auto least_cutting_flute = [&]() -> const std::pair<int, bool>& {
-    if (least_cutting.first < 0) {
+  LeastCutting least_cutting{-1, false, 1.0};
+  const auto least_cutting_flute = [&]() -> const LeastCutting& {
+    if (least_cutting.flute < 0) {
+      double share = 1.0;
       const Eigen::VectorXd key = theta.head(ns);
       for (auto& part : p.parts) {
-        const auto [flute, idle] = part->least_cutting_flute(key);
-        if (least_cutting.first < 0 || (idle && !least_cutting.second)) {
-          least_cutting = {flute, idle};
+        const LeastCutting l = part->least_cutting_flute(key);
+        if (least_cutting.flute < 0 || (l.idle && !least_cutting.idle)) {
+          least_cutting = l;
         }
+        share = std::min(share, l.share);
       }
+      least_cutting.share = share;
     }
     return least_cutting;
   };
@@ -1115,14 +1136,13 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
         out.runout_at_contact_edge =
             out.runout_at_contact_edge ||
             at_contact_edge(p, theta, r, rp, rm, std::max(1.0, static_cast<double>(mres - nt - nc)),
-                            [&] { return least_cutting_flute().second; });
+                            [&] { return least_cutting_flute(); });
       }
     }
     // The flute there, where the model leaves it idle (an edge found by the cost alone has its
     // flute still cutting a little).
-    out.edge_flute = out.runout_at_contact_edge && least_cutting_flute().second
-                         ? least_cutting_flute().first
-                         : -1;
+    out.edge_flute =
+        out.runout_at_contact_edge && least_cutting_flute().idle ? least_cutting_flute().flute : -1;
     if (nc > 0) {
       j.rightCols(nc) = p.coefficient_jacobian(theta);
       // Coefficients the linear solve left at 0 (no axis sees them) are not parameters.

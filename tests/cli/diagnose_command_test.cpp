@@ -168,6 +168,34 @@ TEST(DiagnoseCommand, OnARealCutEveryNumberSaysWhatItIs) {
   EXPECT_NE(j["sigma_caveat"].get<std::string>().find("× the noise floor"), std::string::npos);
 }
 
+// A contact edge is where a flute stops cutting. On PHM 2010's c1_cut315 (a worn ball-nose the
+// plain model leaves 80 % unexplained) the runout candidate's cost was asymmetric enough to pass
+// the edge test, and the report said "rho_um ≥ 0.2484 (a flute cuts nothing beyond it: a lower
+// bound)" — with the flutes' radii 0.4 µm apart against chips of up to 14 µm, no flute is near
+// idle. Now the edge also needs a flute cutting at most half the largest flute's chip.
+TEST(DiagnoseCommand, AModelThatFitsBadlyClaimsNoContactEdgeWhereEveryFluteCuts) {
+  const fs::path csv = test::shared_dir() / "data" / "phm2010" / "c1_cut315_window.csv";
+  ASSERT_TRUE(fs::exists(csv)) << csv;
+  const fs::path dir = test::fresh_temp_dir();
+  const auto r = test::run_command(
+      test::millwatch_cli() + " diagnose " + csv.string() + " --config " +
+      (fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json").string() + " --report " +
+      (dir / "report").string() + " --candidates runout --max-steps 1 --no-plots --no-progress");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "report" / "report.json");
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["steps"].size(), 1U) << j["verdict"];
+  const auto& step = j["steps"][0];
+  for (const auto& params : {step["parameters"], step["candidates"][0]["parameters"]}) {
+    ASSERT_TRUE(params.contains("rho_um")) << params.dump();
+    EXPECT_FALSE(params["rho_um"].contains("lower_bound")) << params["rho_um"].dump();
+    for (const char* d : {"r_ce2_minus_r_ce1_um", "r_ce3_minus_r_ce1_um"}) {
+      EXPECT_LT(std::fabs(params[d]["value"].get<double>()), 1.0) << d;  // flutes alike
+      EXPECT_FALSE(params[d].contains("upper_bound")) << d;
+    }
+  }
+}
+
 TEST(DiagnoseCommand, BadInputGivesAClearError) {
   const fs::path dir = test::fresh_temp_dir();
   const CutFiles f = write_cut(dir, 0.05);  // 21 revolutions: enough to read, checked below
