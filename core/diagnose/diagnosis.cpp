@@ -904,8 +904,9 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
     // hardly moves the force), neither is its growth (its σ, over a rubbing norm near 0, then
     // runs to 1e150).
     const double growth = 2.0 * ev.wear_slope_um, growth_sigma = 2.0 * ev.wear_slope_sigma_um;
-    const bool growth_determined = mid_determined && std::isfinite(growth_sigma) &&
-                                   growth_sigma <= 1e3 * std::max(std::fabs(growth), 1.0);
+    const bool growth_determined =
+        mid_determined && std::isfinite(growth_sigma) &&
+        growth_sigma <= identify::kUndeterminedSigmaRatio * std::max(std::fabs(growth), 1.0);
     out.push_back({"wear_growth_um", growth, growth_determined ? growth_sigma : 0.0});
     out.back().determined = growth_determined;
     out.push_back({"wear_rate_um_per_s", growth / duration_s,

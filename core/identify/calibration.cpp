@@ -231,13 +231,13 @@ std::vector<std::string> calibration_warnings(const FitResult& fit,
                                               double max_unexplained_variance) {
   std::vector<std::string> out;
   char text[400];
-  const double u = unexplained_fraction(fit.residual_rms_N, fit.measured_rms_N);
-  if (u * u > max_unexplained_variance) {
+  const double v = unexplained_variance(fit.residual_rms_N, fit.measured_rms_N);
+  if (v > max_unexplained_variance) {
     std::snprintf(text, sizeof text,
                   "the fit leaves %.1f %% of the measured force unexplained (RMS; %.0f %% of its "
                   "variance, above %.0f %%): the model does not describe these cuts, and its "
                   "coefficients are not the material's",
-                  100.0 * u, 100.0 * u * u, 100.0 * max_unexplained_variance);
+                  100.0 * std::sqrt(v), 100.0 * v, 100.0 * max_unexplained_variance);
     out.emplace_back(text);
   }
   for (const Estimate& e : fit.coefficients) {

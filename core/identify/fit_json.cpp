@@ -82,7 +82,8 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
     }
   };
   for (const Estimate& e : f.coefficients) {
-    if (e.sigma > 0.0 || !e.determined) {  // one no compared axis sees was not fitted: left out
+    // A coefficient no compared axis sees was not fitted (σ 0, determined): left out.
+    if (e.sigma > 0.0 || !e.determined) {
       add(e);
     }
   }

@@ -38,7 +38,6 @@ double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
 }
 
-/// The model's settings a fit runs with: the variants of the systematic estimate change these.
 /// The flute that cuts least in a model: which, whether it cuts nothing (idle), and its largest
 /// chip as a share of the largest flute's.
 struct LeastCutting {
@@ -47,6 +46,7 @@ struct LeastCutting {
   double share = 1.0;
 };
 
+/// The model's settings a fit runs with: the variants of the systematic estimate change these.
 struct Setting {
   int steps = 720;
   int fewer_harmonics = 0;  // harmonics left out at the top of each cut's K
@@ -1353,32 +1353,35 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
   }
   out.alignment_rad = estimate("alignment_rad", ns, theta[ns]);
   const int ne = extra_map.size();
+  // A parameter the data do not pin is no estimate: its value stays the fit's (as the model uses
+  // it), its σs 0.
+  const auto undetermined = [](Estimate& e) {
+    e.determined = false;
+    e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
+  };
   for (int i = 0; i < ne; ++i) {
     out.extra.push_back(
         estimate(extra_map.parameters[static_cast<std::size_t>(i)].name, 2 + i, theta[2 + i]));
-    // Or a σ beyond a thousand times the parameter's magnitude (its value, or its typical
-    // magnitude where that is larger): a column the force hardly sees (the stiffness of a cut
-    // without runout, whose flutes' chips it leaves equal: ±4e7 N/µm at 1 N/µm). Not h_min for
-    // a vanished column: the chip regime switches on the angle grid, so its force is piecewise
-    // constant and its column zero at the fitted point, which the fit's steps across the grid
-    // still pin (its σ then the chip-thickness floor's).
+    // Or a σ beyond kUndeterminedSigmaRatio times the parameter's magnitude (its value, or its
+    // typical magnitude where that is larger): a column the force hardly sees (the stiffness of
+    // a cut without runout, whose flutes' chips it leaves equal: ±4e7 N/µm at 1 N/µm). Not
+    // h_min for a vanished column: the chip regime switches on the angle grid, so its force is
+    // piecewise constant and its column zero at the fitted point, which the fit's steps across
+    // the grid still pin (its σ then the chip-thickness floor's).
     Estimate& e = out.extra.back();
     const model::ParameterInfo& info = extra_map.parameters[static_cast<std::size_t>(i)];
     const bool vanished = !pinned[static_cast<std::size_t>(2 + i)] && cov(2 + i, 2 + i) == 0.0;
     const double magnitude = std::max(std::fabs(e.value), info.scale);
     if ((!pinned[static_cast<std::size_t>(2 + i)] &&
          !(vanished && info.id == model::ParameterId::kHmin)) ||
-        e.sigma_stat > 1e3 * magnitude) {
-      e.determined = false;
-      e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
+        e.sigma_stat > kUndeterminedSigmaRatio * magnitude) {
+      undetermined(e);
     }
   }
-  // A coefficient the data do not pin (a direction of the floor's variance) is no estimate
-  // either; its value stays the fit's, as the model uses it.
+  // A coefficient in a direction of the floor's variance.
   const auto undetermined_if_unpinned = [&](Estimate& e, Eigen::Index i) {
     if (!pinned[static_cast<std::size_t>(i)]) {
-      e.determined = false;
-      e.sigma = e.sigma_stat = e.sigma_sys = 0.0;
+      undetermined(e);
     }
   };
   std::vector<std::string> names(static_cast<std::size_t>(nt + nc));

@@ -121,6 +121,10 @@ inline constexpr double kContactEdgeIdleSignificance = 1e-5;
 /// radii lie 0.4 µm apart against chips of up to 14 µm, had passed the cost test.
 inline constexpr double kContactEdgeMaxChipShare = 0.5;
 
+/// A σ beyond this many times a parameter's magnitude says the record does not pin it
+/// (Estimate::determined): the 1σ interval then spans a thousand times the value itself.
+inline constexpr double kUndeterminedSigmaRatio = 1e3;
+
 /// One estimated parameter.
 struct Estimate {
   std::string name;
