@@ -170,6 +170,7 @@ diagnose::Diagnosis diagnose_cut(const DiagnoseCliOptions& o, const LoadedCut& c
   diagnose::DiagnoseOptions options;
   options.band_hz = o.band_hz;
   options.max_steps = o.max_steps;
+  options.max_exchanges = o.exchanges;
   options.candidates = split_names(o.candidates);
   options.progress = [&](std::string_view line) {
     progress.show(fmt::format("diagnose: {}{}  ({:.1f} s)", prefix, line, progress.elapsed_s()));
@@ -202,6 +203,10 @@ void print_steps(const diagnose::Diagnosis& d) {
         s.runner_up.empty()
             ? ""
             : fmt::format(" (over {} by {:.1f})", s.runner_up, s.margin_over_runner_up).c_str());
+    if (!s.removed.empty()) {
+      std::printf("    in place of %s: the exchange gains ΔBIC %.1f%s\n", s.removed.c_str(),
+                  s.exchange_gain, s.exchange_steps == 2 ? " with the step after it" : "");
+    }
   }
   for (const auto& p : d.at_bound) {
     std::printf("  %s held at its %s bound %g (outside the physical range)\n", p.name.c_str(),
@@ -214,6 +219,9 @@ void print_steps(const diagnose::Diagnosis& d) {
 int run_diagnose(const DiagnoseCliOptions& o) {
   if (o.max_steps < 0) {
     throw std::runtime_error(fmt::format("--max-steps: {} is negative", o.max_steps));
+  }
+  if (o.exchanges < 0) {
+    throw std::runtime_error(fmt::format("--exchanges: {} is negative", o.exchanges));
   }
   if (o.start != "plain" && o.start != "configured") {
     throw std::runtime_error("--start: '" + o.start + "' is neither 'plain' nor 'configured'");

@@ -29,6 +29,7 @@ struct DiagnoseCliOptions {
   double from_s = 0.0;
   double to_s = 0.0;
   int max_steps = 5;
+  int exchanges = 3;
   bool plots = true;
   bool progress = true;
 };

@@ -211,6 +211,9 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--to-s", o->to_s, "Diagnose up to this time (s)");
   cmd->add_option("--candidates", o->candidates, "Comma-separated candidates (default: all)");
   cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 5)");
+  cmd->add_option("--exchanges", o->exchanges,
+                  "Exchanges of an effect named for another where the search stops above the "
+                  "noise floor (default 3; 0: the greedy search alone, faster)");
   cmd->add_flag("!--no-plots", o->plots, "Do not draw the plots");
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->callback([o]() { run_subcommand([&]() { return run_diagnose(*o); }); });

@@ -51,7 +51,9 @@ std::string value_sigma(double v, double s) {
 namespace {
 
 std::string stage_label(const Stage& s, std::size_t i) {
-  return i == 0 ? std::string("starting model") : "+ " + s.added;
+  return i == 0              ? std::string("starting model")
+         : s.removed.empty() ? "+ " + s.added
+                             : "+ " + s.added + " in place of " + s.removed;
 }
 
 /// Runs gnuplot on a script; "" on success, else why not.
@@ -191,7 +193,11 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
                                   s.residual_rms_N[1] / std::max(d.noise_floor_N[1], 1e-300));
     md += fmt::format(
         "| {} | {} | {} | {:.4f} ({:.2f} %) | {:.4f} ({:.2f} %) | {:.2f} | {:.1f} | {} | {} |\n", i,
-        i == 0 ? "(starting model)" : s.added,
+        i == 0 ? "(starting model)"
+        : s.removed.empty()
+            ? s.added
+            : fmt::format("{} in place of {} (the exchange: ΔBIC {:.1f}{})", s.added, s.removed,
+                          s.exchange_gain, s.exchange_steps == 2 ? " with the step after it" : ""),
         i == 0 ? "—"
                : (s.sigma_statistical_only && !s.parameters.empty()
                       ? parameter_text(s.parameters) + " (the window fit's σ statistical only)"
@@ -244,11 +250,15 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
     }
     md += ".\n";
     // From this model: the round that chose the next stage, or after the last, the final round.
+    // An exchange's round scored the model without the effect it replaces.
     const auto& cands = i + 1 < stages.size() ? scored.candidates : d.final_candidates;
     if (!cands.empty()) {
-      md +=
-          "\nCandidates scored from this model:\n\n| candidate | ΔBIC gained | residual fx / fy "
-          "(N) | parameters |\n|---|---|---|---|\n";
+      md += (i + 1 < stages.size() && !scored.removed.empty()
+                 ? "\nCandidates scored from this model without " + scored.removed +
+                       " (the exchange's round; ΔBIC against the model without it):"
+                 : std::string("\nCandidates scored from this model:")) +
+            "\n\n| candidate | ΔBIC gained | residual fx / fy (N) | parameters |\n"
+            "|---|---|---|---|\n";
       for (const auto& c : cands) {
         if (c.ok) {
           md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {} |\n", c.name, c.gain,

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <unsupported/Eigen/FFT>
 
@@ -83,6 +85,15 @@ struct Evaluation {
   double wear_normal = 1.0;
   /// Damping ratios held at a physical bound (name → "lower"/"upper"), from the last segment.
   std::vector<std::pair<std::string, std::string>> at_bound;
+};
+
+/// One round of the search: every candidate not in the model added to it and refitted.
+struct Round {
+  std::vector<CandidateScore> scores;
+  std::vector<State> states;  // each candidate's state, as scored
+  Evaluation leader;          // the best's evaluation (only it is kept)
+  int best = -1;              // index into scores of the lowest criterion (-1: none fitted)
+  int second = -1;
 };
 
 class Engine {
@@ -990,6 +1001,22 @@ class Diagnoser {
   }
   /// Adds a candidate to a state; false with `why` when it does not apply (already in).
   bool apply(const std::string& name, State& s, const Evaluation& current, std::string& why);
+  /// Takes an effect the search named out of a state; false where it cannot be taken out alone
+  /// (the speed and the chain's terms, which nothing else stands in for; min_chip under
+  /// chip_accumulation; runout under runout_change).
+  bool remove(const std::string& name, State& s, const std::vector<std::string>& named) const;
+  /// Scores every candidate of `names` but `excluded` on `state` (`current` its evaluation).
+  Round score_round(const State& state, const Evaluation& current,
+                    const std::vector<std::string>& names, const std::string& label,
+                    const std::string& excluded);
+  /// Takes the round's best into the model: refitted with the model's variants where that holds
+  /// `required_gain` over `current`, its stage recorded (`removed`: the effect it replaces).
+  void accept(Round& round, State& state, Evaluation& current, Diagnosis& out,
+              const std::string& removed, double required_gain);
+  /// The replacement step: each effect named taken out, the best candidate in its place and the
+  /// best step after it; the best such exchange taken where it gains `significance`.
+  bool exchange(State& state, Evaluation& current, Diagnosis& out,
+                const std::vector<std::string>& names);
   Stage stage_of(const std::string& added, const State& s, const Evaluation& ev);
   /// h_min by its profile: the chip regime switches on the model's angle grid, so the force is
   /// piecewise constant in h_min on a fine scale and a derivative-based fit would not move it.
@@ -1490,6 +1517,246 @@ Stage Diagnoser::stage_of(const std::string& added, const State& s, const Evalua
   return st;
 }
 
+Round Diagnoser::score_round(const State& state, const Evaluation& current,
+                             const std::vector<std::string>& names, const std::string& label,
+                             const std::string& excluded) {
+  Round r;
+  int done = 0;
+  for (const auto& name : names) {
+    ++done;
+    if (name == excluded) {
+      continue;
+    }
+    progress(label + name + " (" + std::to_string(done) + "/" + std::to_string(names.size()) + ")");
+    State s = state;
+    CandidateScore score;
+    score.name = name;
+    std::string why;
+    if (!apply(name, s, current, why)) {
+      continue;  // in the model already
+    }
+    // The fitter searches afresh (its starts and alignment scan) for every effect of the
+    // model: a new effect may move the alignment by a pitch (the flute labelling) or the
+    // runout to another basin, where a refinement from the current fit would stay stuck.
+    // The chain's terms hardly move the model: those refine the current fit.
+    const bool chain = name == "amplifier_drift" || name == "mains_hum";
+    Evaluation ev = (name == "min_chip_thickness" || name == "chip_accumulation")
+                        ? profile_h_min(s, current)
+                    : name == "tool_deflection"
+                        ? profile_stiffness(s, current)
+                        : engine_.evaluate(s, &current, false, chain ? &current : nullptr);
+    if (name == "mains_hum" && ev.ok) {
+      State s60 = s;
+      s60.hum_hz = 60.0;
+      Evaluation ev60 = engine_.evaluate(s60, &current, false, &current);
+      if (ev60.ok && ev60.criterion < ev.criterion) {
+        s = s60;
+        ev = std::move(ev60);
+      }
+    }
+    score.ok = ev.ok;
+    score.message = ev.message;
+    if (ev.ok) {
+      score.criterion = ev.criterion;
+      score.gain = current.criterion - ev.criterion;
+      score.free_parameters = ev.free_parameters;
+      for (std::size_t a = 0; a < 2; ++a) {
+        score.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
+      }
+      score.parameters = added_parameters(name, s, ev, engine_.duration());
+    }
+    // Only the leader's evaluation is kept (its samples: ~45 bytes per sample of the record;
+    // all eleven candidates' held 600 MB for a 30 s record at 20 kHz). The first of the lowest
+    // criteria leads, as the choice below picks it.
+    if (ev.ok && (!r.leader.ok || ev.criterion < r.leader.criterion)) {
+      r.leader = std::move(ev);
+    }
+    r.scores.push_back(score);
+    r.states.push_back(s);
+  }
+  for (int i = 0; i < static_cast<int>(r.scores.size()); ++i) {
+    if (!r.scores[static_cast<std::size_t>(i)].ok) {
+      continue;
+    }
+    const double c = r.scores[static_cast<std::size_t>(i)].criterion;
+    if (r.best < 0 || c < r.scores[static_cast<std::size_t>(r.best)].criterion) {
+      r.second = r.best;
+      r.best = i;
+    } else if (r.second < 0 || c < r.scores[static_cast<std::size_t>(r.second)].criterion) {
+      r.second = i;
+    }
+  }
+  return r;
+}
+
+void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosis& out,
+                       const std::string& removed, double required_gain) {
+  const auto& win = round.scores[static_cast<std::size_t>(round.best)];
+  State next = round.states[static_cast<std::size_t>(round.best)];
+  progress("step " + std::to_string(out.steps.size() + 1) + ": adding " + win.name);
+  Evaluation final_ev = std::move(round.leader);  // the best's (the same rule chose both)
+  bool systematic = false;
+  if (opt_.uncertainties) {
+    // The refit with the model's variants starts from the scored fit. Where it ends on a worse
+    // optimum (beyond 0.5 of the criterion) or below the gain an effect must make (PHM
+    // c1_cut158's helix_lag: 9.3 where the choice had scored 11.1, stated below the 10), the
+    // scored fit stands — what the choice tested — with its statistical σ, and the step says
+    // so. Either way the gain stated is one the choice's test passes.
+    Evaluation with_sys = engine_.evaluate(next, &current, true, &final_ev);
+    if (with_sys.ok && with_sys.criterion <= final_ev.criterion + 0.5 &&
+        current.criterion - with_sys.criterion >= required_gain) {
+      final_ev = std::move(with_sys);
+      systematic = true;
+    }
+  }
+  next.config = final_ev.fit.config;
+  next.hold(final_ev.at_bound);
+  // The dynamometer's own step lists its held parameters; a later one says what it moved.
+  std::vector<Parameter> newly_held;
+  if (win.name != "dynamometer_dynamics") {
+    for (const auto& [held, side] : final_ev.at_bound) {
+      newly_held.emplace_back(held, dynamometer_parameter(next.config, held), 0.0, side);
+    }
+  }
+  Stage st = stage_of(win.name, next, final_ev);
+  st.removed = removed;
+  st.gain = current.criterion - final_ev.criterion;
+  // The speed's σ and the chain's are their own (find_speed(), chain_fit()), not the fit's.
+  const bool from_fit =
+      win.name != "spindle_speed_error" && win.name != "amplifier_drift" && win.name != "mains_hum";
+  st.sigma_statistical_only = from_fit && !systematic;
+  if (round.second >= 0) {
+    const auto& runner_up = round.scores[static_cast<std::size_t>(round.second)];
+    st.runner_up = runner_up.name;
+    st.margin_over_runner_up = runner_up.criterion - win.criterion;
+  }
+  st.candidates = round.scores;
+  st.newly_held = std::move(newly_held);
+  out.steps.push_back(std::move(st));
+  if (!removed.empty()) {
+    out.named_effects.erase(
+        std::remove(out.named_effects.begin(), out.named_effects.end(), removed),
+        out.named_effects.end());
+  }
+  out.named_effects.push_back(win.name);
+  state = next;
+  current = std::move(final_ev);
+  engine_.refine_floor(current);
+}
+
+bool Diagnoser::remove(const std::string& name, State& s,
+                       const std::vector<std::string>& named) const {
+  auto& e = s.config.effects;
+  const auto& started = start_.effects;
+  auto drop = [&](const std::string& p) {
+    s.extra.erase(std::remove(s.extra.begin(), s.extra.end(), p), s.extra.end());
+    s.held.erase(
+        std::remove_if(s.held.begin(), s.held.end(), [&](const auto& h) { return h.first == p; }),
+        s.held.end());
+  };
+  if (name == "runout") {
+    if (s.change_s > 0.0) {
+      return false;
+    }
+    s.fit_runout = false;
+    e.runout.enabled = false;
+    e.runout.offset_um = 0.0;
+  } else if (name == "min_chip_thickness") {
+    if (e.accumulation.enabled) {
+      return false;
+    }
+    e.min_chip.enabled = false;
+  } else if (name == "chip_accumulation") {
+    e.accumulation.enabled = false;
+    e.multi_pass.enabled = started.multi_pass.enabled;
+    e.min_chip.enabled = started.min_chip.enabled ||
+                         std::find(named.begin(), named.end(), "min_chip_thickness") != named.end();
+  } else if (name == "tool_deflection") {
+    e.deflection.enabled = false;
+    drop("stiffness_N_per_um");
+  } else if (name == "helix_lag") {
+    e.helix_lag = started.helix_lag;
+  } else if (name == "dynamometer_dynamics") {
+    e.dynamometer = started.dynamometer;
+    for (const char* p : {"natural_hz_x", "natural_hz_y", "damping_ratio_x", "damping_ratio_y"}) {
+      drop(p);
+    }
+  } else if (name == "tool_wear") {
+    s.wear_trend = false;
+    e.flank_wear = started.flank_wear;
+    drop("wear_um");
+  } else {
+    return false;
+  }
+  return true;
+}
+
+bool Diagnoser::exchange(State& state, Evaluation& current, Diagnosis& out,
+                         const std::vector<std::string>& names) {
+  struct Branch {
+    std::string removed;
+    Round first, second;
+    bool two_steps = false;
+    double criterion = 0.0;
+  };
+  std::optional<Branch> chosen;
+  // A second step adds an effect: only within the step limit.
+  const bool room = static_cast<int>(out.named_effects.size()) < opt_.max_steps;
+  const std::vector<std::string> named = out.named_effects;
+  for (const auto& e : named) {
+    State without = state;
+    if (!remove(e, without, named)) {
+      continue;
+    }
+    // The model without it, refitted: what takes its place must gain `significance` over that,
+    // as a step of the search would (not merely free a step for the one after it: on the cp-Ti
+    // preset's cut at 20 kHz, helix_lag had made way for a rigid tool_deflection, ΔBIC −28
+    // where it stood, and chip_accumulation after it).
+    progress("exchange: the model without " + e);
+    const Evaluation bare = engine_.evaluate(without, &current, false, nullptr);
+    if (!bare.ok) {
+      continue;
+    }
+    Branch b;
+    b.removed = e;
+    b.first = score_round(without, bare, names, "exchange for " + e + ": ", e);
+    if (b.first.best < 0 ||
+        b.first.scores[static_cast<std::size_t>(b.first.best)].gain < opt_.significance) {
+      continue;
+    }
+    b.criterion = b.first.scores[static_cast<std::size_t>(b.first.best)].criterion;
+    if (room) {
+      // The step after it, the effect taken out among the candidates again (its profile anew).
+      b.second = score_round(b.first.states[static_cast<std::size_t>(b.first.best)], b.first.leader,
+                             names, "exchange for " + e + ", then: ", "");
+      if (b.second.best >= 0) {
+        const auto& next = b.second.scores[static_cast<std::size_t>(b.second.best)];
+        if (next.gain >= opt_.significance && next.criterion < b.criterion) {
+          b.criterion = next.criterion;
+          b.two_steps = true;
+        }
+      }
+    }
+    if (!chosen || b.criterion < chosen->criterion) {
+      chosen = std::move(b);
+    }
+  }
+  if (!chosen || chosen->criterion > current.criterion - opt_.significance) {
+    return false;
+  }
+  const double before = current.criterion;
+  // The exchange's own step may lose what the step after it more than wins back.
+  accept(chosen->first, state, current, out, chosen->removed,
+         chosen->two_steps ? -std::numeric_limits<double>::infinity() : opt_.significance);
+  const std::size_t at = out.steps.size() - 1;
+  if (chosen->two_steps) {
+    accept(chosen->second, state, current, out, "", opt_.significance);
+  }
+  out.steps[at].exchange_gain = before - current.criterion;
+  out.steps[at].exchange_steps = chosen->two_steps ? 2 : 1;
+  return true;
+}
+
 Diagnosis Diagnoser::run() {
   const auto t0 = std::chrono::steady_clock::now();
   Diagnosis out;
@@ -1550,136 +1817,39 @@ Diagnosis Diagnoser::run() {
     return true;
   };
   out.stop_reason = "";
-  for (int step = 0; step < opt_.max_steps; ++step) {
+  int exchanges = 0;
+  for (int step = 0;; ++step) {
     if (at_floor(current)) {
       out.stop_reason = "the residual is at the noise floor";
       break;
     }
-    std::vector<CandidateScore> scores;
-    std::vector<State> states;
-    // Only the leader's evaluation is kept (its samples: ~45 bytes per sample of the record; all
-    // eleven candidates' held 600 MB for a 30 s record at 20 kHz).
-    Evaluation leader;
-    int done = 0;
-    for (const auto& name : names) {
-      ++done;
-      progress("step " + std::to_string(step + 1) + ": " + name + " (" + std::to_string(done) +
-               "/" + std::to_string(names.size()) + ")");
-      State s = state;
-      CandidateScore score;
-      score.name = name;
-      std::string why;
-      if (!apply(name, s, current, why)) {
-        continue;  // in the model already
-      }
-      // The fitter searches afresh (its starts and alignment scan) for every effect of the
-      // model: a new effect may move the alignment by a pitch (the flute labelling) or the
-      // runout to another basin, where a refinement from the current fit would stay stuck.
-      // The chain's terms hardly move the model: those refine the current fit.
-      const bool chain = name == "amplifier_drift" || name == "mains_hum";
-      Evaluation ev = (name == "min_chip_thickness" || name == "chip_accumulation")
-                          ? profile_h_min(s, current)
-                      : name == "tool_deflection"
-                          ? profile_stiffness(s, current)
-                          : engine_.evaluate(s, &current, false, chain ? &current : nullptr);
-      if (name == "mains_hum" && ev.ok) {
-        State s60 = s;
-        s60.hum_hz = 60.0;
-        Evaluation ev60 = engine_.evaluate(s60, &current, false, &current);
-        if (ev60.ok && ev60.criterion < ev.criterion) {
-          s = s60;
-          ev = std::move(ev60);
-        }
-      }
-      score.ok = ev.ok;
-      score.message = ev.message;
-      if (ev.ok) {
-        score.criterion = ev.criterion;
-        score.gain = current.criterion - ev.criterion;
-        score.free_parameters = ev.free_parameters;
-        for (std::size_t a = 0; a < 2; ++a) {
-          score.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
-        }
-        score.parameters = added_parameters(name, s, ev, engine_.duration());
-      }
-      // The first of the lowest criteria leads, as the choice below picks it.
-      if (ev.ok && (!leader.ok || ev.criterion < leader.criterion)) {
-        leader = std::move(ev);
-      }
-      scores.push_back(score);
-      states.push_back(s);
+    if (static_cast<int>(out.named_effects.size()) >= opt_.max_steps) {
+      break;  // the step limit
     }
-    int best = -1, second = -1;
-    for (int i = 0; i < static_cast<int>(scores.size()); ++i) {
-      if (!scores[static_cast<std::size_t>(i)].ok) {
-        continue;
-      }
-      const double c = scores[static_cast<std::size_t>(i)].criterion;
-      if (best < 0 || c < scores[static_cast<std::size_t>(best)].criterion) {
-        second = best;
-        best = i;
-      } else if (second < 0 || c < scores[static_cast<std::size_t>(second)].criterion) {
-        second = i;
-      }
-    }
-    if (best < 0) {
+    Round round = score_round(state, current, names,
+                              "step " + std::to_string(out.steps.size() + 1) + ": ", "");
+    if (round.best < 0) {
       out.stop_reason =
-          scores.empty() ? "every candidate is in the model" : "no candidate could be fitted";
-      out.final_candidates = scores;
+          round.scores.empty() ? "every candidate is in the model" : "no candidate could be fitted";
+      out.final_candidates = round.scores;
       break;
     }
-    const auto& win = scores[static_cast<std::size_t>(best)];
+    const auto& win = round.scores[static_cast<std::size_t>(round.best)];
     if (win.gain < opt_.significance) {
+      out.final_candidates = round.scores;  // scored from the final model, not the last step's
+      if (step == 0) {
+        out.initial.candidates = round.scores;
+      }
+      if (exchanges < opt_.max_exchanges && exchange(state, current, out, names)) {
+        ++exchanges;
+        continue;
+      }
       out.stop_reason =
           format("no candidate improves the criterion by %.0f or more (best: ", opt_.significance) +
           win.name + format(", ΔBIC %.1f)", win.gain);
-      out.initial.candidates = step == 0 ? scores : out.initial.candidates;
-      out.final_candidates = scores;  // scored from the final model, not the last step's round
       break;
     }
-    State next = states[static_cast<std::size_t>(best)];
-    progress("step " + std::to_string(step + 1) + ": adding " + win.name);
-    Evaluation final_ev = std::move(leader);  // the best's (the same rule chose both)
-    bool systematic = false;
-    if (opt_.uncertainties) {
-      // The refit with the model's variants starts from the scored fit. Where it ends on a worse
-      // optimum (beyond 0.5 of the criterion) or below the gain an effect must make (PHM
-      // c1_cut158's helix_lag: 9.3 where the choice had scored 11.1, stated below the 10), the
-      // scored fit stands — what the choice tested — with its statistical σ, and the step says
-      // so. Either way the gain stated is one the choice's test passes.
-      Evaluation with_sys = engine_.evaluate(next, &current, true, &final_ev);
-      if (with_sys.ok && with_sys.criterion <= final_ev.criterion + 0.5 &&
-          current.criterion - with_sys.criterion >= opt_.significance) {
-        final_ev = std::move(with_sys);
-        systematic = true;
-      }
-    }
-    next.config = final_ev.fit.config;
-    next.hold(final_ev.at_bound);
-    // The dynamometer's own step lists its held parameters; a later one says what it moved.
-    std::vector<Parameter> newly_held;
-    if (win.name != "dynamometer_dynamics") {
-      for (const auto& [held, side] : final_ev.at_bound) {
-        newly_held.emplace_back(held, dynamometer_parameter(next.config, held), 0.0, side);
-      }
-    }
-    Stage st = stage_of(win.name, next, final_ev);
-    st.gain = current.criterion - final_ev.criterion;
-    // The speed's σ and the chain's are their own (find_speed(), chain_fit()), not the fit's.
-    const bool from_fit = win.name != "spindle_speed_error" && win.name != "amplifier_drift" &&
-                          win.name != "mains_hum";
-    st.sigma_statistical_only = from_fit && !systematic;
-    if (second >= 0) {
-      st.runner_up = scores[static_cast<std::size_t>(second)].name;
-      st.margin_over_runner_up = scores[static_cast<std::size_t>(second)].criterion - win.criterion;
-    }
-    st.candidates = scores;
-    st.newly_held = std::move(newly_held);
-    out.steps.push_back(std::move(st));
-    out.named_effects.push_back(win.name);
-    state = next;
-    current = std::move(final_ev);
-    engine_.refine_floor(current);
+    accept(round, state, current, out, "", opt_.significance);
   }
   if (out.stop_reason.empty()) {
     out.stop_reason =
@@ -1739,6 +1909,17 @@ Diagnosis Diagnoser::run() {
                   (at_floor(current) ? "." : "; something else remains (" + unexplained + ").");
     if (out.named_effects.size() > 1) {
       out.verdict.replace(out.verdict.find("adding it"), 9, "adding them");
+    }
+    for (std::size_t i = 0; i < out.steps.size(); ++i) {
+      const Stage& st = out.steps[i];
+      if (!st.removed.empty() && std::find(out.named_effects.begin(), out.named_effects.end(),
+                                           st.removed) == out.named_effects.end()) {
+        const std::string with = st.exchange_steps == 2 && i + 1 < out.steps.size()
+                                     ? st.added + " and " + out.steps[i + 1].added
+                                     : st.added;
+        out.verdict += " " + st.removed + ", named on the way, gave way to " + with +
+                       format(" (ΔBIC %.1f over the model that held it).", st.exchange_gain);
+      }
     }
   }
   if (!at_floor(current)) {

@@ -68,6 +68,10 @@ struct DiagnoseOptions {
   int steps_per_rev = 720;       ///< the fitted model's angle grid
   int helix_discs = 5;           ///< discs when helix_lag is added
   bool uncertainties = true;     ///< the winner refitted with the fitter's systematic spread
+  /// Exchanges the search makes at most where it stops above the floor (the replacement step:
+  /// an effect named taken out, the best candidate in its place; 0: the greedy search alone).
+  /// Each costs two rounds per effect named and lowers the criterion by `significance` at least.
+  int max_exchanges = 3;
   /// Candidates scored (catalogue names); empty: the whole catalogue.
   std::vector<std::string> candidates;
   /// Called with a short line as the work progresses (a terminal's progress line).
@@ -158,7 +162,14 @@ struct ModelView {
 
 /// The model after a step (or the starting model).
 struct Stage {
-  std::string added;                    ///< effect added at this step ("" for the starting model)
+  std::string added;  ///< effect added at this step ("" for the starting model)
+  /// An exchange (the search's replacement step): the effect named before that `added` takes
+  /// the place of ("" for a plain step). Its candidates were scored from the model without it.
+  std::string removed;
+  /// On an exchange: the criterion gained over the model before it by the exchange and the step
+  /// taken with it (the exchange's own `gain` may be below zero where that step wins it back).
+  double exchange_gain = 0.0;
+  int exchange_steps = 0;               ///< on an exchange: 1, or 2 with the step taken with it
   std::vector<Parameter> parameters;    ///< the added effect's
   std::vector<Parameter> coefficients;  ///< the force law's, refitted
   std::array<double, 2> residual_rms_N{};

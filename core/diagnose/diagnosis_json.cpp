@@ -109,6 +109,11 @@ nlohmann::json to_json(const Stage& s) {
     j["newly_held"] = parameters(s.newly_held);
     j["runner_up"] = s.runner_up.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.runner_up);
     j["margin_over_runner_up"] = s.margin_over_runner_up;
+    j["removed"] = s.removed.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.removed);
+    if (!s.removed.empty()) {
+      j["exchange_gain"] = s.exchange_gain;
+      j["exchange_steps"] = s.exchange_steps;
+    }
   }
   return j;
 }
