@@ -167,6 +167,30 @@ std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
   return out.empty() ? "—" : out;
 }
 
+namespace {
+
+/// A table of the candidates scored from a model, under `heading` ("" without any).
+std::string candidate_table(const std::string& heading,
+                            const std::vector<diagnose::CandidateScore>& cands) {
+  if (cands.empty()) {
+    return "";
+  }
+  std::string md = heading +
+                   "\n\n| candidate | ΔBIC gained | residual fx / fy (N) | parameters |\n"
+                   "|---|---|---|---|\n";
+  for (const auto& c : cands) {
+    if (c.ok) {
+      md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {} |\n", c.name, c.gain,
+                        c.residual_rms_N[0], c.residual_rms_N[1], parameter_text(c.parameters));
+    } else {
+      md += fmt::format("| {} | — | — | not fitted: {} |\n", c.name, c.message);
+    }
+  }
+  return md;
+}
+
+}  // namespace
+
 std::string markdown(const Diagnosis& d, const std::string& title, bool have_plots,
                      const std::string& plot_problem) {
   std::string md = fmt::format("# Diagnosis: {}\n\n**{}**\n\n", title, d.verdict);
@@ -250,23 +274,18 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
     }
     md += ".\n";
     // From this model: the round that chose the next stage, or after the last, the final round.
-    // An exchange's round scored the model without the effect it replaces.
-    const auto& cands = i + 1 < stages.size() ? scored.candidates : d.final_candidates;
-    if (!cands.empty()) {
-      md += (i + 1 < stages.size() && !scored.removed.empty()
-                 ? "\nCandidates scored from this model without " + scored.removed +
-                       " (the exchange's round; ΔBIC against the model without it):"
-                 : std::string("\nCandidates scored from this model:")) +
-            "\n\n| candidate | ΔBIC gained | residual fx / fy (N) | parameters |\n"
-            "|---|---|---|---|\n";
-      for (const auto& c : cands) {
-        if (c.ok) {
-          md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {} |\n", c.name, c.gain,
-                            c.residual_rms_N[0], c.residual_rms_N[1], parameter_text(c.parameters));
-        } else {
-          md += fmt::format("| {} | — | — | not fitted: {} |\n", c.name, c.message);
-        }
-      }
+    // Before an exchange, the round in which nothing gained, then the exchange's round, scored
+    // from the model without the effect it replaces.
+    const bool exchange_next = i + 1 < stages.size() && !scored.removed.empty();
+    if (exchange_next) {
+      md += candidate_table("\nCandidates scored from this model (none gained enough):",
+                            scored.candidates_before_exchange);
+      md += candidate_table("\nCandidates scored from this model without " + scored.removed +
+                                " (the exchange's round; ΔBIC against the model without it):",
+                            scored.candidates);
+    } else {
+      md += candidate_table("\nCandidates scored from this model:",
+                            i + 1 < stages.size() ? scored.candidates : d.final_candidates);
     }
     if (have_plots) {
       md += fmt::format(

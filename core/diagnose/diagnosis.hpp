@@ -169,7 +169,10 @@ struct Stage {
   /// On an exchange: the criterion gained over the model before it by the exchange and the step
   /// taken with it (the exchange's own `gain` may be below zero where that step wins it back).
   double exchange_gain = 0.0;
-  int exchange_steps = 0;               ///< on an exchange: 1, or 2 with the step taken with it
+  int exchange_steps = 0;  ///< on an exchange: 1, or 2 with the step taken with it
+  /// On an exchange: the round scored from the model before it, in which no candidate gained
+  /// enough (empty where the step limit, not the gains, stopped the search).
+  std::vector<CandidateScore> candidates_before_exchange;
   std::vector<Parameter> parameters;    ///< the added effect's
   std::vector<Parameter> coefficients;  ///< the force law's, refitted
   std::array<double, 2> residual_rms_N{};
@@ -205,7 +208,8 @@ struct Diagnosis {
   std::array<double, 2> noise_floor_N{};
   Stage initial;
   std::vector<Stage> steps;
-  std::vector<std::string> named_effects;  ///< in the order added
+  /// The final model's effects, in the order added (one an exchange took out is not among them).
+  std::vector<std::string> named_effects;
   /// The last round: every candidate scored from the final model (none gained enough).
   std::vector<CandidateScore> final_candidates;
   std::string stop_reason;

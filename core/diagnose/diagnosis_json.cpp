@@ -113,6 +113,7 @@ nlohmann::json to_json(const Stage& s) {
     if (!s.removed.empty()) {
       j["exchange_gain"] = s.exchange_gain;
       j["exchange_steps"] = s.exchange_steps;
+      j["candidates_before_exchange"] = candidates(s.candidates_before_exchange);
     }
   }
   return j;

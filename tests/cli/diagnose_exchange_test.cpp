@@ -73,6 +73,13 @@ TEST(DiagnoseExchange, AnEffectStandingInForMissingOnesGivesWayToThem) {
   for (std::size_t i = 0; i < exchange; ++i) {
     EXPECT_NE(steps[i]["added"], "tool_deflection") << r.output;
   }
+  // The round that stopped the greedy search: tool_deflection scored, gaining less than 10.
+  bool deflection_scored = false;
+  for (const auto& c : ex["candidates_before_exchange"]) {
+    EXPECT_LT(c["gain"].get<double>(), 10.0) << c.dump();
+    deflection_scored = deflection_scored || c["name"] == "tool_deflection";
+  }
+  EXPECT_TRUE(deflection_scored) << ex["candidates_before_exchange"].dump(1);
   // The model before the exchange, its criterion, and the one after the step taken with it.
   const double before = steps[exchange - 1]["criterion"].get<double>();
   const double after = steps[exchange + 1]["criterion"].get<double>();
@@ -112,6 +119,11 @@ TEST(DiagnoseExchange, AnEffectStandingInForMissingOnesGivesWayToThem) {
   const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("chip_accumulation in place of min_chip_thickness (the exchange: ΔBIC "),
             std::string::npos);
+  EXPECT_NE(text.find("Candidates scored from this model without min_chip_thickness"),
+            std::string::npos);
+  // The search stopped at the step limit after the exchange: no round from the final model.
+  EXPECT_EQ(d["stop_reason"], "the step limit was reached");
+  EXPECT_TRUE(d["final_candidates"].empty()) << d["final_candidates"].dump(1);
 }
 
 }  // namespace
