@@ -1520,6 +1520,15 @@ Stage Diagnoser::stage_of(const std::string& added, const State& s, const Evalua
   return st;
 }
 
+/// Names as a sentence lists them: "a", "a and b", "a, b and c".
+std::string joined(const std::vector<std::string>& names) {
+  std::string list;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    list += (i == 0 ? "" : (i + 1 == names.size() ? " and " : ", ")) + names[i];
+  }
+  return list;
+}
+
 /// What the verdict says of the exchanges: each effect named on the way and not in the final
 /// model, once, with the final model's effects that took its place ("" without exchanges).
 std::string gave_way(const Diagnosis& d) {
@@ -1540,7 +1549,9 @@ std::string gave_way(const Diagnosis& d) {
       gone.push_back(st.removed);
       by.emplace_back();
     }
-    for (std::size_t j = i; j < std::min(d.steps.size(), i + std::size_t(st.exchange_steps)); ++j) {
+    const std::size_t end =
+        std::min(d.steps.size(), i + static_cast<std::size_t>(st.exchange_steps));
+    for (std::size_t j = i; j < end; ++j) {
       const std::string& n = d.steps[j].added;
       if (in_final(n) && std::find(by[k].begin(), by[k].end(), n) == by[k].end()) {
         by[k].push_back(n);
@@ -1549,12 +1560,9 @@ std::string gave_way(const Diagnosis& d) {
   }
   std::string text;
   for (std::size_t k = 0; k < gone.size(); ++k) {
-    std::string list;
-    for (std::size_t i = 0; i < by[k].size(); ++i) {
-      list += (i == 0 ? "" : (i + 1 == by[k].size() ? " and " : ", ")) + by[k][i];
-    }
     text += " " + gone[k] + ", named on the way, " +
-            (list.empty() ? std::string("was taken out again.") : "gave way to " + list + ".");
+            (by[k].empty() ? std::string("was taken out again.")
+                           : "gave way to " + joined(by[k]) + ".");
   }
   return text;
 }
@@ -1876,7 +1884,7 @@ Diagnosis Diagnoser::run() {
   };
   out.stop_reason = "";
   int exchanges = 0;
-  for (int step = 0;; ++step) {
+  for (;;) {
     if (at_floor(current)) {
       out.stop_reason = "the residual is at the noise floor";
       break;
@@ -1902,7 +1910,7 @@ Diagnosis Diagnoser::run() {
         continue;
       }
       out.final_candidates = round.scores;  // scored from the final model, not the last step's
-      if (step == 0) {
+      if (out.steps.empty()) {              // the starting model's round
         out.initial.candidates = round.scores;
       }
       out.stop_reason =
@@ -1949,11 +1957,7 @@ Diagnosis Diagnoser::run() {
             : format("No effect tried explains the residual (%.1f× the noise floor): ", ratio) +
                   unexplained + ".";
   } else {
-    std::string list;
-    for (std::size_t i = 0; i < out.named_effects.size(); ++i) {
-      list += (i == 0 ? "" : (i + 1 == out.named_effects.size() ? " and " : ", ")) +
-              out.named_effects[i];
-    }
+    const std::string list = joined(out.named_effects);
     // "Brought down" only where both axes fell: the criterion weighs them together, and one may
     // rise while the other falls (PHM c1_cut158: fx 9.29 → 3.78 N, fy 5.58 → 5.72 N).
     const auto& first_rms = out.initial.residual_rms_N;

@@ -70,7 +70,8 @@ struct DiagnoseOptions {
   bool uncertainties = true;     ///< the winner refitted with the fitter's systematic spread
   /// Exchanges the search makes at most where it stops above the floor (the replacement step:
   /// an effect named taken out, the best candidate in its place; 0: the greedy search alone).
-  /// Each costs two rounds per effect named and lowers the criterion by `significance` at least.
+  /// Each costs a refit and one or two rounds per effect named, and lowers the criterion by
+  /// `significance` at least.
   int max_exchanges = 3;
   /// Candidates scored (catalogue names); empty: the whole catalogue.
   std::vector<std::string> candidates;
