@@ -123,9 +123,14 @@ FeedTrend feed_trend(const std::vector<double>& feed_um, const std::vector<doubl
   }
   if (t.exponent >= 0.6) {
     t.name = "proportional_to_feed";
+    // The exact path departs from f_t·sin θ by ~f_t/(2R) of the chip: its share of the force
+    // grows as the feed (relative exponent ~1), where an effect riding on the force keeps it.
     t.suggests =
-        "an error that keeps its share of the force: the force law's coefficients or size "
-        "effect, or an effect riding on the force (dynamometer_dynamics, helix_lag)";
+        t.relative_exponent >= 0.6
+            ? "an error whose share of the force grows with the feed: the tooth path "
+              "(trochoidal_path: ~f_t/(2R) of the chip), or the force law's size effect"
+            : "an error that keeps its share of the force: the force law's coefficients or size "
+              "effect, or an effect riding on the force (dynamometer_dynamics, helix_lag)";
   } else if (t.exponent <= -0.4) {
     t.name = "grows_as_feed_falls";
     t.suggests =

@@ -5,7 +5,7 @@
 namespace millwatch::diagnose {
 namespace {
 
-constexpr std::array<CandidateInfo, 11> kCatalogue = {{
+constexpr std::array<CandidateInfo, 12> kCatalogue = {{
     {"runout", CandidateKind::kModelEffect,
      "once-per-revolution pattern: spindle-frequency harmonics that are not tooth-passing "
      "harmonics; one flute's peak above the other's",
@@ -29,6 +29,13 @@ constexpr std::array<CandidateInfo, 11> kCatalogue = {{
      "entry and exit smeared over the helix lag; tooth-passing harmonics falling faster than a "
      "straight edge's",
      "effects.helix_lag: axial discs trailing the tip ([000] eqs 1-4)", "none (discs)"},
+    {"trochoidal_path", CandidateKind::kModelEffect,
+     "entry and exit off f_t·sin θ by the chip's curvature term f_t²·cos²θ/(2R); the flutes' "
+     "chips shifted against each other by the feed-phase term (large feed per tooth against the "
+     "radius)",
+     "effects.trochoidal: the exact trochoidal flute path, its crossing found by Newton-Raphson "
+     "([002] eqs 2-10, [000] eqs 9-18)",
+     "none (geometry)"},
     {"dynamometer_dynamics", CandidateKind::kModelEffect,
      "harmonics near the dynamometer's resonance amplified and shifted in phase",
      "effects.dynamometer: a second-order resonance per axis ([001]/[003])",

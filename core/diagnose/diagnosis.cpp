@@ -1005,19 +1005,19 @@ class Diagnoser {
   /// (the speed and the chain's terms, which nothing else stands in for; min_chip under
   /// chip_accumulation; runout under runout_change).
   bool remove(const std::string& name, State& s, const std::vector<std::string>& named) const;
-  /// Scores every candidate of `names` but `excluded` on `state` (`current` its evaluation).
+  /// Scores every candidate of `names` but the `excluded` on `state` (`current` its evaluation).
   Round score_round(const State& state, const Evaluation& current,
                     const std::vector<std::string>& names, const std::string& label,
-                    const std::string& excluded);
+                    const std::vector<std::string>& excluded);
   /// Takes the round's best into the model: refitted with the model's variants (where
   /// `with_variants`) if that holds `required_gain` over `current`, its stage recorded
   /// (`removed`: the effect it replaces).
   void accept(Round& round, State& state, Evaluation& current, Diagnosis& out,
               const std::string& removed, double required_gain, bool with_variants);
   /// The replacement step: each effect named taken out, the best candidate in its place and the
-  /// best step after it; the best such exchange taken where it gains `significance`. `trigger`:
-  /// the round from the current model in which no candidate gained (kept on the exchange's
-  /// stage).
+  /// best step after it, neither putting it back; the best such exchange taken where it gains
+  /// `significance`. `trigger`: the round from the current model in which no candidate gained
+  /// (kept on the exchange's stage).
   bool exchange(State& state, Evaluation& current, Diagnosis& out,
                 const std::vector<std::string>& names, const std::vector<CandidateScore>& trigger);
   Stage stage_of(const std::string& added, const State& s, const Evaluation& ev);
@@ -1082,6 +1082,12 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
     }
     e.helix_lag.enabled = true;
     e.helix_lag.discs = opt_.helix_discs;
+  } else if (name == "trochoidal_path") {
+    if (e.trochoidal.enabled) {
+      why = "already in the model";
+      return false;
+    }
+    e.trochoidal.enabled = true;
   } else if (name == "dynamometer_dynamics") {
     if (e.dynamometer.enabled) {
       why = "already in the model";
@@ -1569,12 +1575,12 @@ std::string gave_way(const Diagnosis& d) {
 
 Round Diagnoser::score_round(const State& state, const Evaluation& current,
                              const std::vector<std::string>& names, const std::string& label,
-                             const std::string& excluded) {
+                             const std::vector<std::string>& excluded) {
   Round r;
   int done = 0;
   for (const auto& name : names) {
     ++done;
-    if (name == excluded) {
+    if (std::find(excluded.begin(), excluded.end(), name) != excluded.end()) {
       continue;
     }
     progress(label + name + " (" + std::to_string(done) + "/" + std::to_string(names.size()) + ")");
@@ -1726,6 +1732,8 @@ bool Diagnoser::remove(const std::string& name, State& s,
     drop("stiffness_N_per_um");
   } else if (name == "helix_lag") {
     e.helix_lag = started.helix_lag;
+  } else if (name == "trochoidal_path") {
+    e.trochoidal = started.trochoidal;
   } else if (name == "dynamometer_dynamics") {
     e.dynamometer = started.dynamometer;
     for (const char* p : {"natural_hz_x", "natural_hz_y", "damping_ratio_x", "damping_ratio_y"}) {
@@ -1780,16 +1788,22 @@ bool Diagnoser::exchange(State& state, Evaluation& current, Diagnosis& out,
     without.hold(bare.at_bound);
     Branch b;
     b.removed = e;
-    b.first = score_round(without, bare, names, "exchange for " + e + ": ", e);
+    // Neither step puts the effect back: back, it makes the branch one step that the search's
+    // round had scored below `significance`, now gaining by a refit from elsewhere (on the cp-Ti
+    // preset's cut: runout out for runout_change, which puts it back with a change the truth
+    // has not, ΔBIC 17; trochoidal_path out for tool_wear and back in, ΔBIC 105).
+    const std::vector<std::string> excluded =
+        e == "runout" ? std::vector<std::string>{e, "runout_change"} : std::vector<std::string>{e};
+    b.first = score_round(without, bare, names, "exchange for " + e + ": ", excluded);
     if (b.first.best < 0 || !pins_it(b.first.scores[static_cast<std::size_t>(b.first.best)])) {
       continue;
     }
     b.criterion = b.first.scores[static_cast<std::size_t>(b.first.best)].criterion;
-    // The step after it, the effect taken out among the candidates again (its profile anew).
-    // Scored against the first's scored fit, which accept() therefore takes without the variants'
-    // refit (below); each candidate's fit is whole, its own held parameters its own.
+    // The step after it, scored against the first's scored fit, which accept() therefore takes
+    // without the variants' refit (below); each candidate's fit is whole, its own held parameters
+    // its own.
     b.second = score_round(b.first.states[static_cast<std::size_t>(b.first.best)], b.first.leader,
-                           names, "exchange for " + e + ", then: ", "");
+                           names, "exchange for " + e + ", then: ", excluded);
     if (b.second.best >= 0) {
       const auto& next = b.second.scores[static_cast<std::size_t>(b.second.best)];
       if (pins_it(next) && next.criterion < b.criterion) {
@@ -1896,7 +1910,7 @@ Diagnosis Diagnoser::run() {
       break;
     }
     Round round = score_round(state, current, names,
-                              "step " + std::to_string(out.steps.size() + 1) + ": ", "");
+                              "step " + std::to_string(out.steps.size() + 1) + ": ", {});
     if (round.best < 0) {
       out.stop_reason =
           round.scores.empty() ? "every candidate is in the model" : "no candidate could be fitted";

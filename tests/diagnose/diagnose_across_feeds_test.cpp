@@ -111,6 +111,12 @@ TEST(FeedTrend, ReadsTheExponentOfAnAnalyticSeries) {
   EXPECT_NEAR(t.exponent, 1.0, 1e-12);
   EXPECT_NEAR(t.relative_exponent, 0.3, 1e-12);
   EXPECT_NEAR(t.exponent_sigma, 0.0, 1e-9);
+  EXPECT_NE(t.suggests.find("riding on the force"), std::string::npos) << t.suggests;
+  // Its share of the force growing as the feed (f_t^1.7 over a force ∝ f_t^0.7): the tooth path.
+  t = feed_trend(f, series(0.05, 1.7), floor, measured, "tooth_passing_harmonics");
+  EXPECT_EQ(t.name, "proportional_to_feed");
+  EXPECT_NEAR(t.relative_exponent, 1.0, 1e-12);
+  EXPECT_NE(t.suggests.find("trochoidal_path"), std::string::npos) << t.suggests;
   t = feed_trend(f, series(0.5, -0.3), floor, measured, "spindle_harmonics");
   EXPECT_EQ(t.name, "independent_of_feed");
   EXPECT_NEAR(t.exponent, -0.3, 1e-12);

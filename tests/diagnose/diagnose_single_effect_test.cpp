@@ -70,8 +70,9 @@ TEST_P(HiddenEffect, IsNamedAddedAndClosesTheGap) {
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, HiddenEffect,
                          ::testing::Values("runout", "min_chip_thickness", "chip_accumulation",
-                                           "tool_deflection", "helix_lag", "dynamometer_dynamics",
-                                           "spindle_speed_error", "amplifier_drift", "mains_hum"),
+                                           "tool_deflection", "helix_lag", "trochoidal_path",
+                                           "dynamometer_dynamics", "spindle_speed_error",
+                                           "amplifier_drift", "mains_hum"),
                          [](const auto& p) { return std::string(p.param); });
 
 TEST(Diagnose, NegativeControlAddsNothing) {
