@@ -62,6 +62,14 @@ struct State {
       held.push_back(h);
     }
   }
+
+  /// Takes a parameter out of the fit, free or held (an effect taken out: hold()'s reverse).
+  void drop(const std::string& name) {
+    extra.erase(std::remove(extra.begin(), extra.end(), name), extra.end());
+    held.erase(
+        std::remove_if(held.begin(), held.end(), [&](const auto& h) { return h.first == name; }),
+        held.end());
+  }
 };
 
 /// One fit of a state to the record.
@@ -1704,12 +1712,6 @@ bool Diagnoser::remove(const std::string& name, State& s,
                        const std::vector<std::string>& named) const {
   auto& e = s.config.effects;
   const auto& started = start_.effects;
-  auto drop = [&](const std::string& p) {
-    s.extra.erase(std::remove(s.extra.begin(), s.extra.end(), p), s.extra.end());
-    s.held.erase(
-        std::remove_if(s.held.begin(), s.held.end(), [&](const auto& h) { return h.first == p; }),
-        s.held.end());
-  };
   if (name == "runout") {
     if (s.change_s > 0.0) {
       return false;
@@ -1729,7 +1731,7 @@ bool Diagnoser::remove(const std::string& name, State& s,
                          std::find(named.begin(), named.end(), "min_chip_thickness") != named.end();
   } else if (name == "tool_deflection") {
     e.deflection.enabled = false;
-    drop("stiffness_N_per_um");
+    s.drop("stiffness_N_per_um");
   } else if (name == "helix_lag") {
     e.helix_lag = started.helix_lag;
   } else if (name == "trochoidal_path") {
@@ -1737,12 +1739,12 @@ bool Diagnoser::remove(const std::string& name, State& s,
   } else if (name == "dynamometer_dynamics") {
     e.dynamometer = started.dynamometer;
     for (const char* p : {"natural_hz_x", "natural_hz_y", "damping_ratio_x", "damping_ratio_y"}) {
-      drop(p);
+      s.drop(p);
     }
   } else if (name == "tool_wear") {
     s.wear_trend = false;
     e.flank_wear = started.flank_wear;
-    drop("wear_um");
+    s.drop("wear_um");
   } else {
     return false;
   }
