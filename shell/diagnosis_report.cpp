@@ -232,6 +232,20 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
         s.runner_up.empty() ? "—"
                             : fmt::format("{} ({:.1f})", s.runner_up, s.margin_over_runner_up));
   }
+  // A step's row gives its own model's values; later steps' refits move them.
+  std::string final_parameters;
+  for (const auto& e : d.final_parameters) {
+    if (!e.parameters.empty()) {
+      final_parameters +=
+          (final_parameters.empty() ? "" : "; ") + e.effect + ": " + parameter_text(e.parameters);
+    }
+  }
+  if (!final_parameters.empty()) {
+    md +=
+        "\nParameters of the final model (its last fit; each step's row gives its own model's, "
+        "which later steps' refits move): " +
+        final_parameters + ".\n";
+  }
   md += "\nForce coefficients of the final model: " + parameter_text(stages.back()->coefficients) +
         ".\n";
   if (!d.sigma_caveat.empty()) {

@@ -1029,6 +1029,10 @@ class Diagnoser {
   bool exchange(State& state, Evaluation& current, Diagnosis& out,
                 const std::vector<std::string>& names, const std::vector<CandidateScore>& trigger);
   Stage stage_of(const std::string& added, const State& s, const Evaluation& ev);
+  /// Each named effect's parameters in the final model (`s`, fitted by `ev`); the dynamometer's
+  /// held ones with their bound.
+  std::vector<EffectParameters> final_parameters(const std::vector<std::string>& named,
+                                                 const State& s, const Evaluation& ev) const;
   /// h_min by its profile: the chip regime switches on the model's angle grid, so the force is
   /// piecewise constant in h_min on a fine scale and a derivative-based fit would not move it.
   /// The criterion on a geometric grid of h_min over (0.05, 1.5)·f_t·…, then a golden section
@@ -1534,6 +1538,27 @@ Stage Diagnoser::stage_of(const std::string& added, const State& s, const Evalua
   return st;
 }
 
+std::vector<EffectParameters> Diagnoser::final_parameters(const std::vector<std::string>& named,
+                                                          const State& s,
+                                                          const Evaluation& ev) const {
+  std::vector<EffectParameters> out;
+  for (const auto& name : named) {
+    EffectParameters e{name, added_parameters(name, s, ev, engine_.duration())};
+    if (name == "dynamometer_dynamics") {
+      // added_parameters lists what this fit held; every step's holds are the state's.
+      e.parameters.erase(std::remove_if(e.parameters.begin(), e.parameters.end(),
+                                        [](const Parameter& p) { return !p.at_bound.empty(); }),
+                         e.parameters.end());
+      model::ModelConfig c = s.config;
+      for (const auto& [held, side] : s.held) {
+        e.parameters.emplace_back(held, dynamometer_parameter(c, held), 0.0, side);
+      }
+    }
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 /// Names as a sentence lists them: "a", "a and b", "a, b and c".
 std::string joined(const std::vector<std::string>& names) {
   std::string list;
@@ -1947,6 +1972,7 @@ Diagnosis Diagnoser::run() {
     out.at_bound.emplace_back(name, dynamometer_parameter(out.final_model, name), 0.0, side);
   }
   out.spindle_rpm = state.rpm;
+  out.final_parameters = final_parameters(out.named_effects, state, current);
 
   const auto& last_rms =
       out.steps.empty() ? out.initial.residual_rms_N : out.steps.back().residual_rms_N;

@@ -197,6 +197,12 @@ struct Stage {
   ModelView view;
 };
 
+/// An effect of the final model and its parameters.
+struct EffectParameters {
+  std::string effect;
+  std::vector<Parameter> parameters;
+};
+
 struct Diagnosis {
   bool ok = false;
   std::string message;  ///< why not, when not ok
@@ -219,6 +225,11 @@ struct Diagnosis {
   /// step's model, and what the model lacks biases its parameters beyond them ("" at the floor).
   std::string sigma_caveat;
   model::ModelConfig final_model;
+  /// The final model's effects (as named_effects) with their parameters as its last fit left
+  /// them: a step's own parameters are its model's, and a later step's refit moves them (on the
+  /// cp-Ti preset's cut r_CE2 − r_CE1 went from −1.88 µm at the runout's step, standing in for
+  /// the dynamometer and ploughing still missing, to about −2.9 in the final model).
+  std::vector<EffectParameters> final_parameters;
   /// The final model's parameters held at a physical bound (kDampingRatioMin/Max), with the bound.
   std::vector<Parameter> at_bound;
   double seconds = 0.0;  ///< wall-clock time

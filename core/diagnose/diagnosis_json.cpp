@@ -133,6 +133,10 @@ nlohmann::json to_json(const Diagnosis& d) {
                    {"extension", c.extension},
                    {"parameters", c.parameters}});
   }
+  nlohmann::json final = nlohmann::json::object();
+  for (const auto& e : d.final_parameters) {
+    final[e.effect] = parameters(e.parameters);
+  }
   return {{"named_effects", d.named_effects},
           {"steps", steps},
           {"final_candidates", candidates(d.final_candidates)},
@@ -144,6 +148,7 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"verdict", d.verdict},
           {"sigma_caveat",
            d.sigma_caveat.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.sigma_caveat)},
+          {"final_parameters", final},
           {"parameters_at_bound", parameters(d.at_bound)},
           {"damping_ratio_range", {kDampingRatioMin, kDampingRatioMax}},
           {"natural_hz_range", {kNaturalHzMin, kNaturalHzMax}},

@@ -4,7 +4,9 @@
 // residual_rms_N {fx, fy}, residual_percent {fx, fy}, criterion, gain, runner_up,
 // margin_over_runner_up, candidates, localisation}], initial (the starting model, same form),
 // initial_residual_rms_N, final_residual_rms_N, noise_floor_N, measured_rms_N (each {fx, fy}),
-// verdict, stop_reason, band_hz, effective_samples_per_axis, criterion ("BIC"), the catalogue.
+// final_parameters {effect: {name: {value, sigma}}} (the final model's, as its last fit left
+// them), verdict, stop_reason, band_hz, effective_samples_per_axis, criterion ("BIC"), the
+// catalogue.
 
 #include <nlohmann/json.hpp>
 

@@ -143,6 +143,14 @@ TEST(DiagnoseExchange, AnEffectStandingInForMissingOnesGivesWayToThem) {
   EXPECT_EQ(d["stop_reason"].get<std::string>().rfind("no candidate improves", 0), 0U)
       << d["stop_reason"];
   EXPECT_FALSE(d["final_candidates"].empty());
+  // The final model's runout against the truth's r_CE2 − r_CE1 = −2ρ·cos γ (ρ 1.82 µm at 0.58 rad:
+  // −3.045 µm); at its own step, before the dynamometer, the ploughing and the deflection were
+  // in, it read −1.88 µm, standing in for them.
+  ASSERT_TRUE(d["final_parameters"].contains("runout")) << d["final_parameters"].dump(1);
+  const auto& dr = d["final_parameters"]["runout"]["r_ce2_minus_r_ce1_um"];
+  const double truth_dr_um = -2.0 * 1.82 * std::cos(0.58);
+  EXPECT_LE(std::fabs(dr["value"].get<double>() - truth_dr_um), 3.0 * dr["sigma"].get<double>())
+      << dr.dump();
   EXPECT_LT(d["final_residual_rms_N"]["fx"].get<double>(),
             steps[exchange + 1]["residual_rms_N"]["fx"].get<double>());
   EXPECT_LT(d["final_residual_rms_N"]["fy"].get<double>(),

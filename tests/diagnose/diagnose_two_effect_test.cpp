@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <ostream>
 #include <string>
@@ -69,6 +70,55 @@ INSTANTIATE_TEST_SUITE_P(Pairs, HiddenPair,
                          [](const auto& p) {
                            return std::string(p.param.first) + "_and_" + p.param.second;
                          });
+
+const Parameter* find(const std::vector<Parameter>& ps, const std::string& name) {
+  const auto it =
+      std::find_if(ps.begin(), ps.end(), [&](const Parameter& p) { return p.name == name; });
+  return it == ps.end() ? nullptr : &*it;
+}
+
+// The final model's parameters are its last fit's: the runout's radius difference named before
+// the deflection is refitted with it, and both agree with the truth (ρ 1 µm at 0.6 rad: r_CE2 −
+// r_CE1 = −2ρ·cos γ = −1.651 µm; 0.15 N/µm).
+TEST(Diagnose, TheFinalModelsParametersAreItsLastFits) {
+  const auto cut = test::hidden_effect_cut({"runout", "tool_deflection"});
+  const Diagnosis d = diagnose(cut.record, cut.start);
+  print(d);
+  ASSERT_TRUE(d.ok) << d.message;
+  ASSERT_EQ(d.final_parameters.size(), d.named_effects.size());
+  for (std::size_t i = 0; i < d.named_effects.size(); ++i) {
+    EXPECT_EQ(d.final_parameters[i].effect, d.named_effects[i]);
+  }
+  const auto runout = std::find_if(d.final_parameters.begin(), d.final_parameters.end(),
+                                   [](const auto& e) { return e.effect == "runout"; });
+  const auto deflection = std::find_if(d.final_parameters.begin(), d.final_parameters.end(),
+                                       [](const auto& e) { return e.effect == "tool_deflection"; });
+  ASSERT_NE(runout, d.final_parameters.end()) << d.verdict;
+  ASSERT_NE(deflection, d.final_parameters.end()) << d.verdict;
+  const Parameter* dr = find(runout->parameters, "r_ce2_minus_r_ce1_um");
+  const Parameter* k = find(deflection->parameters, "stiffness_N_per_um");
+  ASSERT_NE(dr, nullptr);
+  ASSERT_NE(k, nullptr);
+  std::printf("  final: r_ce2 - r_ce1 = %.4f ± %.4f um, stiffness = %.4f ± %.4f N/um\n", dr->value,
+              dr->sigma, k->value, k->sigma);
+  EXPECT_LE(std::fabs(dr->value - (-1.6507)), 3.0 * dr->sigma) << dr->value << " ± " << dr->sigma;
+  EXPECT_LE(std::fabs(k->value - 0.15), 3.0 * k->sigma) << k->value << " ± " << k->sigma;
+  // The stiffness was the last step's: its final value is that step's.
+  const auto& last = d.steps.back();
+  if (last.added == "tool_deflection") {
+    const Parameter* at_step = find(last.parameters, "stiffness_N_per_um");
+    ASSERT_NE(at_step, nullptr);
+    EXPECT_DOUBLE_EQ(at_step->value, k->value);
+    // The runout's step gave the model before the deflection; the final fit moved it.
+    for (const auto& st : d.steps) {
+      if (st.added == "runout") {
+        const Parameter* before = find(st.parameters, "r_ce2_minus_r_ce1_um");
+        ASSERT_NE(before, nullptr);
+        EXPECT_NE(before->value, dr->value);
+      }
+    }
+  }
+}
 
 TEST(Diagnose, AccumulationImitatingRunoutIsNamedAccumulation) {
   const auto cut = test::hidden_effect_cut({"accumulation_like_runout"});
