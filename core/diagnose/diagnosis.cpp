@@ -842,6 +842,17 @@ void bound_radius(const identify::FitResult& fit, std::size_t j, Parameter& p) {
   }
 }
 
+/// Parameters held at a physical bound (name → "lower"/"upper"), each with its value in
+/// `config` (the bound) and no σ.
+std::vector<Parameter> held_parameters(
+    model::ModelConfig config, const std::vector<std::pair<std::string, std::string>>& held) {
+  std::vector<Parameter> out;
+  for (const auto& [name, side] : held) {
+    out.emplace_back(name, dynamometer_parameter(config, name), 0.0, side);
+  }
+  return out;
+}
+
 /// The parameters a candidate added, from its evaluation.
 std::vector<Parameter> added_parameters(const std::string& name, const State& s,
                                         const Evaluation& ev, double duration_s) {
@@ -885,9 +896,8 @@ std::vector<Parameter> added_parameters(const std::string& name, const State& s,
       }
     }
     if (name == "dynamometer_dynamics") {
-      for (const auto& [held, side] : ev.at_bound) {
-        model::ModelConfig c = fit.config;
-        out.push_back({held, dynamometer_parameter(c, held), 0.0, side});
+      for (auto& p : held_parameters(fit.config, ev.at_bound)) {
+        out.push_back(std::move(p));
       }
     }
   } else if (name == "spindle_speed_error") {
@@ -1549,9 +1559,8 @@ std::vector<EffectParameters> Diagnoser::final_parameters(const std::vector<std:
       e.parameters.erase(std::remove_if(e.parameters.begin(), e.parameters.end(),
                                         [](const Parameter& p) { return !p.at_bound.empty(); }),
                          e.parameters.end());
-      model::ModelConfig c = s.config;
-      for (const auto& [held, side] : s.held) {
-        e.parameters.emplace_back(held, dynamometer_parameter(c, held), 0.0, side);
+      for (auto& p : held_parameters(s.config, s.held)) {
+        e.parameters.push_back(std::move(p));
       }
     }
     out.push_back(std::move(e));
@@ -1703,9 +1712,7 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
   // The dynamometer's own step lists its held parameters; a later one says what it moved.
   std::vector<Parameter> newly_held;
   if (win.name != "dynamometer_dynamics") {
-    for (const auto& [held, side] : final_ev.at_bound) {
-      newly_held.emplace_back(held, dynamometer_parameter(next.config, held), 0.0, side);
-    }
+    newly_held = held_parameters(next.config, final_ev.at_bound);
   }
   Stage st = stage_of(win.name, next, final_ev);
   st.removed = removed;
@@ -1968,9 +1975,7 @@ Diagnosis Diagnoser::run() {
   out.noise_floor_N = engine_.floor();
   out.final_model = current.fit.config;
   out.final_model.effects.runout.enabled = state.fit_runout;
-  for (const auto& [name, side] : state.held) {
-    out.at_bound.emplace_back(name, dynamometer_parameter(out.final_model, name), 0.0, side);
-  }
+  out.at_bound = held_parameters(out.final_model, state.held);
   out.spindle_rpm = state.rpm;
   out.final_parameters = final_parameters(out.named_effects, state, current);
 
