@@ -36,23 +36,14 @@ Diagnosis diagnose_resonance(double zeta_x, double zeta_y, double natural_hz_x =
   return d;
 }
 
-const Parameter* find(const std::vector<Parameter>& ps, const std::string& name) {
-  for (const auto& p : ps) {
-    if (p.name == name) {
-      return &p;
-    }
-  }
-  return nullptr;
-}
-
 TEST(DampingBound, AnUnderdampedFitIsHeldAtTheLowerBound) {
   const Diagnosis d = diagnose_resonance(0.0004, 0.03);
   ASSERT_TRUE(d.ok) << d.message;
   ASSERT_FALSE(d.steps.empty()) << d.verdict;
   EXPECT_EQ(d.named_effects.front(), "dynamometer_dynamics");
   const auto& ps = d.steps.front().parameters;
-  const Parameter* x = find(ps, "damping_ratio_x");
-  const Parameter* y = find(ps, "damping_ratio_y");
+  const Parameter* x = test::find_parameter(ps, "damping_ratio_x");
+  const Parameter* y = test::find_parameter(ps, "damping_ratio_y");
   ASSERT_NE(x, nullptr);
   ASSERT_NE(y, nullptr);
   EXPECT_EQ(x->at_bound, "lower");
@@ -83,7 +74,7 @@ TEST(DampingBound, ADampingInsideTheRangeIsEstimated) {
   for (const auto& p : d.steps.front().parameters) {
     EXPECT_TRUE(p.at_bound.empty()) << p.name;
   }
-  const Parameter* x = find(d.steps.front().parameters, "damping_ratio_x");
+  const Parameter* x = test::find_parameter(d.steps.front().parameters, "damping_ratio_x");
   ASSERT_NE(x, nullptr);
   EXPECT_NEAR(x->value, 0.02, 0.01);
 }

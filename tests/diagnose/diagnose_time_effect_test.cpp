@@ -17,15 +17,6 @@
 namespace millwatch::diagnose {
 namespace {
 
-const Parameter* find(const Stage& s, const std::string& name) {
-  for (const auto& p : s.parameters) {
-    if (p.name == name) {
-      return &p;
-    }
-  }
-  return nullptr;
-}
-
 void print(const Diagnosis& d) {
   for (const auto& s : d.steps) {
     std::printf("  + %-16s residual %.4f, %.4f N (floor %.4f, %.4f)\n", s.added.c_str(),
@@ -48,8 +39,8 @@ TEST(DiagnoseTimeEffects, GrowingWearIsNamedWithItsGrowth) {
     EXPECT_LE(d.steps[0].residual_rms_N[a], 1.3 * d.noise_floor_N[a]) << "axis " << a;
   }
   // Truth: VB from 1 to 9 µm over the simulated cut (the recording keeps nearly all of it).
-  const Parameter* growth = find(d.steps[0], "wear_growth_um");
-  const Parameter* mid = find(d.steps[0], "wear_mid_um");
+  const Parameter* growth = test::find_parameter(d.steps[0].parameters, "wear_growth_um");
+  const Parameter* mid = test::find_parameter(d.steps[0].parameters, "wear_mid_um");
   ASSERT_NE(growth, nullptr);
   ASSERT_NE(mid, nullptr);
   EXPECT_NEAR(growth->value, 8.0, 0.3);
@@ -70,11 +61,13 @@ TEST(DiagnoseTimeEffects, RunoutChangeIsNamedWithItsTimeAndBothRunouts) {
   // Truth: at 0.2 s (from the simulation's start; the recording starts a few samples later)
   // ρ 1.0 µm at 0.6 rad becomes 2.0 µm at 1.2 rad. The force pins each flute's cutting radius
   // (r_CE2 − r_CE1 = −2ρ·cos γ for two flutes), not ρ·sin γ (physics-notes).
-  const Parameter* t = find(d.steps[0], "change_time_s");
+  const Parameter* t = test::find_parameter(d.steps[0].parameters, "change_time_s");
   ASSERT_NE(t, nullptr);
   EXPECT_NEAR(t->value, 0.2, 2.0 * t->sigma + 0.005);
-  const Parameter* before = find(d.steps[0], "r_ce2_minus_r_ce1_before_um");
-  const Parameter* after = find(d.steps[0], "r_ce2_minus_r_ce1_after_um");
+  const Parameter* before =
+      test::find_parameter(d.steps[0].parameters, "r_ce2_minus_r_ce1_before_um");
+  const Parameter* after =
+      test::find_parameter(d.steps[0].parameters, "r_ce2_minus_r_ce1_after_um");
   ASSERT_NE(before, nullptr);
   ASSERT_NE(after, nullptr);
   EXPECT_NEAR(std::fabs(before->value), 2.0 * 1.0 * std::cos(0.6), 2.0 * before->sigma + 0.02);

@@ -71,12 +71,6 @@ INSTANTIATE_TEST_SUITE_P(Pairs, HiddenPair,
                            return std::string(p.param.first) + "_and_" + p.param.second;
                          });
 
-const Parameter* find(const std::vector<Parameter>& ps, const std::string& name) {
-  const auto it =
-      std::find_if(ps.begin(), ps.end(), [&](const Parameter& p) { return p.name == name; });
-  return it == ps.end() ? nullptr : &*it;
-}
-
 // The final model's parameters are its last fit's: the runout's radius difference named before
 // the deflection is refitted with it, and both agree with the truth (ρ 1 µm at 0.6 rad: r_CE2 −
 // r_CE1 = −2ρ·cos γ = −1.651 µm; 0.15 N/µm).
@@ -95,8 +89,8 @@ TEST(Diagnose, TheFinalModelsParametersAreItsLastFits) {
                                        [](const auto& e) { return e.effect == "tool_deflection"; });
   ASSERT_NE(runout, d.final_parameters.end()) << d.verdict;
   ASSERT_NE(deflection, d.final_parameters.end()) << d.verdict;
-  const Parameter* dr = find(runout->parameters, "r_ce2_minus_r_ce1_um");
-  const Parameter* k = find(deflection->parameters, "stiffness_N_per_um");
+  const Parameter* dr = test::find_parameter(runout->parameters, "r_ce2_minus_r_ce1_um");
+  const Parameter* k = test::find_parameter(deflection->parameters, "stiffness_N_per_um");
   ASSERT_NE(dr, nullptr);
   ASSERT_NE(k, nullptr);
   std::printf("  final: r_ce2 - r_ce1 = %.4f ± %.4f um, stiffness = %.4f ± %.4f N/um\n", dr->value,
@@ -106,13 +100,13 @@ TEST(Diagnose, TheFinalModelsParametersAreItsLastFits) {
   // The stiffness was the last step's: its final value is that step's.
   const auto& last = d.steps.back();
   if (last.added == "tool_deflection") {
-    const Parameter* at_step = find(last.parameters, "stiffness_N_per_um");
+    const Parameter* at_step = test::find_parameter(last.parameters, "stiffness_N_per_um");
     ASSERT_NE(at_step, nullptr);
     EXPECT_DOUBLE_EQ(at_step->value, k->value);
     // The runout's step gave the model before the deflection; the final fit moved it.
     for (const auto& st : d.steps) {
       if (st.added == "runout") {
-        const Parameter* before = find(st.parameters, "r_ce2_minus_r_ce1_um");
+        const Parameter* before = test::find_parameter(st.parameters, "r_ce2_minus_r_ce1_um");
         ASSERT_NE(before, nullptr);
         EXPECT_NE(before->value, dr->value);
       }

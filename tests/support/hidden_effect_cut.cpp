@@ -91,6 +91,13 @@ sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, dou
   return s;
 }
 
+const diagnose::Parameter* find_parameter(const std::vector<diagnose::Parameter>& ps,
+                                          const std::string& name) {
+  const auto it = std::find_if(ps.begin(), ps.end(),
+                               [&](const diagnose::Parameter& p) { return p.name == name; });
+  return it == ps.end() ? nullptr : &*it;
+}
+
 diagnose::CutRecord record_in_model_frame(const sim::Scenario& s) {
   // A data acquisition samples behind an anti-aliasing filter; the simulator samples the force
   // as it is (its harmonics above Nyquist would fold onto the spindle harmonics and look like a

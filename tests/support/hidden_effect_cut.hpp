@@ -38,6 +38,10 @@ HiddenEffectCut hidden_effect_cut_at_feed(const std::vector<std::string>& hidden
 sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, double duration_s,
                                      double sample_rate_hz, unsigned seed);
 
+/// The parameter called `name` among `ps` (a stage's or a candidate's), or nullptr.
+const diagnose::Parameter* find_parameter(const std::vector<diagnose::Parameter>& ps,
+                                          const std::string& name);
+
 /// The recording of a scenario in the model frame, as a data acquisition with an anti-aliasing
 /// filter records it (flat to 0.4·fs): simulated at 8× the rate, filtered, decimated, noise and
 /// quantisation added at the recorder's rate.
