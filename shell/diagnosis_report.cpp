@@ -148,6 +148,10 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
 std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
   std::string out;
   for (const auto& p : ps) {
+    if (!p.held.empty()) {
+      out += (out.empty() ? "" : ", ") + p.name + fmt::format(" = {:.4g} ({})", p.value, p.held);
+      continue;
+    }
     if (!p.determined) {
       out += (out.empty() ? "" : ", ") + p.name +
              fmt::format(" = {:.4g} (not determined: the record does not pin it)", p.value);
@@ -180,8 +184,9 @@ std::string candidate_table(const std::string& heading,
                    "|---|---|---|---|\n";
   for (const auto& c : cands) {
     if (c.ok) {
-      md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {} |\n", c.name, c.gain,
-                        c.residual_rms_N[0], c.residual_rms_N[1], parameter_text(c.parameters));
+      md += fmt::format("| {} | {:.1f} | {:.4f} / {:.4f} | {}{} |\n", c.name, c.gain,
+                        c.residual_rms_N[0], c.residual_rms_N[1], parameter_text(c.parameters),
+                        c.shown ? "" : " — not chosen: " + c.message);
     } else {
       md += fmt::format("| {} | — | — | not fitted: {} |\n", c.name, c.message);
     }

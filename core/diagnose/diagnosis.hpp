@@ -100,6 +100,8 @@ struct Parameter {
   /// false: the record does not pin it (identify::Estimate::determined); the value is where the
   /// fit left it, sigma 0, not an estimate.
   bool determined = true;
+  /// Not fitted in this model: why the value is held (sigma 0); "" when fitted.
+  std::string held;
 };
 
 /// The physical range of a dynamometer's damping ratio ζ: a piezoelectric dynamometer clamped
@@ -126,14 +128,26 @@ double& dynamometer_parameter(model::ModelConfig& config, const std::string& nam
 struct CandidateScore {
   std::string name;
   bool ok = false;
-  std::string message;  ///< why not, when not ok
+  std::string message;  ///< why not fitted (not ok), or why not shown
   double criterion = 0.0;
   /// Current model's criterion minus this one's (> 0: better).
   double gain = 0.0;
   std::array<double, 2> residual_rms_N{};
   std::vector<Parameter> parameters;
   int free_parameters = 0;
+  /// Its own parameters show the effect (see not_shown_by_parameters()); when not, `message`
+  /// says why, and it is not chosen whatever its gain.
+  bool shown = true;
 };
+
+/// Why a candidate's fit, though it gained, does not show the effect it names, or "" when it
+/// does. A time-varying candidate refits the rest of the model with it (runout_change: every
+/// parameter once per segment; tool_wear: the coefficients beside the wear), so a refit that
+/// lands in a better basin of the other parameters gains with an effect that is not there:
+/// runout_change is shown by a runout (ρ, or r_CE2 − r_CE1) that differs across the change by
+/// more than 2σ of the difference, tool_wear by a wear or a growth beyond 2σ of zero.
+std::string not_shown_by_parameters(const std::string& candidate,
+                                    const std::vector<Parameter>& parameters);
 
 struct FrequencyBand {
   std::string name;

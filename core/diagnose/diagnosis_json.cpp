@@ -12,7 +12,9 @@ nlohmann::json axes(const std::array<double, 2>& v) {
 nlohmann::json parameters(const std::vector<Parameter>& ps) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& p : ps) {
-    if (!p.determined) {  // not an estimate: no σ
+    if (!p.held.empty()) {  // not fitted: no σ
+      j[p.name] = {{"value", p.value}, {"sigma", nullptr}, {"held", true}, {"note", p.held}};
+    } else if (!p.determined) {  // not an estimate: no σ
       j[p.name] = {{"value", p.value},
                    {"sigma", nullptr},
                    {"determined", false},
@@ -82,6 +84,10 @@ nlohmann::json candidates(const std::vector<CandidateScore>& scores) {
       cj["residual_rms_N"] = axes(c.residual_rms_N);
       cj["parameters"] = parameters(c.parameters);
       cj["free_parameters"] = c.free_parameters;
+      cj["shown"] = c.shown;
+      if (!c.shown) {
+        cj["message"] = c.message;
+      }
     } else {
       cj["message"] = c.message;
     }

@@ -726,9 +726,14 @@ struct WindowFitter::Impl {
       }
     }
     if (!separable) {
-      for (const auto& p : model::parameters_of_effect(commanded, "force_law")) {
-        if (p.rfind("k_", 0) == 0) {  // the coefficients, not the exponents
-          coefficient_names.push_back(p);
+      // The coefficients the separable fit would solve for (the ploughing regime's too, with
+      // the minimum chip thickness), unless named among the extra parameters or held.
+      const auto named = [](const std::vector<std::string>& list, const char* p) {
+        return std::find(list.begin(), list.end(), p) != list.end();
+      };
+      for (const char* p : model::linear_coefficient_names(commanded)) {
+        if (!named(options.extra_parameters, p) && !named(options.held_coefficients, p)) {
+          coefficient_names.emplace_back(p);
         }
       }
       coefficient_map = model::make_parameter_map(commanded, coefficient_names);

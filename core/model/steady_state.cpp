@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -102,6 +103,30 @@ bool solve_dense(double* a, double* b, int n) {
     b[r] = s / a[r * n + r];
   }
   return true;
+}
+
+/// evaluate_force_basis()'s columns for a law and its regimes.
+std::span<const char* const> linear_coefficient_names(ForceLawKind law, bool min_chip,
+                                                      bool area_law) {
+  static constexpr const char* kLinearEdge[] = {"k_tc_N_per_mm2", "k_nc_N_per_mm2",
+                                                "k_ac_N_per_mm2", "k_te_N_per_mm",
+                                                "k_ne_N_per_mm",  "k_ae_N_per_mm"};
+  static constexpr const char* kLinearArea[] = {"k_tc_N_per_mm2", "k_nc_N_per_mm2",
+                                                "k_ac_N_per_mm2", "k_tp_N_per_mm3",
+                                                "k_np_N_per_mm3", "k_ap_N_per_mm3"};
+  static constexpr const char* kPower[] = {"k_tc_Nmm", "k_nc_Nmm", "k_ac_Nmm",
+                                           "k_tp_Nmm", "k_np_Nmm", "k_ap_Nmm"};
+  static constexpr const char* kKronenberg[] = {"k_s0_N_per_mm2"};
+  switch (law) {
+    case ForceLawKind::kLinearEdge:
+      return area_law ? std::span<const char* const>(kLinearArea) : kLinearEdge;
+    case ForceLawKind::kPowerLaw:
+      // The ploughing regime's coefficients only when [000]'s minimum chip thickness is on.
+      return std::span<const char* const>(kPower).first(min_chip ? 6 : 3);
+    case ForceLawKind::kKronenberg:
+      break;
+  }
+  return kKronenberg;
 }
 
 }  // namespace
@@ -1343,39 +1368,12 @@ void SteadyStateWorkspace::Impl::evaluate(const ModelConfig& c, double rpm, int 
 void SteadyStateWorkspace::Impl::accumulate_basis() {
   // Columns per law (see evaluate_force_basis); column `columns` is the offset.
   int columns = 0;
-  auto name = [&](const char* s) { basis.names[static_cast<std::size_t>(columns++)] = s; };
+  for (const char* n : linear_coefficient_names(law_kind, min_chip, area_law)) {
+    basis.names[static_cast<std::size_t>(columns++)] = n;
+  }
   const auto& le = material_coefficients.linear_edge;
   const auto& pl = material_coefficients.power_law;
   const auto& kr = material_coefficients.kronenberg;
-  switch (law_kind) {
-    case ForceLawKind::kLinearEdge:
-      name("k_tc_N_per_mm2");
-      name("k_nc_N_per_mm2");
-      name("k_ac_N_per_mm2");
-      if (area_law) {
-        name("k_tp_N_per_mm3");
-        name("k_np_N_per_mm3");
-        name("k_ap_N_per_mm3");
-      } else {
-        name("k_te_N_per_mm");
-        name("k_ne_N_per_mm");
-        name("k_ae_N_per_mm");
-      }
-      break;
-    case ForceLawKind::kPowerLaw:
-      name("k_tc_Nmm");
-      name("k_nc_Nmm");
-      name("k_ac_Nmm");
-      if (min_chip) {
-        name("k_tp_Nmm");
-        name("k_np_Nmm");
-        name("k_ap_Nmm");
-      }
-      break;
-    case ForceLawKind::kKronenberg:
-      name("k_s0_N_per_mm2");
-      break;
-  }
   basis.columns = columns;
   const auto n = static_cast<std::size_t>(flutes);
   const auto s = static_cast<std::size_t>(steps);
@@ -1658,6 +1656,13 @@ const SteadyState& evaluate_steady_state(const ModelConfig& config, double spind
                                          SteadyStateOutput output) {
   workspace.impl_->evaluate(config, spindle_rpm, steps_per_rev, output);
   return workspace.impl_->result;
+}
+
+std::span<const char* const> linear_coefficient_names(const ModelConfig& config) {
+  const ForceLawKind law = config.material.law;
+  return linear_coefficient_names(
+      law, config.effects.min_chip.enabled,
+      law == ForceLawKind::kLinearEdge && config.material.linear_edge.ploughing_area);
 }
 
 const ForceBasis& evaluate_force_basis(const ModelConfig& config, double spindle_rpm,

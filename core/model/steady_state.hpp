@@ -152,6 +152,14 @@ enum class SteadyStateOutput { kMean, kMeanAndCycle };
 
 /// Forces the model is linear in, per unit coefficient (see evaluate_force_basis()).
 inline constexpr int kMaxBasisColumns = 6;
+
+/// The coefficients the force is linear in for the configuration's law and effects, in
+/// evaluate_force_basis()'s column order (parameter_map.hpp names): the law's shearing and edge
+/// coefficients, or with [001]'s ploughing area or [000]'s minimum chip thickness the
+/// ploughing regime's in place of (or beside) the edge's. A fitter with deflection on, where
+/// there is no basis, fits the same set.
+[[nodiscard]] std::span<const char* const> linear_coefficient_names(const ModelConfig& config);
+
 struct ForceBasis {
   int columns = 0;
   /// Parameter names (parameter_map.hpp) of the coefficients, e.g. "k_tc_N_per_mm2".

@@ -155,6 +155,21 @@ TEST(DiagnoseExchange, AnEffectStandingInForMissingOnesGivesWayToThem) {
             steps[exchange + 1]["residual_rms_N"]["fx"].get<double>());
   EXPECT_LT(d["final_residual_rms_N"]["fy"].get<double>(),
             steps[exchange + 1]["residual_rms_N"]["fy"].get<double>());
+  // With the deflection in, the ploughing coefficients are held, and the report says so (freed,
+  // they traded with a wear rubbing the cut has not: k_tp 0.47 ± 188 against a truth of 526.7,
+  // beside 2.6 µm of wear taken in place of the trochoidal path).
+  const auto& accumulation = d["final_parameters"]["chip_accumulation"];
+  for (const char* name : {"k_tp_Nmm", "k_np_Nmm"}) {
+    ASSERT_TRUE(accumulation.contains(name)) << accumulation.dump(1);
+    EXPECT_EQ(accumulation[name]["held"], true) << accumulation.dump(1);
+    EXPECT_TRUE(accumulation[name]["sigma"].is_null()) << accumulation.dump(1);
+  }
+  // The time-varying candidates scored from the final model show nothing of their own.
+  for (const auto& c : d["final_candidates"]) {
+    if (c["name"] == "runout_change" || c["name"] == "tool_wear") {
+      EXPECT_EQ(c["shown"], false) << c.dump(1);
+    }
+  }
 }
 
 }  // namespace

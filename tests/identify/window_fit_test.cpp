@@ -20,6 +20,7 @@
 #include "core/identify/fit_json.hpp"
 #include "core/model/abeni_runout.hpp"
 #include "core/model/flute_positions.hpp"
+#include "core/model/parameter_map.hpp"
 #include "core/model/steady_state.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "tests/support/exact_window.hpp"
@@ -596,6 +597,61 @@ TEST(WindowFit, FitsTheMinimumChipThicknessAndTheStiffnessWhenAsked) {
     EXPECT_EQ(f.config.material.power_law.k_ac_Nmm, start.material.power_law.k_ac_Nmm);
     // k_tc, k_nc (and the ploughing regime's k_tp, k_np with the minimum chip thickness).
     EXPECT_EQ(f.coefficients.size(), h_min ? 4u : 2u) << x.name;
+  }
+}
+
+// With the deflection on the coefficients are Levenberg–Marquardt's, not a linear solve's; the
+// ploughing regime's were left out of that set, so under the monitor's default model (minimum
+// chip thickness and deflection) K_tp and K_np stayed as configured, silently. Truth: [000]'s
+// power law with its ploughing regime below h_min 0.6 µm at f_t 2 µm, and [001]'s ploughing
+// area with the linear edge law, both with deflection at 0.5 N/µm; 20 discs against the
+// fitter's 5. The start's ploughing coefficients are 1.5× and 0.6× the truth's.
+TEST(WindowFit, FitsThePloughingCoefficientsUnderDeflection) {
+  for (const bool area : {false, true}) {
+    model::ModelConfig m = model::without_effects(model::ModelConfig{});
+    m.process.feed_per_tooth_um = 2.0;
+    model::set_effect(m, "runout", true);
+    m.effects.runout.offset_um = 0.4;
+    m.effects.runout.angle_rad = 0.5;
+    model::set_effect(m, "helix_lag", true);
+    model::set_effect(m, "min_chip", true);
+    m.effects.min_chip.h_min_um = 0.6;
+    model::set_effect(m, "deflection", true);
+    m.effects.deflection.stiffness_N_per_um = 0.5;
+    std::string tp = "k_tp_Nmm", np = "k_np_Nmm";
+    if (area) {
+      m.material.law = model::ForceLawKind::kLinearEdge;
+      m.material.linear_edge.ploughing_area = true;
+      m.material.linear_edge.k_tp_N_per_mm3 = 4.0e4;
+      m.material.linear_edge.k_np_N_per_mm3 = 6.0e4;
+      tp = "k_tp_N_per_mm3";
+      np = "k_np_N_per_mm3";
+    }
+    const model::ParameterMap map = model::make_parameter_map(m, std::vector<std::string>{tp, np});
+    const Eigen::VectorXd truth = model::get_parameters(map, m);
+    MeasuredRevolution measured = test::finer_window(m);
+    measured.use_axis[2] = false;
+    model::ModelConfig start = m;
+    start.effects.runout.offset_um = 0.0;
+    model::set_parameters(map, Eigen::Vector2d(1.5 * truth[0], 0.6 * truth[1]), start);
+    const FitResult f = WindowFitter(start, test::ideal_lowpass, FitOptions{}).fit(measured);
+    ASSERT_TRUE(f.ok) << f.message;
+    std::printf("%s: rho %.3f ± %.3f (truth 0.4); residual %.2e of %.3f N\n",
+                area ? "area" : "power", f.rho_um.value, f.rho_um.sigma, f.residual_rms_N[1],
+                f.measured_rms_N[1]);
+    for (int i = 0; i < 2; ++i) {
+      const std::string& name = i == 0 ? tp : np;
+      const auto it = std::find_if(f.coefficients.begin(), f.coefficients.end(),
+                                   [&](const Estimate& c) { return c.name == name; });
+      ASSERT_NE(it, f.coefficients.end()) << name << " is not among the fitted coefficients";
+      std::printf("  %s %.4g ± %.2g (truth %.4g, start %.4g)\n", name.c_str(), it->value, it->sigma,
+                  truth[i], (i == 0 ? 1.5 : 0.6) * truth[i]);
+      EXPECT_TRUE(it->determined) << name;
+      EXPECT_NEAR(it->value, truth[i], 0.05 * truth[i]) << name;
+      EXPECT_NEAR(model::get_parameters(map, f.config)[i], it->value, 1e-9 * truth[i]) << name;
+    }
+    EXPECT_LE(std::fabs(f.rho_um.value - 0.4), 2.0 * f.rho_um.sigma);  // two flutes: ρ·sin γ free
+    EXPECT_LT(f.residual_rms_N[1], 0.01 * f.measured_rms_N[1]);
   }
 }
 
