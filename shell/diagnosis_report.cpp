@@ -148,10 +148,6 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
 std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
   std::string out;
   for (const auto& p : ps) {
-    if (!p.held.empty()) {
-      out += (out.empty() ? "" : ", ") + p.name + fmt::format(" = {:.4g} ({})", p.value, p.held);
-      continue;
-    }
     if (!p.determined) {
       out += (out.empty() ? "" : ", ") + p.name +
              fmt::format(" = {:.4g} (not determined: the record does not pin it)", p.value);

@@ -100,8 +100,6 @@ struct Parameter {
   /// false: the record does not pin it (identify::Estimate::determined); the value is where the
   /// fit left it, sigma 0, not an estimate.
   bool determined = true;
-  /// Not fitted in this model: why the value is held (sigma 0); "" when fitted.
-  std::string held;
 };
 
 /// The physical range of a dynamometer's damping ratio ζ: a piezoelectric dynamometer clamped

@@ -1,6 +1,7 @@
 #include "core/diagnose/diagnosis_json.hpp"
 
 #include "core/diagnose/catalogue.hpp"
+#include "core/model/model_config.hpp"
 
 namespace millwatch::diagnose {
 namespace {
@@ -12,9 +13,7 @@ nlohmann::json axes(const std::array<double, 2>& v) {
 nlohmann::json parameters(const std::vector<Parameter>& ps) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& p : ps) {
-    if (!p.held.empty()) {  // not fitted: no σ
-      j[p.name] = {{"value", p.value}, {"sigma", nullptr}, {"held", true}, {"note", p.held}};
-    } else if (!p.determined) {  // not an estimate: no σ
+    if (!p.determined) {  // not an estimate: no σ
       j[p.name] = {{"value", p.value},
                    {"sigma", nullptr},
                    {"determined", false},
@@ -155,6 +154,9 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"sigma_caveat",
            d.sigma_caveat.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.sigma_caveat)},
           {"final_parameters", final},
+          // The final model as a configuration (model_config_from_json reads it): the commanded
+          // speed, the fitted values in place; the time base's speed is spindle_rpm.
+          {"final_model", model::to_json(d.final_model)},
           {"parameters_at_bound", parameters(d.at_bound)},
           {"damping_ratio_range", {kDampingRatioMin, kDampingRatioMax}},
           {"natural_hz_range", {kNaturalHzMin, kNaturalHzMax}},

@@ -727,12 +727,10 @@ struct WindowFitter::Impl {
     }
     if (!separable) {
       // The coefficients the separable fit would solve for (the ploughing regime's too, with
-      // the minimum chip thickness), unless named among the extra parameters or held.
-      const auto named = [](const std::vector<std::string>& list, const char* p) {
-        return std::find(list.begin(), list.end(), p) != list.end();
-      };
+      // the minimum chip thickness), unless named among the extra parameters.
       for (const char* p : model::linear_coefficient_names(commanded)) {
-        if (!named(options.extra_parameters, p) && !named(options.held_coefficients, p)) {
+        if (std::find(options.extra_parameters.begin(), options.extra_parameters.end(), p) ==
+            options.extra_parameters.end()) {
           coefficient_names.emplace_back(p);
         }
       }

@@ -80,12 +80,9 @@ struct FitOptions {
   double passband_gain = 0.1;                 ///< harmonics used: |H(k·f)| ≥ this
   bool fit_runout = true;                     ///< ρ and γ free (else as configured)
   std::vector<std::string> extra_parameters;  ///< other nonlinear parameters (parameter_map names)
-  /// With deflection on: force coefficients left as configured instead of fitted (by default
-  /// every coefficient the force is linear in is fitted, model::linear_coefficient_names()).
-  std::vector<std::string> held_coefficients;
-  int max_iterations = 30;  ///< Levenberg–Marquardt iterations per start
-  int refined_starts = 2;   ///< best starts refined
-  bool systematic = true;   ///< estimate the model-discrepancy spread
+  int max_iterations = 30;                    ///< Levenberg–Marquardt iterations per start
+  int refined_starts = 2;                     ///< best starts refined
+  bool systematic = true;                     ///< estimate the model-discrepancy spread
   /// Compare the mean force (k = 0) too. Off by default: the charge amplifiers' offset and drift
   /// live there; on when the channels are known to be tared (a calibration on short cuts).
   bool use_mean = false;

@@ -77,9 +77,10 @@ TEST(DiagnoseTimeEffects, RunoutChangeIsNamedWithItsTimeAndBothRunouts) {
 
 // A time-varying candidate refits the rest of the model with it, so it can gain by landing in a
 // better basin of the other parameters while its own parameters show nothing: on the cp-Ti
-// preset's cut, once the ploughing coefficients were fitted under deflection, runout_change
-// gained ΔBIC 302.7 with r_CE2 − r_CE1 −2.851 ± 0.118 µm before and −2.791 ± 0.105 µm after
-// (tests/cli/diagnose_exchange_test.cpp), and tool_wear 34.6 with 0.065 ± 1.013 µm of wear
+// preset's cut, with the ploughing coefficients fitted under deflection but the damping on x
+// still held at its bound from an early step, runout_change gained ΔBIC 302.7 with
+// r_CE2 − r_CE1 −2.851 ± 0.118 µm before and −2.791 ± 0.105 µm after
+// (tests/cli/diagnose_preset_test.cpp's cut), and tool_wear 34.6 with 0.065 ± 1.013 µm of wear
 // growing 0.032 ± 0.077 µm. Neither shows its effect; the changes of the cuts above do.
 TEST(DiagnoseTimeEffects, ACandidateWhoseParametersShowNothingIsNotShown) {
   const std::vector<Parameter> same_runout = {{"change_time_s", 0.1349, 0.0036},
