@@ -28,7 +28,7 @@ struct DiagnoseCliOptions {
   double band_hz = 0.0;
   double from_s = 0.0;
   double to_s = 0.0;
-  int max_steps = 8;
+  int max_steps = 10;
   int exchanges = 3;
   bool plots = true;
   bool progress = true;

@@ -210,7 +210,7 @@ void add_diagnose_command(CLI::App& app) {
                   "Diagnose from this time on (s from the record's first sample; skip the entry)");
   cmd->add_option("--to-s", o->to_s, "Diagnose up to this time (s)");
   cmd->add_option("--candidates", o->candidates, "Comma-separated candidates (default: all)");
-  cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 8)");
+  cmd->add_option("--max-steps", o->max_steps, "Effects added at most (default 10)");
   cmd->add_option("--exchanges", o->exchanges,
                   "Exchanges of an effect named for another where the search stops above the "
                   "noise floor (default 3; 0: the greedy search alone, faster)");

@@ -64,7 +64,7 @@ struct DiagnoseOptions {
   double band_hz = 0.0;
   double significance = 10.0;    ///< ΔBIC an effect must gain to be added
   double floor_tolerance = 1.1;  ///< residual ≤ this × noise floor on every axis: at the floor
-  int max_steps = 8;             ///< effects added at most
+  int max_steps = 10;            ///< effects added at most
   int steps_per_rev = 720;       ///< the fitted model's angle grid
   int helix_discs = 5;           ///< discs when helix_lag is added
   bool uncertainties = true;     ///< the winner refitted with the fitter's systematic spread
