@@ -1577,19 +1577,11 @@ Stage Diagnoser::stage_of(const std::string& added, const State& s, const Evalua
 std::vector<EffectParameters> Diagnoser::final_parameters(const std::vector<std::string>& named,
                                                           const State& s,
                                                           const Evaluation& ev) const {
+  // The final fit holds what the state holds (State::held is its at_bound), so each effect's
+  // parameters, the dynamometer's bounds among them, are that fit's.
   std::vector<EffectParameters> out;
   for (const auto& name : named) {
-    EffectParameters e{name, added_parameters(name, s, ev, engine_.duration())};
-    if (name == "dynamometer_dynamics") {
-      // added_parameters lists what this fit held; every step's holds are the state's.
-      e.parameters.erase(std::remove_if(e.parameters.begin(), e.parameters.end(),
-                                        [](const Parameter& p) { return !p.at_bound.empty(); }),
-                         e.parameters.end());
-      for (auto& p : held_parameters(s.config, s.held)) {
-        e.parameters.push_back(std::move(p));
-      }
-    }
-    out.push_back(std::move(e));
+    out.push_back({name, added_parameters(name, s, ev, engine_.duration())});
   }
   return out;
 }
@@ -1990,9 +1982,9 @@ Diagnosis Diagnoser::run() {
     }
     Round round = score_round(state, current, names,
                               "step " + std::to_string(out.steps.size() + 1) + ": ", {});
-    const bool any_fitted = std::any_of(round.scores.begin(), round.scores.end(),
-                                        [](const CandidateScore& c) { return c.ok; });
     if (round.best < 0) {
+      const bool any_fitted = std::any_of(round.scores.begin(), round.scores.end(),
+                                          [](const CandidateScore& c) { return c.ok; });
       out.stop_reason = round.scores.empty() ? "every candidate is in the model"
                         : any_fitted         ? "no candidate fitted shows its effect"
                                              : "no candidate could be fitted";
@@ -2180,14 +2172,13 @@ std::string not_shown_by_parameters(const std::string& candidate,
            "): the gain is the rest of the model refitted per segment, not a change";
   }
   if (candidate == "tool_wear") {
-    for (const char* q : {"wear_mid_um", "wear_growth_um"}) {
-      const Parameter* p = find(q);
+    const Parameter* mid = find("wear_mid_um");
+    const Parameter* growth = find("wear_growth_um");
+    for (const Parameter* p : {mid, growth}) {
       if (p != nullptr && std::fabs(p->value) > kShown * p->sigma) {
         return "";
       }
     }
-    const Parameter* mid = find("wear_mid_um");
-    const Parameter* growth = find("wear_growth_um");
     return "neither the wear nor its growth differs from zero by 2σ" +
            (mid != nullptr && growth != nullptr
                 ? format(" (%.3f ± %.3f µm, growing %.3f ± %.3f µm)", mid->value, mid->sigma,
