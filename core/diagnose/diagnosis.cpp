@@ -2151,38 +2151,61 @@ std::string not_shown_by_parameters(const std::string& candidate,
     }
     return nullptr;
   };
+  // Only an estimate can show an effect: a value the record does not pin, or one that sits on
+  // a bound, has σ 0 or a one-sided meaning, and would pass |v| > 2σ whatever it is.
+  const auto not_estimated = [](const Parameter& p) -> const char* {
+    if (!p.determined) {
+      return "not pinned by the record";
+    }
+    if (!p.at_bound.empty()) {
+      return "at its physical bound";
+    }
+    if (p.lower_bound || p.upper_bound) {
+      return "a bound the force allows, not a measurement";
+    }
+    if (!(std::isfinite(p.sigma) && p.sigma > 0.0)) {
+      return "without a standard error";
+    }
+    return nullptr;
+  };
+  const auto describe = [&](const Parameter& p, const char* what) {
+    const char* why = not_estimated(p);
+    return why == nullptr ? format("%.3f ± %.3f µm", p.value, p.sigma) + what
+                          : format("%.3f µm", p.value) + what + ", " + why;
+  };
   if (candidate == "runout_change") {
     std::string text;
+    bool estimated = true;  // the quantity the text shows
     for (const char* q : {"r_ce2_minus_r_ce1", "rho"}) {
       const Parameter* b = find(std::string(q) + "_before_um");
       const Parameter* a = find(std::string(q) + "_after_um");
       if (b == nullptr || a == nullptr) {
         continue;
       }
-      const double sigma = std::hypot(b->sigma, a->sigma);
-      if (std::fabs(a->value - b->value) > kShown * sigma) {
+      const bool both = not_estimated(*b) == nullptr && not_estimated(*a) == nullptr;
+      if (both && std::fabs(a->value - b->value) > kShown * std::hypot(b->sigma, a->sigma)) {
         return "";
       }
       if (text.empty()) {
-        text = std::string(q) + format(" %.3f ± %.3f µm before, %.3f ± %.3f µm after", b->value,
-                                       b->sigma, a->value, a->sigma);
+        text = std::string(q) + " " + describe(*b, " before") + ", " + describe(*a, " after");
+        estimated = both;
       }
     }
-    return "the runout before and after the change agree within 2σ (" + text +
-           "): the gain is the rest of the model refitted per segment, not a change";
+    return std::string(estimated ? "the runout before and after the change agree within 2σ ("
+                                 : "the runout before and after the change is not estimated (") +
+           text + "): the gain is the rest of the model refitted per segment, not a change";
   }
   if (candidate == "tool_wear") {
     const Parameter* mid = find("wear_mid_um");
     const Parameter* growth = find("wear_growth_um");
     for (const Parameter* p : {mid, growth}) {
-      if (p != nullptr && std::fabs(p->value) > kShown * p->sigma) {
+      if (p != nullptr && not_estimated(*p) == nullptr && std::fabs(p->value) > kShown * p->sigma) {
         return "";
       }
     }
-    return "neither the wear nor its growth differs from zero by 2σ" +
+    return "neither the wear nor its growth differs from zero by 2σ of an estimate" +
            (mid != nullptr && growth != nullptr
-                ? format(" (%.3f ± %.3f µm, growing %.3f ± %.3f µm)", mid->value, mid->sigma,
-                         growth->value, growth->sigma)
+                ? " (" + describe(*mid, "") + "; growing " + describe(*growth, "") + ")"
                 : std::string()) +
            ": the gain is the coefficients refitted beside it, not wear";
   }

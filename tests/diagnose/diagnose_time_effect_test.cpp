@@ -119,5 +119,45 @@ TEST(DiagnoseTimeEffects, ACandidateWhoseParametersShowNothingIsNotShown) {
   EXPECT_EQ(not_shown_by_parameters("helix_lag", {}), "");
 }
 
+// σ 0 is not an infinitely precise value: a parameter the record does not pin, or one that sits
+// on a bound, would pass |v| > 2σ whatever its value. Only estimates can show an effect.
+TEST(DiagnoseTimeEffects, ValuesThatAreNotEstimatesShowNothing) {
+  // The runout after the change undetermined (a segment too short to pin it): left where the
+  // fit put it, 1 µm from the value before, σ 0.
+  Parameter undetermined{"r_ce2_minus_r_ce1_after_um", -1.851, 0.0};
+  undetermined.determined = false;
+  const std::vector<Parameter> runout = {{"change_time_s", 0.1349, 0.0036},
+                                         {"r_ce2_minus_r_ce1_before_um", -2.851, 0.118},
+                                         undetermined};
+  const std::string why = not_shown_by_parameters("runout_change", runout);
+  EXPECT_NE(why.find("is not estimated (r_ce2_minus_r_ce1 -2.851 ± 0.118 µm before, -1.851 µm "
+                     "after, not pinned by the record)"),
+            std::string::npos)
+      << why;
+  // ρ on a flute's contact edge is the least the force allows, not a measurement.
+  std::vector<Parameter> contact = {{"rho_before_um", 1.0, 0.1}, {"rho_after_um", 3.0, 0.0}};
+  contact[1].lower_bound = true;
+  EXPECT_NE(not_shown_by_parameters("runout_change", contact).find("not a measurement"),
+            std::string::npos);
+  // The same values as estimates show the change.
+  EXPECT_EQ(
+      not_shown_by_parameters("runout_change", {{"r_ce2_minus_r_ce1_before_um", -2.851, 0.118},
+                                                {"r_ce2_minus_r_ce1_after_um", -1.851, 0.118}}),
+      "");
+
+  // The wear on its physical bound and its growth unpinned: both σ 0, nothing shown.
+  Parameter at_bound{"wear_mid_um", 0.0, 0.0, "lower"};
+  Parameter growth{"wear_growth_um", 0.4, 0.0};
+  growth.determined = false;
+  const std::string wear = not_shown_by_parameters("tool_wear", {at_bound, growth});
+  EXPECT_NE(wear.find("0.000 µm, at its physical bound; growing 0.400 µm, not pinned"),
+            std::string::npos)
+      << wear;
+  // A σ that is not a number is not an estimate either.
+  EXPECT_NE(not_shown_by_parameters(
+                "tool_wear", {{"wear_mid_um", 5.0, std::nan("")}, {"wear_growth_um", 8.0, 0.0}}),
+            "");
+}
+
 }  // namespace
 }  // namespace millwatch::diagnose
