@@ -208,6 +208,9 @@ void print_steps(const diagnose::Diagnosis& d) {
                   s.exchange_gain, s.exchange_steps == 2 ? " with the step after it" : "");
     }
   }
+  for (const auto& note : d.final_notes) {
+    std::printf("  %s\n", note.c_str());
+  }
   for (const auto& p : d.at_bound) {
     std::printf("  %s held at its %s bound %g (outside the physical range)\n", p.name.c_str(),
                 p.at_bound.c_str(), p.value);

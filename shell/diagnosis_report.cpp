@@ -157,7 +157,8 @@ std::string parameter_text(const std::vector<diagnose::Parameter>& ps) {
            (p.lower_bound   ? " ≥ "
             : p.upper_bound ? " ≤ "
                             : " = ") +
-           (p.at_bound.empty()
+           (!p.bound_note.empty() ? fmt::format("{:.4g} ({})", p.value, p.bound_note)
+            : p.at_bound.empty()
                 ? value_sigma(p.value, p.sigma) +
                       (p.lower_bound   ? " (a flute cuts nothing beyond it: a lower bound)"
                        : p.upper_bound ? " (a flute cuts nothing beyond it: an upper bound)"
@@ -247,8 +248,10 @@ std::string markdown(const Diagnosis& d, const std::string& title, bool have_plo
         "which later steps' refits move): " +
         final_parameters + ".\n";
   }
-  md += "\nForce coefficients of the final model: " + parameter_text(stages.back()->coefficients) +
-        ".\n";
+  md += "\nForce coefficients of the final model: " + parameter_text(d.final_coefficients) + ".\n";
+  for (const auto& note : d.final_notes) {
+    md += "\n" + note + ".\n";
+  }
   if (!d.sigma_caveat.empty()) {
     md += "\n" + d.sigma_caveat + "\n";
   }

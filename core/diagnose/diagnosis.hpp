@@ -97,6 +97,9 @@ struct Parameter {
   /// idle at a contact edge (its radius lies at least the largest chip below the flute's before
   /// it, so r_j − r_CE1 is at most its value).
   bool upper_bound = false;
+  /// Why the value is a bound (lower_bound/upper_bound), where it is not a flute's contact edge:
+  /// h_min at an end of the range its profile tries.
+  std::string bound_note;
   /// false: the record does not pin it (identify::Estimate::determined); the value is where the
   /// fit left it, sigma 0, not an estimate.
   bool determined = true;
@@ -236,6 +239,13 @@ struct Diagnosis {
   /// Where the final model leaves the residual above the noise floor: that every σ is given its
   /// step's model, and what the model lacks biases its parameters beyond them ("" at the floor).
   std::string sigma_caveat;
+  /// What was done to the final model after the search's last step (h_min profiled again in it;
+  /// an effect that then shows nothing dropped), a sentence each.
+  std::vector<std::string> final_notes;
+  /// The final model's residual and force coefficients (the last step's, unless final_notes
+  /// changed the model after it).
+  std::array<double, 2> final_residual_rms_N{};
+  std::vector<Parameter> final_coefficients;
   model::ModelConfig final_model;
   /// The final model's effects (as named_effects) with their parameters as its last fit left
   /// them: a step's own parameters are its model's, and a later step's refit moves them (on the

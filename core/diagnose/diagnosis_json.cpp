@@ -25,14 +25,19 @@ nlohmann::json parameters(const std::vector<Parameter>& ps) {
       j[p.name] = {{"value", p.value}, {"sigma", p.sigma}};
       if (p.lower_bound) {
         j[p.name]["lower_bound"] = true;
-        j[p.name]["note"] =
-            "at a flute's contact edge: a flute cuts nothing beyond it, the force "
-            "bounds the value from below only";
+        j[p.name]["note"] = !p.bound_note.empty()
+                                ? p.bound_note
+                                : "at a flute's contact edge: a flute cuts nothing beyond it, the "
+                                  "force bounds the value from below only";
       } else if (p.upper_bound) {
         j[p.name]["upper_bound"] = true;
-        j[p.name]["note"] =
-            "at a flute's contact edge: a flute cuts nothing beyond it, the force "
-            "bounds the value from above only";
+        j[p.name]["note"] = !p.bound_note.empty()
+                                ? p.bound_note
+                                : "at a flute's contact edge: a flute cuts nothing beyond it, the "
+                                  "force bounds the value from above only";
+      }
+      if ((p.lower_bound || p.upper_bound) && !(p.sigma > 0.0)) {
+        j[p.name]["sigma"] = nullptr;  // a bound, not an estimate
       }
     } else {  // a bound, not an estimate: no σ
       j[p.name] = {{"value", p.value},
@@ -129,8 +134,6 @@ nlohmann::json to_json(const Diagnosis& d) {
   for (const auto& s : d.steps) {
     steps.push_back(to_json(s));
   }
-  const auto& final_rms =
-      d.steps.empty() ? d.initial.residual_rms_N : d.steps.back().residual_rms_N;
   nlohmann::json cat = nlohmann::json::array();
   for (const auto& c : catalogue()) {
     cat.push_back({{"name", c.name},
@@ -147,10 +150,11 @@ nlohmann::json to_json(const Diagnosis& d) {
           {"final_candidates", candidates(d.final_candidates)},
           {"initial", to_json(d.initial)},
           {"initial_residual_rms_N", axes(d.initial.residual_rms_N)},
-          {"final_residual_rms_N", axes(final_rms)},
+          {"final_residual_rms_N", axes(d.final_residual_rms_N)},
           {"noise_floor_N", axes(d.noise_floor_N)},
           {"measured_rms_N", axes(d.measured_rms_N)},
           {"verdict", d.verdict},
+          {"final_notes", d.final_notes},
           {"sigma_caveat",
            d.sigma_caveat.empty() ? nlohmann::json(nullptr) : nlohmann::json(d.sigma_caveat)},
           {"final_parameters", final},

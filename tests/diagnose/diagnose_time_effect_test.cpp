@@ -153,6 +153,20 @@ TEST(DiagnoseTimeEffects, ValuesThatAreNotEstimatesShowNothing) {
   EXPECT_NE(wear.find("0.000 µm, at its physical bound; growing 0.400 µm, not pinned"),
             std::string::npos)
       << wear;
+  // h_min at the least its profile tries is at most that, not a minimum chip thickness: the gain
+  // is the ploughing coefficients on the few chips below it (a cut with the deflection and no
+  // minimum chip thickness: chip_accumulation 0.2 µm ± 0.035, 0.05·f_t, then the profile's
+  // least). Inside the range it shows itself (the cp-Ti preset's truth, 0.2 µm).
+  Parameter least{"h_min_um", 0.08, 0.0};
+  least.upper_bound = true;
+  least.bound_note = "the least the profile tries (0.020·f_t)";
+  const std::string chip = not_shown_by_parameters(
+      "chip_accumulation", {least, {"k_tp_Nmm", 316.4, 46.9}, {"k_np_Nmm", 47.6, 2.7}});
+  EXPECT_NE(chip.find("h_min is not estimated (0.080 µm, the least the profile tries"),
+            std::string::npos)
+      << chip;
+  EXPECT_NE(not_shown_by_parameters("min_chip_thickness", {least}), "");
+  EXPECT_EQ(not_shown_by_parameters("chip_accumulation", {{"h_min_um", 0.2, 0.035}}), "");
   // A σ that is not a number is not an estimate either.
   EXPECT_NE(not_shown_by_parameters(
                 "tool_wear", {{"wear_mid_um", 5.0, std::nan("")}, {"wear_growth_um", 8.0, 0.0}}),
