@@ -60,7 +60,8 @@ std::string summary_text(const json& j) {
   if (std::isfinite(rpm)) {
     s += fmt::format("  speed         {:.1f} rpm measured", rpm);
     if (has_number(j, "spindle_rpm_std")) {
-      s += fmt::format(" (± {:.1f})", num(j, "spindle_rpm_std"));
+      // The revolutions' spread, not the mean's σ (the runout's ± below is an estimate's σ).
+      s += fmt::format(" (± {:.1f} rev to rev)", num(j, "spindle_rpm_std"));
     }
     s += fmt::format(", {:.0f} commanded ({:+.2f} %)\n", commanded,
                      100.0 * (rpm - commanded) / commanded);
@@ -80,7 +81,7 @@ std::string summary_text(const json& j) {
   const json& alpha = j.value("alpha_deg", json::object());
   if (has_number(alpha, "mean")) {
     s += fmt::format("  alpha         {:.2f}°", num(alpha, "mean"));
-    s += has_number(alpha, "std") ? fmt::format(" ± {:.2f}°", num(alpha, "std"))
+    s += has_number(alpha, "std") ? fmt::format(" ± {:.2f}° rev to rev", num(alpha, "std"))
                                   : std::string(" (one revolution: no spread)");
     const json& model = j.value("model", json::object());
     if (has_number(model, "alpha_deg")) {
@@ -119,7 +120,7 @@ std::string summary_text(const json& j) {
   if (has_number(j, "delta_fy_N")) {
     s += fmt::format("  delta Fy      {:.3f} N", num(j, "delta_fy_N"));
     if (has_number(j, "delta_fy_N_std")) {
-      s += fmt::format(" ± {:.3f}", num(j, "delta_fy_N_std"));  // over the revolutions
+      s += fmt::format(" ± {:.3f} rev to rev", num(j, "delta_fy_N_std"));
     }
     const json& model = j.value("model", json::object());
     if (has_number(model, "delta_fy_N")) {

@@ -41,7 +41,19 @@ TEST(SummaryText, AlphaFromOneRevolutionHasNoSpread) {
       << text;
   nlohmann::json many = summary(41, 41);
   many["alpha_deg"] = {{"mean", 157.29}, {"std", 0.15}};
-  EXPECT_NE(summary_text(many).find("alpha         157.29° ± 0.15°"), std::string::npos);
+  // The ± of a mean over revolutions is their spread, and says so (the runout's is a σ).
+  EXPECT_NE(summary_text(many).find("alpha         157.29° ± 0.15° rev to rev"), std::string::npos);
+  many["spindle_rpm"] = 25252.0;
+  many["spindle_rpm_std"] = 1.0;
+  many["delta_fy_N"] = 0.776;
+  many["delta_fy_N_std"] = 0.002;
+  const std::string text_many = summary_text(many);
+  EXPECT_NE(text_many.find("speed         25252.0 rpm measured (± 1.0 rev to rev), 25000 "
+                           "commanded (+1.01 %)"),
+            std::string::npos)
+      << text_many;
+  EXPECT_NE(text_many.find("delta Fy      0.776 N ± 0.002 rev to rev"), std::string::npos)
+      << text_many;
 }
 
 // The identified runout, and where a flute cuts nothing beyond it (the fit on a flute's contact
