@@ -1805,6 +1805,15 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
   State next = round.states[static_cast<std::size_t>(round.best)];
   progress("step " + std::to_string(out.steps.size() + 1) + ": adding " + win.name);
   Evaluation final_ev = std::move(round.leader);  // the best's (the same rule chose both)
+  if ((win.name == "min_chip_thickness" || win.name == "chip_accumulation") &&
+      next.h_min_bracket_um[0] > 0.0) {
+    // Scored on h_min's grid; its step refines it, before the refit with the model's variants
+    // (after it, a refined fit would replace that refit's σ with the statistical one alone).
+    Evaluation refined = refine_h_min(next, current, nullptr, final_ev);
+    if (refined.ok && refined.criterion < final_ev.criterion) {
+      final_ev = std::move(refined);
+    }
+  }
   bool systematic = false;
   if (opt_.uncertainties && with_variants) {
     // The refit with the model's variants starts from the scored fit. Where it ends on a worse
@@ -1817,14 +1826,6 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
         current.criterion - with_sys.criterion >= required_gain) {
       final_ev = std::move(with_sys);
       systematic = true;
-    }
-  }
-  if ((win.name == "min_chip_thickness" || win.name == "chip_accumulation") &&
-      next.h_min_bracket_um[0] > 0.0) {
-    // Scored on h_min's grid; its step refines it.
-    Evaluation refined = refine_h_min(next, current, nullptr, final_ev);
-    if (refined.ok && refined.criterion < final_ev.criterion) {
-      final_ev = std::move(refined);
     }
   }
   if (!next.held.empty()) {

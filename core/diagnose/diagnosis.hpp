@@ -239,8 +239,8 @@ struct Diagnosis {
   /// Where the final model leaves the residual above the noise floor: that every σ is given its
   /// step's model, and what the model lacks biases its parameters beyond them ("" at the floor).
   std::string sigma_caveat;
-  /// What was done to the final model after the search's last step (h_min profiled again in it;
-  /// an effect that then shows nothing dropped), a sentence each.
+  /// What was done to the final model after the search's last step (h_min profiled again in
+  /// it), a sentence each.
   std::vector<std::string> final_notes;
   /// The final model's residual and force coefficients (the last step's, unless final_notes
   /// changed the model after it).
