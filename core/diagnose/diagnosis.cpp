@@ -2114,7 +2114,15 @@ Diagnosis Diagnoser::run() {
     out.stop_reason =
         at_floor(current) ? "the residual is at the noise floor" : "the step limit was reached";
   }
+  const bool step_limited = out.stop_reason == "the step limit was reached";
+  const bool search_at_floor = at_floor(current);
   final_h_min(state, current, out);
+  if (!search_at_floor && at_floor(current)) {
+    // The search stopped above the floor; the verdict, on the final model, says it is there.
+    out.stop_reason +=
+        "; then h_min, profiled again in the final model, took the residual to "
+        "the noise floor";
+  }
   out.noise_floor_N = engine_.floor();
   for (std::size_t a = 0; a < 2; ++a) {
     out.final_residual_rms_N[a] = std::sqrt(current.mean_square[a]);
@@ -2130,7 +2138,6 @@ Diagnosis Diagnoser::run() {
   const double ratio = std::max(last_rms[0] / std::max(out.noise_floor_N[0], 1e-300),
                                 last_rms[1] / std::max(out.noise_floor_N[1], 1e-300));
   // "Look outside the catalogue" only when the whole catalogue was scored and none gained.
-  const bool step_limited = out.stop_reason == "the step limit was reached";
   const bool whole_catalogue = names.size() >= catalogue().size();
   const std::string unexplained =
       step_limited ? format("the step limit (%.0f) stopped the search", opt_.max_steps)
