@@ -144,7 +144,7 @@ FeedTrend feed_trend(const std::vector<double>& feed_um, const std::vector<doubl
               "difference), runout_change"
         : band == "tooth_passing_harmonics"
             ? "an error of fixed size at every tooth pass: ploughing and rubbing of the edge "
-              "(min_chip_thickness), tool_wear"
+              "(min_chip_thickness, ploughing_area), tool_wear"
             : "an error of fixed size outside the harmonics: the measurement chain "
               "(amplifier_drift, mains_hum)";
   }

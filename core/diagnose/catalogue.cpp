@@ -5,7 +5,7 @@
 namespace millwatch::diagnose {
 namespace {
 
-constexpr std::array<CandidateInfo, 12> kCatalogue = {{
+constexpr std::array<CandidateInfo, 13> kCatalogue = {{
     {"runout", CandidateKind::kModelEffect,
      "once-per-revolution pattern: spindle-frequency harmonics that are not tooth-passing "
      "harmonics; one flute's peak above the other's",
@@ -20,6 +20,13 @@ constexpr std::array<CandidateInfo, 12> kCatalogue = {{
      "effects.min_chip + accumulation + multi_pass: a pass below h_min removes nothing ([002] "
      "eqs 11-12)",
      "h_min_um"},
+    {"ploughing_area", CandidateKind::kModelEffect,
+     "a force of fixed size while a flute cuts (the area ploughed before its chip reached "
+     "h_min), rising over the entry and falling over the exit: where an edge force would be, "
+     "shaped by h_min",
+     "material.linear_edge.ploughing = area: K_p·A_p, the area ploughed below h_min, in place "
+     "of the edge force K_e ([001] eqs 14-21)",
+     "h_min_um (and K_tp, K_np, K_ap, linear)"},
     {"tool_deflection", CandidateKind::kModelEffect,
      "peaks flattened against the tooth-passing shape; chip-load imbalance smaller than runout "
      "predicts",

@@ -66,14 +66,46 @@ TEST_P(HiddenEffect, IsNamedAddedAndClosesTheGap) {
   for (std::size_t a = 0; a < 2; ++a) {
     EXPECT_LE(last[a], 1.3 * d.noise_floor_N[a]) << "axis " << a;
   }
+  // [001]'s ploughed area belongs to the linear law: a power-law cut does not score it.
+  const bool linear = cut.start.material.law == model::ForceLawKind::kLinearEdge;
+  EXPECT_EQ(linear, effect == "ploughing_area");
+  for (const auto& c : d.steps.front().candidates) {
+    EXPECT_TRUE(linear || c.name != "ploughing_area");
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, HiddenEffect,
                          ::testing::Values("runout", "min_chip_thickness", "chip_accumulation",
-                                           "tool_deflection", "helix_lag", "trochoidal_path",
-                                           "dynamometer_dynamics", "spindle_speed_error",
-                                           "amplifier_drift", "mains_hum"),
+                                           "ploughing_area", "tool_deflection", "helix_lag",
+                                           "trochoidal_path", "dynamometer_dynamics",
+                                           "spindle_speed_error", "amplifier_drift", "mains_hum"),
                          [](const auto& p) { return std::string(p.param); });
+
+TEST(Diagnose, PloughedAreaIsFoundWithItsHMinAndCoefficients) {
+  // [001]'s law hidden (h_min 1.5 µm, K_tp 4000, K_np 6000 N/mm³): the step states them, and
+  // the edge force the plain linear law fitted in their place is gone from the law.
+  const auto cut = test::hidden_effect_cut({"ploughing_area"});
+  const Diagnosis d = diagnose(cut.record, cut.start);
+  print(d);
+  ASSERT_TRUE(d.ok) << d.message;
+  ASSERT_EQ(d.named_effects, std::vector<std::string>{"ploughing_area"}) << d.verdict;
+  const auto& ps = d.steps.front().parameters;
+  const Parameter* h = test::find_parameter(ps, "h_min_um");
+  const Parameter* ktp = test::find_parameter(ps, "k_tp_N_per_mm3");
+  const Parameter* knp = test::find_parameter(ps, "k_np_N_per_mm3");
+  ASSERT_NE(h, nullptr);
+  ASSERT_NE(ktp, nullptr);
+  ASSERT_NE(knp, nullptr);
+  EXPECT_FALSE(h->upper_bound || h->lower_bound) << h->bound_note;
+  EXPECT_GT(h->sigma, 0.0);
+  EXPECT_NEAR(h->value, 1.5, 3.0 * h->sigma);
+  // The truth's finer angle step and more helix discs than the fitted model's move the
+  // coefficients by a few per cent, beyond their σ from the noise alone.
+  EXPECT_NEAR(ktp->value, 4000.0, 0.05 * 4000.0);
+  EXPECT_NEAR(knp->value, 6000.0, 0.05 * 6000.0);
+  EXPECT_TRUE(d.final_model.material.linear_edge.ploughing_area);
+  EXPECT_TRUE(d.final_model.effects.min_chip.enabled);
+}
 
 TEST(Diagnose, NegativeControlAddsNothing) {
   const auto cut = test::hidden_effect_cut({});
@@ -81,6 +113,7 @@ TEST(Diagnose, NegativeControlAddsNothing) {
   print(d);
   ASSERT_TRUE(d.ok) << d.message;
   EXPECT_TRUE(d.named_effects.empty()) << d.verdict;
+
   // The model describes the record to its noise: its σ need no caveat.
   EXPECT_TRUE(d.sigma_caveat.empty()) << d.sigma_caveat;
 }

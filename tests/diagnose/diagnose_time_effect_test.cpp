@@ -173,5 +173,26 @@ TEST(DiagnoseTimeEffects, ValuesThatAreNotEstimatesShowNothing) {
             "");
 }
 
+TEST(DiagnoseTimeEffects, ANegativePloughingCoefficientShowsNoPloughing) {
+  // The AlSi10Mg preset's cut, ploughing_area scored from the plain model: ΔBIC 15,639 with
+  // K_tp −3,821 ± 1,400 N/mm³, ploughing that would pull the edge along. Where it lands beside
+  // the accumulation, both coefficients positive and near the truth's (4,000, 6,000), it shows.
+  const Parameter h{"h_min_um", 3.2, 0.8};
+  const std::string why = not_shown_by_parameters(
+      "ploughing_area", {h, {"k_tp_N_per_mm3", -3821.0, 1400.0}, {"k_np_N_per_mm3", 1.0e4, 1300}});
+  EXPECT_NE(why.find("a negative ploughing coefficient (k_tp_N_per_mm3 = -3821 ± 1.4e+03)"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(not_shown_by_parameters("min_chip_thickness", {h, {"k_np_Nmm", -40.0, 5.0}}), "");
+  EXPECT_EQ(not_shown_by_parameters("ploughing_area", {{"h_min_um", 1.315, 0.026},
+                                                       {"k_tp_N_per_mm3", 3519.0, 430.0},
+                                                       {"k_np_N_per_mm3", 7212.0, 410.0}}),
+            "");
+  // Within 2σ of zero it may be either sign (a coefficient the record hardly pins); the axial
+  // one's sign follows the helix.
+  EXPECT_EQ(not_shown_by_parameters("chip_accumulation", {h, {"k_tp_Nmm", -50.0, 40.0}}), "");
+  EXPECT_EQ(not_shown_by_parameters("ploughing_area", {h, {"k_ap_N_per_mm3", -500.0, 10.0}}), "");
+}
+
 }  // namespace
 }  // namespace millwatch::diagnose

@@ -49,6 +49,25 @@ sim::Scenario hidden_effect_scenario(const std::vector<std::string>& hidden, dou
       model::set_effect(m, "multi_pass", true);
       m.effects.min_chip.h_min_um = 1.2;
       m.process.feed_per_tooth_um = 2.0;
+    } else if (h == "ploughing_area") {
+      // [001]'s law (the AlSi10Mg preset's assumed coefficients): the shear force and, in place
+      // of an edge force, K_p times the area ploughed while the chip is below h_min = 1.5 µm, at
+      // 3 µm a tooth (the chip below it over a third of the slot: θ < 30° and θ > 150°).
+      m.material.law = model::ForceLawKind::kLinearEdge;
+      auto& le = m.material.linear_edge;
+      le = {};
+      le.k_tc_N_per_mm2 = 1000.0;
+      le.k_nc_N_per_mm2 = 420.0;
+      le.k_ac_N_per_mm2 = 60.0;
+      le.k_te_N_per_mm = le.k_ne_N_per_mm = le.k_ae_N_per_mm = 0.0;
+      le.k_tp_N_per_mm3 = 4000.0;
+      le.k_np_N_per_mm3 = 6000.0;
+      le.k_ap_N_per_mm3 = 500.0;
+      model::set_effect(m, "ploughing_area", true);
+      model::set_effect(m, "min_chip", true);
+      m.effects.min_chip.h_min_um = 1.5;
+      m.process.feed_per_tooth_um = 3.0;
+      m.process.axial_depth_mm = 0.2;
     } else if (h == "tool_deflection") {
       model::set_effect(m, "deflection", true);
       m.effects.deflection.stiffness_N_per_um = 0.15;
