@@ -29,7 +29,16 @@ out_url="udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304"
 start_daemon() {  # config, summary, log, [options]
   "$MILLWATCH_DAEMON" -c "$1" --lcm-url "$url" --summary "$2" "${@:4}" >"$3" 2>&1 &
   daemon=$!
-  sleep 0.5  # subscribed and listening
+  # Subscribed and listening: it logs "millwatchd running" once its source is open (a fixed
+  # 0.5 s was once too short on a machine busy with other tests, and the first blocks were
+  # played to nobody). The loggers, started before it, have had at least as long.
+  for _ in $(seq 100); do
+    grep -q "millwatchd running" "$3" 2>/dev/null && break
+    kill -0 "$daemon" 2>/dev/null || break
+    sleep 0.1
+  done
+  grep -q "millwatchd running" "$3" || echo "millwatchd did not start listening within 10 s" >&2
+  sleep 0.2
 }
 
 await_exit() {  # pid, tenths of a second, message: a straggler is killed and the session fails
