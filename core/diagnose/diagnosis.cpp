@@ -1379,10 +1379,15 @@ void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
   t.config = taken.fit.config;
   current = std::move(taken);
   state = t;
+  const double after_um = state.config.effects.min_chip.h_min_um;
   out.final_notes.push_back(
-      format("h_min profiled again in the final model: %.3f µm, where its step had found %.3f µm "
-             "in the model of the time (ΔBIC %.1f)",
-             state.config.effects.min_chip.h_min_um, before_um, gain) +
+      (std::fabs(after_um - before_um) < 5e-4  // the same to the digits shown
+           ? format("h_min profiled again in the final model: %.3f µm, as its step had found "
+                    "(ΔBIC %.1f from the refit)",
+                    after_um, gain)
+           : format("h_min profiled again in the final model: %.3f µm, where its step had found "
+                    "%.3f µm in the model of the time (ΔBIC %.1f)",
+                    after_um, before_um, gain)) +
       (state.h_min_bound == "upper" ? "; the least the profile tries: the record shows no "
                                       "minimum chip thickness above it"
                                     : "") +
