@@ -135,7 +135,7 @@ FeedTrend feed_trend(const std::vector<double>& feed_um, const std::vector<doubl
     t.name = "grows_as_feed_falls";
     t.suggests =
         "more of the engagement below h_min as the feed falls: min_chip_thickness, "
-        "chip_accumulation";
+        "chip_accumulation, ploughing_area";
   } else {
     t.name = "independent_of_feed";
     t.suggests =

@@ -16,10 +16,10 @@
 //     feeds — in the spindle harmonics runout's cutting-radius difference ρ·cos γ, the same
 //     micrometres at every feed ([000] eq 9; its force error K(1−a)h^(−a)·Δh gives n ≈ −a);
 //     in the tooth-passing harmonics the ploughing and rubbing of the edge below h_min, whose
-//     force does not scale with the chip ([000] eq 5, [002] eq 17's edge terms); elsewhere the
-//     measurement chain (drift, hum do not know the feed).
+//     force does not scale with the chip ([000] eq 5, [002] eq 17's edge terms, [001]'s ploughed
+//     area); elsewhere the measurement chain (drift, hum do not know the feed).
 //   grows_as_feed_falls (n ≤ −0.4): more of the engagement below h_min as f_t falls
-//     (min_chip_thickness, chip_accumulation).
+//     (min_chip_thickness, chip_accumulation, ploughing_area).
 //   at_noise_floor: no cut's residual stands above 1.1× its noise floor (the diagnosis's own
 //     "at the floor"): nothing to read.
 // The relative exponent (the excess over the measured RMS) says how the error's weight changes:

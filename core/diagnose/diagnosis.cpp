@@ -51,6 +51,12 @@ bool profiles_h_min(const std::string& name) {
   return name == "min_chip_thickness" || name == "chip_accumulation" || name == "ploughing_area";
 }
 
+/// [001]'s ploughed-area law in effect (the flag counts for the linear law only).
+bool area_law_on(const model::ModelConfig& c) {
+  return c.material.law == model::ForceLawKind::kLinearEdge &&
+         c.material.linear_edge.ploughing_area;
+}
+
 /// A ploughing regime's coefficient (k_tp_Nmm, k_np_N_per_mm3, …).
 bool is_ploughing_coefficient(const std::string& name) {
   return name.rfind("k_tp_", 0) == 0 || name.rfind("k_np_", 0) == 0 || name.rfind("k_ap_", 0) == 0;
@@ -82,7 +88,10 @@ struct State {
   // lowest tried), "lower" (at least: the highest); "" inside.
   std::string h_min_bound;
   std::array<double, 2> h_min_bracket_um{};  // the grid's neighbours of the best (profile_h_min)
-  double change_s = 0.0;                     // the runout changed at this time (0: it did not)
+  // Scored at the model's own h_min from the current fit (evaluate_at_h_min): its refinement
+  // starts there too, and its bracket is not known to hold the minimum.
+  bool h_min_from_current = false;
+  double change_s = 0.0;  // the runout changed at this time (0: it did not)
   double change_sigma_s = 0.0;
   bool wear_trend = false;  // flank wear's rubbing, growing linearly over the record
   // The parameters of `extra` the last accepted fit held at a physical bound: name →
@@ -1079,7 +1088,7 @@ class Diagnoser {
   bool apply(const std::string& name, State& s, const Evaluation& current, std::string& why);
   /// Takes an effect the search named out of a state; false where it cannot be taken out alone
   /// (the speed and the chain's terms, which nothing else stands in for; min_chip under
-  /// chip_accumulation; runout under runout_change).
+  /// chip_accumulation or ploughing_area; runout under runout_change).
   bool remove(const std::string& name, State& s, const std::vector<std::string>& named) const;
   /// Scores every candidate of `names` but the `excluded` on `state` (`current` its evaluation).
   Round score_round(const State& state, const Evaluation& current,
@@ -1282,12 +1291,14 @@ Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current, const E
   // The least (largest) h of the grid the best: the minimum is not bracketed, whatever a golden
   // section finds inside the first (last) interval.
   s.h_min_bound = best == 0 ? "upper" : best + 1 == grid.size() ? "lower" : "";
+  s.h_min_from_current = false;
   return best_ev;
 }
 
 Evaluation Diagnoser::evaluate_at_h_min(State& s, const Evaluation& current) {
   const double h = s.config.effects.min_chip.h_min_um;
   s.h_min_bracket_um = {h / kHMinGridRatio, h * kHMinGridRatio};
+  s.h_min_from_current = true;
   // From the current fit: a fresh search (its starts and alignment scan) of the area law over
   // an accumulation cycle takes ~30 s on the AlSi10Mg preset's 1.5 s record.
   return engine_.evaluate(s, &current, false, &current);
@@ -1381,7 +1392,7 @@ void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
   state = t;
   const double after_um = state.config.effects.min_chip.h_min_um;
   out.final_notes.push_back(
-      (std::fabs(after_um - before_um) < 5e-4  // the same to the digits shown
+      (format("%.3f", after_um) == format("%.3f", before_um)  // the same to the digits shown
            ? format("h_min profiled again in the final model: %.3f µm, as its step had found "
                     "(ΔBIC %.1f from the refit)",
                     after_um, gain)
@@ -1784,8 +1795,9 @@ Round Diagnoser::score_round(const State& state, const Evaluation& current,
     // The ploughed area beside an h_min the model has estimated: scored at that h_min, refined
     // at its step. Its profile there would cost twelve fits of the area law over the
     // accumulation's whole cycle (the AlSi10Mg preset's diagnosis: 43 s → 6.8 min).
+    // (An h_min the search estimated: a configured one has no σ and may be far off.)
     const bool at_model_h_min = name == "ploughing_area" && state.config.effects.min_chip.enabled &&
-                                state.h_min_bound.empty();
+                                state.h_min_bound.empty() && state.h_min_sigma_um > 0.0;
     Evaluation ev = at_model_h_min         ? evaluate_at_h_min(s, current)
                     : profiles_h_min(name) ? profile_h_min(s, current)
                     : name == "tool_deflection"
@@ -1814,7 +1826,7 @@ Round Diagnoser::score_round(const State& state, const Evaluation& current,
       score.shown = score.message.empty();
     }
     // Only the leader's evaluation is kept (its samples: ~45 bytes per sample of the record;
-    // all eleven candidates' held 600 MB for a 30 s record at 20 kHz). The first of the lowest
+    // all the candidates' held 600 MB for a 30 s record at 20 kHz). The first of the lowest
     // criteria among those that show their effect leads, as the choice below picks it.
     if (ev.ok && score.shown && (!r.leader.ok || ev.criterion < r.leader.criterion)) {
       r.leader = std::move(ev);
@@ -1846,9 +1858,25 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
   if (profiles_h_min(win.name) && next.h_min_bracket_um[0] > 0.0) {
     // Scored on h_min's grid; its step refines it, before the refit with the model's variants
     // (after it, a refined fit would replace that refit's σ with the statistical one alone).
-    Evaluation refined = refine_h_min(next, current, nullptr, final_ev);
+    const Evaluation* seed = next.h_min_from_current ? &current : nullptr;
+    Evaluation refined = refine_h_min(next, current, seed, final_ev);
     if (refined.ok && refined.criterion < final_ev.criterion) {
       final_ev = std::move(refined);
+    }
+    const double h = next.config.effects.min_chip.h_min_um;
+    const auto at_end = [&](double end) { return std::fabs(std::log(h / end)) < 0.01; };
+    if (next.h_min_from_current &&
+        (at_end(next.h_min_bracket_um[0]) || at_end(next.h_min_bracket_um[1]))) {
+      // Not bracketed by the model's h_min's neighbours: its whole profile.
+      State whole = next;
+      Evaluation profiled = profile_h_min(whole, current, seed);
+      if (profiled.ok && whole.h_min_bound.empty()) {
+        profiled = refine_h_min(whole, current, seed, std::move(profiled));
+      }
+      if (profiled.ok && profiled.criterion < final_ev.criterion) {
+        next = whole;
+        final_ev = std::move(profiled);
+      }
     }
   }
   bool systematic = false;
@@ -1930,15 +1958,15 @@ bool Diagnoser::remove(const std::string& name, State& s,
     e.runout.enabled = false;
     e.runout.offset_um = 0.0;
   } else if (name == "min_chip_thickness") {
-    if (e.accumulation.enabled || s.config.material.linear_edge.ploughing_area) {
+    if (e.accumulation.enabled || area_law_on(s.config)) {
       return false;  // they need h_min
     }
     e.min_chip.enabled = false;
   } else if (name == "chip_accumulation") {
     e.accumulation.enabled = false;
     e.multi_pass.enabled = started.multi_pass.enabled;
-    e.min_chip.enabled = started.min_chip.enabled || is_named("min_chip_thickness") ||
-                         s.config.material.linear_edge.ploughing_area;
+    e.min_chip.enabled =
+        started.min_chip.enabled || is_named("min_chip_thickness") || area_law_on(s.config);
   } else if (name == "ploughing_area") {
     s.config.material.linear_edge.ploughing_area = start_.material.linear_edge.ploughing_area;
     e.min_chip.enabled =

@@ -107,6 +107,24 @@ TEST(Diagnose, PloughedAreaIsFoundWithItsHMinAndCoefficients) {
   EXPECT_TRUE(d.final_model.effects.min_chip.enabled);
 }
 
+TEST(Diagnose, PloughedAreaBesideAConfiguredHMinIsProfiled) {
+  // The starting model has a minimum chip thickness of its own (0.5 µm, configured: no σ, a third
+  // of the truth's): the ploughed area profiles h_min afresh rather than taking that one.
+  auto cut = test::hidden_effect_cut({"ploughing_area"});
+  cut.start.effects.min_chip.enabled = true;
+  const Diagnosis d = diagnose(cut.record, cut.start);
+  print(d);
+  ASSERT_TRUE(d.ok) << d.message;
+  ASSERT_FALSE(d.named_effects.empty()) << d.verdict;
+  EXPECT_EQ(d.named_effects.front(), "ploughing_area") << d.verdict;
+  const Parameter* h = test::find_parameter(d.steps.front().parameters, "h_min_um");
+  ASSERT_NE(h, nullptr);
+  EXPECT_NEAR(h->value, 1.5, 3.0 * h->sigma);
+  for (std::size_t a = 0; a < 2; ++a) {
+    EXPECT_LE(d.final_residual_rms_N[a], 1.3 * d.noise_floor_N[a]) << "axis " << a;
+  }
+}
+
 TEST(Diagnose, NegativeControlAddsNothing) {
   const auto cut = test::hidden_effect_cut({});
   const Diagnosis d = diagnose(cut.record, cut.start);
