@@ -1116,17 +1116,17 @@ class Diagnoser {
   /// neighbours, and σ the grid's resolution. Where the best is an end of the grid, h_min is a
   /// bound (State::h_min_bound), not an estimate. Candidates are scored on the grid alone.
   Evaluation profile_h_min(State& s, const Evaluation& current, const Evaluation* from = nullptr);
-  /// A golden section between the best grid point's neighbours (`best`: its evaluation); σ
-  /// from the profile's curvature (Δ(−2 ln L) = 1). For a step taken and the final model.
   /// Fits s at its h_min from the current fit, with the grid's neighbours as refine_h_min()'s
   /// bracket.
   Evaluation evaluate_at_h_min(State& s, const Evaluation& current);
+  /// A golden section between the best grid point's neighbours (`best`: its evaluation); σ
+  /// from the profile's curvature (Δ(−2 ln L) = 1). For a step taken and the final model.
   Evaluation refine_h_min(State& s, const Evaluation& current, const Evaluation* from,
                           Evaluation best);
-  /// h_min profiled again in the final model, where min_chip_thickness or chip_accumulation was
-  /// named: a step profiles it in its own model, and what later steps add moves it (the cp-Ti
-  /// preset's cut at 20 kHz: 0.08 µm where chip_accumulation came in before the deflection,
-  /// 0.198 µm in the final model, truth 0.2).
+  /// h_min profiled again in the final model, where min_chip_thickness, chip_accumulation or
+  /// ploughing_area was named: a step profiles it in its own model, and what later steps add moves
+  /// it (the cp-Ti preset's cut at 20 kHz: 0.08 µm where chip_accumulation came in before the
+  /// deflection, 0.198 µm in the final model, truth 0.2).
   void final_h_min(State& state, Evaluation& current, Diagnosis& out);
   /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
   /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
