@@ -83,6 +83,12 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
     case monitor::PipelineEventKind::kNoSteadySignal:
       spdlog::warn("{}: no steady tooth-passing signal, no speed stated: {}", source_, e.detail);
       return;
+    case monitor::PipelineEventKind::kSpeedOutOfRange:
+      if (n <= 10) {
+        spdlog::warn("{}: t = {:.3f} s: {}", source_, t_s,
+                     monitor::describe_line_outside_search(e, summary_.config()));
+      }
+      return;
     case monitor::PipelineEventKind::kNoTemplate:  // no sample count: the lock's speed instead
       if (n <= 10) {
         spdlog::warn(

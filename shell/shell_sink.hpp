@@ -39,7 +39,7 @@ class ShellSink : public monitor::PipelineSink {
   monitor::RunSummary& summary_;
   std::string source_;
   monitor::PipelineSink* observer_ = nullptr;
-  std::array<std::int64_t, 16> logged_{};  // per event kind
+  std::array<std::int64_t, 32> logged_{};  // per event kind
 };
 
 }  // namespace millwatch::shell

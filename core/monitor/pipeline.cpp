@@ -1,8 +1,12 @@
 #include "core/monitor/pipeline.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <string>
+#include <utility>
 
 #include "core/monitor/extremum.hpp"
 
@@ -25,6 +29,9 @@ constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model fol
 // which the events follow minima that are not the flutes' (a 6-flute cut after a speed ramp:
 // the events' filter ran on to 16,500 rpm for 13,000, counting 8 turns the spindle did not make).
 constexpr double kEventSpeedDisagreement = 0.03;
+// Unlocked windows in a row that must agree on a line outside the search before it is
+// reported: noise peaks wander from window to window, a spindle's line stays.
+constexpr int kLineWindows = 4;
 constexpr int kIdleToStop = 3;  // idle revolutions in a row: cutting has stopped
 // An in-plane channel whose synchronous range over the lock's windows is below this fraction of
 // the other's carries no cutting force (in a cut the two are within a factor of a few).
@@ -129,8 +136,56 @@ std::string_view to_string(PipelineEventKind kind) {
       return "no steady tooth-passing signal";
     case PipelineEventKind::kNoTemplate:
       return "tooth events not found";
+    case PipelineEventKind::kSpeedOutOfRange:
+      return "spindle speed outside the search";
   }
   return "event";
+}
+
+const char* const kLineWithSpindleLine =
+    "unlocked tracker windows agreed on a strongest spectral line outside the search, with a "
+    "line at its spindle frequency as a tooth-passing line";
+
+std::string describe_line_outside_search(const PipelineEvent& e, const MonitorConfig& config) {
+  const int flutes = config.model.tool.flutes;
+  const double commanded_rpm = config.model.process.spindle_rpm;
+  const double line_hz = e.value;
+  // The line is the spindle frequency (runout can make it the strongest) or the tooth-passing
+  // one: without runout a cut at f with z flutes is periodic at z·f, and forces alone cannot
+  // tell. A line at line/z as well makes it the tooth-passing one, likely.
+  const bool tooth_passing = e.detail == kLineWithSpindleLine;
+  std::array<double, 2> rpm = {60.0 * line_hz / flutes, 60.0 * line_hz};
+  std::array<const char*, 2> as = {"the tooth-passing frequency", "the spindle frequency"};
+  if (!tooth_passing &&
+      std::fabs(std::log(rpm[1] / commanded_rpm)) < std::fabs(std::log(rpm[0] / commanded_rpm))) {
+    std::swap(rpm[0], rpm[1]);
+    std::swap(as[0], as[1]);
+  }
+  const auto percent = [&](double r) { return 100.0 * (r / commanded_rpm - 1.0); };
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "the strongest spectral line, %.0f Hz, lies outside the spindle tracker's search "
+                "(%.0f rpm commanded, ± %.0f %%), so no speed is stated",
+                line_hz, commanded_rpm, 100.0 * config.spindle.search_fraction);
+  std::string out = text;
+  if (flutes == 1) {
+    std::snprintf(text, sizeof text, ": the spindle ran at %.0f rpm (%+.0f %%)", rpm[0],
+                  percent(rpm[0]));
+    out += text;
+  } else {
+    std::snprintf(text, sizeof text, ": the spindle ran at %.0f rpm (%+.0f %%) if it is %s%s",
+                  rpm[0], percent(rpm[0]), as[0],
+                  tooth_passing ? " of its flutes (a line stands at that speed's spindle "
+                                  "frequency too)"
+                                : "");
+    out += text;
+    std::snprintf(text, sizeof text, ", at %.0f rpm (%+.0f %%) if it is %s (%d flutes)", rpm[1],
+                  percent(rpm[1]), as[1], flutes);
+    out += text;
+  }
+  return out +
+         "; if it ran at one of them (an override?), set process.spindle_rpm to it, or widen "
+         "spindle.search_fraction";
 }
 
 Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
@@ -203,6 +258,8 @@ void Pipeline::restart_stream(std::int64_t first_sample) {
     longest_stretch_ = std::max(longest_stretch_, last_sample_ - stretch_first_ + 1);
   }
   stretch_first_ = first_sample;
+  line_run_ = 0;  // the tracker starts afresh
+  line_reported_ = false;
   conditioner_.restart(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
   if (events_.active()) {
@@ -328,8 +385,8 @@ void Pipeline::hand_over(std::string_view why) {
 
 void Pipeline::finish() {
   flush_tail();
-  if (ever_locked_ || tracker_locked_) {
-    return;  // measured, or a kNoTemplate said why not
+  if (ever_locked_ || tracker_locked_ || lines_reported_ > 0) {
+    return;  // measured, or a kNoTemplate or kSpeedOutOfRange said why not
   }
   // Say why nothing was measured.
   const signal::TrackerTiming t = signal::tracker_timing(tracker_config(config_));
@@ -468,6 +525,7 @@ void Pipeline::on_tracker_update() {
     }
   }
   was_cutting_ = e.cutting;
+  note_line_outside_search(e, center);
   conditioner_.set_quiet(e.updates > 0 && !e.cutting, stats_.typical_peak_N());
 
   if (e.valid) {
@@ -502,6 +560,34 @@ void Pipeline::on_tracker_update() {
       static_cast<double>(center) >
           static_cast<double>(measured_until_) + phase_.samples_per_revolution()) {
     start_events();
+  }
+}
+
+void Pipeline::note_line_outside_search(const signal::SpindleEstimate& e, std::int64_t center) {
+  if (e.valid) {
+    line_run_ = 0;
+    line_reported_ = false;
+    return;
+  }
+  if (!e.line_outside_search) {
+    line_run_ = 0;
+    return;
+  }
+  const double tolerance_hz = std::max(0.01 * e.line_hz, tracker_.bin_hz());
+  if (line_run_ > 0 && std::fabs(e.line_hz - line_run_hz_) <= tolerance_hz) {
+    ++line_run_;
+    line_run_hz_ += (e.line_hz - line_run_hz_) / line_run_;
+  } else {
+    line_run_ = 1;
+    line_run_hz_ = e.line_hz;
+  }
+  if (line_run_ >= kLineWindows && !line_reported_) {
+    line_reported_ = true;
+    ++lines_reported_;
+    event(PipelineEventKind::kSpeedOutOfRange, input_sample(center), line_run_, line_run_hz_,
+          e.line_has_spindle_line
+              ? kLineWithSpindleLine
+              : "unlocked tracker windows agreed on a strongest spectral line outside the search");
   }
 }
 

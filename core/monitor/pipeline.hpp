@@ -67,6 +67,10 @@ enum class PipelineEventKind {
                     ///< longest stretch between breaks in the stream
   kNoSteadySignal,  ///< cutting seen, but no two successive windows agreed (count: windows)
   kNoTemplate,      ///< locked, but the revolution's tooth events could not be told apart
+  /// Unlocked tracker windows in a row (count) agreed on a strongest spectral line (value, Hz)
+  /// that no speed searched explains (signal::SpindleEstimate::line_outside_search): once per
+  /// spell without a lock. describe_line_outside_search() words it.
+  kSpeedOutOfRange,
   /// The flute-force change detectors hold (AlertEngine): the revolution's speed (value, rpm) is
   /// more than alerts.conditions_tolerance off their baseline's (count: that speed, rpm rounded).
   kAlertsHeld,
@@ -86,6 +90,16 @@ struct PipelineEvent {
   double value = 0.0;
   std::string_view detail;
 };
+
+/// A kSpeedOutOfRange event's detail where a line stands at its z-th sub-harmonic as well
+/// (signal::SpindleEstimate::line_has_spindle_line); any other detail: either reading.
+extern const char* const kLineWithSpindleLine;
+
+/// A kSpeedOutOfRange event (its line in value, Hz) in words: the speeds the line means as the
+/// spindle frequency and as the tooth-passing one of `config`'s tool, against the commanded
+/// speed and the tracker's search — the tooth-passing reading first where the event's detail is
+/// kLineWithSpindleLine, else the one nearer the commanded speed.
+std::string describe_line_outside_search(const PipelineEvent& e, const MonitorConfig& config);
 
 struct PipelineStatus {
   InputCounters input;
@@ -225,6 +239,9 @@ class Pipeline {
     return input_.utime_of(input_sample(m));
   }
   void on_tracker_update();
+  /// Follows the tracker's strongest line outside its search over unlocked windows and reports
+  /// it (kSpeedOutOfRange) once they agree on it.
+  void note_line_outside_search(const signal::SpindleEstimate& e, std::int64_t center);
   /// Turns heard while cutting since the tracker's last window, not counted by it yet.
   [[nodiscard]] double heard_since_update() const;
   void start_events();
@@ -286,6 +303,13 @@ class Pipeline {
   bool ever_locked_ = false;     // the tooth events started at least once
   bool tracker_locked_ = false;  // the tracker locked at least once (kNoTemplate said the rest)
   std::int64_t inconsistent_windows_ = 0;  // cutting windows that did not agree, since a lock
+  // Successive unlocked windows whose strongest line lies outside the search and agrees
+  // (note_line_outside_search): how many, their mean (Hz), whether this spell without a lock
+  // reported it, and how many spells did.
+  int line_run_ = 0;
+  double line_run_hz_ = 0.0;
+  bool line_reported_ = false;
+  std::int64_t lines_reported_ = 0;
   double cutting_revolutions_ = 0.0;
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;

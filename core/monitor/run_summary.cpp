@@ -123,10 +123,13 @@ void RunSummary::add(const PipelineEvent& e) {
     detail = text + detail;
   } else if (e.kind == PipelineEventKind::kNoSteadySignal && e.count > 0) {
     detail = std::to_string(e.count) + " tracker windows: " + detail;
+  } else if (e.kind == PipelineEventKind::kSpeedOutOfRange) {
+    detail = describe_line_outside_search(e, config_);
   }
   // The warning's samples: events that count samples (a lost block, a gap, bad samples, a short
   // record), not windows.
-  const bool counts_samples = e.kind != PipelineEventKind::kNoSteadySignal;
+  const bool counts_samples =
+      e.kind != PipelineEventKind::kNoSteadySignal && e.kind != PipelineEventKind::kSpeedOutOfRange;
   auto it = std::find_if(warnings_.begin(), warnings_.end(),
                          [&](const Warning& w) { return w.kind == kind; });
   if (it == warnings_.end()) {

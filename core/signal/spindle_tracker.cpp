@@ -10,6 +10,7 @@
 #include "core/config/json_reader.hpp"
 #include "core/signal/fftw_planner.hpp"
 #include "core/signal/harmonic_floors.hpp"
+#include "core/signal/order_statistic.hpp"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -20,6 +21,9 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kLockedSearch = 0.02;  // ± relative search range around the locked speed
+// A line outside the search is reported only this far above min_snr_db (over the spectrum's
+// median rather than its harmonic's own floor): a clear line, not the strongest noise bin.
+constexpr double kLineMarginDb = 6.0;
 
 double wrap_pi(double a) {
   return a - kTwoPi * std::round(a / kTwoPi);
@@ -227,6 +231,7 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
       std::min(magnitude_.size(),
                static_cast<std::size_t>(std::ceil((harmonics_ + 2) * f_max / bin_hz)) + 8);
   floors_.resize(fft_size_ / 2 + 1);
+  line_scratch_.assign(2 * magnitude_bins_, 0.0);
   past_.assign(2 * (window_ / hop_) + 3, Past{});  // two windows back: a ramp's three windows
   fft_in_ = fftw_alloc_real(fft_size_);
   fft_out_ = fftw_alloc_complex(fft_size_ / 2 + 1);
@@ -315,6 +320,86 @@ double SpindleTracker::magnitude_at(double f_hz) const {
   return (1.0 - w) * magnitude_[k] + w * magnitude_[k + 1];
 }
 
+double SpindleTracker::peak_offset_bins(std::size_t k) const {
+  // A parabola through the log-magnitudes of bins k − 1, k, k + 1 (a Hann-windowed line's is
+  // nearly one).
+  const double l0 = std::log(magnitude_[k - 1]);
+  const double l1 = std::log(magnitude_[k]);
+  const double l2 = std::log(magnitude_[k + 1]);
+  const double denom = l0 - 2.0 * l1 + l2;
+  return denom < 0.0 ? 0.5 * (l0 - l2) / denom : 0.0;
+}
+
+int SpindleTracker::line_harmonics() const {
+  return 2 * config_.flutes;
+}
+
+bool SpindleTracker::line_fits(double line_hz, double f_hz) const {
+  const double tolerance_hz = 1.5 * bin_hz();
+  // A spindle's strongest line is one of its harmonics: its own frequency (runout), the
+  // tooth-passing one or its second, or another where runout shapes the pulses (a 2-flute slot,
+  // f_t 2 µm, ρ 0.8 µm: the third).
+  for (int h = 1; h <= line_harmonics(); ++h) {
+    if (std::fabs(line_hz - h * f_hz) <= tolerance_hz) {
+      return true;
+    }
+  }
+  return false;
+}
+
+void SpindleTracker::find_strongest_line(SpindleEstimate& e) {
+  const double bin = bin_hz();
+  const double f_cmd = config_.commanded_rpm / 60.0;
+  const double f_lo = f_cmd * (1.0 - config_.search_fraction);
+  const double f_hi = f_cmd * (1.0 + config_.search_fraction);
+  const int z = config_.flutes;
+  // From half the slowest spindle frequency searched (below it: drift) to the second
+  // tooth-passing harmonic of the fastest: higher up, the spectrum of a force magnitude with
+  // kinks holds small lines of every order and aliases from the decimation (a 2-flute slot
+  // without runout at 50 kHz: its sixth tooth-passing harmonic, 4,947 Hz, folded to 3,386 Hz,
+  // the strongest there).
+  const auto first =
+      std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(0.5 * f_lo / bin)));
+  const std::size_t last =
+      std::min({magnitude_bins_ - 2, static_cast<std::size_t>(0.45 * config_.sample_rate_hz / bin),
+                static_cast<std::size_t>(std::ceil(line_harmonics() * f_hi / bin)) + 2});
+  if (last <= first + 16) {
+    return;
+  }
+  std::size_t k = first;
+  for (std::size_t c = first; c <= last; ++c) {
+    if (magnitude_[c] > magnitude_[k]) {
+      k = c;
+    }
+  }
+  const std::size_t n = last - first + 1;
+  const std::span<double> values(line_scratch_.data(), n);
+  std::copy_n(magnitude_.begin() + static_cast<std::ptrdiff_t>(first), n, values.begin());
+  const double median = kth_smallest(values, n / 2, std::span<double>(line_scratch_.data() + n, n));
+  const double m = magnitude_[k];
+  if (!(m > 0.0) || !(median > 0.0)) {
+    return;
+  }
+  e.line_hz = (static_cast<double>(k) + peak_offset_bins(k)) * bin;
+  e.line_snr_db = 20.0 * std::log10(m / median);
+  // Explained by a speed searched: some f = line/h within the range (a bin wider at both ends)
+  // with a line of its own at f or at the tooth-passing z·f, as a lock needs.
+  const double clear = median * std::pow(10.0, config_.min_snr_db / 20.0);
+  const auto line_near = [&](double hz) {
+    const auto c = static_cast<std::size_t>(std::lround(hz / bin));
+    return c >= 1 && c + 1 < magnitude_bins_ &&
+           std::max({magnitude_[c - 1], magnitude_[c], magnitude_[c + 1]}) >= clear;
+  };
+  bool explained = false;
+  for (int h = 1; h <= line_harmonics() && !explained; ++h) {
+    const double f = e.line_hz / h;
+    explained = f >= f_lo - 1.5 * bin / h && f <= f_hi + 1.5 * bin / h &&
+                (line_near(f) || line_near(z * f));
+  }
+  e.line_outside_search = e.line_snr_db >= config_.min_snr_db + kLineMarginDb && !explained;
+  e.line_has_spindle_line = z > 1 && line_near(e.line_hz / z);
+}
+
 double SpindleTracker::harmonic_score(double f_hz) const {
   double sum = 0.0;
   for (int h = 1; h <= harmonics_; ++h) {
@@ -351,6 +436,14 @@ void SpindleTracker::update() {
     magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
   }
 
+  estimate_.line_hz = 0.0;
+  estimate_.line_snr_db = 0.0;
+  estimate_.line_outside_search = false;
+  estimate_.line_has_spindle_line = false;
+  if (!locked_) {
+    find_strongest_line(estimate_);
+  }
+
   // Coarse search over the commanded range, a quarter of a (padded) bin at a time.
   const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
   const double f_cmd = config_.commanded_rpm / 60.0;
@@ -385,6 +478,7 @@ void SpindleTracker::update() {
   floors_.prepare(magnitude_, harmonic_bins, lobe, last_bin);
   double sum_w = 0.0, sum_wf = 0.0, sum_wff = 0.0, sum_peak = 0.0, sum_floor = 0.0;
   int used = 0;
+  bool own_line = false;  // a line stands at f or at the tooth-passing z·f
   for (int h = 1; h <= harmonics_; ++h) {
     const auto center = static_cast<std::size_t>(std::lround(h * best_f / bin_hz));
     if (center < 3 || center + 3 >= magnitude_.size()) {
@@ -408,12 +502,8 @@ void SpindleTracker::update() {
     if (m < 4.0 * floor) {
       continue;
     }
-    const double l0 = std::log(magnitude_[k - 1]);
-    const double l1 = std::log(m);
-    const double l2 = std::log(magnitude_[k + 1]);
-    const double denom = l0 - 2.0 * l1 + l2;
-    const double delta = denom < 0.0 ? 0.5 * (l0 - l2) / denom : 0.0;
-    const double f_h = (static_cast<double>(k) + delta) * bin_hz / h;
+    own_line = own_line || h == 1 || h == config_.flutes;
+    const double f_h = (static_cast<double>(k) + peak_offset_bins(k)) * bin_hz / h;
     const double weight = (h * m) * (h * m);
     sum_w += weight;
     sum_wf += weight * f_h;
@@ -536,6 +626,15 @@ void SpindleTracker::update() {
   }
   if (!e.consistent) {
     e.valid = false;
+    return;
+  }
+  if (!own_line || (e.line_hz > 0.0 && !line_fits(e.line_hz, f))) {
+    // No line at this speed's own frequency nor at its tooth-passing one, or the window's
+    // strongest line is none this speed makes: an alias (harmonics of a speed outside the
+    // search that fall on some of this speed's: 40,000 rpm seen from 25,000 commanded as
+    // 26,667, whose third and sixth harmonics are its tooth-passing lines), not a lock.
+    e.valid = false;
+    e.consistent = false;
     return;
   }
   locked_ = true;

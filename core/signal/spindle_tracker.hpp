@@ -104,6 +104,21 @@ struct SpindleEstimate {
   double angle_rad = 0.0;          ///< spindle angle at center_sample, [0, 2π)
   std::int64_t center_sample = 0;  ///< the window's centre, in input samples
   std::int64_t updates = 0;
+  /// Unlocked windows only (0 and false while locked): the strongest spectral line from half
+  /// the slowest spindle frequency searched to the second tooth-passing harmonic of the
+  /// fastest, its SNR over the median of those bins, and whether it stands 6 dB more than
+  /// min_snr_db above them while no speed searched explains it: none within
+  /// commanded·(1 ± search_fraction) has it among its harmonics up to that one and a line of
+  /// its own (at its frequency or its tooth-passing one). A spindle run off its commanded speed
+  /// (an override) shows so. A lock needs the same of its speed: harmonics of a speed outside
+  /// the search can fall on some of a searched speed's and agree from window to window
+  /// (40,000 rpm seen from 25,000 commanded as 26,667 with 2 flutes).
+  double line_hz = 0.0;
+  double line_snr_db = 0.0;
+  bool line_outside_search = false;
+  /// With z > 1 flutes: a line stands min_snr_db above the median at line_hz / z as well, the
+  /// spindle line of a tooth-passing line_hz (runout makes one) — the likelier reading.
+  bool line_has_spindle_line = false;
 };
 
 class SpindleTracker {
@@ -131,6 +146,10 @@ class SpindleTracker {
   /// The resolved window and hop (samples).
   [[nodiscard]] std::size_t window_samples() const { return window_; }
   [[nodiscard]] std::size_t hop_samples() const { return hop_; }
+  /// The zero-padded spectrum's bin width (Hz).
+  [[nodiscard]] double bin_hz() const {
+    return config_.sample_rate_hz / static_cast<double>(fft_size_);
+  }
   /// Samples taken since the last update (none before the first).
   [[nodiscard]] std::size_t samples_since_update() const {
     return estimate_.updates > 0 ? since_hop_ : 0;
@@ -152,6 +171,14 @@ class SpindleTracker {
   [[nodiscard]] const Past* window_ago(std::int64_t center) const;
   [[nodiscard]] bool on_a_ramp(const Past& earlier, double hz, std::int64_t center) const;
   double magnitude_at(double f_hz) const;
+  void find_strongest_line(SpindleEstimate& e);
+  /// Whether a strongest line at line_hz is one a spindle at f_hz makes: one of its harmonics
+  /// up to line_harmonics(), within 1.5 bins.
+  [[nodiscard]] bool line_fits(double line_hz, double f_hz) const;
+  /// A spectral peak at bin k (a local maximum) off the bin, in bins.
+  [[nodiscard]] double peak_offset_bins(std::size_t k) const;
+  /// The harmonics a strongest line is sought among: up to the second tooth-passing one.
+  [[nodiscard]] int line_harmonics() const;
   void release();
 
   SpindleTrackerConfig config_;
@@ -162,8 +189,9 @@ class SpindleTracker {
   std::vector<double> ring_;  // the last window_ samples
   std::vector<double> hann_;
   std::vector<double> magnitude_;
-  std::size_t magnitude_bins_ = 0;  // magnitude_'s bins update() computes (and reads)
-  HarmonicFloors floors_;           // the harmonics' noise floors (update())
+  std::size_t magnitude_bins_ = 0;    // magnitude_'s bins update() computes (and reads)
+  HarmonicFloors floors_;             // the harmonics' noise floors (update())
+  std::vector<double> line_scratch_;  // find_strongest_line()'s median (2 × the bins)
   double* fft_in_ = nullptr;
   fftw_complex* fft_out_ = nullptr;
   fftw_plan plan_ = nullptr;

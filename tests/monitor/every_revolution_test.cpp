@@ -716,6 +716,56 @@ TEST(EveryRevolution, AnInPlaneChannelWithoutCuttingForceIsSaidAndNothingMeasure
   }
 }
 
+// A spindle run off its commanded speed beyond the tracker's search (± 15 %: an override of
+// 70 % or 160 %, a wrong speed in the sidecar): no speed is stated and no revolution measured —
+// before, the 40,000 rpm cut was measured at 26,665 rpm ("± 110 rev to rev"), an alias whose
+// harmonics fell on the tooth-passing lines, and the 17,500 rpm one at 25,752 rpm — and the
+// monitor says where the cut's strongest line is and what speeds it means, the truth's among
+// them. Told the truth's speed, it measures the cut.
+TEST(EveryRevolution, ASpindleOffItsCommandedSpeedIsSaidAndNoSpeedStated) {
+  for (const double true_rpm : {17500.0, 33000.0, 40000.0}) {
+    sim::Scenario s = slot(50000.0, 0.4);
+    s.spindle.actual_rpm = true_rpm;
+    const Recording r = test::record(s);
+    Collector out;
+    Pipeline p(test::monitor_for(s), out);  // commanded 25,000 rpm
+    test::replay(p, r, 1000);
+    EXPECT_TRUE(out.revolutions.empty()) << true_rpm;
+    EXPECT_EQ(out.count(PipelineEventKind::kLockAcquired), 0) << true_rpm;
+    EXPECT_EQ(out.count(PipelineEventKind::kNoSteadySignal), 0) << true_rpm;  // not "irregular"
+    const PipelineEvent* e = out.first(PipelineEventKind::kSpeedOutOfRange);
+    ASSERT_NE(e, nullptr) << true_rpm;
+    EXPECT_EQ(out.count(PipelineEventKind::kSpeedOutOfRange), 1) << true_rpm;  // once
+    EXPECT_LT(e->utime_us, 100000) << true_rpm;  // within 0.1 s of the cut's start
+    // The line is the spindle's or the tooth-passing one; the words name both readings.
+    const double as_spindle = 60.0 * e->value, as_tooth = 30.0 * e->value;
+    EXPECT_TRUE(std::fabs(as_spindle / true_rpm - 1.0) < 0.005 ||
+                std::fabs(as_tooth / true_rpm - 1.0) < 0.005)
+        << true_rpm << " rpm: line at " << e->value << " Hz";
+    const std::string words = describe_line_outside_search(*e, test::monitor_for(s));
+    char reading[32];
+    std::snprintf(reading, sizeof reading, "%.0f rpm",
+                  std::fabs(as_spindle / true_rpm - 1.0) < 0.005 ? as_spindle : as_tooth);
+    EXPECT_NE(words.find(reading), std::string::npos) << words;
+    EXPECT_NE(words.find("25000 rpm commanded"), std::string::npos) << words;
+
+    s.model.process.spindle_rpm = true_rpm;  // the user sets the speed the spindle ran at
+    Collector told;
+    Pipeline q(test::monitor_for(s), told);
+    test::replay(q, r, 1000);
+    EXPECT_GT(told.revolutions.size(), 0.85 * 0.4 * true_rpm / 60.0) << true_rpm;
+    std::vector<double> rpm;
+    for (const RevolutionRecord& rev : told.revolutions) {
+      rpm.push_back(60.0 / rev.measured.period_s);
+      EXPECT_NEAR(rpm.back(), true_rpm, 0.02 * true_rpm);  // 75 samples a turn at 40,000 rpm
+    }
+    std::nth_element(rpm.begin(), rpm.begin() + static_cast<std::ptrdiff_t>(rpm.size() / 2),
+                     rpm.end());
+    EXPECT_NEAR(rpm[rpm.size() / 2], true_rpm, 0.001 * true_rpm);
+    EXPECT_EQ(told.count(PipelineEventKind::kSpeedOutOfRange), 0) << true_rpm;
+  }
+}
+
 /// The 6-flute cut above at 333.3 kHz with a narrow valley search (0.2 pitch), the spindle
 /// jumping 11,000 → 13,000 rpm in `jump_s` from 0.3 s.
 sim::Scenario six_flutes_jumping(double jump_s) {

@@ -145,6 +145,44 @@ TEST(RunSummary, AWarningCountsSamplesNotWindows) {
   EXPECT_EQ(w[0]["detail"], "20 tracker windows: weak or irregular cutting");
 }
 
+// "spindle speed outside the search" says where the line is and what speeds it means, against
+// the commanded speed and the search: a 583.3 Hz line with a line at its spindle frequency
+// (2 flutes, 25,000 rpm commanded) is 17,500 rpm read as tooth passing, first, or 35,000 rpm;
+// without one, the reading nearer the commanded speed comes first. Its windows are no samples.
+TEST(RunSummary, ASpeedOutsideTheSearchNamesTheSpeedsItsLineMeans) {
+  MonitorConfig config;
+  config.model.tool.flutes = 2;
+  config.model.process.spindle_rpm = 25000.0;
+  config.spindle.search_fraction = 0.15;
+  for (const bool spindle_line : {true, false}) {
+    RunSummary summary(config);
+    PipelineEvent e;
+    e.kind = PipelineEventKind::kSpeedOutOfRange;
+    e.count = 4;
+    e.value = 583.3333;
+    e.detail = spindle_line ? kLineWithSpindleLine : "a strongest line outside the search";
+    summary.add(e);
+    const nlohmann::json w = summary.to_json()["warnings"];
+    ASSERT_GE(w.size(), 1u) << w.dump();
+    EXPECT_EQ(w[0]["kind"], "spindle speed outside the search");
+    EXPECT_EQ(w[0]["samples"], 0);
+    const std::string d = w[0]["detail"];
+    EXPECT_EQ(d.rfind("the strongest spectral line, 583 Hz, lies outside the spindle tracker's "
+                      "search (25000 rpm commanded, ± 15 %), so no speed is stated: the spindle "
+                      "ran at ",
+                      0),
+              0u)
+        << d;
+    const std::size_t tooth = d.find("17500 rpm (-30 %) if it is the tooth-passing frequency");
+    const std::size_t spindle = d.find("35000 rpm (+40 %) if it is the spindle frequency");
+    ASSERT_NE(tooth, std::string::npos) << d;
+    ASSERT_NE(spindle, std::string::npos) << d;
+    // ln(35,000/25,000) = 0.34 against ln(25,000/17,500) = 0.36: nearer, without the line.
+    EXPECT_EQ(tooth < spindle, spindle_line) << d;
+    EXPECT_NE(d.find("set process.spindle_rpm"), std::string::npos) << d;
+  }
+}
+
 /// A summary of `count` valid revolutions of a `flutes`-flute tool whose flutes share the turn.
 nlohmann::json valid_revolutions(int flutes, int count) {
   MonitorConfig config;

@@ -274,6 +274,52 @@ TEST(SpindleTracker, DoesNotLockOnIrregularCutting) {
   EXPECT_EQ(valid, 0);
 }
 
+// A spindle run off its commanded speed, beyond the search (an override of 70 % or 160 %):
+// no lock, no speed — at 40,000 rpm seen from 25,000 commanded the harmonics of 26,667 rpm fall
+// on every other tooth-passing line and agree from window to window, an alias the tracker must
+// not lock on — and every cutting window shows where its strongest line is. Where the speed is
+// within the search, no window says its line lies outside.
+TEST(SpindleTracker, ASpindleOffItsSearchIsNoLockAndShowsItsLine) {
+  const double fs = 50000.0 / 6.0;  // the pipeline's decimated magnitude at 50 kHz
+  for (const double true_rpm : {17500.0, 25252.0, 33000.0, 40000.0}) {
+    Cut cut;
+    cut.amplitude = {1.0, 0.5};  // runout: a line at the spindle frequency
+    SpindleTracker tracker(config(fs, 2, 25000.0));
+    const double f_true = true_rpm / 60.0;
+    std::vector<double> x(static_cast<std::size_t>(0.5 * fs));
+    for (std::size_t n = 0; n < x.size(); ++n) {
+      const double t = static_cast<double>(n) / fs;
+      x[n] = cut.force(2 * kPi * f_true * t, t);
+    }
+    const bool in_search = std::fabs(true_rpm / 25000.0 - 1.0) < 0.15;
+    int valid = 0, outside = 0, updates = 0;
+    for (std::size_t i = 0; i < x.size(); i += 50) {
+      if (tracker.process(std::span(x).subspan(i, std::min<std::size_t>(50, x.size() - i))) == 0) {
+        continue;
+      }
+      const SpindleEstimate& e = tracker.estimate();
+      ++updates;
+      valid += e.valid ? 1 : 0;
+      if (e.line_outside_search) {
+        ++outside;
+        // The spindle's line or its tooth-passing one, found to within a bin.
+        const double bin_hz = tracker.bin_hz();
+        EXPECT_TRUE(std::fabs(e.line_hz - f_true) < bin_hz ||
+                    std::fabs(e.line_hz - 2.0 * f_true) < bin_hz)
+            << true_rpm << " rpm: line at " << e.line_hz << " Hz";
+      }
+    }
+    EXPECT_GE(updates, 40) << true_rpm;  // 0.5 s in hops of 12 ms
+    if (in_search) {
+      EXPECT_GE(valid, updates - 3) << true_rpm;
+      EXPECT_EQ(outside, 0) << true_rpm;
+    } else {
+      EXPECT_EQ(valid, 0) << true_rpm << " rpm stated as " << tracker.estimate().spindle_rpm;
+      EXPECT_GE(outside, updates - 1) << true_rpm;  // every window but the first
+    }
+  }
+}
+
 // Issue 6 §10: a spindle slowing to rest and speeding up again (a feed hold) gives no lock,
 // and cutting at speed again locks within a tenth of a second.
 TEST(SpindleTracker, DoesNotLockOnAStoppingSpindleAndReacquiresQuickly) {
