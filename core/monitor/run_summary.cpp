@@ -276,7 +276,9 @@ nlohmann::json RunSummary::to_json() const {
              std::to_string(std::lround(100.0 * u * u)) + " % of its variance, above " +
              "identification.max_unexplained " +
              std::to_string(std::lround(100.0 * config_.identification.max_unexplained)) +
-             " %): runout and coefficients describe this cut poorly");
+             " %): runout and coefficients describe this cut poorly — check the tool and cut "
+             "configured (flutes, diameter, feed, depths), or name the missing effect with "
+             "millwatch diagnose");
   }
   const bool scattered = identification_.is_object() && identification_.contains("fit") &&
                          identification_["fit"].contains("window_scatter");
