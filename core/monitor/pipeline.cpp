@@ -406,6 +406,11 @@ void Pipeline::finish() {
                 "two windows (spindle.window_s) of steady cutting that agree"
               : "the spindle tracker locks on two windows (spindle.window_s) of steady cutting "
                 "that agree");
+  } else if (alias_windows_ > 0) {
+    event(PipelineEventKind::kNoSteadySignal, at, alias_windows_, 0.0,
+          "tracker windows agreed on a speed within the search whose lines are not the cut's: "
+          "the harmonics of a spindle outside the search (spindle.search_fraction) falling on "
+          "some of that speed's, an alias");
   } else if (inconsistent_windows_ > 0) {
     event(PipelineEventKind::kNoSteadySignal, at, inconsistent_windows_, 0.0,
           "weak or irregular cutting: tooth-passing lines came and went, but no two windows a "
@@ -564,6 +569,7 @@ void Pipeline::on_tracker_update() {
 }
 
 void Pipeline::note_line_outside_search(const signal::SpindleEstimate& e, std::int64_t center) {
+  alias_windows_ += e.alias_refused ? 1 : 0;
   if (e.valid) {
     line_run_ = 0;
     line_reported_ = false;

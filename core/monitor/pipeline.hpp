@@ -310,6 +310,7 @@ class Pipeline {
   double line_run_hz_ = 0.0;
   bool line_reported_ = false;
   std::int64_t lines_reported_ = 0;
+  std::int64_t alias_windows_ = 0;  // windows the tracker refused as an alias (finish())
   double cutting_revolutions_ = 0.0;
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;

@@ -335,16 +335,11 @@ int SpindleTracker::line_harmonics() const {
 }
 
 bool SpindleTracker::line_fits(double line_hz, double f_hz) const {
-  const double tolerance_hz = 1.5 * bin_hz();
   // A spindle's strongest line is one of its harmonics: its own frequency (runout), the
-  // tooth-passing one or its second, or another where runout shapes the pulses (a 2-flute slot,
+  // tooth-passing one or a multiple, or another where runout shapes the pulses (a 2-flute slot,
   // f_t 2 µm, ρ 0.8 µm: the third).
-  for (int h = 1; h <= line_harmonics(); ++h) {
-    if (std::fabs(line_hz - h * f_hz) <= tolerance_hz) {
-      return true;
-    }
-  }
-  return false;
+  const double h = std::max(1.0, std::round(line_hz / f_hz));
+  return std::fabs(line_hz - h * f_hz) <= 1.5 * bin_hz();
 }
 
 void SpindleTracker::find_strongest_line(SpindleEstimate& e) {
@@ -380,24 +375,38 @@ void SpindleTracker::find_strongest_line(SpindleEstimate& e) {
   if (!(m > 0.0) || !(median > 0.0)) {
     return;
   }
-  e.line_hz = (static_cast<double>(k) + peak_offset_bins(k)) * bin;
+  // At the band's edges the strongest bin need not be a peak: the offset stays within its bin.
+  e.line_hz = (static_cast<double>(k) + std::clamp(peak_offset_bins(k), -0.5, 0.5)) * bin;
   e.line_snr_db = 20.0 * std::log10(m / median);
-  // Explained by a speed searched: some f = line/h within the range (a bin wider at both ends)
-  // with a line of its own at f or at the tooth-passing z·f, as a lock needs.
   const double clear = median * std::pow(10.0, config_.min_snr_db / 20.0);
+  // A line within a bin of hz: a peak there (not the flank of one a few bins away), clear.
   const auto line_near = [&](double hz) {
     const auto c = static_cast<std::size_t>(std::lround(hz / bin));
-    return c >= 1 && c + 1 < magnitude_bins_ &&
-           std::max({magnitude_[c - 1], magnitude_[c], magnitude_[c + 1]}) >= clear;
+    if (c < 2 || c + 2 >= magnitude_bins_) {
+      return false;
+    }
+    std::size_t p = c - 1;
+    for (std::size_t q = c; q <= c + 1; ++q) {
+      p = magnitude_[q] > magnitude_[p] ? q : p;
+    }
+    return magnitude_[p] >= clear && magnitude_[p] >= magnitude_[p - 1] &&
+           magnitude_[p] >= magnitude_[p + 1];
   };
-  bool explained = false;
-  for (int h = 1; h <= line_harmonics() && !explained; ++h) {
-    const double f = e.line_hz / h;
-    explained = f >= f_lo - 1.5 * bin / h && f <= f_hi + 1.5 * bin / h &&
-                (line_near(f) || line_near(z * f));
-  }
-  e.line_outside_search = e.line_snr_db >= config_.min_snr_db + kLineMarginDb && !explained;
+  // A spindle's line: clear of the noise, with a line of its family beside it — the spindle
+  // line below a tooth-passing one (runout), or its own second or z-th harmonic. An isolated
+  // line (hum, a pump, a resonance, chatter) is none.
   e.line_has_spindle_line = z > 1 && line_near(e.line_hz / z);
+  e.line_of_a_spindle =
+      e.line_snr_db >= config_.min_snr_db + kLineMarginDb &&
+      (e.line_has_spindle_line || line_near(2.0 * e.line_hz) || line_near(z * e.line_hz));
+  // Explained by a speed searched: some f = line/h within the range (a bin wider at both ends)
+  // with a line of its own at f or at the tooth-passing z·f, as a lock needs.
+  bool explained = false;
+  for (int h = 1; !explained && e.line_hz / h >= f_lo - 1.5 * bin / h; ++h) {
+    const double f = e.line_hz / h;
+    explained = f <= f_hi + 1.5 * bin / h && (line_near(f) || line_near(z * f));
+  }
+  e.line_outside_search = e.line_of_a_spindle && !explained;
 }
 
 double SpindleTracker::harmonic_score(double f_hz) const {
@@ -440,6 +449,8 @@ void SpindleTracker::update() {
   estimate_.line_snr_db = 0.0;
   estimate_.line_outside_search = false;
   estimate_.line_has_spindle_line = false;
+  estimate_.line_of_a_spindle = false;
+  estimate_.alias_refused = false;
   if (!locked_) {
     find_strongest_line(estimate_);
   }
@@ -623,16 +634,18 @@ void SpindleTracker::update() {
     // consistent again.
     locked_ = false;
     phase_.valid = false;
+    find_strongest_line(e);  // as every window that starts unlocked
   }
   if (!e.consistent) {
     e.valid = false;
     return;
   }
-  if (!own_line || (e.line_hz > 0.0 && !line_fits(e.line_hz, f))) {
+  if (!own_line || (e.line_of_a_spindle && !line_fits(e.line_hz, f))) {
     // No line at this speed's own frequency nor at its tooth-passing one, or the window's
     // strongest line is none this speed makes: an alias (harmonics of a speed outside the
     // search that fall on some of this speed's: 40,000 rpm seen from 25,000 commanded as
     // 26,667, whose third and sixth harmonics are its tooth-passing lines), not a lock.
+    e.alias_refused = true;
     e.valid = false;
     e.consistent = false;
     return;

@@ -104,21 +104,27 @@ struct SpindleEstimate {
   double angle_rad = 0.0;          ///< spindle angle at center_sample, [0, 2π)
   std::int64_t center_sample = 0;  ///< the window's centre, in input samples
   std::int64_t updates = 0;
-  /// Unlocked windows only (0 and false while locked): the strongest spectral line from half
-  /// the slowest spindle frequency searched to the second tooth-passing harmonic of the
-  /// fastest, its SNR over the median of those bins, and whether it stands 6 dB more than
-  /// min_snr_db above them while no speed searched explains it: none within
-  /// commanded·(1 ± search_fraction) has it among its harmonics up to that one and a line of
-  /// its own (at its frequency or its tooth-passing one). A spindle run off its commanded speed
-  /// (an override) shows so. A lock needs the same of its speed: harmonics of a speed outside
-  /// the search can fall on some of a searched speed's and agree from window to window
-  /// (40,000 rpm seen from 25,000 commanded as 26,667 with 2 flutes).
+  /// Windows that start unlocked (or lose the lock to a phase jump); 0 and false in the others:
+  /// the strongest spectral line from half the slowest spindle frequency searched to the
+  /// second tooth-passing harmonic of the fastest, and its SNR over the median of those bins.
   double line_hz = 0.0;
   double line_snr_db = 0.0;
-  bool line_outside_search = false;
   /// With z > 1 flutes: a line stands min_snr_db above the median at line_hz / z as well, the
   /// spindle line of a tooth-passing line_hz (runout makes one) — the likelier reading.
   bool line_has_spindle_line = false;
+  /// The line is a spindle's: 6 dB more than min_snr_db above the median, with a line of its
+  /// family min_snr_db above it too (at line_hz / z, 2·line_hz or z·line_hz) — not an isolated
+  /// line of hum, a pump, a resonance or chatter.
+  bool line_of_a_spindle = false;
+  /// A spindle's line that no speed searched explains: none within commanded·(1 ±
+  /// search_fraction) has it among its harmonics and a line of its own (at its frequency or
+  /// its tooth-passing one). A spindle run off its commanded speed (an override) shows so.
+  bool line_outside_search = false;
+  /// Two windows agreed on a speed within the search that is an alias, not a lock: no line at
+  /// its frequency nor its tooth-passing one, or a spindle's line that is none of its
+  /// harmonics — the harmonics of a speed outside the search falling on some of its (40,000 rpm
+  /// seen from 25,000 commanded as 26,667 with 2 flutes).
+  bool alias_refused = false;
 };
 
 class SpindleTracker {
@@ -172,8 +178,8 @@ class SpindleTracker {
   [[nodiscard]] bool on_a_ramp(const Past& earlier, double hz, std::int64_t center) const;
   double magnitude_at(double f_hz) const;
   void find_strongest_line(SpindleEstimate& e);
-  /// Whether a strongest line at line_hz is one a spindle at f_hz makes: one of its harmonics
-  /// up to line_harmonics(), within 1.5 bins.
+  /// Whether a strongest line at line_hz is one a spindle at f_hz makes: one of its harmonics,
+  /// within 1.5 bins.
   [[nodiscard]] bool line_fits(double line_hz, double f_hz) const;
   /// A spectral peak at bin k (a local maximum) off the bin, in bins.
   [[nodiscard]] double peak_offset_bins(std::size_t k) const;

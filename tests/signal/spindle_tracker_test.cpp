@@ -274,6 +274,20 @@ TEST(SpindleTracker, DoesNotLockOnIrregularCutting) {
   EXPECT_EQ(valid, 0);
 }
 
+/// Feeds x in blocks of 50 samples and calls each(estimate) after every update; returns the
+/// updates.
+template <class Each>
+int feed_updates(SpindleTracker& tracker, std::span<const double> x, Each each) {
+  int updates = 0;
+  for (std::size_t i = 0; i < x.size(); i += 50) {
+    if (tracker.process(x.subspan(i, std::min<std::size_t>(50, x.size() - i))) > 0) {
+      ++updates;
+      each(tracker.estimate());
+    }
+  }
+  return updates;
+}
+
 // A spindle run off its commanded speed, beyond the search (an override of 70 % or 160 %):
 // no lock, no speed — at 40,000 rpm seen from 25,000 commanded the harmonics of 26,667 rpm fall
 // on every other tooth-passing line and agree from window to window, an alias the tracker must
@@ -292,13 +306,8 @@ TEST(SpindleTracker, ASpindleOffItsSearchIsNoLockAndShowsItsLine) {
       x[n] = cut.force(2 * kPi * f_true * t, t);
     }
     const bool in_search = std::fabs(true_rpm / 25000.0 - 1.0) < 0.15;
-    int valid = 0, outside = 0, updates = 0;
-    for (std::size_t i = 0; i < x.size(); i += 50) {
-      if (tracker.process(std::span(x).subspan(i, std::min<std::size_t>(50, x.size() - i))) == 0) {
-        continue;
-      }
-      const SpindleEstimate& e = tracker.estimate();
-      ++updates;
+    int valid = 0, outside = 0;
+    const int updates = feed_updates(tracker, x, [&](const SpindleEstimate& e) {
       valid += e.valid ? 1 : 0;
       if (e.line_outside_search) {
         ++outside;
@@ -308,7 +317,7 @@ TEST(SpindleTracker, ASpindleOffItsSearchIsNoLockAndShowsItsLine) {
                     std::fabs(e.line_hz - 2.0 * f_true) < bin_hz)
             << true_rpm << " rpm: line at " << e.line_hz << " Hz";
       }
-    }
+    });
     EXPECT_GE(updates, 40) << true_rpm;  // 0.5 s in hops of 12 ms
     if (in_search) {
       EXPECT_GE(valid, updates - 3) << true_rpm;
@@ -316,6 +325,42 @@ TEST(SpindleTracker, ASpindleOffItsSearchIsNoLockAndShowsItsLine) {
     } else {
       EXPECT_EQ(valid, 0) << true_rpm << " rpm stated as " << tracker.estimate().spindle_rpm;
       EXPECT_GE(outside, updates - 1) << true_rpm;  // every window but the first
+    }
+  }
+}
+
+// An isolated steady line — a pump, a structural resonance, chatter — is no spindle's, however
+// strong: beside a cut within the search it keeps no lock away (a 600 Hz sine with twice the
+// pulses' amplitude, the strongest line), and alone it is never shown as a speed outside the
+// search. (One that falls on a harmonic of a speed searched, 1,234 Hz = 3 × 411.3, draws the
+// harmonic sum itself there: then no lock, the speed's own lines missing.)
+TEST(SpindleTracker, AnIsolatedLineIsNoSpindle) {
+  const double fs = 50000.0 / 6.0;
+  for (const bool cutting : {true, false}) {
+    Cut cut;
+    SpindleTracker tracker(config(fs, 2, 25000.0));
+    const double f_true = 25252.0 / 60.0;
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::vector<double> x(static_cast<std::size_t>(0.5 * fs));
+    for (std::size_t n = 0; n < x.size(); ++n) {
+      const double t = static_cast<double>(n) / fs;
+      x[n] = (cutting ? cut.force(2 * kPi * f_true * t, t) : noise(rng)) +
+             2.0 * std::sin(2 * kPi * 600.0 * t);
+    }
+    int valid = 0, outside = 0, strongest_there = 0;
+    const int updates = feed_updates(tracker, x, [&](const SpindleEstimate& e) {
+      valid += e.valid ? 1 : 0;
+      outside += e.line_outside_search ? 1 : 0;
+      strongest_there += std::fabs(e.line_hz - 600.0) < tracker.bin_hz() ? 1 : 0;
+      EXPECT_FALSE(e.alias_refused) << cutting;
+    });
+    EXPECT_EQ(outside, 0) << cutting;
+    EXPECT_GE(strongest_there, 1) << cutting;  // it is the strongest line where one is sought
+    if (cutting) {
+      EXPECT_GE(valid, updates - 3);
+    } else {
+      EXPECT_EQ(valid, 0);
     }
   }
 }
