@@ -28,7 +28,10 @@
 // on a ramp that moves the speed by more than that in a window, three windows a window apart
 // whose speeds lie on one line within lock_agreement and whose two pairs of tooth phases each
 // agree. A stopping or starting spindle, or weak irregular cutting, gives windows that disagree:
-// no lock, no speed.
+// no lock, no speed. A spindle outside the search can give windows that agree on an alias (its
+// harmonics falling on some of a searched speed's): a lock also needs a line at its own
+// frequency or its tooth-passing one, and a spindle's strongest line among its harmonics;
+// unlocked windows show a spindle's line no searched speed explains (SpindleEstimate).
 // While locked, the phase model (signal::PhaseModel, in input samples) is re-anchored at the
 // newest sample every window, continuous there, corrected by part of the window's tooth-phase
 // error (modulo one pitch, so a weak fundamental cannot flip the flute), with the speed's rate
