@@ -1360,12 +1360,8 @@ Evaluation Diagnoser::refine_h_min(State& s, const Evaluation& current, const Ev
 }
 
 void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
-  const auto named = [&](const char* e) {
-    return std::find(out.named_effects.begin(), out.named_effects.end(), e) !=
-           out.named_effects.end();
-  };
   if (!state.config.effects.min_chip.enabled ||
-      !(named("min_chip_thickness") || named("chip_accumulation") || named("ploughing_area"))) {
+      std::none_of(out.named_effects.begin(), out.named_effects.end(), profiles_h_min)) {
     return;
   }
   progress("h_min profiled again in the final model");

@@ -385,7 +385,7 @@ void Pipeline::hand_over(std::string_view why) {
 
 void Pipeline::finish() {
   flush_tail();
-  if (ever_locked_ || tracker_locked_ || lines_reported_ > 0) {
+  if (ever_locked_ || tracker_locked_ || line_ever_reported_) {
     return;  // measured, or a kNoTemplate or kSpeedOutOfRange said why not
   }
   // Say why nothing was measured.
@@ -589,7 +589,7 @@ void Pipeline::note_line_outside_search(const signal::SpindleEstimate& e, std::i
   }
   if (line_run_ >= kLineWindows && !line_reported_) {
     line_reported_ = true;
-    ++lines_reported_;
+    line_ever_reported_ = true;
     event(PipelineEventKind::kSpeedOutOfRange, input_sample(center), line_run_, line_run_hz_,
           e.line_has_spindle_line
               ? kLineWithSpindleLine

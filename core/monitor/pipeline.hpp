@@ -305,11 +305,11 @@ class Pipeline {
   std::int64_t inconsistent_windows_ = 0;  // cutting windows that did not agree, since a lock
   // Successive unlocked windows whose strongest line lies outside the search and agrees
   // (note_line_outside_search): how many, their mean (Hz), whether this spell without a lock
-  // reported it, and how many spells did.
+  // reported it, and whether any spell did.
   int line_run_ = 0;
   double line_run_hz_ = 0.0;
   bool line_reported_ = false;
-  std::int64_t lines_reported_ = 0;
+  bool line_ever_reported_ = false;
   std::int64_t alias_windows_ = 0;  // windows the tracker refused as an alias (finish())
   double cutting_revolutions_ = 0.0;
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()

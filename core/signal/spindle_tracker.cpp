@@ -226,10 +226,9 @@ void SpindleTracker::setup(const SpindleTrackerConfig& config) {
   magnitude_.assign(fft_size_ / 2 + 1, 0.0);
   // The highest bin update() reads: the harmonics' peaks up to the highest speed searched and
   // their floors two spindle frequencies beyond, with a few bins of interpolation and lobe.
-  const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
-  magnitude_bins_ =
-      std::min(magnitude_.size(),
-               static_cast<std::size_t>(std::ceil((harmonics_ + 2) * f_max / bin_hz)) + 8);
+  const double bin = bin_hz();
+  magnitude_bins_ = std::min(
+      magnitude_.size(), static_cast<std::size_t>(std::ceil((harmonics_ + 2) * f_max / bin)) + 8);
   floors_.resize(fft_size_ / 2 + 1);
   line_scratch_.assign(2 * magnitude_bins_, 0.0);
   past_.assign(2 * (window_ / hop_) + 3, Past{});  // two windows back: a ramp's three windows
@@ -330,10 +329,6 @@ double SpindleTracker::peak_offset_bins(std::size_t k) const {
   return denom < 0.0 ? 0.5 * (l0 - l2) / denom : 0.0;
 }
 
-int SpindleTracker::line_harmonics() const {
-  return 2 * config_.flutes;
-}
-
 bool SpindleTracker::line_fits(double line_hz, double f_hz) const {
   // A spindle's strongest line is one of its harmonics: its own frequency (runout), the
   // tooth-passing one or a multiple, or another where runout shapes the pulses (a 2-flute slot,
@@ -357,7 +352,7 @@ void SpindleTracker::find_strongest_line(SpindleEstimate& e) {
       std::max<std::size_t>(3, static_cast<std::size_t>(std::ceil(0.5 * f_lo / bin)));
   const std::size_t last =
       std::min({magnitude_bins_ - 2, static_cast<std::size_t>(0.45 * config_.sample_rate_hz / bin),
-                static_cast<std::size_t>(std::ceil(line_harmonics() * f_hi / bin)) + 2});
+                static_cast<std::size_t>(std::ceil(2 * z * f_hi / bin)) + 2});
   if (last <= first + 16) {
     return;
   }
@@ -456,7 +451,7 @@ void SpindleTracker::update() {
   }
 
   // Coarse search over the commanded range, a quarter of a (padded) bin at a time.
-  const double bin_hz = config_.sample_rate_hz / static_cast<double>(fft_size_);
+  const double bin = bin_hz();
   const double f_cmd = config_.commanded_rpm / 60.0;
   double f_lo = f_cmd * (1.0 - config_.search_fraction);
   double f_hi = f_cmd * (1.0 + config_.search_fraction);
@@ -466,7 +461,7 @@ void SpindleTracker::update() {
   }
   double best_f = f_lo;
   double best_score = -1.0;
-  for (double f = f_lo; f <= f_hi; f += 0.25 * bin_hz) {
+  for (double f = f_lo; f <= f_hi; f += 0.25 * bin) {
     const double s = harmonic_score(f);
     if (s > best_score) {
       best_score = s;
@@ -479,7 +474,7 @@ void SpindleTracker::update() {
   // frequencies of it, outside every harmonic's main lobe (Hann: ±2 bins of the unpadded
   // window) — enough independent bins for a steady median even with a short window.
   const double lobe = 2.0 * static_cast<double>(fft_size_) / static_cast<double>(window_) + 1.0;
-  const double harmonic_bins = best_f / bin_hz;
+  const double harmonic_bins = best_f / bin;
   const auto reach = static_cast<std::size_t>(2.0 * harmonic_bins);
   // Which bins lie outside every harmonic's lobe, once for all harmonics (their neighbourhoods
   // overlap).
@@ -491,7 +486,7 @@ void SpindleTracker::update() {
   int used = 0;
   bool own_line = false;  // a line stands at f or at the tooth-passing z·f
   for (int h = 1; h <= harmonics_; ++h) {
-    const auto center = static_cast<std::size_t>(std::lround(h * best_f / bin_hz));
+    const auto center = static_cast<std::size_t>(std::lround(h * best_f / bin));
     if (center < 3 || center + 3 >= magnitude_.size()) {
       continue;
     }
@@ -514,7 +509,7 @@ void SpindleTracker::update() {
       continue;
     }
     own_line = own_line || h == 1 || h == config_.flutes;
-    const double f_h = (static_cast<double>(k) + peak_offset_bins(k)) * bin_hz / h;
+    const double f_h = (static_cast<double>(k) + peak_offset_bins(k)) * bin / h;
     const double weight = (h * m) * (h * m);
     sum_w += weight;
     sum_wf += weight * f_h;

@@ -186,8 +186,6 @@ class SpindleTracker {
   [[nodiscard]] bool line_fits(double line_hz, double f_hz) const;
   /// A spectral peak at bin k (a local maximum) off the bin, in bins.
   [[nodiscard]] double peak_offset_bins(std::size_t k) const;
-  /// The harmonics a strongest line is sought among: up to the second tooth-passing one.
-  [[nodiscard]] int line_harmonics() const;
   void release();
 
   SpindleTrackerConfig config_;
