@@ -166,8 +166,9 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   EXPECT_EQ(status.back().revolutions, revolutions);
 }
 
-// Issue 3 §3 and §5: lcm-logger records a live run's raw samples and the daemon's outputs; the
-// recorded outputs decode; replaying the recorded raw channel gives the live run's results.
+// Issue 3 §3 and §5: lcm-logger records a live run's raw samples and the daemon's outputs (two
+// loggers: the raw channel on its own, whose queue no burst of results fills); the recorded
+// outputs decode; replaying the recorded raw channel gives the live run's results.
 TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   const auto r = session("live", dir_);
   ASSERT_EQ(r.exit_code, 0) << r.output << test::read_text(dir_ / "daemon.log");
@@ -180,9 +181,15 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   const int revolutions = live["revolutions"].get<int>();
   EXPECT_GT(revolutions, 250);
 
-  const auto log = read_log(dir_ / "live.lcmlog");
-  ASSERT_EQ(log.count("MILLWATCH_FORCE_RAW"), 1u);
-  EXPECT_EQ(log.at("MILLWATCH_FORCE_RAW").size(), 200u);  // 250-sample blocks
+  // The raw channel on a logger of its own (live.lcmlog), the results on another.
+  const auto raw = read_log(dir_ / "live.lcmlog");
+  const std::string loggers = "lcm-logger said: " + test::read_text(dir_ / "logger.out") +
+                              "\nthe namespace's UDP counters:\n" +
+                              test::read_text(dir_ / "udp_stats.txt");
+  ASSERT_EQ(raw.size(), 1u) << loggers;                                   // the raw channel alone
+  EXPECT_EQ(events(raw, "MILLWATCH_FORCE_RAW").size(), 200u) << loggers;  // 250-sample blocks
+  const auto log = read_log(dir_ / "outputs.lcmlog");
+  EXPECT_EQ(log.count("MILLWATCH_FORCE_RAW"), 0u);
   // Every channel the daemon publishes on was recorded, and every event decodes.
   for (const char* channel :
        {"MILLWATCH_SPINDLE", "MILLWATCH_TOOTH_PERIODS", "MILLWATCH_FLUTE_PEAKS",
