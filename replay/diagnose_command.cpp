@@ -171,6 +171,7 @@ diagnose::Diagnosis diagnose_cut(const DiagnoseCliOptions& o, const LoadedCut& c
   options.band_hz = o.band_hz;
   options.max_steps = o.max_steps;
   options.max_exchanges = o.exchanges;
+  options.jobs = o.jobs;
   options.candidates = split_names(o.candidates);
   options.progress = [&](std::string_view line) {
     progress.show(fmt::format("diagnose: {}{}  ({:.1f} s)", prefix, line, progress.elapsed_s()));

@@ -30,6 +30,7 @@ struct DiagnoseCliOptions {
   double to_s = 0.0;
   int max_steps = 10;
   int exchanges = 3;
+  int jobs = 0;  ///< candidates fitted at once (0: one per core)
   bool plots = true;
   bool progress = true;
 };

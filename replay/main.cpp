@@ -214,6 +214,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--exchanges", o->exchanges,
                   "Exchanges of an effect named for another where the search stops above the "
                   "noise floor (default 3; 0: the greedy search alone, faster)");
+  cmd->add_option("-j,--jobs", o->jobs,
+                  "Candidates fitted at once, a thread each (default 0: one per core; the same "
+                  "result for any number)")
+      ->check(kNonNegative);
   cmd->add_flag("!--no-plots", o->plots, "Do not draw the plots");
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->callback([o]() { run_subcommand([&]() { return run_diagnose(*o); }); });

@@ -2,14 +2,19 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <exception>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 #include <unsupported/Eigen/FFT>
 
 #include "core/diagnose/catalogue.hpp"
@@ -188,6 +193,8 @@ class Engine {
       }
     }
   }
+  /// The noise floor `other` has refined (an engine of another thread's).
+  void take_floor(const Engine& other) { floor_ = other.floor_; }
   [[nodiscard]] const std::array<double, 2>& measured_rms() const { return measured_rms_; }
   [[nodiscard]] double duration() const { return static_cast<double>(n_) / fs_; }
 
@@ -1081,19 +1088,44 @@ class Diagnoser {
  private:
   void progress(const std::string& line) const {
     if (opt_.progress) {
+      const std::lock_guard lock(progress_mutex_);
       opt_.progress(line);
     }
   }
   /// Adds a candidate to a state; false with `why` when it does not apply (already in).
-  bool apply(const std::string& name, State& s, const Evaluation& current, std::string& why);
+  /// `engine`: the workspace its searches (the speed's, the change's) run on.
+  bool apply(Engine& engine, const std::string& name, State& s, const Evaluation& current,
+             std::string& why);
   /// Takes an effect the search named out of a state; false where it cannot be taken out alone
   /// (the speed and the chain's terms, which nothing else stands in for; min_chip under
   /// chip_accumulation or ploughing_area; runout under runout_change).
   bool remove(const std::string& name, State& s, const std::vector<std::string>& named) const;
   /// Scores every candidate of `names` but the `excluded` on `state` (`current` its evaluation).
+  /// Their fits run on opt_.jobs engines at once; the round is read in the order of `names`.
   Round score_round(const State& state, const Evaluation& current,
                     const std::vector<std::string>& names, const std::string& label,
                     const std::vector<std::string>& excluded);
+  /// One candidate added to `s` (the round's state) and fitted on `engine`: its score, or
+  /// nothing where it does not apply (in the model already); `ev` its evaluation.
+  std::optional<CandidateScore> score_candidate(Engine& engine, const std::string& name, State& s,
+                                                const Evaluation& current, Evaluation& ev);
+  /// Calls work(engine, i) for each i of `order` (a permutation of [0, count)), started in that
+  /// order, on up to opt_.jobs threads with an engine each (the calling thread's is engine_);
+  /// the first exception a call throws is thrown again once all have ended.
+  /// Called from a thread run_on_engines() started (a candidate's profile), it runs the calls
+  /// one after the other on `caller`, that thread's engine; otherwise `caller` is engine_.
+  template <typename Work>
+  void run_on_engines(Engine& caller, std::size_t count, const std::vector<std::size_t>& order,
+                      const Work& work);
+  /// run_on_engines() in the order 0, 1, …
+  template <typename Work>
+  void run_on_engines(Engine& caller, std::size_t count, const Work& work) {
+    std::vector<std::size_t> order(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      order[i] = i;
+    }
+    run_on_engines(caller, count, order, work);
+  }
   /// Takes the round's best into the model: refitted with the model's variants (where
   /// `with_variants`) if that holds `required_gain` over `current`, its stage recorded
   /// (`removed`: the effect it replaces).
@@ -1115,10 +1147,11 @@ class Diagnoser {
   /// The criterion on a geometric grid of h_min over (0.02, 1.6)·f_t: the best point, its
   /// neighbours, and σ the grid's resolution. Where the best is an end of the grid, h_min is a
   /// bound (State::h_min_bound), not an estimate. Candidates are scored on the grid alone.
-  Evaluation profile_h_min(State& s, const Evaluation& current, const Evaluation* from = nullptr);
+  Evaluation profile_h_min(Engine& engine, State& s, const Evaluation& current,
+                           const Evaluation* from = nullptr);
   /// Fits s at its h_min from the current fit, with the grid's neighbours as refine_h_min()'s
   /// bracket.
-  Evaluation evaluate_at_h_min(State& s, const Evaluation& current);
+  Evaluation evaluate_at_h_min(Engine& engine, State& s, const Evaluation& current);
   /// A golden section between the best grid point's neighbours (`best`: its evaluation); σ
   /// from the profile's curvature (Δ(−2 ln L) = 1). For a step taken and the final model.
   Evaluation refine_h_min(State& s, const Evaluation& current, const Evaluation* from,
@@ -1131,7 +1164,7 @@ class Diagnoser {
   /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
   /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
   /// where the deflection hardly changes the force.
-  Evaluation profile_stiffness(State& s, const Evaluation& current);
+  Evaluation profile_stiffness(Engine& engine, State& s, const Evaluation& current);
 
   Localisation localise(const State& s, const Evaluation& ev, ModelView& view);
 
@@ -1139,9 +1172,14 @@ class Diagnoser {
   model::ModelConfig start_;
   const DiagnoseOptions& opt_;
   Engine engine_;
+  // The engines of run_on_engines()' other threads (made when first needed): an engine's model
+  // workspace is one fit's state.
+  std::vector<std::unique_ptr<Engine>> helpers_;
+  mutable std::mutex progress_mutex_;  // progress() from several threads
+  bool engines_running_ = false;       // run_on_engines() has threads out (set by the caller's)
 };
 
-bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& current,
+bool Diagnoser::apply(Engine& engine, const std::string& name, State& s, const Evaluation& current,
                       std::string& why) {
   auto& e = s.config.effects;
   auto add_extra = [&](const std::string& p) {
@@ -1217,7 +1255,7 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
       return false;
     }
     const auto [rpm, sigma] =
-        engine_.find_speed(s.config.process.spindle_rpm, current, s.config.tool.flutes);
+        engine.find_speed(s.config.process.spindle_rpm, current, s.config.tool.flutes);
     s.rpm = rpm;
     s.rpm_sigma = sigma;
     s.speed_fitted = true;
@@ -1226,7 +1264,7 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
       why = "already in the model";
       return false;
     }
-    const auto [t, sigma] = engine_.find_change(s, current);
+    const auto [t, sigma] = engine.find_change(s, current);
     s.change_s = t;
     s.change_sigma_s = sigma;
     s.fit_runout = true;
@@ -1262,7 +1300,8 @@ bool Diagnoser::apply(const std::string& name, State& s, const Evaluation& curre
   return true;
 }
 
-Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current, const Evaluation* from) {
+Evaluation Diagnoser::profile_h_min(Engine& engine, State& s, const Evaluation& current,
+                                    const Evaluation* from) {
   const double ft = s.config.process.feed_per_tooth_um;
   std::vector<double> grid;  // down from the largest to the first point at or below the least
   for (double h = kHMinHighestPerFeed * ft; grid.empty() || grid.back() > kHMinLowestPerFeed * ft;
@@ -1270,17 +1309,21 @@ Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current, const E
     grid.push_back(h);
   }
   std::reverse(grid.begin(), grid.end());
+  // The first of the lowest criteria; only its evaluation is kept.
   std::size_t best = 0;
   Evaluation best_ev;
-  for (std::size_t i = 0; i < grid.size(); ++i) {
+  std::mutex best_mutex;
+  run_on_engines(engine, grid.size(), [&](Engine& on, std::size_t i) {
     State t = s;
     t.config.effects.min_chip.h_min_um = grid[i];
-    Evaluation ev = engine_.evaluate(t, &current, false, from);
-    if (ev.ok && (!best_ev.ok || ev.criterion < best_ev.criterion)) {
+    Evaluation ev = on.evaluate(t, &current, false, from);
+    const std::lock_guard lock(best_mutex);
+    if (ev.ok && (!best_ev.ok || ev.criterion < best_ev.criterion ||
+                  (ev.criterion == best_ev.criterion && i < best))) {
       best = i;
       best_ev = std::move(ev);
     }
-  }
+  });
   if (!best_ev.ok) {
     return best_ev;
   }
@@ -1295,22 +1338,29 @@ Evaluation Diagnoser::profile_h_min(State& s, const Evaluation& current, const E
   return best_ev;
 }
 
-Evaluation Diagnoser::evaluate_at_h_min(State& s, const Evaluation& current) {
+Evaluation Diagnoser::evaluate_at_h_min(Engine& engine, State& s, const Evaluation& current) {
   const double h = s.config.effects.min_chip.h_min_um;
   s.h_min_bracket_um = {h / kHMinGridRatio, h * kHMinGridRatio};
   s.h_min_from_current = true;
   // From the current fit: a fresh search (its starts and alignment scan) of the area law over
   // an accumulation cycle takes ~30 s on the AlSi10Mg preset's 1.5 s record.
-  return engine_.evaluate(s, &current, false, &current);
+  return engine.evaluate(s, &current, false, &current);
 }
 
 Evaluation Diagnoser::refine_h_min(State& s, const Evaluation& current, const Evaluation* from,
                                    Evaluation best_ev) {
   const double ft = s.config.process.feed_per_tooth_um;
-  auto at = [&](double h) {
+  auto at_on = [&](Engine& engine, double h) {
     State t = s;
     t.config.effects.min_chip.h_min_um = h;
-    return engine_.evaluate(t, &current, false, from);
+    return engine.evaluate(t, &current, false, from);
+  };
+  auto at = [&](double h) { return at_on(engine_, h); };
+  // Two points fitted at once (on two threads where there are).
+  auto both = [&](double h1, double h2, Evaluation& first, Evaluation& second) {
+    run_on_engines(engine_, 2, [&](Engine& on, std::size_t i) {
+      (i == 0 ? first : second) = at_on(on, i == 0 ? h1 : h2);
+    });
   };
   // Golden section (in log h) between the best grid point's neighbours.
   double lo = std::log(s.h_min_bracket_um[0]);
@@ -1318,7 +1368,8 @@ Evaluation Diagnoser::refine_h_min(State& s, const Evaluation& current, const Ev
   double best_h = s.config.effects.min_chip.h_min_um;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-  Evaluation e1 = at(std::exp(x1)), e2 = at(std::exp(x2));
+  Evaluation e1, e2;
+  both(std::exp(x1), std::exp(x2), e1, e2);
   for (int it = 0; it < 7; ++it) {
     const double c1 = e1.ok ? e1.criterion : 1e300, c2 = e2.ok ? e2.criterion : 1e300;
     if (c1 < best_ev.criterion) {
@@ -1345,7 +1396,8 @@ Evaluation Diagnoser::refine_h_min(State& s, const Evaluation& current, const Ev
   }
   // σ: the criterion's (−2 ln L + const) curvature at the optimum, from ±5 %.
   const double d = 0.05 * best_h;
-  const Evaluation ep = at(best_h + d), em = at(best_h - d);
+  Evaluation ep, em;
+  both(best_h + d, best_h - d, ep, em);
   double sigma = best_h;  // unpinned unless the profile says otherwise
   if (ep.ok && em.ok) {
     const double curvature = (ep.criterion - 2.0 * best_ev.criterion + em.criterion) / (d * d);
@@ -1367,7 +1419,7 @@ void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
   progress("h_min profiled again in the final model");
   const double before_um = state.config.effects.min_chip.h_min_um;
   State t = state;
-  Evaluation ev = profile_h_min(t, current, &current);
+  Evaluation ev = profile_h_min(engine_, t, current, &current);
   if (ev.ok) {
     ev = refine_h_min(t, current, &current, std::move(ev));
   }
@@ -1403,7 +1455,7 @@ void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
            : "; every σ statistical only (the refit with the model's variants did not hold)"));
 }
 
-Evaluation Diagnoser::profile_stiffness(State& s, const Evaluation& current) {
+Evaluation Diagnoser::profile_stiffness(Engine& engine, State& s, const Evaluation& current) {
   State fixed = s;
   fixed.extra.erase(std::remove(fixed.extra.begin(), fixed.extra.end(), "stiffness_N_per_um"),
                     fixed.extra.end());
@@ -1411,7 +1463,7 @@ Evaluation Diagnoser::profile_stiffness(State& s, const Evaluation& current) {
   double best_k = s.config.effects.deflection.stiffness_N_per_um;
   for (double k = 0.05; k <= 3.3; k *= 2.0) {
     fixed.config.effects.deflection.stiffness_N_per_um = k;
-    Evaluation ev = engine_.evaluate(fixed, &current, false, &current);
+    Evaluation ev = engine.evaluate(fixed, &current, false, &current);
     if (ev.ok && (!best.ok || ev.criterion < best.criterion)) {
       best = std::move(ev);
       best_k = k;
@@ -1422,7 +1474,7 @@ Evaluation Diagnoser::profile_stiffness(State& s, const Evaluation& current) {
     s.config = best.fit.config;
     s.config.effects.deflection.stiffness_N_per_um = best_k;
   }
-  Evaluation ev = engine_.evaluate(s, &current, false, best.ok ? &best : nullptr);
+  Evaluation ev = engine.evaluate(s, &current, false, best.ok ? &best : nullptr);
   return ev.ok || !best.ok ? ev : best;
 }
 
@@ -1768,67 +1820,64 @@ std::string gave_way(const Diagnosis& d) {
 Round Diagnoser::score_round(const State& state, const Evaluation& current,
                              const std::vector<std::string>& names, const std::string& label,
                              const std::vector<std::string>& excluded) {
+  std::vector<std::size_t> todo;  // indices into names
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (std::find(excluded.begin(), excluded.end(), names[i]) == excluded.end()) {
+      todo.push_back(i);
+    }
+  }
+  // The costliest fits first, so that the threads end together: a profile of h_min is a dozen
+  // fits, the stiffness's seven, any other one or two. (The order the fits start in does not
+  // change them.)
+  const auto cost = [&](std::size_t t) {
+    const std::string& name = names[todo[t]];
+    return profiles_h_min(name) ? 2 : name == "tool_deflection" ? 1 : 0;
+  };
+  std::vector<std::size_t> order(todo.size());
+  for (std::size_t t = 0; t < order.size(); ++t) {
+    order[t] = t;
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return cost(a) > cost(b); });
+  struct Scored {
+    std::optional<CandidateScore> score;
+    State state;
+  };
+  std::vector<Scored> scored(todo.size());
+  // Only the leader's evaluation is kept (its samples: ~45 bytes per sample of the record;
+  // all the candidates' held 600 MB for a 30 s record at 20 kHz). The first (in the order of
+  // names) of the lowest criteria among those that show their effect leads, as the choice below
+  // picks it.
   Round r;
-  int done = 0;
-  for (const auto& name : names) {
-    ++done;
-    if (std::find(excluded.begin(), excluded.end(), name) != excluded.end()) {
-      continue;
+  std::size_t leader_at = 0;
+  std::mutex leader_mutex;
+  std::vector<std::size_t> rank(order.size());  // (k/n) in the progress line: started k-th
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    rank[order[k]] = k;
+  }
+  run_on_engines(engine_, todo.size(), order, [&](Engine& engine, std::size_t t) {
+    const std::string& name = names[todo[t]];
+    progress(label + name + " (" + std::to_string(rank[t] + 1) + "/" + std::to_string(todo.size()) +
+             ")");
+    Scored& out = scored[t];
+    out.state = state;
+    Evaluation ev;
+    out.score = score_candidate(engine, name, out.state, current, ev);
+    if (!out.score || !ev.ok || !out.score->shown) {
+      return;
     }
-    progress(label + name + " (" + std::to_string(done) + "/" + std::to_string(names.size()) + ")");
-    State s = state;
-    CandidateScore score;
-    score.name = name;
-    std::string why;
-    if (!apply(name, s, current, why)) {
-      continue;  // in the model already
-    }
-    // The fitter searches afresh (its starts and alignment scan) for every effect of the
-    // model: a new effect may move the alignment by a pitch (the flute labelling) or the
-    // runout to another basin, where a refinement from the current fit would stay stuck.
-    // The chain's terms hardly move the model: those refine the current fit.
-    const bool chain = name == "amplifier_drift" || name == "mains_hum";
-    // The ploughed area beside an h_min the model has estimated: scored at that h_min, refined
-    // at its step. Its profile there would cost twelve fits of the area law over the
-    // accumulation's whole cycle (the AlSi10Mg preset's diagnosis: 43 s → 6.8 min).
-    // (An h_min the search estimated: a configured one has no σ and may be far off.)
-    const bool at_model_h_min = name == "ploughing_area" && state.config.effects.min_chip.enabled &&
-                                state.h_min_bound.empty() && state.h_min_sigma_um > 0.0;
-    Evaluation ev = at_model_h_min         ? evaluate_at_h_min(s, current)
-                    : profiles_h_min(name) ? profile_h_min(s, current)
-                    : name == "tool_deflection"
-                        ? profile_stiffness(s, current)
-                        : engine_.evaluate(s, &current, false, chain ? &current : nullptr);
-    if (name == "mains_hum" && ev.ok) {
-      State s60 = s;
-      s60.hum_hz = 60.0;
-      Evaluation ev60 = engine_.evaluate(s60, &current, false, &current);
-      if (ev60.ok && ev60.criterion < ev.criterion) {
-        s = s60;
-        ev = std::move(ev60);
-      }
-    }
-    score.ok = ev.ok;
-    score.message = ev.message;
-    if (ev.ok) {
-      score.criterion = ev.criterion;
-      score.gain = current.criterion - ev.criterion;
-      score.free_parameters = ev.free_parameters;
-      for (std::size_t a = 0; a < 2; ++a) {
-        score.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
-      }
-      score.parameters = added_parameters(name, s, ev, engine_.duration());
-      score.message = not_shown_by_parameters(name, score.parameters);
-      score.shown = score.message.empty();
-    }
-    // Only the leader's evaluation is kept (its samples: ~45 bytes per sample of the record;
-    // all the candidates' held 600 MB for a 30 s record at 20 kHz). The first of the lowest
-    // criteria among those that show their effect leads, as the choice below picks it.
-    if (ev.ok && score.shown && (!r.leader.ok || ev.criterion < r.leader.criterion)) {
+    const std::lock_guard lock(leader_mutex);
+    if (!r.leader.ok || ev.criterion < r.leader.criterion ||
+        (ev.criterion == r.leader.criterion && t < leader_at)) {
       r.leader = std::move(ev);
+      leader_at = t;
     }
-    r.scores.push_back(score);
-    r.states.push_back(s);
+  });
+  for (auto& one : scored) {
+    if (one.score) {
+      r.scores.push_back(std::move(*one.score));
+      r.states.push_back(std::move(one.state));
+    }
   }
   for (int i = 0; i < static_cast<int>(r.scores.size()); ++i) {
     if (!r.scores[static_cast<std::size_t>(i)].ok || !r.scores[static_cast<std::size_t>(i)].shown) {
@@ -1843,6 +1892,104 @@ Round Diagnoser::score_round(const State& state, const Evaluation& current,
     }
   }
   return r;
+}
+
+std::optional<CandidateScore> Diagnoser::score_candidate(Engine& engine, const std::string& name,
+                                                         State& s, const Evaluation& current,
+                                                         Evaluation& ev) {
+  CandidateScore score;
+  score.name = name;
+  // The ploughed area beside an h_min the model has estimated: scored at that h_min, refined
+  // at its step. Its profile there would cost twelve fits of the area law over the
+  // accumulation's whole cycle (the AlSi10Mg preset's diagnosis: 43 s → 6.8 min).
+  // (An h_min the search estimated: a configured one has no σ and may be far off.)
+  const bool at_model_h_min = name == "ploughing_area" && s.config.effects.min_chip.enabled &&
+                              s.h_min_bound.empty() && s.h_min_sigma_um > 0.0;
+  std::string why;
+  if (!apply(engine, name, s, current, why)) {
+    return std::nullopt;  // in the model already
+  }
+  // The fitter searches afresh (its starts and alignment scan) for every effect of the
+  // model: a new effect may move the alignment by a pitch (the flute labelling) or the
+  // runout to another basin, where a refinement from the current fit would stay stuck.
+  // The chain's terms hardly move the model: those refine the current fit.
+  const bool chain = name == "amplifier_drift" || name == "mains_hum";
+  ev = at_model_h_min         ? evaluate_at_h_min(engine, s, current)
+       : profiles_h_min(name) ? profile_h_min(engine, s, current)
+       : name == "tool_deflection"
+           ? profile_stiffness(engine, s, current)
+           : engine.evaluate(s, &current, false, chain ? &current : nullptr);
+  if (name == "mains_hum" && ev.ok) {
+    State s60 = s;
+    s60.hum_hz = 60.0;
+    Evaluation ev60 = engine.evaluate(s60, &current, false, &current);
+    if (ev60.ok && ev60.criterion < ev.criterion) {
+      s = s60;
+      ev = std::move(ev60);
+    }
+  }
+  score.ok = ev.ok;
+  score.message = ev.message;
+  if (ev.ok) {
+    score.criterion = ev.criterion;
+    score.gain = current.criterion - ev.criterion;
+    score.free_parameters = ev.free_parameters;
+    for (std::size_t a = 0; a < 2; ++a) {
+      score.residual_rms_N[a] = std::sqrt(ev.mean_square[a]);
+    }
+    score.parameters = added_parameters(name, s, ev, engine.duration());
+    score.message = not_shown_by_parameters(name, score.parameters);
+    score.shown = score.message.empty();
+  }
+  return score;
+}
+
+template <typename Work>
+void Diagnoser::run_on_engines(Engine& caller, std::size_t count,
+                               const std::vector<std::size_t>& order, const Work& work) {
+  if (engines_running_) {  // inside one of its own threads: serially on that thread's engine
+    for (std::size_t k = 0; k < count; ++k) {
+      work(caller, order[k]);
+    }
+    return;
+  }
+  const int jobs = opt_.jobs > 0
+                       ? opt_.jobs
+                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const std::size_t threads = std::min(count, static_cast<std::size_t>(std::max(1, jobs)));
+  while (helpers_.size() + 1 < threads) {
+    helpers_.push_back(std::make_unique<Engine>(rec_, opt_));
+  }
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto loop = [&](Engine& engine) {
+    for (std::size_t k = next++; k < count; k = next++) {
+      try {
+        work(engine, order[k]);
+      } catch (...) {
+        const std::lock_guard lock(failure_mutex);
+        if (!failure) {
+          failure = std::current_exception();
+        }
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  engines_running_ = threads > 1;  // before the threads start: they read it
+  for (std::size_t w = 0; w + 1 < threads; ++w) {
+    Engine& helper = *helpers_[w];
+    helper.take_floor(engine_);  // refined as the search goes (the speed's σ reads it)
+    pool.emplace_back([&loop, &helper] { loop(helper); });
+  }
+  loop(caller);
+  for (auto& t : pool) {
+    t.join();
+  }
+  engines_running_ = false;
+  if (failure) {
+    std::rethrow_exception(failure);
+  }
 }
 
 void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosis& out,
@@ -1865,7 +2012,7 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
         (at_end(next.h_min_bracket_um[0]) || at_end(next.h_min_bracket_um[1]))) {
       // Not bracketed by the model's h_min's neighbours: its whole profile.
       State whole = next;
-      Evaluation profiled = profile_h_min(whole, current, seed);
+      Evaluation profiled = profile_h_min(engine_, whole, current, seed);
       if (profiled.ok && whole.h_min_bound.empty()) {
         profiled = refine_h_min(whole, current, seed, std::move(profiled));
       }

@@ -75,6 +75,10 @@ struct DiagnoseOptions {
   int max_exchanges = 3;
   /// Candidates scored (catalogue names); empty: the whole catalogue.
   std::vector<std::string> candidates;
+  /// Candidates of a round fitted at once, each on a model workspace of its own (threads; 0:
+  /// one per core). The result is the same for any number: each candidate is fitted from the
+  /// round's model alone, and the round is read in the catalogue's order.
+  int jobs = 1;
   /// Called with a short line as the work progresses (a terminal's progress line).
   std::function<void(std::string_view)> progress;
 };
