@@ -86,8 +86,10 @@ stop_logger() {  # [pid]
   echo "logger exit $?"
 }
 
+raw_channel='^MILLWATCH_FORCE_RAW$'  # a regular expression, as lcm-logger and -logplayer take
+
 play() {  # the raw channel of a log, at twice real time
-  timeout 30 lcm-logplayer -s 2 -e '^MILLWATCH_FORCE_RAW$' --lcm-url="$url" "$1" >/dev/null
+  timeout 30 lcm-logplayer -s 2 -e "$raw_channel" --lcm-url="$url" "$1" >/dev/null
 }
 
 case "$mode" in
@@ -95,9 +97,9 @@ case "$mode" in
     # The raw channel on a logger of its own: a logger of every channel shares one queue of 30
     # messages between the raw blocks and the daemon's results, and on a busy 2-core machine
     # (the sanitized suite) once lost a raw block in the burst when measuring starts.
-    start_logger live.lcmlog "$url" -c '^MILLWATCH_FORCE_RAW$'
+    start_logger live.lcmlog "$url" -c "$raw_channel"
     raw_logger=$logger
-    start_logger outputs.lcmlog "$url" -v -c '^MILLWATCH_FORCE_RAW$'
+    start_logger outputs.lcmlog "$url" -v -c "$raw_channel"
     start_daemon monitor.json daemon.json daemon.log
     # Blocks of 5 ms: about two revolutions' messages per block, in the logger's queue.
     timeout 30 "$MILLWATCH_CLI" publish cut.csv --url "$url" --speed 1 --block 250 \

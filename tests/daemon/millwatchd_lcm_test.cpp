@@ -156,10 +156,17 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   }
   const auto out = read_log(dir_ / "out.lcmlog");
   EXPECT_EQ(out.count("MILLWATCH_FORCE_RAW"), 0u);
+  // Who lost what, if any is short: the daemon's log ends with the messages it published and
+  // dropped, then the loggers' and the kernel's side.
+  const std::string loggers = test::read_text(dir_ / "split.log") +
+                              "\nlcm-logger said: " + test::read_text(dir_ / "logger.out") +
+                              "\nthe namespace's UDP counters:\n" +
+                              test::read_text(dir_ / "udp_stats.txt");
   const auto periods = decode_all<tooth_periods2_t>(events(out, "MILLWATCH_TOOTH_PERIODS"));
-  EXPECT_GE(periods.size(), static_cast<std::size_t>(0.95 * revolutions));
+  EXPECT_GE(periods.size(), static_cast<std::size_t>(0.95 * revolutions)) << loggers;
   EXPECT_GE(decode_all<flute_peaks2_t>(events(out, "MILLWATCH_FLUTE_PEAKS")).size(),
-            static_cast<std::size_t>(0.95 * revolutions));
+            static_cast<std::size_t>(0.95 * revolutions))
+      << loggers;
   const auto status = decode_all<pipeline_status3_t>(events(out, "MILLWATCH_STATUS"));
   ASSERT_FALSE(status.empty());
   EXPECT_EQ(status.back().samples_in, 50000);  // the final status, published on SIGTERM
