@@ -122,6 +122,15 @@ struct State {
   }
 };
 
+/// The ploughed area beside an h_min the model (state `s`) has estimated: scored at that h_min,
+/// refined at its step. Its profile there would cost twelve fits of the area law over the
+/// accumulation's whole cycle (the AlSi10Mg preset's diagnosis: 43 s → 6.8 min). (An h_min the
+/// search estimated: a configured one has no σ and may be far off.)
+bool at_model_h_min(const std::string& name, const State& s) {
+  return name == "ploughing_area" && s.config.effects.min_chip.enabled && s.h_min_bound.empty() &&
+         s.h_min_sigma_um > 0.0;
+}
+
 /// One fit of a state to the record.
 struct Evaluation {
   bool ok = false;
@@ -1154,8 +1163,8 @@ class Diagnoser {
   Evaluation evaluate_at_h_min(Engine& engine, State& s, const Evaluation& current);
   /// A golden section between the best grid point's neighbours (`best`: its evaluation); σ
   /// from the profile's curvature (Δ(−2 ln L) = 1). For a step taken and the final model.
-  Evaluation refine_h_min(State& s, const Evaluation& current, const Evaluation* from,
-                          Evaluation best);
+  Evaluation refine_h_min(Engine& engine, State& s, const Evaluation& current,
+                          const Evaluation* from, Evaluation best);
   /// h_min profiled again in the final model, where min_chip_thickness, chip_accumulation or
   /// ploughing_area was named: a step profiles it in its own model, and what later steps add moves
   /// it (the cp-Ti preset's cut at 20 kHz: 0.08 µm where chip_accumulation came in before the
@@ -1347,18 +1356,18 @@ Evaluation Diagnoser::evaluate_at_h_min(Engine& engine, State& s, const Evaluati
   return engine.evaluate(s, &current, false, &current);
 }
 
-Evaluation Diagnoser::refine_h_min(State& s, const Evaluation& current, const Evaluation* from,
-                                   Evaluation best_ev) {
+Evaluation Diagnoser::refine_h_min(Engine& engine, State& s, const Evaluation& current,
+                                   const Evaluation* from, Evaluation best_ev) {
   const double ft = s.config.process.feed_per_tooth_um;
-  auto at_on = [&](Engine& engine, double h) {
+  auto at_on = [&](Engine& on, double h) {
     State t = s;
     t.config.effects.min_chip.h_min_um = h;
-    return engine.evaluate(t, &current, false, from);
+    return on.evaluate(t, &current, false, from);
   };
-  auto at = [&](double h) { return at_on(engine_, h); };
+  auto at = [&](double h) { return at_on(engine, h); };
   // Two points fitted at once (on two threads where there are).
   auto both = [&](double h1, double h2, Evaluation& first, Evaluation& second) {
-    run_on_engines(engine_, 2, [&](Engine& on, std::size_t i) {
+    run_on_engines(engine, 2, [&](Engine& on, std::size_t i) {
       (i == 0 ? first : second) = at_on(on, i == 0 ? h1 : h2);
     });
   };
@@ -1421,7 +1430,7 @@ void Diagnoser::final_h_min(State& state, Evaluation& current, Diagnosis& out) {
   State t = state;
   Evaluation ev = profile_h_min(engine_, t, current, &current);
   if (ev.ok) {
-    ev = refine_h_min(t, current, &current, std::move(ev));
+    ev = refine_h_min(engine_, t, current, &current, std::move(ev));
   }
   if (!ev.ok || !(ev.criterion < current.criterion)) {
     out.final_notes.push_back(format(
@@ -1827,11 +1836,14 @@ Round Diagnoser::score_round(const State& state, const Evaluation& current,
     }
   }
   // The costliest fits first, so that the threads end together: a profile of h_min is a dozen
-  // fits, the stiffness's seven, any other one or two. (The order the fits start in does not
-  // change them.)
+  // fits, the stiffness's seven, any other one or two (the ploughed area at an h_min the model
+  // has estimated one). The order the fits start in does not change them.
   const auto cost = [&](std::size_t t) {
     const std::string& name = names[todo[t]];
-    return profiles_h_min(name) ? 2 : name == "tool_deflection" ? 1 : 0;
+    return at_model_h_min(name, state) ? 0
+           : profiles_h_min(name)      ? 2
+           : name == "tool_deflection" ? 1
+                                       : 0;
   };
   std::vector<std::size_t> order(todo.size());
   for (std::size_t t = 0; t < order.size(); ++t) {
@@ -1899,12 +1911,7 @@ std::optional<CandidateScore> Diagnoser::score_candidate(Engine& engine, const s
                                                          Evaluation& ev) {
   CandidateScore score;
   score.name = name;
-  // The ploughed area beside an h_min the model has estimated: scored at that h_min, refined
-  // at its step. Its profile there would cost twelve fits of the area law over the
-  // accumulation's whole cycle (the AlSi10Mg preset's diagnosis: 43 s → 6.8 min).
-  // (An h_min the search estimated: a configured one has no σ and may be far off.)
-  const bool at_model_h_min = name == "ploughing_area" && s.config.effects.min_chip.enabled &&
-                              s.h_min_bound.empty() && s.h_min_sigma_um > 0.0;
+  const bool at_model_h = at_model_h_min(name, s);  // the round's state, before apply()
   std::string why;
   if (!apply(engine, name, s, current, why)) {
     return std::nullopt;  // in the model already
@@ -1914,7 +1921,7 @@ std::optional<CandidateScore> Diagnoser::score_candidate(Engine& engine, const s
   // runout to another basin, where a refinement from the current fit would stay stuck.
   // The chain's terms hardly move the model: those refine the current fit.
   const bool chain = name == "amplifier_drift" || name == "mains_hum";
-  ev = at_model_h_min         ? evaluate_at_h_min(engine, s, current)
+  ev = at_model_h             ? evaluate_at_h_min(engine, s, current)
        : profiles_h_min(name) ? profile_h_min(engine, s, current)
        : name == "tool_deflection"
            ? profile_stiffness(engine, s, current)
@@ -1961,7 +1968,10 @@ void Diagnoser::run_on_engines(Engine& caller, std::size_t count,
     helpers_.push_back(std::make_unique<Engine>(rec_, opt_));
   }
   std::atomic<std::size_t> next{0};
+  // Every call runs, whatever another throws: the first in `order` of those that threw is
+  // thrown again, the same one on any number of threads.
   std::exception_ptr failure;
+  std::size_t failed_at = count;
   std::mutex failure_mutex;
   const auto loop = [&](Engine& engine) {
     for (std::size_t k = next++; k < count; k = next++) {
@@ -1969,18 +1979,24 @@ void Diagnoser::run_on_engines(Engine& caller, std::size_t count,
         work(engine, order[k]);
       } catch (...) {
         const std::lock_guard lock(failure_mutex);
-        if (!failure) {
+        if (k < failed_at) {
+          failed_at = k;
           failure = std::current_exception();
         }
       }
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(threads - 1);
   engines_running_ = threads > 1;  // before the threads start: they read it
   for (std::size_t w = 0; w + 1 < threads; ++w) {
     Engine& helper = *helpers_[w];
     helper.take_floor(engine_);  // refined as the search goes (the speed's σ reads it)
-    pool.emplace_back([&loop, &helper] { loop(helper); });
+    try {
+      pool.emplace_back([&loop, &helper] { loop(helper); });
+    } catch (...) {
+      break;  // no thread to be had: the ones started and this one do the rest
+    }
   }
   loop(caller);
   for (auto& t : pool) {
@@ -2002,7 +2018,7 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
     // Scored on h_min's grid; its step refines it, before the refit with the model's variants
     // (after it, a refined fit would replace that refit's σ with the statistical one alone).
     const Evaluation* seed = next.h_min_from_current ? &current : nullptr;
-    Evaluation refined = refine_h_min(next, current, seed, final_ev);
+    Evaluation refined = refine_h_min(engine_, next, current, seed, final_ev);
     if (refined.ok && refined.criterion < final_ev.criterion) {
       final_ev = std::move(refined);
     }
@@ -2014,7 +2030,7 @@ void Diagnoser::accept(Round& round, State& state, Evaluation& current, Diagnosi
       State whole = next;
       Evaluation profiled = profile_h_min(engine_, whole, current, seed);
       if (profiled.ok && whole.h_min_bound.empty()) {
-        profiled = refine_h_min(whole, current, seed, std::move(profiled));
+        profiled = refine_h_min(engine_, whole, current, seed, std::move(profiled));
       }
       if (profiled.ok && profiled.criterion < final_ev.criterion) {
         next = whole;
@@ -2452,6 +2468,10 @@ Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
         "diagnose: the band (%.0f Hz) must hold the tooth-passing frequency 2.5 %% above the "
         "commanded speed (%.0f Hz)",
         band, (1.0 + kSpeedSearchFraction) * tooth_hz));
+  }
+  if (options.jobs < 0) {
+    throw std::invalid_argument("diagnose: jobs must be 0 (one per core) or more (got " +
+                                std::to_string(options.jobs) + ")");
   }
   for (const auto& name : options.candidates) {
     if (find_candidate(name) == nullptr) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,19 @@ TEST(DiagnoseJobs, ThreeThreadsGiveTheOneThreadsDiagnosis) {
     return v;
   };
   EXPECT_EQ(sorted(one.progress), sorted(three.progress));
+}
+
+TEST(DiagnoseJobs, ANegativeCountIsRefusedNamingIt) {
+  const auto cut = test::hidden_effect_cut({});
+  DiagnoseOptions o;
+  o.jobs = -2;
+  try {
+    (void)diagnose(cut.record, cut.start, o);
+    ADD_FAILURE() << "jobs -2 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("jobs"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("-2"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
