@@ -2,8 +2,8 @@
 # One multi-process LCM session for tests/daemon/millwatchd_lcm_test.cpp, run inside a private
 # network namespace so that no packet leaves the machine:
 #   unshare -n tests/daemon/lcm_session.sh MODE DIR
-# with MILLWATCH_CLI and MILLWATCH_DAEMON set. DIR holds the inputs and receives the outputs:
-#   live       two lcm-loggers record while millwatchd monitors cut.csv, published by
+# with MILLWATCH_CLI, MILLWATCH_DAEMON and MILLWATCH_LCM_RECORDER set. DIR holds the inputs and receives the outputs:
+#   live       two recorders record while millwatchd monitors cut.csv, published by
 #              `millwatch publish` in 250-sample blocks: the raw channel → live.lcmlog, every other
 #              channel → outputs.lcmlog; daemon.json (summary), daemon.log
 #   logplayer  lcm-logplayer plays live.lcmlog's raw channel into a fresh millwatchd, stopped
@@ -13,7 +13,7 @@
 #              channel is played → in.lcmlog, out.lcmlog, split.json, split.log
 #   reload     millwatchd starts on initial.json and gets part1.lcmlog, SIGHUP with good.json,
 #              SIGHUP with bad.json, garbage.lcmlog, part2.lcmlog (all played raw) while
-#              lcm-logger records → reload.lcmlog, reload.json, reload.log
+#              a recorder records → reload.lcmlog, reload.json, reload.log
 # Every wait is bounded; a straggler is killed and the session fails. Background programs
 # write to files only, so that none can hold the caller's pipe open.
 set -u
@@ -63,30 +63,33 @@ stop_daemon() {  # [signal]
   echo "daemon exit $?"
 }
 
-# lcm-logger queues 30 messages per subscription and drops the rest, and millwatchd publishes
-# a burst of ~90 when it starts measuring (the revolutions since the lock): on a busy machine
-# the logger keeps up only if it runs as soon as a message arrives.
+# The recorder is tests/support/lcm_recorder (MILLWATCH_LCM_RECORDER): lcm-logger's log format,
+# with no limit on the messages its subscription queues. lcm-logger queues 30 and drops the
+# rest, and millwatchd publishes a burst of ~90 when it starts measuring (the revolutions since
+# the lock): on a busy 2-core VM lcm-logger lost runs of results and once a raw block, though at
+# real-time priority. The recorder runs at that priority too, so that it reads as they come.
 if chrt -f 10 true 2>/dev/null; then
   logger_priority=(chrt -f 10)
 else
   logger_priority=(nice -n -5)
 fi
 
-start_logger() {  # log file, [URL], [lcm-logger's channel options]
-  "${logger_priority[@]}" lcm-logger -q --lcm-url="${2:-$url}" "${@:3}" "$1" >>logger.out 2>&1 &
+start_logger() {  # log file, [URL], [channels' regular expression], [--invert]
+  "${logger_priority[@]}" "$MILLWATCH_LCM_RECORDER" "${2:-$url}" "${3:-.*}" "$1" ${4:+"$4"} \
+    >>logger.out 2>&1 &
   logger=$!
 }
 
 stop_logger() {  # [pid]
   local pid=${1:-$logger}
-  sleep 1  # lcm-logger 1.3.1 can lose buffered events on a hard stop
+  sleep 1  # the last messages in flight
   kill -INT "$pid"
-  await_exit "$pid" 50 "lcm-logger did not stop within 5 s of SIGINT"
+  await_exit "$pid" 50 "the recorder did not stop within 5 s of SIGINT"
   wait "$pid"
   echo "logger exit $?"
 }
 
-raw_channel='^MILLWATCH_FORCE_RAW$'  # a regular expression, as lcm-logger and -logplayer take
+raw_channel='^MILLWATCH_FORCE_RAW$'  # a regular expression, as the recorder and lcm-logplayer take
 
 play() {  # the raw channel of a log, at twice real time
   timeout 30 lcm-logplayer -s 2 -e "$raw_channel" --lcm-url="$url" "$1" >/dev/null
@@ -94,14 +97,12 @@ play() {  # the raw channel of a log, at twice real time
 
 case "$mode" in
   live)
-    # The raw channel on a logger of its own: a logger of every channel shares one queue of 30
-    # messages between the raw blocks and the daemon's results, and on a busy 2-core machine
-    # (the sanitized suite) once lost a raw block in the burst when measuring starts.
-    start_logger live.lcmlog "$url" -c "$raw_channel"
+    # The raw channel on a recorder of its own, as the README advises for lcm-logger.
+    start_logger live.lcmlog "$url" "$raw_channel"
     raw_logger=$logger
-    start_logger outputs.lcmlog "$url" -v -c "$raw_channel"
+    start_logger outputs.lcmlog "$url" "$raw_channel" --invert
     start_daemon monitor.json daemon.json daemon.log
-    # Blocks of 5 ms: about two revolutions' messages per block, in the logger's queue.
+    # Blocks of 5 ms: about two revolutions' messages per block.
     timeout 30 "$MILLWATCH_CLI" publish cut.csv --url "$url" --speed 1 --block 250 \
       >publish.log 2>&1 ||
       echo "publish failed" >&2

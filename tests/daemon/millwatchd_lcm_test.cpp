@@ -1,5 +1,6 @@
 // millwatchd as it runs beside the machine: multi-process LCM sessions inside a private network
-// namespace (tests/daemon/lcm_session.sh: lcm-logger, lcm-logplayer, `millwatch publish`) whose
+// namespace (tests/daemon/lcm_session.sh: tests/support/lcm_recorder — lcm-logger's log without
+// its 30-message queue —, lcm-logplayer, `millwatch publish`) whose
 // recordings are decoded here, the signals (SIGTERM, SIGINT, SIGHUP), garbage on the raw
 // channel, bad configurations (in the file, or refused by the pipeline's stages), a missing DAQ,
 // udpm:// without a multicast route. Single-process tests use memq://. Tests that need
@@ -55,9 +56,10 @@ bool namespaces_work(std::string& why) {
 /// kills its own stragglers).
 test::CommandResult session(const std::string& mode, const fs::path& dir) {
   const fs::path script = test::source_dir() / "tests" / "daemon" / "lcm_session.sh";
-  return test::run_command("MILLWATCH_CLI=" + test::millwatch_cli() +
-                           " MILLWATCH_DAEMON=" + kDaemon + " timeout -k 5 90 unshare -n " +
-                           script.string() + " " + mode + " " + dir.string());
+  return test::run_command(
+      "MILLWATCH_CLI=" + test::millwatch_cli() + " MILLWATCH_DAEMON=" + kDaemon +
+      " MILLWATCH_LCM_RECORDER=" + MILLWATCH_LCM_RECORDER + " timeout -k 5 90 unshare -n " +
+      script.string() + " " + mode + " " + dir.string());
 }
 
 /// A 1 s cut at 50 kHz as a CSV + sidecar, and the daemon configuration monitoring it.
@@ -159,7 +161,7 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   // Who lost what, if any is short: the daemon's log ends with the messages it published and
   // dropped, then the loggers' and the kernel's side.
   const std::string loggers = test::read_text(dir_ / "split.log") +
-                              "\nlcm-logger said: " + test::read_text(dir_ / "logger.out") +
+                              "\nthe recorders said: " + test::read_text(dir_ / "logger.out") +
                               "\nthe namespace's UDP counters:\n" +
                               test::read_text(dir_ / "udp_stats.txt");
   const auto periods = decode_all<tooth_periods2_t>(events(out, "MILLWATCH_TOOTH_PERIODS"));
@@ -173,9 +175,10 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   EXPECT_EQ(status.back().revolutions, revolutions);
 }
 
-// Issue 3 §3 and §5: lcm-logger records a live run's raw samples and the daemon's outputs (two
-// loggers: the raw channel on its own, whose queue no burst of results fills); the recorded
-// outputs decode; replaying the recorded raw channel gives the live run's results.
+// Issue 3 §3 and §5: a live run's raw samples and the daemon's outputs are recorded in
+// lcm-logger's format (two recorders, the raw channel on its own, as the README advises for
+// lcm-logger); the recorded outputs decode; replaying the recorded raw channel (lcm-logplayer)
+// gives the live run's results.
 TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
   const auto r = session("live", dir_);
   ASSERT_EQ(r.exit_code, 0) << r.output << test::read_text(dir_ / "daemon.log");
@@ -190,7 +193,7 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
 
   // The raw channel on a logger of its own (live.lcmlog), the results on another.
   const auto raw = read_log(dir_ / "live.lcmlog");
-  const std::string loggers = "lcm-logger said: " + test::read_text(dir_ / "logger.out") +
+  const std::string loggers = "the recorders said: " + test::read_text(dir_ / "logger.out") +
                               "\nthe namespace's UDP counters:\n" +
                               test::read_text(dir_ / "udp_stats.txt");
   ASSERT_EQ(raw.size(), 1u) << loggers;                                   // the raw channel alone
