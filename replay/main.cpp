@@ -15,6 +15,7 @@
 #include "replay/calibrate_command.hpp"
 #include "replay/diagnose_command.hpp"
 #include "replay/publish_command.hpp"
+#include "replay/record_command.hpp"
 #include "replay/replay_command.hpp"
 #include "replay/simulate_command.hpp"
 
@@ -153,6 +154,23 @@ void add_publish_command(CLI::App& app) {
   cmd->callback([o] { run_subcommand([&o] { return run_publish(*o); }); });
 }
 
+void add_record_command(CLI::App& app) {
+  auto o = std::make_shared<RecordOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "record",
+      "Record LCM traffic into an LCM log (lcm-logger's format, without its queue limit) until "
+      "Ctrl-C or SIGTERM");
+  cmd->add_option("log", o->output, "The LCM log to write")->required();
+  cmd->add_option("--url", o->url, "LCM URL");
+  cmd->add_option("--channels", o->channels,
+                  "Channels to record: a POSIX extended regular expression matching the whole "
+                  "name (default: every channel)");
+  cmd->add_flag("--invert", o->invert, "Record every channel --channels does not match");
+  cmd->add_flag("-f,--force", o->force, "Replace the log if it exists");
+  cmd->add_option("--duration", o->duration_s, "Stop after this many seconds")->check(kPositive);
+  cmd->callback([o] { run_subcommand([&o] { return run_record(*o); }); });
+}
+
 void add_calibrate_command(CLI::App& app) {
   auto o = std::make_shared<CalibrateOptions>();
   CLI::App* cmd = app.add_subcommand(
@@ -233,6 +251,7 @@ int main(int argc, char** argv) {
   millwatch::shell::add_simulate_command(app);
   millwatch::shell::add_replay_command(app);
   millwatch::shell::add_publish_command(app);
+  millwatch::shell::add_record_command(app);
   millwatch::shell::add_calibrate_command(app);
   millwatch::shell::add_diagnose_command(app);
   try {

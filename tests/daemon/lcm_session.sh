@@ -2,7 +2,7 @@
 # One multi-process LCM session for tests/daemon/millwatchd_lcm_test.cpp, run inside a private
 # network namespace so that no packet leaves the machine:
 #   unshare -n tests/daemon/lcm_session.sh MODE DIR
-# with MILLWATCH_CLI, MILLWATCH_DAEMON and MILLWATCH_LCM_RECORDER set. DIR holds the inputs and receives the outputs:
+# with MILLWATCH_CLI and MILLWATCH_DAEMON set. DIR holds the inputs and receives the outputs:
 #   live       two recorders record while millwatchd monitors cut.csv, published by
 #              `millwatch publish` in 250-sample blocks: the raw channel → live.lcmlog, every other
 #              channel → outputs.lcmlog; daemon.json (summary), daemon.log
@@ -63,8 +63,8 @@ stop_daemon() {  # [signal]
   echo "daemon exit $?"
 }
 
-# The recorder is tests/support/lcm_recorder (MILLWATCH_LCM_RECORDER): lcm-logger's log format,
-# with no limit on the messages its subscription queues. lcm-logger queues 30 and drops the
+# The recorder is `millwatch record`: lcm-logger's log format, with no limit on the messages its
+# subscription queues. lcm-logger queues 30 and drops the
 # rest, and millwatchd publishes a burst of ~90 when it starts measuring (the revolutions since
 # the lock): on a busy 2-core VM lcm-logger lost runs of results and once a raw block, though at
 # real-time priority. The recorder runs at that priority too, so that it reads as they come.
@@ -75,9 +75,17 @@ else
 fi
 
 start_logger() {  # log file, [URL], [channels' regular expression], [--invert]
-  "${logger_priority[@]}" "$MILLWATCH_LCM_RECORDER" "${2:-$url}" "${3:-.*}" "$1" ${4:+"$4"} \
-    >>logger.out 2>&1 &
+  local before
+  before=$(grep -c "recording " logger.out 2>/dev/null)
+  "${logger_priority[@]}" "$MILLWATCH_CLI" record "$1" --url "${2:-$url}" --channels "${3:-.*}" \
+    ${4:+"$4"} >>logger.out 2>&1 &
   logger=$!
+  for _ in $(seq 100); do  # subscribed: it says so
+    [ "$(grep -c "recording " logger.out 2>/dev/null)" -gt "${before:-0}" ] && return
+    kill -0 "$logger" 2>/dev/null || break
+    sleep 0.1
+  done
+  echo "the recorder of $1 did not start within 10 s" >&2
 }
 
 stop_logger() {  # [pid]

@@ -1,6 +1,6 @@
 // millwatchd as it runs beside the machine: multi-process LCM sessions inside a private network
-// namespace (tests/daemon/lcm_session.sh: tests/support/lcm_recorder — lcm-logger's log without
-// its 30-message queue —, lcm-logplayer, `millwatch publish`) whose
+// namespace (tests/daemon/lcm_session.sh: `millwatch record` — lcm-logger's log without its
+// 30-message queue —, lcm-logplayer, `millwatch publish`) whose
 // recordings are decoded here, the signals (SIGTERM, SIGINT, SIGHUP), garbage on the raw
 // channel, bad configurations (in the file, or refused by the pipeline's stages), a missing DAQ,
 // udpm:// without a multicast route. Single-process tests use memq://. Tests that need
@@ -56,10 +56,9 @@ bool namespaces_work(std::string& why) {
 /// kills its own stragglers).
 test::CommandResult session(const std::string& mode, const fs::path& dir) {
   const fs::path script = test::source_dir() / "tests" / "daemon" / "lcm_session.sh";
-  return test::run_command(
-      "MILLWATCH_CLI=" + test::millwatch_cli() + " MILLWATCH_DAEMON=" + kDaemon +
-      " MILLWATCH_LCM_RECORDER=" + MILLWATCH_LCM_RECORDER + " timeout -k 5 90 unshare -n " +
-      script.string() + " " + mode + " " + dir.string());
+  return test::run_command("MILLWATCH_CLI=" + test::millwatch_cli() +
+                           " MILLWATCH_DAEMON=" + kDaemon + " timeout -k 5 90 unshare -n " +
+                           script.string() + " " + mode + " " + dir.string());
 }
 
 /// A 1 s cut at 50 kHz as a CSV + sidecar, and the daemon configuration monitoring it.

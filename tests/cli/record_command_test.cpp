@@ -1,0 +1,103 @@
+// End-to-end tests of `millwatch record` as a user runs it: a cut published by `millwatch
+// publish` over udpm:// (in a private network namespace) recorded and replayed to the summary of
+// the cut's own file; an existing log kept unless --force; a bad expression named.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace millwatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSetUp = "ip link set lo up && ip route add 239.0.0.0/8 dev lo";
+
+nlohmann::json replay_json(const fs::path& input, const std::string& options = "") {
+  // A subshell so that run_command's own 2>&1 does not bring the log into the JSON.
+  std::string command = test::millwatch_cli();
+  command += " replay " + input.string() + " --no-identify --json " + options;
+  const auto r = test::run_command("(" + command + " 2>/dev/null)");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return r.exit_code == 0 ? nlohmann::json::parse(r.output) : nlohmann::json();
+}
+
+TEST(RecordCommand, RecordsAPublishedCutThatReplaysAsTheCutsFile) {
+  if (test::run_command("unshare -n sh -c '" + kSetUp + "' 2>&1").exit_code != 0) {
+    GTEST_SKIP() << "no private network namespace here (unshare -n)";
+  }
+  const fs::path dir = test::fresh_temp_dir();
+  const std::string cli = test::millwatch_cli();
+  std::ofstream(dir / "scenario.json")
+      << R"({"recording": {"sample_rate_hz": 50000, "duration_s": 0.5, "seed": 3},
+             "noise": {"enabled": true}})";
+  const auto sim = test::run_command(cli + " simulate " + (dir / "scenario.json").string() +
+                                     " -o " + (dir / "cut.csv").string() + " 2>&1");
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  // The recorder runs until SIGINT; the publisher starts once it says it is recording. The
+  // session is a script file so that no shell between here and it expands its variables.
+  const std::string url = "'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'";
+  std::ofstream(dir / "session.sh")
+      << "set -e\ncd " << dir.string() << "\n"
+      << kSetUp << "\n"
+      << cli << " record cut.lcmlog --url " << url
+      << " --channels MILLWATCH_FORCE_RAW >record.out 2>&1 &\nrec=$!\n"
+      << "for i in $(seq 100); do grep -q recording record.out && break; sleep 0.1; done\n"
+      << cli << " publish cut.csv --url " << url << " --speed 4 --block 500\n"
+      << "sleep 0.5\nkill -INT $rec\nwait $rec\n";
+  const auto r =
+      test::run_command("timeout -k 5 60 unshare -n sh " + (dir / "session.sh").string() + " 2>&1");
+  std::string said;
+  std::getline(std::ifstream(dir / "record.out"), said, '\0');
+  ASSERT_EQ(r.exit_code, 0) << r.output << said;
+  EXPECT_NE(said.find("50 events"), std::string::npos) << said;  // 25,000 samples in 500s
+  EXPECT_NE(said.find("MILLWATCH_FORCE_RAW: 50"), std::string::npos) << said;
+
+  const nlohmann::json from_log =
+      replay_json(dir / "cut.lcmlog", "--sidecar " + (dir / "cut.json").string());
+  const nlohmann::json from_csv = replay_json(dir / "cut.csv");
+  ASSERT_FALSE(from_log.is_null());
+  EXPECT_EQ(from_log["samples"], 25000) << from_log.dump(1).substr(0, 2000);
+  EXPECT_EQ(from_log["samples"], from_csv["samples"]);
+  EXPECT_GE(from_csv["revolutions"].get<int>(), 200);  // 208 turns at 25,000 rpm in 0.5 s
+  EXPECT_EQ(from_log["revolutions"], from_csv["revolutions"]);
+  EXPECT_EQ(from_log["alpha_deg"], from_csv["alpha_deg"]);
+}
+
+TEST(RecordCommand, KeepsAnExistingLogUnlessForced) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path log = dir / "kept.lcmlog";
+  std::ofstream(log) << "an earlier recording";
+  const std::string cli = test::millwatch_cli();
+  const auto refused =
+      test::run_command(cli + " record " + log.string() + " --url memq:// --duration 0.1 2>&1");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find(log.string() + " exists"), std::string::npos) << refused.output;
+  std::string kept;
+  std::getline(std::ifstream(log), kept);
+  EXPECT_EQ(kept, "an earlier recording");
+
+  const auto forced = test::run_command(cli + " record " + log.string() +
+                                        " --url memq:// --duration 0.1 --force 2>&1");
+  EXPECT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_NE(forced.output.find("0 events"), std::string::npos) << forced.output;
+  EXPECT_NE(forced.output.find("nothing recorded"), std::string::npos) << forced.output;
+  EXPECT_EQ(fs::file_size(log), 0u);
+}
+
+TEST(RecordCommand, ABadChannelExpressionIsNamed) {
+  const fs::path log = test::fresh_temp_dir() / "x.lcmlog";
+  const auto r = test::run_command(test::millwatch_cli() + " record " + log.string() +
+                                   " --url memq:// --channels 'RAW[' 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad channel regular expression 'RAW['"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace millwatch
