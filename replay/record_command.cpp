@@ -3,24 +3,14 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <csignal>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
+#include "replay/stop_signal.hpp"
 #include "shell/lcm_recorder.hpp"
 
 namespace millwatch::shell {
-namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-
-void on_stop_signal(int) {
-  g_stop = 1;
-}
-
-}  // namespace
-
 int run_record(const RecordOptions& o) {
   namespace fs = std::filesystem;
   if (!o.force && fs::exists(o.output)) {
@@ -32,10 +22,7 @@ int run_record(const RecordOptions& o) {
     throw std::runtime_error("cannot open LCM at " + o.url);
   }
   LcmRecorder recorder(lcm.getUnderlyingLCM(), o.output, o.channels, o.invert);
-  struct sigaction sa {};
-  sa.sa_handler = on_stop_signal;  // no SA_RESTART: the wait returns at once
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  install_stop_signals(InterruptedCalls::return_at_once);  // the wait ends with the signal
   spdlog::info("recording {}{} from {} into {} until {}", o.invert ? "every channel but " : "",
                o.channels, o.url, o.output,
                o.duration_s > 0.0 ? fmt::format("{} s have passed", o.duration_s)
@@ -44,7 +31,7 @@ int run_record(const RecordOptions& o) {
   const auto elapsed_s = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  while (g_stop == 0 && (o.duration_s <= 0.0 || elapsed_s() < o.duration_s)) {
+  while (!stop_requested() && (o.duration_s <= 0.0 || elapsed_s() < o.duration_s)) {
     recorder.handle(100);
   }
   recorder.finish();  // what arrived before the end and is still queued

@@ -9,10 +9,8 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +29,7 @@
 #include "core/monitor/in_plane_force.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
+#include "replay/stop_signal.hpp"
 #include "shell/column_map.hpp"
 #include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
@@ -50,11 +49,6 @@ namespace millwatch::shell {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_stop(int /*signal*/) {
-  g_stop = true;
-}
 
 std::string progress_text(double fraction, double sample_time_s, double wall_s) {
   const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
@@ -131,13 +125,11 @@ int replay_one(const ReplayOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   std::int64_t first_utime = 0;
   bool have_first = false;
-  g_stop = false;
-  std::signal(SIGINT, on_stop);
-  std::signal(SIGTERM, on_stop);
+  install_stop_signals();
   ProgressLine progress(o.progress, 2.0, 0.25);
   // The record's in-plane force, in the model's frame and before any filter.
   monitor::InPlaneForce in_plane;
-  while (!g_stop) {
+  while (!stop_requested()) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
       break;
@@ -177,7 +169,7 @@ int replay_one(const ReplayOptions& o) {
   }
   progress.done();
   run.finish();
-  if (g_stop) {
+  if (stop_requested()) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
   run.drain();
@@ -264,11 +256,9 @@ int replay_many(const ReplayOptions& o) {
   std::map<pid_t, std::size_t> running;
   std::size_t next = 0;
   std::size_t done = 0;
-  g_stop = false;
-  std::signal(SIGINT, on_stop);
-  std::signal(SIGTERM, on_stop);
+  install_stop_signals();
   while (done < n) {
-    while (!g_stop && next < n && static_cast<int>(running.size()) < jobs) {
+    while (!stop_requested() && next < n && static_cast<int>(running.size()) < jobs) {
       const std::size_t k = next++;
       summaries[k] = o.summary.empty() ? scratch / fmt::format("{}.json", k)
                                        : fs::path(o.summary) / (stems[k] + ".json");
@@ -348,10 +338,10 @@ int replay_many(const ReplayOptions& o) {
   }
   const bool failed = std::any_of(results.begin(), results.end(),
                                   [](const CutResult& r) { return r.exit_code != 0; });
-  if (g_stop) {
+  if (stop_requested()) {
     spdlog::warn("interrupted: {} of {} cuts replayed", done, n);
   }
-  return failed || g_stop ? 1 : 0;
+  return failed || stop_requested() ? 1 : 0;
 }
 
 }  // namespace

@@ -4,8 +4,6 @@
 #include <spdlog/spdlog.h>
 
 #include <array>
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,17 +15,12 @@
 #include "core/model/flute_positions.hpp"
 #include "core/sim/channel_stats.hpp"
 #include "core/sim/cut_simulator.hpp"
+#include "replay/stop_signal.hpp"
 #include "shell/json_file.hpp"
 #include "shell/output_file.hpp"
 
 namespace millwatch::shell {
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void on_interrupt(int /*signal*/) {
-  g_interrupted = true;
-}
 
 nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simulator) {
   nlohmann::json rev;
@@ -176,9 +169,7 @@ int run_simulate(const SimulateOptions& o) {
     return 2;
   }
 
-  g_interrupted = false;
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  install_stop_signals();
   try {
     sim::CutSimulator simulator(scenario);
     OutputFile csv(csv_path);
@@ -187,7 +178,7 @@ int run_simulate(const SimulateOptions& o) {
     std::fputs("t_s,fx_N,fy_N,fz_N\n", csv.stream());
     constexpr std::size_t kBlock = 4096;
     std::vector<double> t(kBlock), fx(kBlock), fy(kBlock), fz(kBlock);
-    while (!g_interrupted) {
+    while (!stop_requested()) {
       const std::size_t n = simulator.next_block(t, fx, fy, fz);
       if (n == 0) {
         break;
@@ -196,7 +187,7 @@ int run_simulate(const SimulateOptions& o) {
         std::fprintf(csv.stream(), "%.9f,%.6g,%.6g,%.6g\n", t[i], fx[i], fy[i], fz[i]);
       }
     }
-    if (g_interrupted) {
+    if (stop_requested()) {
       spdlog::error("interrupted: no output written");
       return 130;
     }

@@ -49,8 +49,8 @@ void LcmRecorder::on_message(const lcm_recv_buf_t* rbuf, const char* channel, vo
 }
 
 void LcmRecorder::record(const lcm_recv_buf_t& rbuf, const char* channel) {
-  if (log_ == nullptr || !failure_.empty() ||
-      (regexec(&channels_, channel, 0, nullptr, 0) == 0) == invert_) {
+  // Only called while subscribed, which ends before finish() closes the log.
+  if (!failure_.empty() || (regexec(&channels_, channel, 0, nullptr, 0) == 0) == invert_) {
     return;
   }
   lcm_eventlog_event_t e{};

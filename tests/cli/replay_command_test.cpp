@@ -460,5 +460,27 @@ TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
   EXPECT_GT(elapsed, 0.2 * 0.95);  // 0.4 s of data at twice real time
 }
 
+TEST(ReplayCommand, SigintEndsAPacedReplayWithASummaryOfWhatWasReplayed) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "long", base_scenario());  // 1 s, 50,000 samples
+  // At real time the replay is still reading when SIGINT comes 0.5 s in; a signal that killed
+  // it, or a read it cut short and called an error, would leave no summary.
+  const fs::path summary = dir / "s.json";
+  const auto r = test::run_command("(" + test::millwatch_cli() + " replay " + csv.string() +
+                                   " --realtime --no-identify --no-progress --summary " +
+                                   summary.string() + " >/dev/null 2>" + summary.string() +
+                                   ".log & pid=$!; sleep 0.5; kill -INT $pid; wait $pid)");
+  std::stringstream log;
+  log << std::ifstream(summary.string() + ".log").rdbuf();
+  ASSERT_EQ(r.exit_code, 0) << log.str();
+  EXPECT_NE(log.str().find("interrupted: the summary covers the samples replayed so far"),
+            std::string::npos)
+      << log.str();
+  ASSERT_TRUE(fs::exists(summary)) << log.str();
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_GT(j["samples"].get<int>(), 5000) << j.dump(1).substr(0, 1000);
+  EXPECT_LT(j["samples"].get<int>(), 50000) << j.dump(1).substr(0, 1000);
+}
+
 }  // namespace
 }  // namespace millwatch
