@@ -1,6 +1,7 @@
 #include "core/monitor/lockstep.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <cstdint>
@@ -61,7 +62,14 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   std::copy(s.mean.fz_N.begin(), s.mean.fz_N.end(), waveform_.fz_N.begin());
   filter_periodic();
   built_ = true;
+  revise();
   return true;
+}
+
+void Lockstep::revise() {
+  // One sequence for every object: a revision names one model and alignment in the process.
+  static std::atomic<std::uint64_t> last{0};
+  revision_ = last.fetch_add(1, std::memory_order_relaxed) + 1;
 }
 
 void Lockstep::set_parameters(const model::ModelConfig& model, double alignment_rad,
@@ -74,6 +82,7 @@ void Lockstep::set_parameters(const model::ModelConfig& model, double alignment_
   if (use_alignment) {
     offset_rad_ = wrap_2pi(alignment_rad);
     aligned_ = built_;
+    revise();
   }
 }
 
@@ -178,6 +187,7 @@ bool Lockstep::align(const SyncAverage& measured) {
   offset_rad_ = wrap_2pi(kTwoPi * e.position / bins);
   correlation_ = corr[best] / std::sqrt(std::max(norm_m * norm_d, 1e-300));
   aligned_ = true;
+  revise();
   return true;
 }
 

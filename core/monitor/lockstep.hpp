@@ -16,6 +16,7 @@
 // millisecond for the plain model: bench/model_benchmark).
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "core/model/periodic_response.hpp"
@@ -68,6 +69,10 @@ class Lockstep {
   /// (the tests compare the two: the same rows, bit for bit).
   void forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows,
                       bool allow_avx = true) const;
+  /// Changes whenever the filtered model or its alignment does (a build, new parameters, an
+  /// alignment), and differs between any two Lockstep objects: what was measured on the model
+  /// revolution holds while it stays the same. 0 before the first build.
+  [[nodiscard]] std::uint64_t revision() const { return revision_; }
   /// The spindle frequency the model was built for (Hz; 0 before the first build).
   [[nodiscard]] double spindle_hz() const { return spindle_hz_; }
 
@@ -79,6 +84,7 @@ class Lockstep {
 
  private:
   void filter_periodic();
+  void revise();
 
   model::ModelConfig commanded_;
   model::ModelConfig config_;
@@ -93,6 +99,7 @@ class Lockstep {
   // Scratch of align(): the model and the measured average on the tracker grid, correlations.
   std::array<std::vector<double>, 3> model_bins_, measured_bins_;
   std::vector<double> correlation_scratch_;
+  std::uint64_t revision_ = 0;
   double spindle_hz_ = 0.0;
   double offset_rad_ = 0.0;
   double correlation_ = 0.0;

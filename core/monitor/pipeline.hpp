@@ -201,6 +201,9 @@ class Pipeline {
   /// The tracker's phase model at full rate (valid while locked).
   [[nodiscard]] const signal::PhaseModel& phase() const { return phase_; }
   [[nodiscard]] const Lockstep& lockstep() const { return lockstep_; }
+  /// Whether the model revolution is measured once per model and alignment and placed on each
+  /// turn (the default), or measured anew on every turn (the tests and benchmarks compare).
+  void keep_model_revolution(bool keep) { analyzer_.keep_model_revolution(keep); }
   [[nodiscard]] const signal::ButterworthDesign& filter() const { return filter_; }
   /// The tooth-event template of the current (or last) lock.
   [[nodiscard]] const ToothEventTemplate& event_template() const {

@@ -101,7 +101,11 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   out.model_valid = false;
   out.sectors = 0;
   const AngleMap map = angle_map(events, tmpl);
-  if (model != nullptr && model->aligned() && model_revolution(events, tmpl, map, *model, out)) {
+  if (model != nullptr && model->aligned() &&
+      (kept_.revision == model->revision() && kept_.kind == tmpl.kind &&
+               kept_.template_rad == tmpl.event_rad && kept_.measured.flutes == events.flutes
+           ? model_revolution_again(events, map, *model, out)
+           : model_revolution(events, tmpl, map, *model, out))) {
     out.model_offset_rad = model->offset_rad();
     residuals(m, ring, map, out);
   }
@@ -183,6 +187,67 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
     return false;
   }
   measure_revolution(row, sample_rate_hz_, mm);
+  if (mm.valid && keep_) {
+    remember_model_revolution(events, tmpl, map, model, mm);
+  }
+  return true;
+}
+
+void RevolutionAnalyzer::remember_model_revolution(const RevolutionEvents& events,
+                                                   const ToothEventTemplate& tmpl,
+                                                   const AngleMap& map, const Lockstep& model,
+                                                   const RevolutionMeasurement& mm) {
+  const double turn_rad = kTwoPi * static_cast<double>(events.turn);
+  const auto n = static_cast<std::size_t>(mm.flutes);
+  for (std::size_t k = 0; k < n; ++k) {
+    kept_.event_rad[k] = map.at(mm.event_sample[k]) - turn_rad;
+    kept_.boundary_rad[k] = map.at(mm.boundary_sample[k]) - turn_rad;
+  }
+  // The model repeats: its event N is its event 0 a turn on (found on samples at another
+  // sub-sample phase, it would put each later period off by that search's rounding).
+  kept_.event_rad[n] = kept_.event_rad[0] + kTwoPi;
+  kept_.boundary_rad[n] = kept_.boundary_rad[0] + kTwoPi;
+  kept_.measured = mm;
+  kept_.kind = tmpl.kind;
+  kept_.template_rad = tmpl.event_rad;
+  kept_.revision = model.revision();
+}
+
+bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, const AngleMap& map,
+                                                const Lockstep& model, RevolutionRecord& out) {
+  if (!(map.slope_rad_per_sample > 0.0)) {
+    return false;
+  }
+  RevolutionMeasurement& mm = out.model;
+  const RevolutionMeasurement& kept = kept_.measured;
+  mm = kept;
+  mm.sequence = events.sequence;
+  // The model's events where this revolution's angle map puts their angles; its forces are
+  // those of any turn (the model repeats), its periods follow this revolution's speed.
+  const double turn_rad = kTwoPi * static_cast<double>(events.turn);
+  const auto ux = static_cast<std::size_t>(mm.flutes);
+  for (std::size_t k = 0; k <= ux; ++k) {
+    mm.event_sample[k] =
+        (kept_.event_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
+    mm.boundary_sample[k] =
+        (kept_.boundary_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
+  }
+  const double dt = 1.0 / sample_rate_hz_;
+  mm.period_s = (mm.event_sample[ux] - mm.event_sample[0]) * dt;
+  for (std::size_t j = 0; j < ux; ++j) {
+    mm.flute_period_s[j] = (mm.event_sample[j + 1] - mm.event_sample[j]) * dt;
+  }
+  mm.alpha_deg = mm.flutes >= 2 ? 360.0 * mm.flute_period_s[1] / mm.period_s : 360.0;
+  // The rows the residuals read: the measured revolution's windows.
+  const RevolutionMeasurement& m = out.measured;
+  first_ = static_cast<std::int64_t>(std::ceil(m.boundary_sample[0]));
+  const auto last = static_cast<std::int64_t>(std::floor(m.boundary_sample[ux]));
+  if (last < first_ ||
+      last - first_ + 1 > static_cast<std::int64_t>(model_rows_.size() / kModelRow)) {
+    return false;
+  }
+  model.forces_on_line(map.at(static_cast<double>(first_)), map.slope_rad_per_sample,
+                       static_cast<std::size_t>(last - first_ + 1), model_rows_.data());
   return true;
 }
 

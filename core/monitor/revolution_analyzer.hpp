@@ -6,7 +6,10 @@
 //     angles, event_rad[j] + 2π·turn, so that every sample has a spindle angle measured by the
 //     revolution itself (a ramp cannot make it slip);
 //   - the model revolution: the lockstep model's filtered force at each sample's angle, its
-//     events sought near the measured ones and its features measured by the same detectors;
+//     events sought near the measured ones and its features measured by the same detectors —
+//     once per model and alignment (Lockstep::revision()): the model is the same every turn, so
+//     its events are kept as angles and placed on each later revolution by its own angle map,
+//     its forces kept as they were measured;
 //   - the residual (measured − model) per axis, per flute window and per angle sector, and the
 //     measured in-plane RMS √mean(Fx² + Fy²) for scale.
 // Scratch for the model revolution is sized at construction; analyze() allocates nothing.
@@ -54,6 +57,13 @@ class RevolutionAnalyzer {
   void analyze(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                const SampleRing& ring, const Lockstep* model, RevolutionRecord& out);
 
+  /// Measure the model revolution once per model and alignment (true, the default) or anew
+  /// on every turn.
+  void keep_model_revolution(bool keep) {
+    keep_ = keep;
+    kept_.revision = 0;
+  }
+
   /// Adds the revolution's samples to the synchronous average at their mapped angles and
   /// closes it as one revolution of the average.
   void add_to_average(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
@@ -62,6 +72,13 @@ class RevolutionAnalyzer {
  private:
   bool model_revolution(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                         const AngleMap& map, const Lockstep& model, RevolutionRecord& out);
+  /// The model revolution from what was measured on it before (same model, same template):
+  /// its events placed by this revolution's map, its rows computed over the measured windows.
+  bool model_revolution_again(const RevolutionEvents& events, const AngleMap& map,
+                              const Lockstep& model, RevolutionRecord& out);
+  void remember_model_revolution(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
+                                 const AngleMap& map, const Lockstep& model,
+                                 const RevolutionMeasurement& mm);
   void residuals(const RevolutionMeasurement& m, const SampleRing& ring, const AngleMap& map,
                  RevolutionRecord& out) const;
 
@@ -78,6 +95,19 @@ class RevolutionAnalyzer {
   static constexpr std::size_t kModelRow = 4;
   std::vector<double> model_rows_;
   std::int64_t first_ = 0;
+
+  /// The model revolution as measured once for a model revision and an event template.
+  struct KeptModelRevolution {
+    std::uint64_t revision = 0;  ///< Lockstep::revision(); 0: nothing kept
+    ToothEventKind kind = ToothEventKind::kValley;
+    std::array<double, kMaxFlutes> template_rad{};
+    /// The events and boundaries as tracker angles within their revolution's turn (rad).
+    std::array<double, kMaxFlutes + 1> event_rad{};
+    std::array<double, kMaxFlutes + 1> boundary_rad{};
+    RevolutionMeasurement measured;  ///< its forces, α and ΔFy
+  };
+  KeptModelRevolution kept_;
+  bool keep_ = true;
 };
 
 }  // namespace millwatch::monitor

@@ -74,6 +74,43 @@ TEST(Lockstep, EqualsTheTimeMarchedModelThroughTheCausalFilter) {
   EXPECT_LT(worst, 0.01 * peak);
 }
 
+// What the analyzer measured on the model revolution holds while the revision stays: it
+// changes with each build, new parameters and alignment, not with a speed the model keeps, and
+// two objects never share one.
+TEST(Lockstep, ItsRevisionChangesWithTheModelOrItsAlignmentOnly) {
+  const double fs = 50000.0;
+  const auto filter = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
+  Lockstep lockstep(cut(), filter);
+  EXPECT_EQ(lockstep.revision(), 0U);
+  ASSERT_TRUE(lockstep.set_spindle_hz(420.0));
+  const std::uint64_t built = lockstep.revision();
+  EXPECT_NE(built, 0U);
+  EXPECT_FALSE(lockstep.set_spindle_hz(420.0 * 1.001));
+  EXPECT_EQ(lockstep.revision(), built);  // the same model
+  ASSERT_TRUE(lockstep.set_spindle_hz(420.0 * 1.01));
+  const std::uint64_t rebuilt = lockstep.revision();
+  EXPECT_NE(rebuilt, built);
+  SyncAverage avg(256, 1);
+  for (int n = 0; n < 256; ++n) {
+    const double a = kTwoPi * (n + 0.5) / 256.0;
+    const auto f = lockstep.force_at(a + 0.7);
+    avg.add(a, {f[0], f[1], f[2]});
+  }
+  avg.end_revolution();
+  ASSERT_TRUE(lockstep.align(avg));
+  const std::uint64_t aligned = lockstep.revision();
+  EXPECT_NE(aligned, rebuilt);
+  model::ModelConfig other = cut();
+  other.effects.runout.offset_um = 0.5;
+  lockstep.set_parameters(other, 0.3, true);
+  EXPECT_NE(lockstep.revision(), aligned);
+  Lockstep second(cut(), filter);
+  ASSERT_TRUE(second.set_spindle_hz(420.0));
+  for (const std::uint64_t r : {built, rebuilt, aligned, lockstep.revision()}) {
+    EXPECT_NE(second.revision(), r);
+  }
+}
+
 // Alignment finds a known angle offset between the model and a measured average that is the
 // model itself, shifted.
 TEST(Lockstep, AlignmentFindsAKnownOffset) {
