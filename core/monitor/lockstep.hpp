@@ -70,8 +70,9 @@ class Lockstep {
   void forces_on_line(double angle0_rad, double step_rad, std::size_t count, double* rows,
                       bool allow_avx = true) const;
   /// Changes whenever the filtered model or its alignment does (a build, new parameters, an
-  /// alignment), and differs between any two Lockstep objects: what was measured on the model
-  /// revolution holds while it stays the same. 0 before the first build.
+  /// alignment), from one sequence for the whole process (a copy shares its original's until
+  /// either changes): what was measured on the model revolution holds while it stays the same.
+  /// 0 until the first build or alignment.
   [[nodiscard]] std::uint64_t revision() const { return revision_; }
   /// The spindle frequency the model was built for (Hz; 0 before the first build).
   [[nodiscard]] double spindle_hz() const { return spindle_hz_; }

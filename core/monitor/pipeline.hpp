@@ -202,7 +202,7 @@ class Pipeline {
   [[nodiscard]] const signal::PhaseModel& phase() const { return phase_; }
   [[nodiscard]] const Lockstep& lockstep() const { return lockstep_; }
   /// Whether the model revolution is measured once per model and alignment and placed on each
-  /// turn (the default), or measured anew on every turn (the tests and benchmarks compare).
+  /// turn (the default), or measured anew on every turn (the tests compare the two).
   void keep_model_revolution(bool keep) { analyzer_.keep_model_revolution(keep); }
   [[nodiscard]] const signal::ButterworthDesign& filter() const { return filter_; }
   /// The tooth-event template of the current (or last) lock.

@@ -102,8 +102,8 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   out.sectors = 0;
   const AngleMap map = angle_map(events, tmpl);
   if (model != nullptr && model->aligned() &&
-      (kept_.revision == model->revision() && kept_.kind == tmpl.kind &&
-               kept_.template_rad == tmpl.event_rad && kept_.measured.flutes == events.flutes
+      (kept_.turns >= kKeptTurns && kept_.holds(model->revision(), tmpl) &&
+               kept_.flutes == events.flutes
            ? model_revolution_again(events, map, *model, out)
            : model_revolution(events, tmpl, map, *model, out))) {
     out.model_offset_rad = model->offset_rad();
@@ -139,6 +139,45 @@ void RevolutionAnalyzer::add_to_average(const RevolutionEvents& events,
 bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
                                           const ToothEventTemplate& tmpl, const AngleMap& map,
                                           const Lockstep& model, RevolutionRecord& out) {
+  // Only a turn whose own events were all found: a predicted one would set the searches and
+  // windows of every later turn.
+  if (keep_ && events.valid && events.bounded) {
+    KeptModelRevolution& k = kept_;
+    if (!k.holds(model.revision(), tmpl) || k.flutes != events.flutes) {
+      k.revision = model.revision();
+      k.tmpl = tmpl;
+      k.flutes = events.flutes;
+      k.turns = 0;
+    }
+    if (k.turns < kKeptTurns) {
+      // This turn's model revolution once more, moved by a fraction of a sample so that the
+      // model's event 0 falls at the sub-sample phase (t + ½)/8 on the kept one's t-th turn:
+      // what is kept then stands for every phase alike (a turn's own phase may move slowly).
+      const double phase = (k.turns + 0.5) / kKeptTurns;
+      double shift = events.event_sample[0] - phase;
+      shift -= std::floor(shift);
+      RevolutionMeasurement& shifted = shifted_;
+      if (measure_model(events, tmpl, map, model, shift, shifted) && shifted.valid) {
+        remember_model_revolution(events, map, shifted);
+      }
+    }
+  }
+  return measure_model(events, tmpl, map, model, 0.0, out.model);
+}
+
+bool RevolutionAnalyzer::measure_model(const RevolutionEvents& measured,
+                                       const ToothEventTemplate& tmpl, const AngleMap& measured_map,
+                                       const Lockstep& model, double shift,
+                                       RevolutionMeasurement& mm) {
+  // The rows hold the model at the angles of samples s + shift: the events move by −shift in
+  // them, and back after.
+  RevolutionEvents events = measured;
+  for (std::size_t k = 0; k <= static_cast<std::size_t>(measured.flutes); ++k) {
+    events.event_sample[k] -= shift;
+    events.boundary_sample[k] -= shift;
+  }
+  AngleMap map = measured_map;
+  map.intercept_rad += shift * map.slope_rad_per_sample;
   const int flutes = events.flutes;
   const auto n = static_cast<std::size_t>(flutes);
   const double span = events.event_sample[n] - events.event_sample[0];
@@ -158,7 +197,6 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
                        static_cast<std::size_t>(last - first_ + 1), model_rows_.data());
   const auto row = [&](std::int64_t s) { return model_row(s); };
   const auto detect = [&](std::int64_t s) { return model_row(s)[3]; };
-  RevolutionMeasurement& mm = out.model;
   mm.flutes = flutes;
   mm.sequence = events.sequence;
   mm.valid = true;
@@ -187,30 +225,64 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
     return false;
   }
   measure_revolution(row, sample_rate_hz_, mm);
-  if (mm.valid && keep_) {
-    remember_model_revolution(events, tmpl, map, model, mm);
+  for (std::size_t k = 0; k <= n; ++k) {
+    mm.event_sample[k] += shift;
+    mm.boundary_sample[k] += shift;
   }
   return true;
 }
 
 void RevolutionAnalyzer::remember_model_revolution(const RevolutionEvents& events,
-                                                   const ToothEventTemplate& tmpl,
-                                                   const AngleMap& map, const Lockstep& model,
+                                                   const AngleMap& map,
                                                    const RevolutionMeasurement& mm) {
+  KeptModelRevolution& k = kept_;
+  const auto t = static_cast<std::size_t>(k.turns);
   const double turn_rad = kTwoPi * static_cast<double>(events.turn);
-  const auto n = static_cast<std::size_t>(mm.flutes);
-  for (std::size_t k = 0; k < n; ++k) {
-    kept_.event_rad[k] = map.at(mm.event_sample[k]) - turn_rad;
-    kept_.boundary_rad[k] = map.at(mm.boundary_sample[k]) - turn_rad;
+  for (std::size_t j = 0; j <= static_cast<std::size_t>(mm.flutes); ++j) {
+    k.event_rad[t][j] = map.at(mm.event_sample[j]) - turn_rad;
+    k.boundary_rad[t][j] = map.at(mm.boundary_sample[j]) - turn_rad;
   }
+  k.measured[t] = mm;
+  if (++k.turns == kKeptTurns) {
+    k.keep();
+  }
+}
+
+void RevolutionAnalyzer::KeptModelRevolution::keep() {
+  // The mean of the middle half of the turns' values: the phases' mean, without a search that
+  // went astray.
+  const auto middle_mean = [](const auto& value) {
+    std::array<double, kKeptTurns> v{};
+    for (std::size_t t = 0; t < v.size(); ++t) {
+      v[t] = value(t);
+    }
+    std::sort(v.begin(), v.end());
+    double sum = 0.0;
+    for (std::size_t t = v.size() / 4; t < v.size() - v.size() / 4; ++t) {
+      sum += v[t];
+    }
+    return sum / static_cast<double>(v.size() - 2 * (v.size() / 4));
+  };
+  const auto n = static_cast<std::size_t>(flutes);
+  kept = RevolutionMeasurement{};
+  kept.flutes = flutes;
+  for (std::size_t j = 0; j < n; ++j) {
+    kept_event_rad[j] = middle_mean([&](std::size_t t) { return event_rad[t][j]; });
+    kept_boundary_rad[j] = middle_mean([&](std::size_t t) { return boundary_rad[t][j]; });
+    for (std::size_t c = 0; c < 3; ++c) {
+      kept.peak_N[j][c] = middle_mean([&](std::size_t t) { return measured[t].peak_N[j][c]; });
+      kept.range_N[j][c] = middle_mean([&](std::size_t t) { return measured[t].range_N[j][c]; });
+    }
+    kept.peak_resultant_N[j] =
+        middle_mean([&](std::size_t t) { return measured[t].peak_resultant_N[j]; });
+  }
+  kept.delta_fy_N = middle_mean([&](std::size_t t) { return measured[t].delta_fy_N; });
   // The model repeats: its event N is its event 0 a turn on (found on samples at another
   // sub-sample phase, it would put each later period off by that search's rounding).
-  kept_.event_rad[n] = kept_.event_rad[0] + kTwoPi;
-  kept_.boundary_rad[n] = kept_.boundary_rad[0] + kTwoPi;
-  kept_.measured = mm;
-  kept_.kind = tmpl.kind;
-  kept_.template_rad = tmpl.event_rad;
-  kept_.revision = model.revision();
+  kept_event_rad[n] = kept_event_rad[0] + kTwoPi;
+  kept_boundary_rad[n] = kept_boundary_rad[0] + kTwoPi;
+  kept.valid = true;
+  kept.bounded = true;
 }
 
 bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, const AngleMap& map,
@@ -219,8 +291,7 @@ bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, 
     return false;
   }
   RevolutionMeasurement& mm = out.model;
-  const RevolutionMeasurement& kept = kept_.measured;
-  mm = kept;
+  mm = kept_.kept;
   mm.sequence = events.sequence;
   // The model's events where this revolution's angle map puts their angles; its forces are
   // those of any turn (the model repeats), its periods follow this revolution's speed.
@@ -228,9 +299,9 @@ bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, 
   const auto ux = static_cast<std::size_t>(mm.flutes);
   for (std::size_t k = 0; k <= ux; ++k) {
     mm.event_sample[k] =
-        (kept_.event_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
+        (kept_.kept_event_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
     mm.boundary_sample[k] =
-        (kept_.boundary_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
+        (kept_.kept_boundary_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
   }
   const double dt = 1.0 / sample_rate_hz_;
   mm.period_s = (mm.event_sample[ux] - mm.event_sample[0]) * dt;
@@ -244,6 +315,7 @@ bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, 
   const auto last = static_cast<std::int64_t>(std::floor(m.boundary_sample[ux]));
   if (last < first_ ||
       last - first_ + 1 > static_cast<std::int64_t>(model_rows_.size() / kModelRow)) {
+    mm.valid = false;
     return false;
   }
   model.forces_on_line(map.at(static_cast<double>(first_)), map.slope_rad_per_sample,

@@ -7,9 +7,10 @@
 //     revolution itself (a ramp cannot make it slip);
 //   - the model revolution: the lockstep model's filtered force at each sample's angle, its
 //     events sought near the measured ones and its features measured by the same detectors —
-//     once per model and alignment (Lockstep::revision()): the model is the same every turn, so
-//     its events are kept as angles and placed on each later revolution by its own angle map,
-//     its forces kept as they were measured;
+//     on the first 8 turns of a model and alignment (Lockstep::revision()), each once more at a
+//     chosen sub-sample phase: the model is the same every turn, so then those 8 are summed up
+//     (each figure the mean of its middle half) and kept, the events as angles placed on each
+//     later turn by the turn's own angle map;
 //   - the residual (measured − model) per axis, per flute window and per angle sector, and the
 //     measured in-plane RMS √mean(Fx² + Fy²) for scale.
 // Scratch for the model revolution is sized at construction; analyze() allocates nothing.
@@ -61,7 +62,7 @@ class RevolutionAnalyzer {
   /// on every turn.
   void keep_model_revolution(bool keep) {
     keep_ = keep;
-    kept_.revision = 0;
+    kept_ = KeptModelRevolution{};
   }
 
   /// Adds the revolution's samples to the synchronous average at their mapped angles and
@@ -76,8 +77,14 @@ class RevolutionAnalyzer {
   /// its events placed by this revolution's map, its rows computed over the measured windows.
   bool model_revolution_again(const RevolutionEvents& events, const AngleMap& map,
                               const Lockstep& model, RevolutionRecord& out);
-  void remember_model_revolution(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
-                                 const AngleMap& map, const Lockstep& model,
+  /// The model revolution on the rows of the model at the angles of samples s + shift (the
+  /// turn's own: shift 0), its events and boundaries in the turn's samples.
+  bool measure_model(const RevolutionEvents& measured, const ToothEventTemplate& tmpl,
+                     const AngleMap& measured_map, const Lockstep& model, double shift,
+                     RevolutionMeasurement& mm);
+  /// Adds a model revolution to those measured for the kept one, which they make from
+  /// kKeptTurns on.
+  void remember_model_revolution(const RevolutionEvents& events, const AngleMap& map,
                                  const RevolutionMeasurement& mm);
   void residuals(const RevolutionMeasurement& m, const SampleRing& ring, const AngleMap& map,
                  RevolutionRecord& out) const;
@@ -85,7 +92,8 @@ class RevolutionAnalyzer {
   double sample_rate_hz_ = 0.0;
   double search_fraction_ = 0.3;
   int sectors_ = 0;
-  /// The model's row at absolute sample s (first_ ≤ s).
+  /// The model's row at absolute sample s: first_ ≤ s ≤ the last row computed (the model
+  /// revolution's margins when measured, the measured windows' last sample when kept).
   [[nodiscard]] const double* model_row(std::int64_t s) const {
     return &model_rows_[kModelRow * static_cast<std::size_t>(s - first_)];
   }
@@ -96,17 +104,32 @@ class RevolutionAnalyzer {
   std::vector<double> model_rows_;
   std::int64_t first_ = 0;
 
-  /// The model revolution as measured once for a model revision and an event template.
+  /// The model revolution of a model revision and an event template: each figure the mean of
+  /// the middle half of its measurements on the first kKeptTurns turns, each at its own
+  /// sub-sample phase (which moves the detectors' answer by a few tenths of a sample; now and
+  /// then a search's start puts a valley a sample away), then placed on every later turn.
+  static constexpr int kKeptTurns = 8;
   struct KeptModelRevolution {
     std::uint64_t revision = 0;  ///< Lockstep::revision(); 0: nothing kept
-    ToothEventKind kind = ToothEventKind::kValley;
-    std::array<double, kMaxFlutes> template_rad{};
-    /// The events and boundaries as tracker angles within their revolution's turn (rad).
-    std::array<double, kMaxFlutes + 1> event_rad{};
-    std::array<double, kMaxFlutes + 1> boundary_rad{};
-    RevolutionMeasurement measured;  ///< its forces, α and ΔFy
+    ToothEventTemplate tmpl;
+    int flutes = 0;
+    int turns = 0;  ///< turns measured; kept from kKeptTurns on
+    /// Per turn measured: the events and boundaries as tracker angles within the turn (rad).
+    std::array<std::array<double, kMaxFlutes + 1>, kKeptTurns> event_rad{};
+    std::array<std::array<double, kMaxFlutes + 1>, kKeptTurns> boundary_rad{};
+    std::array<RevolutionMeasurement, kKeptTurns> measured{};
+    /// What is kept: the events and boundaries, and forces and ΔFy.
+    std::array<double, kMaxFlutes + 1> kept_event_rad{};
+    std::array<double, kMaxFlutes + 1> kept_boundary_rad{};
+    RevolutionMeasurement kept;
+    [[nodiscard]] bool holds(std::uint64_t r, const ToothEventTemplate& t) const {
+      return revision == r && tmpl.kind == t.kind && tmpl.flutes == t.flutes &&
+             tmpl.event_rad == t.event_rad && tmpl.boundary_rad == t.boundary_rad;
+    }
+    void keep();
   };
   KeptModelRevolution kept_;
+  RevolutionMeasurement shifted_;  // scratch: the model revolution measured for the kept one
   bool keep_ = true;
 };
 
