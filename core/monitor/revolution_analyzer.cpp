@@ -102,8 +102,7 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   out.sectors = 0;
   const AngleMap map = angle_map(events, tmpl);
   if (model != nullptr && model->aligned() &&
-      (kept_.turns >= kKeptTurns && kept_.holds(model->revision(), tmpl) &&
-               kept_.flutes == events.flutes
+      (kept_.turns >= kKeptTurns && kept_.holds(model->revision(), tmpl)
            ? model_revolution_again(events, map, *model, out)
            : model_revolution(events, tmpl, map, *model, out))) {
     out.model_offset_rad = model->offset_rad();
@@ -143,10 +142,9 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
   // windows of every later turn.
   if (keep_ && events.valid && events.bounded) {
     KeptModelRevolution& k = kept_;
-    if (!k.holds(model.revision(), tmpl) || k.flutes != events.flutes) {
+    if (!k.holds(model.revision(), tmpl)) {
       k.revision = model.revision();
       k.tmpl = tmpl;
-      k.flutes = events.flutes;
       k.turns = 0;
     }
     if (k.turns < kKeptTurns) {
@@ -156,9 +154,8 @@ bool RevolutionAnalyzer::model_revolution(const RevolutionEvents& events,
       const double phase = (k.turns + 0.5) / kKeptTurns;
       double shift = events.event_sample[0] - phase;
       shift -= std::floor(shift);
-      RevolutionMeasurement& shifted = shifted_;
-      if (measure_model(events, tmpl, map, model, shift, shifted) && shifted.valid) {
-        remember_model_revolution(events, map, shifted);
+      if (measure_model(events, tmpl, map, model, shift, shifted_) && shifted_.valid) {
+        remember_model_revolution(events, map, shifted_);
       }
     }
   }
@@ -263,9 +260,9 @@ void RevolutionAnalyzer::KeptModelRevolution::keep() {
     }
     return sum / static_cast<double>(v.size() - 2 * (v.size() / 4));
   };
-  const auto n = static_cast<std::size_t>(flutes);
+  const auto n = static_cast<std::size_t>(tmpl.flutes);
   kept = RevolutionMeasurement{};
-  kept.flutes = flutes;
+  kept.flutes = tmpl.flutes;
   for (std::size_t j = 0; j < n; ++j) {
     kept_event_rad[j] = middle_mean([&](std::size_t t) { return event_rad[t][j]; });
     kept_boundary_rad[j] = middle_mean([&](std::size_t t) { return boundary_rad[t][j]; });
@@ -298,17 +295,10 @@ bool RevolutionAnalyzer::model_revolution_again(const RevolutionEvents& events, 
   const double turn_rad = kTwoPi * static_cast<double>(events.turn);
   const auto ux = static_cast<std::size_t>(mm.flutes);
   for (std::size_t k = 0; k <= ux; ++k) {
-    mm.event_sample[k] =
-        (kept_.kept_event_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
-    mm.boundary_sample[k] =
-        (kept_.kept_boundary_rad[k] + turn_rad - map.intercept_rad) / map.slope_rad_per_sample;
+    mm.event_sample[k] = map.sample_at(kept_.kept_event_rad[k] + turn_rad);
+    mm.boundary_sample[k] = map.sample_at(kept_.kept_boundary_rad[k] + turn_rad);
   }
-  const double dt = 1.0 / sample_rate_hz_;
-  mm.period_s = (mm.event_sample[ux] - mm.event_sample[0]) * dt;
-  for (std::size_t j = 0; j < ux; ++j) {
-    mm.flute_period_s[j] = (mm.event_sample[j + 1] - mm.event_sample[j]) * dt;
-  }
-  mm.alpha_deg = mm.flutes >= 2 ? 360.0 * mm.flute_period_s[1] / mm.period_s : 360.0;
+  measure_periods(sample_rate_hz_, mm);
   // The rows the residuals read: the measured revolution's windows.
   const RevolutionMeasurement& m = out.measured;
   first_ = static_cast<std::int64_t>(std::ceil(m.boundary_sample[0]));

@@ -35,6 +35,10 @@ struct AngleMap {
   [[nodiscard]] double at(double sample) const {
     return intercept_rad + slope_rad_per_sample * sample;
   }
+  /// The sample at an angle (rad): at()'s inverse (slope > 0).
+  [[nodiscard]] double sample_at(double angle_rad) const {
+    return (angle_rad - intercept_rad) / slope_rad_per_sample;
+  }
 };
 
 /// The least-squares line through the found events at their template angles (all events when
@@ -111,9 +115,8 @@ class RevolutionAnalyzer {
   static constexpr int kKeptTurns = 8;
   struct KeptModelRevolution {
     std::uint64_t revision = 0;  ///< Lockstep::revision(); 0: nothing kept
-    ToothEventTemplate tmpl;
-    int flutes = 0;
-    int turns = 0;  ///< turns measured; kept from kKeptTurns on
+    ToothEventTemplate tmpl;     ///< whose flutes are the events' (ToothEventTracker::start)
+    int turns = 0;               ///< turns measured; kept from kKeptTurns on
     /// Per turn measured: the events and boundaries as tracker angles within the turn (rad).
     std::array<std::array<double, kMaxFlutes + 1>, kKeptTurns> event_rad{};
     std::array<std::array<double, kMaxFlutes + 1>, kKeptTurns> boundary_rad{};

@@ -245,6 +245,18 @@ RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to,
   return row_extremes_sse2(row, from, to);
 }
 
+/// The revolution's and each flute's tooth period from its events, and α = 360°·T_1/T ([001]
+/// eq 36): `m` must hold flutes and the events.
+inline void measure_periods(double sample_rate_hz, RevolutionMeasurement& m) {
+  const double dt = 1.0 / sample_rate_hz;
+  const auto ux = static_cast<std::size_t>(m.flutes);
+  m.period_s = (m.event_sample[ux] - m.event_sample[0]) * dt;
+  for (std::size_t j = 0; j < ux; ++j) {
+    m.flute_period_s[j] = (m.event_sample[j + 1] - m.event_sample[j]) * dt;
+  }
+  m.alpha_deg = m.flutes >= 2 ? 360.0 * m.flute_period_s[1] / m.period_s : 360.0;
+}
+
 /// Measures one revolution. `row(n)` returns the four channels of absolute sample n side by side
 /// (fx, fy, fz and the squared in-plane force fx² + fy², as the pipeline's ring holds them) for
 /// every n in [⌈boundary[0]⌉, ⌊boundary[flutes]⌋]. `m` must hold flutes, the events, the
@@ -254,12 +266,9 @@ RowExtremes row_extremes(const Rows& row, std::int64_t from, std::int64_t to,
 template <typename Rows>
 void measure_revolution(const Rows& row, double sample_rate_hz, RevolutionMeasurement& m) {
   const int flutes = m.flutes;
-  const double dt = 1.0 / sample_rate_hz;
-  const auto ux = static_cast<std::size_t>(flutes);
-  m.period_s = (m.event_sample[ux] - m.event_sample[0]) * dt;
+  measure_periods(sample_rate_hz, m);
   for (int j = 0; j < flutes; ++j) {
     const auto uj = static_cast<std::size_t>(j);
-    m.flute_period_s[uj] = (m.event_sample[uj + 1] - m.event_sample[uj]) * dt;
     const auto from = static_cast<std::int64_t>(std::ceil(m.boundary_sample[uj]));
     const auto to = static_cast<std::int64_t>(std::floor(m.boundary_sample[uj + 1]));
     // The sample each peak is refined at: fx, fy, fz's of largest magnitude, the resultant's
@@ -291,7 +300,6 @@ void measure_revolution(const Rows& row, double sample_rate_hz, RevolutionMeasur
     }
     m.peak_resultant_N[uj] = peak;
   }
-  m.alpha_deg = flutes >= 2 ? 360.0 * m.flute_period_s[1] / m.period_s : 360.0;
   m.delta_fy_N = flutes >= 2 ? std::fabs(m.peak_N[0][1]) - std::fabs(m.peak_N[1][1]) : 0.0;
 }
 

@@ -30,6 +30,23 @@ model::ModelConfig cut() {
   return c;
 }
 
+/// A "measurement" that is the model itself, shifted: over `revolutions` turns of `samples` each
+/// (sample n at tracker angle 2π(n + `phase`)/samples), the model at tracker angle a + shift_rad,
+/// averaged on 256 bins.
+SyncAverage shifted_model_average(const Lockstep& lockstep, double shift_rad, int samples,
+                                  int revolutions, double phase = 0.5) {
+  SyncAverage avg(256, revolutions);
+  for (int r = 0; r < revolutions; ++r) {
+    for (int n = 0; n < samples; ++n) {
+      const double a = kTwoPi * (n + phase) / samples;
+      const auto f = lockstep.force_at(a + shift_rad);
+      avg.add(a, {f[0], f[1], f[2]});
+    }
+    avg.end_revolution();
+  }
+  return avg;
+}
+
 // The filtered model force at an angle is what the causal Butterworth filter gives when the
 // model's force is fed through it sample by sample for many revolutions (its steady state),
 // at the measured speed with the feed rate fixed by the commanded one.
@@ -90,14 +107,7 @@ TEST(Lockstep, ItsRevisionChangesWithTheModelOrItsAlignmentOnly) {
   ASSERT_TRUE(lockstep.set_spindle_hz(420.0 * 1.01));
   const std::uint64_t rebuilt = lockstep.revision();
   EXPECT_NE(rebuilt, built);
-  SyncAverage avg(256, 1);
-  for (int n = 0; n < 256; ++n) {
-    const double a = kTwoPi * (n + 0.5) / 256.0;
-    const auto f = lockstep.force_at(a + 0.7);
-    avg.add(a, {f[0], f[1], f[2]});
-  }
-  avg.end_revolution();
-  ASSERT_TRUE(lockstep.align(avg));
+  ASSERT_TRUE(lockstep.align(shifted_model_average(lockstep, 0.7, 256, 1)));
   const std::uint64_t aligned = lockstep.revision();
   EXPECT_NE(aligned, rebuilt);
   model::ModelConfig other = cut();
@@ -120,17 +130,9 @@ TEST(Lockstep, AlignmentFindsAKnownOffset) {
   Lockstep lockstep(cut(), filter);
   lockstep.set_spindle_hz(f_hz);
   const double shift_rad = 1.234;
-  SyncAverage avg(256, 10);
-  // The "measurement": the model at tracker angle a is the model at angle a + shift.
-  for (int r = 0; r < 10; ++r) {
-    for (int n = 0; n < 400; ++n) {
-      const double a = kTwoPi * (n + 0.37) / 400.0;
-      const auto f = lockstep.force_at(a + shift_rad);  // offset still 0
-      avg.add(a, {f[0], f[1], f[2]});
-    }
-    avg.end_revolution();
-  }
-  ASSERT_TRUE(lockstep.align(avg));
+  // The "measurement": the model at tracker angle a is the model at angle a + shift (the
+  // offset still 0).
+  ASSERT_TRUE(lockstep.align(shifted_model_average(lockstep, shift_rad, 400, 10, 0.37)));
   EXPECT_NEAR(std::remainder(lockstep.offset_rad() - shift_rad, kTwoPi), 0.0, 0.004);
   EXPECT_GT(lockstep.alignment_correlation(), 0.999);
 }
@@ -144,16 +146,7 @@ TEST(Lockstep, ForcesOnALineAreTheForcesAtEachAngle) {
   const auto filter = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
   Lockstep lockstep(cut(), filter);
   lockstep.set_spindle_hz(421.0);
-  SyncAverage avg(256, 2);
-  for (int r = 0; r < 2; ++r) {
-    for (int n = 0; n < 512; ++n) {
-      const double a = kTwoPi * (n + 0.5) / 512.0;
-      const auto f = lockstep.force_at(a + 0.8);
-      avg.add(a, {f[0], f[1], f[2]});
-    }
-    avg.end_revolution();
-  }
-  ASSERT_TRUE(lockstep.align(avg));
+  ASSERT_TRUE(lockstep.align(shifted_model_average(lockstep, 0.8, 512, 2)));
   const double step_rad = kTwoPi * 421.0 / fs;
   const auto count = static_cast<std::size_t>(3.0 * fs / 421.0);
   if (!signal::cpu_has_avx()) {
