@@ -157,7 +157,7 @@ void LowPassFilter::settle(double x) {
     const double gain = (c.b0 + c.b1 + c.b2) / (1.0 + c.a1 + c.a2);
     const double y = gain * x;
     z[1] = c.b2 * x - c.a2 * y;
-    z[0] = c.b1 * x - c.a1 * y + z[1];
+    z[0] = (c.b1 * x + z[1]) - c.a1 * y;
     x = y;
   }
 }
@@ -214,13 +214,13 @@ namespace {
 
 using SectionStates = std::array<std::array<double, 2>, kMaxButterworthSections>;
 
-/// One biquad with numerator g·(1, 2, 1) on four lanes: y = b0·x + z0; z0 = (2·b0·x − a1·y) + z1;
+/// One biquad with numerator g·(1, 2, 1) on four lanes: y = b0·x + z0; z0 = (2·b0·x + z1) − a1·y;
 /// z1 = b0·x − a2·y (process_three_lowpass_sse2's section, operation for operation).
 __attribute__((target("avx"), always_inline)) inline __m256d lowpass_section_avx(
     __m256d x, __m256d b, __m256d a1, __m256d a2, __m256d& z0, __m256d& z1) {
   const __m256d bx = _mm256_mul_pd(b, x);
   const __m256d y = _mm256_add_pd(bx, z0);
-  z0 = _mm256_add_pd(_mm256_sub_pd(_mm256_add_pd(bx, bx), _mm256_mul_pd(a1, y)), z1);
+  z0 = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(bx, bx), z1), _mm256_mul_pd(a1, y));
   z1 = _mm256_sub_pd(bx, _mm256_mul_pd(a2, y));
   return y;
 }

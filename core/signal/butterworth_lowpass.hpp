@@ -125,13 +125,15 @@ class LowPassFilter {
     setup(ButterworthDesign::lowpass(sample_rate_hz, cutoff_hz, order));
   }
 
-  /// Filters one sample (same units out as in).
+  /// Filters one sample (same units out as in). Transposed direct form II; z0's terms that do
+  /// not wait on y are added first, so that the recursion from one y to the next is a multiply
+  /// and two additions (every kernel below does the same, to keep their results step()'s).
   double step(double x) {
     for (int s = 0; s < design_.sections; ++s) {
       const Biquad& c = design_.sos[static_cast<std::size_t>(s)];
       auto& z = state_.z[static_cast<std::size_t>(s)];
       const double y = c.b0 * x + z[0];
-      z[0] = c.b1 * x - c.a1 * y + z[1];
+      z[0] = (c.b1 * x + z[1]) - c.a1 * y;
       z[1] = c.b2 * x - c.a2 * y;
       x = y;
     }
@@ -201,9 +203,9 @@ class LowPassFilter {
         const double ya = c.b0 * ia + a0;
         const double yb = c.b0 * ib + b0;
         const double yc = c.b0 * ic + c0;
-        a0 = c.b1 * ia - c.a1 * ya + a1;
-        b0 = c.b1 * ib - c.a1 * yb + b1;
-        c0 = c.b1 * ic - c.a1 * yc + c1;
+        a0 = (c.b1 * ia + a1) - c.a1 * ya;
+        b0 = (c.b1 * ib + b1) - c.a1 * yb;
+        c0 = (c.b1 * ic + c1) - c.a1 * yc;
         a1 = c.b2 * ia - c.a2 * ya;
         b1 = c.b2 * ib - c.a2 * yb;
         c1 = c.b2 * ic - c.a2 * yc;
@@ -250,12 +252,12 @@ class LowPassFilter {
     double* xa = out[0];
     double* xb = out[1];
     double* xc = out[2];
-    // One biquad on a pair of lanes: y = b0·x + z0; z0 = (2·b0·x − a1·y) + z1; z1 = b0·x − a2·y.
+    // One biquad on a pair of lanes: y = b0·x + z0; z0 = (2·b0·x + z1) − a1·y; z1 = b0·x − a2·y.
     const auto section = [](__m128d x, __m128d b, __m128d a1, __m128d a2, __m128d& z0,
                             __m128d& z1) {
       const __m128d bx = _mm_mul_pd(b, x);
       const __m128d y = _mm_add_pd(bx, z0);
-      z0 = _mm_add_pd(_mm_sub_pd(_mm_add_pd(bx, bx), _mm_mul_pd(a1, y)), z1);
+      z0 = _mm_sub_pd(_mm_add_pd(_mm_add_pd(bx, bx), z1), _mm_mul_pd(a1, y));
       z1 = _mm_sub_pd(bx, _mm_mul_pd(a2, y));
       return y;
     };
@@ -328,10 +330,10 @@ class LowPassFilter {
     double* xc = out[2];
     const auto step = [&p, &q](double x, std::array<double, 4>& s) {
       const double y = p.b0 * x + s[0];
-      s[0] = p.b1 * x - p.a1 * y + s[1];
+      s[0] = (p.b1 * x + s[1]) - p.a1 * y;
       s[1] = p.b2 * x - p.a2 * y;
       const double y2 = q.b0 * y + s[2];
-      s[2] = q.b1 * y - q.a1 * y2 + s[3];
+      s[2] = (q.b1 * y + s[3]) - q.a1 * y2;
       s[3] = q.b2 * y - q.a2 * y2;
       return y2;
     };

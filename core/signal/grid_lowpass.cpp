@@ -27,7 +27,7 @@ Wide cascade_step(const ButterworthDesign& d, WideVector& z, Wide x) {
     Wide& z0 = z(2 * s);
     Wide& z1 = z(2 * s + 1);
     const Wide y = c.b0 * x + z0;
-    z0 = c.b1 * x - c.a1 * y + z1;
+    z0 = (c.b1 * x + z1) - c.a1 * y;
     z1 = c.b2 * x - c.a2 * y;
     x = y;
   }
