@@ -212,7 +212,10 @@ class Conditioner {
       envelope_sq_ *= decay_power_[count];
       return;
     }
-    const bool may_move = quiet_ && typical_peak_N_ > 0.0;
+    if (!(quiet_ && typical_peak_N_ > 0.0)) {  // the tare stands
+      tare_standing_on_grid(start, fx, fy, fz, count);
+      return;
+    }
     const double idle = kIdleFraction * typical_peak_N_;
     double tx = tare_N_[0], ty = tare_N_[1], tz = tare_N_[2];
     double e = envelope_sq_;                 // at the sample before the run
@@ -223,7 +226,7 @@ class Conditioner {
       const double ey = fy[i] - ty;
       e = std::max(ex * ex + ey * ey, e * decay);
       decay = grid_decay_;
-      if (may_move && e < idle * idle) {
+      if (e < idle * idle) {
         tx += grid_tare_gain_ * (fx[i] - tx);
         ty += grid_tare_gain_ * (fy[i] - ty);
         tz += grid_tare_gain_ * (fz[i] - tz);
@@ -235,6 +238,50 @@ class Conditioner {
     }
     envelope_sq_ = e * decay_power_[count - 1 - last];
     tare_N_ = {tx, ty, tz};
+  }
+
+  /// tare_run_on_grid() while the tare stands (cutting, or no usual peak yet), from the run's
+  /// first grid sample `start`: the envelope's recursion over the grid samples runs as four
+  /// interleaved ones (every fourth grid sample, decay D⁴, D a grid step's), joined at the end,
+  /// as tare_run() does over every sample — one recursion waits a multiply and a maximum per
+  /// grid sample. The same maximum of x_j·D^(age), up to the rounding of the powers of d.
+  void tare_standing_on_grid(std::size_t start, double* fx, double* fy, double* fz,
+                             std::size_t count) {
+    const auto step = static_cast<std::size_t>(stride_);
+    const double tx = tare_N_[0], ty = tare_N_[1], tz = tare_N_[2];
+    // D^k, k ≤ 4: a chunk holds four grid steps (kChunk ≥ 4·kMaxGridStride).
+    const auto grid_power = [&](std::size_t k) { return decay_power_[k * step]; };
+    // Grid sample i tared in place; its in-plane square.
+    const auto square = [&](std::size_t i) {
+      const double ex = fx[i] - tx;
+      const double ey = fy[i] - ty;
+      fx[i] = ex;
+      fy[i] = ey;
+      fz[i] -= tz;
+      return ex * ex + ey * ey;
+    };
+    const std::size_t grid_samples = (count - 1 - start) / step + 1;
+    const std::size_t whole = grid_samples / 4 * 4;
+    double e = 0.0;  // max x_j·D^(age) over the grid samples so far (squares are ≥ 0)
+    if (whole > 0) {
+      const double d4 = grid_power(4);
+      double e0 = 0.0, e1 = 0.0, e2 = 0.0, e3 = 0.0;
+      for (std::size_t i = start, end = start + whole * step; i < end; i += 4 * step) {
+        e0 = std::max(square(i), e0 * d4);
+        e1 = std::max(square(i + step), e1 * d4);
+        e2 = std::max(square(i + 2 * step), e2 * d4);
+        e3 = std::max(square(i + 3 * step), e3 * d4);
+      }
+      e = std::max({e0 * grid_power(3), e1 * grid_power(2), e2 * grid_power(1), e3});
+    }
+    const double d = grid_power(1);
+    for (std::size_t i = start + whole * step; i < count; i += step) {
+      e = std::max(square(i), e * d);
+    }
+    // The envelope before the run, decayed to the last grid sample, then to the run's end.
+    const std::size_t last = start + (grid_samples - 1) * step;
+    e = std::max(e, envelope_sq_ * decay_power_[start + 1] * decay_power_[last - start]);
+    envelope_sq_ = e * decay_power_[count - 1 - last];
   }
 
   template <typename Out>
