@@ -239,16 +239,22 @@ void line_rows_scalar(const Lockstep::LineRow* table, GridLine line, std::int64_
 __attribute__((target("avx"))) void line_rows_avx(const Lockstep::LineRow* table, GridLine line,
                                                   std::int64_t last_point, std::int64_t samples,
                                                   double* rows) {
-  for (std::int64_t i = 0; i < samples; ++i) {
-    double f = 0.0;
-    const double* t = table[grid_point(line.at(i), last_point, f)].v.data();
-    const __m256d forces =
-        _mm256_add_pd(_mm256_loadu_pd(t), _mm256_mul_pd(_mm256_set1_pd(f), _mm256_loadu_pd(t + 4)));
-    const __m128d xy = _mm256_castpd256_pd128(forces);
-    const __m128d xy2 = _mm_mul_pd(xy, xy);
-    double* r = rows + 4 * i;
-    _mm256_storeu_pd(r, forces);
-    _mm_store_sd(r + 3, _mm_add_sd(xy2, _mm_unpackhi_pd(xy2, xy2)));
+  const auto count = static_cast<std::size_t>(samples);
+  GridChunk chunk;  // the samples' grid points and fractions, four at a time
+  for (std::size_t from = 0; from < count; from += kGridChunk) {
+    const std::size_t n = std::min(kGridChunk, count - from);
+    grid_chunk_avx(line, from, n, static_cast<std::int32_t>(last_point), chunk);
+    for (std::size_t j = 0; j < n; ++j) {
+      const double* t = table[chunk.point[j]].v.data();
+      const __m256d forces = _mm256_add_pd(
+          _mm256_loadu_pd(t),
+          _mm256_mul_pd(_mm256_broadcast_sd(&chunk.fraction[j]), _mm256_loadu_pd(t + 4)));
+      const __m128d xy = _mm256_castpd256_pd128(forces);
+      const __m128d xy2 = _mm_mul_pd(xy, xy);
+      double* r = rows + 4 * (from + j);
+      _mm256_storeu_pd(r, forces);
+      _mm_store_sd(r + 3, _mm_add_sd(xy2, _mm_unpackhi_pd(xy2, xy2)));
+    }
   }
 }
 #endif

@@ -111,7 +111,8 @@ class SyncAverageOf {
   /// one more double, which must be readable (the AVX kernel loads all four) but does not reach
   /// the sums (the pipeline's ring holds fx² + fy² there). Where the CPU has AVX (and set_avx()
   /// has not turned it off), a sample's row and a bin's sums, three channels and the weight,
-  /// each fill one 256-bit register: half the instructions of the SSE2 pairs, the same
+  /// each fill one 256-bit register: half the instructions of the SSE2 pairs; the samples' bins
+  /// and shares come four at a time (grid_chunk_avx: the positions the line gives). The same
   /// operations on each lane, so the same sums, bit for bit.
   template <typename RowsOf>
   void add_line_rows(std::size_t count, double first_bin, double bins_per_sample,
@@ -319,22 +320,26 @@ class SyncAverageOf {
     _mm256_storeu_pd(a, _mm256_add_pd(_mm256_loadu_pd(a), lo));
     _mm256_storeu_pd(b, _mm256_add_pd(_mm256_loadu_pd(b), hi));
   }
-  /// add_line_rows()'s samples sparser than the bins: each straight to its two bins. Everything
-  /// the loop reads is in locals (the line and `rows` by value): the compiler must assume that
-  /// a SIMD store may change any memory, and would read members again after every one.
+  /// add_line_rows()'s samples sparser than the bins: each straight to its two bins, a chunk
+  /// of their bins and shares at a time (grid_chunk_avx). Everything the loop reads is in locals
+  /// (the line and `rows` by value): the compiler must assume that a SIMD store may change any
+  /// memory, and would read members again after every one.
   template <typename RowsOf>
   __attribute__((target("avx"))) void add_sparse_avx(std::size_t count, Line line,
                                                      const RowsOf rows) {
     double* const sums = &sums_[index(slot_, 0)];
     const int last = bins_ - 1;
     const __m256d one = _mm256_set1_pd(1.0);
-    for (std::size_t i = 0; i < count; ++i) {
-      const double pos = line.at(i);
-      const int k = std::min(static_cast<int>(pos), last);
-      const double w = pos - k;
-      const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(i)), one, 0x8);  // (c0, c1, c2, 1)
-      add_two_rows_avx(sums, k, last, _mm256_mul_pd(_mm256_set1_pd(1.0 - w), v),
-                       _mm256_mul_pd(_mm256_set1_pd(w), v));
+    GridChunk chunk;
+    for (std::size_t from = 0; from < count; from += kGridChunk) {
+      const std::size_t n = std::min(kGridChunk, count - from);
+      grid_chunk_avx(line, from, n, last, chunk);
+      for (std::size_t j = 0; j < n; ++j) {
+        const __m256d w = _mm256_broadcast_sd(&chunk.fraction[j]);
+        const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(from + j)), one, 0x8);  // (c, 1)
+        add_two_rows_avx(sums, chunk.point[j], last, _mm256_mul_pd(_mm256_sub_pd(one, w), v),
+                         _mm256_mul_pd(w, v));
+      }
     }
   }
   /// add_line_rows()'s denser samples: a run's sums held in two registers until it moves on.
@@ -347,21 +352,25 @@ class SyncAverageOf {
     const __m256d zero = _mm256_setzero_pd();
     int k0 = -1;
     __m256d lo = zero, hi = zero;
-    for (std::size_t i = 0; i < count; ++i) {
-      const double pos = line.at(i);
-      const int k = std::min(static_cast<int>(pos), last);
-      if (k != k0) {
-        if (k0 >= 0) {
-          add_two_rows_avx(sums, k0, last, lo, hi);
+    GridChunk chunk;
+    for (std::size_t from = 0; from < count; from += kGridChunk) {
+      const std::size_t n = std::min(kGridChunk, count - from);
+      grid_chunk_avx(line, from, n, last, chunk);
+      for (std::size_t j = 0; j < n; ++j) {
+        const int k = chunk.point[j];
+        if (k != k0) {
+          if (k0 >= 0) {
+            add_two_rows_avx(sums, k0, last, lo, hi);
+          }
+          lo = zero;
+          hi = zero;
+          k0 = k;
         }
-        lo = zero;
-        hi = zero;
-        k0 = k;
+        const __m256d w = _mm256_broadcast_sd(&chunk.fraction[j]);
+        const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(from + j)), one, 0x8);
+        lo = _mm256_add_pd(lo, _mm256_mul_pd(_mm256_sub_pd(one, w), v));
+        hi = _mm256_add_pd(hi, _mm256_mul_pd(w, v));
       }
-      const double w = pos - k;
-      const __m256d v = _mm256_blend_pd(_mm256_loadu_pd(rows(i)), one, 0x8);
-      lo = _mm256_add_pd(lo, _mm256_mul_pd(_mm256_set1_pd(1.0 - w), v));
-      hi = _mm256_add_pd(hi, _mm256_mul_pd(_mm256_set1_pd(w), v));
     }
     if (k0 >= 0) {
       add_two_rows_avx(sums, k0, last, lo, hi);
