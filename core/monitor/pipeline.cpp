@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "core/monitor/extremum.hpp"
+#include "core/monitor/force_rows.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -458,12 +459,10 @@ void Pipeline::measure_run(std::int64_t n, std::size_t count, const double* fx, 
   // Valleys are sought on the squared in-plane force: near a valley the force is nearly
   // linear in time, so its square is a smooth parabola.
   const auto stride = static_cast<std::size_t>(stride_);
-  ring_.push_run(n, count, [&](std::size_t i, double* row) {
+  static_assert(kRingChannels == 4);  // force_rows()'s rows
+  ring_.push_rows(n, count, [&](std::size_t i, std::size_t rows, double* at) {
     const std::size_t j = i * stride;
-    row[0] = fx[j];
-    row[1] = fy[j];
-    row[2] = fz[j];
-    row[3] = fx[j] * fx[j] + fy[j] * fy[j];
+    force_rows(fx + j, fy + j, fz + j, stride, rows, at);
   });
   // Every decimation_-th measuring sample's magnitude to the tracker, a batch per call
   // (run_limit(): only the run's last sample can start an update).

@@ -4,6 +4,8 @@
 // one sample sit side by side (one push writes one short run, a revolution's scan reads memory
 // in order).
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -43,13 +45,7 @@ class SampleRing {
     if (count == 0) {
       return;
     }
-    if (first != newest_ + 1 || empty()) {
-      oldest_ = first;
-    }
-    newest_ = first + static_cast<std::int64_t>(count) - 1;
-    if (newest_ - oldest_ >= static_cast<std::int64_t>(capacity_)) {
-      oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
-    }
+    take(first, count);
     std::size_t at = static_cast<std::size_t>(first) & mask_;
     double* slot = &data_[at << row_shift_];
     for (std::size_t i = 0; i < count; ++i) {
@@ -60,6 +56,27 @@ class SampleRing {
       } else {
         slot += std::size_t{1} << row_shift_;
       }
+    }
+  }
+  /// push_run() a stretch of rows at a time: fill(i, n, rows) writes samples first + i …
+  /// first + i + n − 1 into the n rows from `rows` on (2^k doubles each: the channels, then
+  /// padding), at most twice (the ring's end splits the run; of a run longer than the ring,
+  /// only the samples it keeps). For a fill that handles several rows at once in vector
+  /// registers.
+  template <typename Fill>
+  void push_rows(std::int64_t first, std::size_t count, const Fill& fill) {
+    if (count == 0) {
+      return;
+    }
+    take(first, count);
+    const std::size_t skipped = count > capacity_ ? count - capacity_ : 0;
+    const std::size_t at =
+        static_cast<std::size_t>(first + static_cast<std::int64_t>(skipped)) & mask_;
+    const std::size_t kept = count - skipped;
+    const std::size_t before_end = std::min(kept, capacity_ - at);
+    fill(skipped, before_end, &data_[at << row_shift_]);
+    if (before_end < kept) {
+      fill(skipped + before_end, kept - before_end, data_.data());
     }
   }
   /// Value of channel c at absolute index n (oldest() ≤ n ≤ newest()).
@@ -89,6 +106,16 @@ class SampleRing {
   void clear();
 
  private:
+  /// The ring now holds samples [first, first + count) after what it held, if they follow it.
+  void take(std::int64_t first, std::size_t count) {
+    if (first != newest_ + 1 || empty()) {
+      oldest_ = first;
+    }
+    newest_ = first + static_cast<std::int64_t>(count) - 1;
+    if (newest_ - oldest_ >= static_cast<std::int64_t>(capacity_)) {
+      oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
+    }
+  }
   [[nodiscard]] double* row(std::int64_t n) {
     return &data_[(static_cast<std::size_t>(n) & mask_) << row_shift_];
   }

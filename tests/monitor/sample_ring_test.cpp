@@ -1,13 +1,20 @@
 // The sample ring against what was pushed into it: rows addressed by absolute sample index across
-// the ring's wrap, by push() and push_run(), through row() and through rows() (the rows by value
-// that SIMD loops read), channels padded to a power of two.
+// the ring's wrap, by push(), push_run() and push_rows(), through row() and through rows() (the
+// rows by value that SIMD loops read), channels padded to a power of two; and the pipeline's
+// force rows (force_rows.hpp) against their definition.
 
 #include "core/monitor/sample_ring.hpp"
 
 #include <gtest/gtest.h>
 
 #include <array>
+#include <bit>
+#include <cmath>
 #include <cstdint>
+#include <vector>
+
+#include "core/monitor/force_rows.hpp"
+#include "core/signal/cpu_features.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -42,6 +49,77 @@ TEST(SampleRing, KeepsTheNewestSamplesAcrossItsWrapByIndex) {
     // Rows are 2^k doubles apart: consecutive samples are one row apart but at the ring's end.
     EXPECT_EQ(kept.row(1025) - kept.row(1024), 4);
     EXPECT_EQ(kept.row(1024), kept.row(1040));
+  }
+}
+
+// push_rows() hands its fill stretches of consecutive rows, at most two (the ring's end splits
+// them; of a run longer than the ring, the samples it keeps): the same ring as push_run() sample
+// by sample, for runs from every place in the ring, across its end, and longer than it.
+TEST(SampleRing, RowsInStretchesAreTheRowsOneByOne) {
+  for (const std::size_t count : {1U, 5U, 16U, 23U, 40U}) {
+    for (std::int64_t first = 1000; first < 1016; ++first) {
+      SampleRing stretches(3, 16), one_by_one(3, 16);
+      int calls = 0;
+      stretches.push_rows(first, count, [&](std::size_t i, std::size_t n, double* rows) {
+        ++calls;
+        for (std::size_t k = 0; k < n; ++k) {
+          for (std::size_t c = 0; c < 3; ++c) {
+            rows[4 * k + c] = value(first + static_cast<std::int64_t>(i + k), c);
+          }
+        }
+      });
+      one_by_one.push_run(first, count, [&](std::size_t i, double* row) {
+        for (std::size_t c = 0; c < 3; ++c) {
+          row[c] = value(first + static_cast<std::int64_t>(i), c);
+        }
+      });
+      EXPECT_LE(calls, 2);
+      ASSERT_EQ(stretches.oldest(), one_by_one.oldest());
+      ASSERT_EQ(stretches.newest(), one_by_one.newest());
+      for (std::int64_t n = stretches.oldest(); n <= stretches.newest(); ++n) {
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_EQ(stretches.at(c, n), one_by_one.at(c, n))
+              << count << " from " << first << ": sample " << n;
+          ASSERT_EQ(stretches.at(c, n), value(n, static_cast<std::size_t>(c)));
+        }
+      }
+    }
+  }
+}
+
+// The pipeline's rows (fx, fy, fz, fx² + fy²): the AVX kernel (four samples a transpose) gives
+// the scalar one's rows bit for bit, for every count (whole fours and the rest), signed zeros,
+// subnormals and large values among the samples; a stride takes every stride-th sample.
+TEST(ForceRows, FourAtATimeAreTheRowsOneByOne) {
+  std::vector<double> fx, fy, fz;
+  for (int i = 0; i < 40; ++i) {
+    const double t = 0.37 * i;
+    fx.push_back(i == 3 ? -0.0 : 12.5 * std::sin(t) - 3.0);
+    fy.push_back(i == 5 ? 4e-310 : -7.25 * std::cos(1.3 * t));
+    fz.push_back(i == 7 ? 1e150 : 0.5 * t);
+  }
+  const auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  for (std::size_t count = 0; count <= 13; ++count) {
+    std::vector<double> fast(4 * count, -1.0), plain(4 * count, -2.0);
+    force_rows(fx.data(), fy.data(), fz.data(), 1, count, fast.data());
+    force_rows(fx.data(), fy.data(), fz.data(), 1, count, plain.data(), false);
+    for (std::size_t i = 0; i < count; ++i) {
+      const double want[4] = {fx[i], fy[i], fz[i], fx[i] * fx[i] + fy[i] * fy[i]};
+      for (std::size_t c = 0; c < 4; ++c) {
+        ASSERT_EQ(bits(fast[4 * i + c]), bits(plain[4 * i + c])) << count << " " << i << " " << c;
+        ASSERT_EQ(bits(plain[4 * i + c]), bits(want[c])) << count << " " << i << " " << c;
+      }
+    }
+  }
+  std::vector<double> strided(4 * 10);
+  force_rows(fx.data(), fy.data(), fz.data(), 3, 10, strided.data());
+  for (std::size_t i = 0; i < 10; ++i) {
+    EXPECT_EQ(strided[4 * i], fx[3 * i]);
+    EXPECT_EQ(strided[4 * i + 2], fz[3 * i]);
+    EXPECT_EQ(strided[4 * i + 3], fx[3 * i] * fx[3 * i] + fy[3 * i] * fy[3 * i]);
+  }
+  if (!signal::cpu_has_avx()) {
+    GTEST_SKIP() << "this CPU has no AVX: the scalar rows alone were compared";
   }
 }
 
