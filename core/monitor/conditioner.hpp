@@ -391,8 +391,9 @@ class Conditioner {
 
   static constexpr double kIdleFraction = 0.2;  // of the usual peak: a quiet envelope
   static constexpr std::size_t kChunk = 256;    // samples filtered at a time by push_block()
-  // A chunk on a grid ends on it, and decay_power_ holds a grid step's decay.
-  static_assert(kChunk >= static_cast<std::size_t>(signal::kMaxGridStride));
+  // A chunk on a grid ends on it, and decay_power_ holds four grid steps' decay
+  // (tare_standing_on_grid's D⁴).
+  static_assert(kChunk >= 4 * static_cast<std::size_t>(signal::kMaxGridStride));
 
   signal::AxisMap axis_map_;
   std::array<signal::LowPassFilter, 3> lowpass_;

@@ -52,9 +52,11 @@ inline constexpr std::size_t kGridChunk = 64;
 
 /// A chunk of a line's samples: each one's grid point, min(⌊pos⌋, last point), and its
 /// fraction pos − point.
+/// Not zeroed (a chunk is written before it is read): zeroing its 768 bytes at every line would
+/// cost as much as the positions of a few dozen samples.
 struct GridChunk {
-  alignas(32) std::array<double, kGridChunk> fraction{};
-  alignas(16) std::array<std::int32_t, kGridChunk> point{};
+  alignas(32) std::array<double, kGridChunk> fraction;
+  alignas(16) std::array<std::int32_t, kGridChunk> point;
 };
 
 #if defined(MILLWATCH_GRID_LINE_AVX)
@@ -64,7 +66,9 @@ struct GridChunk {
 /// position passes it, so sample i's is start + step·i less m·grid, the m that puts it in
 /// [0, grid); here m comes from a division (a floor, checked both ways) — the same difference,
 /// exactly: m·grid is an integer, as is every multiple of the position's last bit there.
-/// `last_point` < 2³¹.
+/// `last_point` < 2³¹. For a spindle's line, whose step lies below the grid by more than a
+/// position's rounding (at() wraps once a sample: a step within a rounding of the grid can leave
+/// its position at or past the grid, where this one wraps it again).
 __attribute__((target("avx"))) inline void grid_chunk_avx(const GridLine& line, std::size_t from,
                                                           std::size_t n, std::int32_t last_point,
                                                           GridChunk& out) {

@@ -238,7 +238,7 @@ TEST(Conditioner, TheEnvelopeInBlocksIsTheSampleBySampleOne) {
       EXPECT_NEAR(all.envelope_sq[b], truth.envelope_sq[b], 1e-12 * truth.envelope_sq[b])
           << "run " << run << " block " << b;
     }
-    for (const int stride : {3, 6}) {
+    for (const int stride : {3, 6, signal::kMaxGridStride}) {
       const Output grid = in_blocks(stride, run);
       const std::vector<double> expected = grid_envelope(truth, stride);
       ASSERT_EQ(grid.envelope_sq.size(), expected.size());

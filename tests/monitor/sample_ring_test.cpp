@@ -89,12 +89,13 @@ TEST(SampleRing, RowsInStretchesAreTheRowsOneByOne) {
 
 // The pipeline's rows (fx, fy, fz, fx² + fy²): the AVX kernel (four samples a transpose) gives
 // the scalar one's rows bit for bit, for every count (whole fours and the rest), signed zeros,
-// subnormals and large values among the samples; a stride takes every stride-th sample.
+// subnormals, a large fz and an fx whose square overflows among the samples; a stride takes
+// every stride-th sample.
 TEST(ForceRows, FourAtATimeAreTheRowsOneByOne) {
   std::vector<double> fx, fy, fz;
   for (int i = 0; i < 40; ++i) {
     const double t = 0.37 * i;
-    fx.push_back(i == 3 ? -0.0 : 12.5 * std::sin(t) - 3.0);
+    fx.push_back(i == 3 ? -0.0 : i == 9 ? 1e200 : 12.5 * std::sin(t) - 3.0);
     fy.push_back(i == 5 ? 4e-310 : -7.25 * std::cos(1.3 * t));
     fz.push_back(i == 7 ? 1e150 : 0.5 * t);
   }
@@ -115,6 +116,7 @@ TEST(ForceRows, FourAtATimeAreTheRowsOneByOne) {
   force_rows(fx.data(), fy.data(), fz.data(), 3, 10, strided.data());
   for (std::size_t i = 0; i < 10; ++i) {
     EXPECT_EQ(strided[4 * i], fx[3 * i]);
+    EXPECT_EQ(strided[4 * i + 1], fy[3 * i]);
     EXPECT_EQ(strided[4 * i + 2], fz[3 * i]);
     EXPECT_EQ(strided[4 * i + 3], fx[3 * i] * fx[3 * i] + fy[3 * i] * fy[3 * i]);
   }
