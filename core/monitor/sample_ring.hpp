@@ -19,13 +19,7 @@ class SampleRing {
 
   /// Appends one sample of every channel at index `sample` (must be newest() + 1 unless empty).
   void push(std::int64_t sample, const double* values) {
-    if (sample != newest_ + 1 || empty()) {
-      oldest_ = sample;  // a new stretch (or the first sample)
-    }
-    newest_ = sample;
-    if (newest_ - oldest_ >= static_cast<std::int64_t>(capacity_)) {
-      oldest_ = newest_ - static_cast<std::int64_t>(capacity_) + 1;
-    }
+    take(sample, 1);
     double* slot = row(sample);
     if (channels_ == 4) {  // the pipeline's: four stores, not a call to memcpy
       slot[0] = values[0];
@@ -38,31 +32,11 @@ class SampleRing {
       slot[c] = values[c];
     }
   }
-  /// push() of `count` samples from index `first` on: fill(i, slot) writes sample first + i's
-  /// channels into slot (rows in order, one test of the ring's end per row).
-  template <typename Fill>
-  void push_run(std::int64_t first, std::size_t count, const Fill& fill) {
-    if (count == 0) {
-      return;
-    }
-    take(first, count);
-    std::size_t at = static_cast<std::size_t>(first) & mask_;
-    double* slot = &data_[at << row_shift_];
-    for (std::size_t i = 0; i < count; ++i) {
-      fill(i, slot);
-      if (++at == capacity_) {
-        at = 0;
-        slot = data_.data();
-      } else {
-        slot += std::size_t{1} << row_shift_;
-      }
-    }
-  }
-  /// push_run() a stretch of rows at a time: fill(i, n, rows) writes samples first + i …
-  /// first + i + n − 1 into the n rows from `rows` on (2^k doubles each: the channels, then
-  /// padding), at most twice (the ring's end splits the run; of a run longer than the ring,
-  /// only the samples it keeps). For a fill that handles several rows at once in vector
-  /// registers.
+  /// push() of `count` samples from index `first` on, a stretch of rows at a time: fill(i, n,
+  /// rows) writes samples first + i … first + i + n − 1 into the n rows from `rows` on (2^k
+  /// doubles each: the channels, then padding), at most twice (the ring's end splits the run;
+  /// of a run longer than the ring, only the samples it keeps). For a fill that handles several
+  /// rows at once in vector registers.
   template <typename Fill>
   void push_rows(std::int64_t first, std::size_t count, const Fill& fill) {
     if (count == 0) {
@@ -106,7 +80,8 @@ class SampleRing {
   void clear();
 
  private:
-  /// The ring now holds samples [first, first + count) after what it held, if they follow it.
+  /// The ring now holds samples [first, first + count) after what it held, if they follow it
+  /// (else they start a new stretch, as the first samples do).
   void take(std::int64_t first, std::size_t count) {
     if (first != newest_ + 1 || empty()) {
       oldest_ = first;

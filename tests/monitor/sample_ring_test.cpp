@@ -1,5 +1,5 @@
 // The sample ring against what was pushed into it: rows addressed by absolute sample index across
-// the ring's wrap, by push(), push_run() and push_rows(), through row() and through rows() (the
+// the ring's wrap, by push() and push_rows(), through row() and through rows() (the
 // rows by value that SIMD loops read), channels padded to a power of two; and the pipeline's
 // force rows (force_rows.hpp) against their definition.
 
@@ -30,9 +30,11 @@ TEST(SampleRing, KeepsTheNewestSamplesAcrossItsWrapByIndex) {
   for (const int channels : {3, 4}) {
     SampleRing ring(channels, 10);
     ASSERT_EQ(ring.capacity(), 16U);
-    ring.push_run(1000, 40, [&](std::size_t i, double* row) {
-      for (std::size_t c = 0; c < static_cast<std::size_t>(channels); ++c) {
-        row[c] = value(1000 + static_cast<std::int64_t>(i), c);
+    ring.push_rows(1000, 40, [&](std::size_t i, std::size_t n, double* rows) {
+      for (std::size_t k = 0; k < n; ++k) {
+        for (std::size_t c = 0; c < static_cast<std::size_t>(channels); ++c) {
+          rows[4 * k + c] = value(1000 + static_cast<std::int64_t>(i + k), c);
+        }
       }
     });
     const SampleRing& kept = ring;
@@ -53,8 +55,8 @@ TEST(SampleRing, KeepsTheNewestSamplesAcrossItsWrapByIndex) {
 }
 
 // push_rows() hands its fill stretches of consecutive rows, at most two (the ring's end splits
-// them; of a run longer than the ring, the samples it keeps): the same ring as push_run() sample
-// by sample, for runs from every place in the ring, across its end, and longer than it.
+// them; of a run longer than the ring, the samples it keeps): the same ring as push() sample by
+// sample, for runs from every place in the ring, across its end, and longer than it.
 TEST(SampleRing, RowsInStretchesAreTheRowsOneByOne) {
   for (const std::size_t count : {1U, 5U, 16U, 23U, 40U}) {
     for (std::int64_t first = 1000; first < 1016; ++first) {
@@ -68,11 +70,12 @@ TEST(SampleRing, RowsInStretchesAreTheRowsOneByOne) {
           }
         }
       });
-      one_by_one.push_run(first, count, [&](std::size_t i, double* row) {
-        for (std::size_t c = 0; c < 3; ++c) {
-          row[c] = value(first + static_cast<std::int64_t>(i), c);
-        }
-      });
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::int64_t n = first + static_cast<std::int64_t>(i);
+        // A row's room (push() of a four-channel ring reads four; this one reads three).
+        const std::array<double, 4> v = {value(n, 0), value(n, 1), value(n, 2), 0.0};
+        one_by_one.push(n, v.data());
+      }
       EXPECT_LE(calls, 2);
       ASSERT_EQ(stretches.oldest(), one_by_one.oldest());
       ASSERT_EQ(stretches.newest(), one_by_one.newest());
