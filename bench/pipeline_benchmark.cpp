@@ -193,6 +193,59 @@ BENCHMARK(BM_Pipeline)
     ->Args({333300, 333, 0})
     ->Unit(benchmark::kMillisecond);
 
+/// Revolution latency at 333.3 kHz while the lockstep model follows a speed ramp (25,000 →
+/// 26,000 rpm over 1.5 s: a rebuild every 0.2 %, ~50 rpm, about 20 in all), blocks of 1 ms
+/// handed over at real time as a live source does (paced by the clock: the model builds off the
+/// sample thread have the time they have live). The default model ([000]'s effects: ~4.7 ms a
+/// build here). Counters: the latencies from 0.4 s on, and the model's builds.
+void BM_PipelineLatencyThroughARamp(benchmark::State& state) {
+  const double fs = 333300.0;
+  const std::size_t block = 333;
+  sim::Scenario s = bench::benchmark_scenario(fs, 2.5, 25000.0);
+  s.spindle.profile = sim::SpindleProfileKind::kRamp;
+  s.spindle.ramp_end_rpm = 26000.0;
+  s.spindle.ramp_start_s = 0.5;
+  s.spindle.ramp_end_s = 2.0;
+  const Recording r = bench::simulate_cut(s);
+  const std::size_t n = r.t.size();
+  const std::vector<std::int64_t> utime_us = block_utimes_us(r, block);
+  monitor::MonitorConfig c;
+  c.sample_rate_hz = fs;
+  c.model.process.spindle_rpm = 25000.0;
+  std::vector<double> latencies_s;
+  latencies_s.reserve(1 << 16);
+  std::int64_t builds = 0;
+  // The lock and its burst of revolutions measured back to the start of the cut come first:
+  // latencies from 0.4 s on, before the ramp.
+  const auto steady = static_cast<std::size_t>(0.4 * fs) / block * block;
+  for (auto _ : state) {
+    std::vector<double> warm_up_s;
+    LatencySink sink;
+    sink.latencies_s = &warm_up_s;
+    monitor::Pipeline p(c, sink);
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < n; i += block) {
+      const std::size_t count = std::min(block, n - i);
+      if (i == steady) {
+        sink.latencies_s = &latencies_s;
+      }
+      std::this_thread::sleep_until(
+          start + std::chrono::duration<double>(static_cast<double>(i + count) / fs));
+      sink.block_start = std::chrono::steady_clock::now();
+      p.process({utime_us[i / block], 0, fs, std::span(r.fx).subspan(i, count),
+                 std::span(r.fy).subspan(i, count), std::span(r.fz).subspan(i, count)});
+    }
+    builds += p.status().model_builds;
+  }
+  count_durations(state, "latency", latencies_s);
+  state.counters["model_builds"] =
+      static_cast<double>(builds) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_PipelineLatencyThroughARamp)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
 /// The daemon's sample thread at 333.3 kHz while identification runs in its worker thread (live
 /// hand-over: never waits): throughput of the sample thread with a fit in progress most of the
 /// time, and what the worker kept up with (windows fitted, dropped, results late, taken).

@@ -83,6 +83,13 @@ if jitter:
           f" {len(jitter)} × 10 s, wall clock): p99 {max(r['job_p99_us'] for r in jitter):.0f} µs,"
           f" worst {max(r['job_worst_us'] for r in jitter) / 1e3:.2f} ms — what preemption adds to"
           " any job; a worst latency above that would be the pipeline's own.")
+ramp = runs.get("BM_PipelineLatencyThroughARamp/iterations:1/real_time", [])
+if ramp:
+    print(f"\nThrough a speed ramp at 333.3 kHz (`BM_PipelineLatencyThroughARamp`: 25,000 → 26,000"
+          f" rpm, the default model rebuilt {ramp[0]['model_builds']:.0f} times on the model"
+          f" builder's thread, blocks handed over at real time, {len(ramp)} runs): latency p99"
+          f" {max(r['latency_p99_us'] for r in ramp):.0f} µs, worst"
+          f" {max(r['latency_worst_us'] for r in ramp) / 1e3:.2f} ms (target < 100 µs / 1 ms).")
 rev = min(r["real_time"] for r in runs["BM_FullModelRevolution"]) / 1e3
 upd = min(r["real_time"] for r in runs["BM_ModelUpdateAfterRunoutChange"]) / 1e3
 if whole:

@@ -6,6 +6,7 @@
 #include <complex>
 #include <cstdint>
 #include <numbers>
+#include <utility>
 
 #include "core/monitor/extremum.hpp"
 #include "core/monitor/grid_line.hpp"
@@ -66,6 +67,25 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   return true;
 }
 
+void Lockstep::build(const model::ModelConfig& commanded, double spindle_hz) {
+  commanded_ = commanded;
+  built_ = false;
+  set_spindle_hz(spindle_hz);
+}
+
+void Lockstep::take_model(Lockstep& built) {
+  std::swap(commanded_, built.commanded_);
+  std::swap(config_, built.config_);
+  std::swap(waveform_, built.waveform_);
+  std::swap(filtered_, built.filtered_);
+  std::swap(line_table_, built.line_table_);
+  std::swap(spindle_hz_, built.spindle_hz_);
+  std::swap(built_, built.built_);
+  aligned_ = aligned_ && built_;
+  revise();
+  built.revise();
+}
+
 void Lockstep::revise() {
   // One sequence for every object: a revision names one model and alignment in the process.
   static std::atomic<std::uint64_t> last{0};
@@ -84,6 +104,12 @@ void Lockstep::set_parameters(const model::ModelConfig& model, double alignment_
     aligned_ = built_;
     revise();
   }
+}
+
+void Lockstep::set_alignment(double alignment_rad) {
+  offset_rad_ = wrap_2pi(alignment_rad);
+  aligned_ = built_;
+  revise();
 }
 
 void Lockstep::filter_periodic() {

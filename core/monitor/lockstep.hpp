@@ -12,8 +12,9 @@
 // measured revolution-synchronous average, all three axes together; the best shift (refined to
 // a fraction of a bin) is the model's angle offset against the tracker's zero. From then on
 // each measured sample's angle gives its model sample. Following a new speed re-evaluates the
-// steady state and the filter (allocation-free after the first build, well under a
-// millisecond for the plain model: bench/model_benchmark).
+// steady state and the filter (allocation-free after the first build; 0.16 ms for the plain
+// model, 4.3 ms for [000]'s full one: bench/model_benchmark) — the pipeline has it done on
+// ModelBuilder's thread and takes the result (take_model()).
 
 #include <array>
 #include <cstdint>
@@ -45,11 +46,23 @@ class Lockstep {
   /// at the first build only). Returns whether it was rebuilt (speed changed by more than 0.2 %).
   bool set_spindle_hz(double spindle_hz);
   [[nodiscard]] bool has_model() const { return built_; }
+  /// The cut as commanded that the model is built from (the identified parameters once taken).
+  [[nodiscard]] const model::ModelConfig& commanded_config() const { return commanded_; }
+  /// Builds the model of `commanded` at `spindle_hz` afresh, whatever was built before (a spare
+  /// built off the sample thread: ModelBuilder).
+  void build(const model::ModelConfig& commanded, double spindle_hz);
+  /// Takes `built`'s model — its configuration, speed, waveforms and table — and hands it this
+  /// one's (swapped, nothing allocated). The alignment stays this one's (as at a new speed); a
+  /// new revision.
+  void take_model(Lockstep& built);
 
   /// Takes identified parameters: `model` (commanded speed, as identify::FitResult::config) and,
   /// when `use_alignment`, its alignment (model angle minus tracker angle, rad); rebuilt at the
   /// current speed. Without the alignment the old offset stands until align() is called.
   void set_parameters(const model::ModelConfig& model, double alignment_rad, bool use_alignment);
+  /// Takes an alignment (model angle minus tracker angle, rad) found elsewhere (an identified
+  /// fit's); aligned once built.
+  void set_alignment(double alignment_rad);
 
   /// Aligns the model with the measured synchronous average; returns false when there is
   /// nothing to align (no model, empty average).

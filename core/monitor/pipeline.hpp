@@ -3,7 +3,8 @@
 // the model in lockstep, spindle state and alerts out. The live daemon and the replay build the
 // same pipeline from the same MonitorConfig; only the source and the pacing differ. Everything
 // is driven by sample time (the blocks' utime), so a replay of a recorded stream reproduces the
-// live results exactly.
+// live results exactly (the lockstep model's rebuilds on ModelBuilder's thread included: they
+// apply a fixed number of revolutions after they were asked for).
 //
 // A block's way through the stages, each owning its state:
 //   InputCheck        flags and counts bad samples, gaps, bad blocks
@@ -15,10 +16,12 @@
 //   RevolutionAnalyzer features, own speed, angle map, model revolution, residuals
 //   RevolutionStats   α and ΔFy over the last window; idle revolutions; AlertEngine
 // Outputs go to a PipelineSink, called from the thread that calls process(). After set-up the
-// steady state allocates nothing, except when a lock or a speed change (re)builds the model.
+// steady state allocates nothing, except when a lock builds the model (a speed change or
+// identified parameters rebuild it on ModelBuilder's thread).
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string_view>
@@ -30,6 +33,7 @@
 #include "core/monitor/conditioner.hpp"
 #include "core/monitor/input_check.hpp"
 #include "core/monitor/lockstep.hpp"
+#include "core/monitor/model_builder.hpp"
 #include "core/monitor/monitor_config.hpp"
 #include "core/monitor/revolution_analyzer.hpp"
 #include "core/monitor/revolution_record.hpp"
@@ -257,8 +261,19 @@ class Pipeline {
   /// The tooth-event template at a lock; nullptr, or why there is none (a literal).
   const char* build_template(std::int64_t anchor, ToothEventTemplate& out);
   void on_revolution(const RevolutionEvents& events);
-  /// The lockstep model follows the spindle speed (rebuilt when it moved by more than 0.2 %).
-  void follow_speed(double spindle_hz);
+  /// The lockstep model follows the spindle speed (rebuilt when it moved by more than 0.2 %):
+  /// the first model, and with `now` (a lock), at once; else on builder_'s thread, taken
+  /// build_delay_revolutions_ later (take_model_build()).
+  void follow_speed(double spindle_hz, bool now = false);
+  /// The model builder_ was asked for goes into the lockstep, waited for if it is not done:
+  /// when due (`due_only`), or at once (before anything else changes the model); a fit's with
+  /// its alignment. Then, with `start_next`, the build of a fit that waited for it.
+  void take_model_build(bool due_only, bool start_next = true);
+  /// Starts building the model of the fit waiting for builder_, if it is free.
+  void start_fit_build();
+  /// Identified parameters taken by the model (built with them): their alignment, the event.
+  struct PendingFit;
+  void apply_fit(const PendingFit& f);
   /// The window just completed goes to the identifier.
   void submit_window();
   /// The identified parameters due at this revolution, if any, go to the model.
@@ -350,6 +365,24 @@ class Pipeline {
   bool alerts_holding_ = false;
   bool alerts_armed_ = false;
   double alerts_baseline_rpm_ = 0.0;
+  // Rebuilds off this thread (made with the first model, at the lock); the one asked for applies
+  // from revolution build_due_ on, build_delay_revolutions_ after it was asked for.
+  std::unique_ptr<ModelBuilder> builder_;
+  std::int64_t build_due_ = 0;
+  std::int64_t build_delay_revolutions_ = 2;
+  // Identified parameters accepted for the model (take_identification()), waiting for builder_
+  // or being built by it.
+  struct PendingFit {
+    model::ModelConfig config;
+    double alignment_rad = 0.0;
+    bool same_lock = false;  // the window was measured since the lock
+    std::int64_t lock = 0;   // that lock's number (locks_)
+    std::int64_t window_revolution = 0;
+    double unexplained = 0.0;
+  };
+  std::optional<PendingFit> waiting_fit_;
+  std::optional<PendingFit> building_fit_;
+  std::int64_t locks_ = 0;  // tooth events started (start_events())
 };
 
 }  // namespace millwatch::monitor

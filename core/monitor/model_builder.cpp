@@ -1,0 +1,69 @@
+#include "core/monitor/model_builder.hpp"
+
+#include <utility>
+
+namespace millwatch::monitor {
+
+ModelBuilder::ModelBuilder(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
+                           bool zero_phase)
+    : commanded_(model), filter_(filter), zero_phase_(zero_phase), thread_([this] { run(); }) {}
+
+ModelBuilder::~ModelBuilder() {
+  {
+    const std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_one();
+  thread_.join();
+}
+
+void ModelBuilder::start(const model::ModelConfig& commanded, double spindle_hz) {
+  {
+    const std::lock_guard lock(mutex_);
+    commanded_ = commanded;
+    spindle_hz_ = spindle_hz;
+    requested_ = true;
+    finished_ = false;
+  }
+  busy_ = true;
+  wake_.notify_one();
+}
+
+void ModelBuilder::take_into(Lockstep& lockstep) {
+  std::unique_lock lock(mutex_);
+  done_.wait(lock, [this] { return finished_; });
+  busy_ = false;
+  finished_ = false;
+  if (error_) {
+    std::rethrow_exception(std::exchange(error_, nullptr));
+  }
+  lockstep.take_model(*spare_);
+}
+
+void ModelBuilder::run() {
+  std::unique_lock lock(mutex_);
+  // Under the lock: start() waits for it (the model it copies from is this thread's meanwhile).
+  spare_.emplace(commanded_, filter_, zero_phase_);
+  for (;;) {
+    wake_.wait(lock, [this] { return requested_ || stop_; });
+    if (stop_) {
+      return;
+    }
+    requested_ = false;
+    // The request and the spare are this thread's until finished_ is set: start() is not
+    // called while busy, and take_into() reads the spare only after finished_.
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      spare_->build(commanded_, spindle_hz_);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    lock.lock();
+    error_ = error;
+    finished_ = true;
+    done_.notify_one();
+  }
+}
+
+}  // namespace millwatch::monitor
