@@ -6,7 +6,9 @@ namespace millwatch::monitor {
 
 ModelBuilder::ModelBuilder(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
                            bool zero_phase)
-    : commanded_(model), filter_(filter), zero_phase_(zero_phase), thread_([this] { run(); }) {}
+    : model_(model), commanded_(model), filter_(filter), zero_phase_(zero_phase), thread_([this] {
+        run();
+      }) {}
 
 ModelBuilder::~ModelBuilder() {
   {
@@ -41,9 +43,12 @@ void ModelBuilder::take_into(Lockstep& lockstep) {
 }
 
 void ModelBuilder::run() {
+  try {
+    spare_.emplace(model_, filter_, zero_phase_);  // model_, filter_: never written after
+  } catch (...) {
+    spare_error_ = std::current_exception();
+  }
   std::unique_lock lock(mutex_);
-  // Under the lock: start() waits for it (the model it copies from is this thread's meanwhile).
-  spare_.emplace(commanded_, filter_, zero_phase_);
   for (;;) {
     wake_.wait(lock, [this] { return requested_ || stop_; });
     if (stop_) {
@@ -53,11 +58,13 @@ void ModelBuilder::run() {
     // The request and the spare are this thread's until finished_ is set: start() is not
     // called while busy, and take_into() reads the spare only after finished_.
     lock.unlock();
-    std::exception_ptr error;
-    try {
-      spare_->build(commanded_, spindle_hz_);
-    } catch (...) {
-      error = std::current_exception();
+    std::exception_ptr error = spare_error_;
+    if (spare_) {
+      try {
+        spare_->build(commanded_, spindle_hz_);
+      } catch (...) {
+        error = std::current_exception();
+      }
     }
     lock.lock();
     error_ = error;

@@ -44,14 +44,17 @@ class ModelBuilder {
   /// The speed of the build started last (Hz).
   [[nodiscard]] double spindle_hz() const { return spindle_hz_; }
   /// Waits for the build started last, then swaps its model into `lockstep`
-  /// (Lockstep::take_model: the alignment stays). Rethrows what the build threw. While busy().
+  /// (Lockstep::take_model: the alignment stays). Rethrows what the build (or making the spare)
+  /// threw. While busy().
   void take_into(Lockstep& lockstep);
 
  private:
   void run();
 
-  std::optional<Lockstep> spare_;  // made by run()
-  model::ModelConfig commanded_;   // the spare's model, then the build asked for
+  std::optional<Lockstep> spare_;   // made by run() from model_
+  std::exception_ptr spare_error_;  // what making it threw (every build then fails with it)
+  const model::ModelConfig model_;
+  model::ModelConfig commanded_;  // the build asked for
   signal::ButterworthDesign filter_;
   bool zero_phase_ = false;
   double spindle_hz_ = 0.0;

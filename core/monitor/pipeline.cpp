@@ -29,7 +29,9 @@ constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model fol
 // A rebuild at a new speed applies this long (at the commanded speed, in revolutions) after it
 // was asked for: [000]'s full model takes 4.3 ms to build on the Zen 5, ~7 ms on the Intel Xeon
 // (bench/model_benchmark), done meanwhile on the builder's thread. Through a ramp the model
-// lags the speed by this much more than the 0.2 %: 100 rpm at 5,000 rpm/s, 0.4 % at 25,000 rpm.
+// lags the speed by this much more than the 0.2 % (100 rpm at 5,000 rpm/s, 0.4 % at 25,000
+// rpm), up to twice that when the speed's build waits for a fit's (a fit's build takes the
+// newest speed, so fits do not hold the speed back).
 constexpr double kModelBuildDelay_s = 0.02;
 // Relative: the tooth events' revolution speed against a consistent tracker window's, beyond
 // which the events follow minima that are not the flutes' (a 6-flute cut after a speed ramp:
@@ -670,6 +672,7 @@ void Pipeline::start_events() {
     event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm, why);
     return;
   }
+  ++locks_;  // before the model: a fit taken here is no longer this lock's
   if (config_.lockstep) {
     follow_speed(phase_.spindle_hz_at(static_cast<double>(anchor)), true);
     if (lockstep_.align(sync_)) {
@@ -694,7 +697,6 @@ void Pipeline::start_events() {
   last_rpm_ = 0.0;
   recent_speeds_.fill({});
   lock_revolution_ = revolution_base_ + revolutions_;
-  ++locks_;
   stats_.clear_window();
   alerts_.rebaseline();
   ever_locked_ = true;
@@ -729,6 +731,7 @@ void Pipeline::follow_speed(double spindle_hz, bool now) {
   if (!config_.lockstep || !(spindle_hz > 0.0)) {
     return;
   }
+  wanted_hz_ = spindle_hz;
   const auto moved = [&](double built_hz) {
     return !lockstep_.has_model() ||
            std::fabs(spindle_hz - built_hz) > kModelSpeedChange * built_hz;
@@ -835,8 +838,8 @@ void Pipeline::start_fit_build() {
   if (!waiting_fit_ || !lockstep_.has_model() || !builder_ || builder_->busy()) {
     return;
   }
-  // At the model's speed, as it stands.
-  builder_->start(waiting_fit_->config, lockstep_.spindle_hz());
+  // At the newest speed the model was asked to follow (a fit's build follows it too).
+  builder_->start(waiting_fit_->config, wanted_hz_ > 0.0 ? wanted_hz_ : lockstep_.spindle_hz());
   build_due_ = revolutions_ + build_delay_revolutions_;
   building_fit_ = std::move(waiting_fit_);
   waiting_fit_.reset();

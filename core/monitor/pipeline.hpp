@@ -382,7 +382,8 @@ class Pipeline {
   };
   std::optional<PendingFit> waiting_fit_;
   std::optional<PendingFit> building_fit_;
-  std::int64_t locks_ = 0;  // tooth events started (start_events())
+  std::int64_t locks_ = 0;  // locks that reached the model (start_events())
+  double wanted_hz_ = 0.0;  // the speed the model was last asked to follow
 };
 
 }  // namespace millwatch::monitor

@@ -27,11 +27,20 @@ model::ModelConfig full_cut() {
   return c;
 }
 
-/// Every filtered force the two give, over a turn of angles, the same bit for bit.
+/// Every filtered force the two give, over a turn of angles, the same bit for bit: one by one
+/// (force_at()) and along a line (forces_on_line(), from the table the residuals read); and the
+/// same unfiltered waveform.
 void expect_same_model(const Lockstep& a, const Lockstep& b) {
   ASSERT_TRUE(a.has_model());
   ASSERT_TRUE(b.has_model());
   EXPECT_EQ(a.spindle_hz(), b.spindle_hz());
+  EXPECT_EQ(a.waveform().fx_N, b.waveform().fx_N);
+  EXPECT_EQ(a.waveform().fy_N, b.waveform().fy_N);
+  constexpr std::size_t kRows = 1000;
+  std::vector<double> rows_a(4 * kRows), rows_b(4 * kRows);
+  a.forces_on_line(0.1, kTwoPi / 997.0, kRows, rows_a.data());
+  b.forces_on_line(0.1, kTwoPi / 997.0, kRows, rows_b.data());
+  EXPECT_EQ(rows_a, rows_b);
   for (int k = 0; k < 997; ++k) {
     const double angle = kTwoPi * k / 997.0;
     const auto fa = a.force_at(angle);
