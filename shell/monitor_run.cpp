@@ -26,6 +26,7 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   t.blocks_rejected += c.blocks_rejected;
   total.identifications_taken += s.identifications_taken;
   total.identifications_rejected += s.identifications_rejected;
+  total.identifications_superseded += s.identifications_superseded;
   total.revolutions += s.revolutions;
   total.valid_revolutions += s.valid_revolutions;
   total.idle_revolutions += s.idle_revolutions;

@@ -92,20 +92,6 @@ void Lockstep::revise() {
   revision_ = last.fetch_add(1, std::memory_order_relaxed) + 1;
 }
 
-void Lockstep::set_parameters(const model::ModelConfig& model, double alignment_rad,
-                              bool use_alignment) {
-  commanded_ = model;
-  if (built_) {
-    built_ = false;  // rebuilt at the speed it was built for
-    set_spindle_hz(spindle_hz_);
-  }
-  if (use_alignment) {
-    offset_rad_ = wrap_2pi(alignment_rad);
-    aligned_ = built_;
-    revise();
-  }
-}
-
 void Lockstep::set_alignment(double alignment_rad) {
   offset_rad_ = wrap_2pi(alignment_rad);
   aligned_ = built_;

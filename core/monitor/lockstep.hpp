@@ -56,10 +56,6 @@ class Lockstep {
   /// new revision.
   void take_model(Lockstep& built);
 
-  /// Takes identified parameters: `model` (commanded speed, as identify::FitResult::config) and,
-  /// when `use_alignment`, its alignment (model angle minus tracker angle, rad); rebuilt at the
-  /// current speed. Without the alignment the old offset stands until align() is called.
-  void set_parameters(const model::ModelConfig& model, double alignment_rad, bool use_alignment);
   /// Takes an alignment (model angle minus tracker angle, rad) found elsewhere (an identified
   /// fit's); aligned once built.
   void set_alignment(double alignment_rad);

@@ -381,6 +381,10 @@ void Pipeline::flush_tail() {
   conditioner_.flush(
       [this](std::int64_t n, double fx, double fy, double fz) { downstream(n, fx, fy, fz); });
   finished_tail_revolutions_ = heard_since_update();  // the record's last part-hop
+  // Fits accepted for the model that no revolution will take now: counted, not lost.
+  identifications_superseded_ += (waiting_fit_ ? 1 : 0) + (building_fit_ ? 1 : 0);
+  waiting_fit_.reset();
+  building_fit_.reset();
   // The input since the last health check (up to half a second: a gap there is a sensor
   // alert too).
   alerts_.on_input(input_.counters(),
@@ -675,11 +679,10 @@ void Pipeline::start_events() {
   ++locks_;  // before the model: a fit taken here is no longer this lock's
   if (config_.lockstep) {
     follow_speed(phase_.spindle_hz_at(static_cast<double>(anchor)), true);
-    if (lockstep_.align(sync_)) {
-      event(PipelineEventKind::kModelAligned, input_sample(anchor), 0,
-            lockstep_.alignment_correlation(), "model aligned to the measured revolution");
-    }
-    realigned_ = false;
+    // On the template average: a first offset, in the tracker's angle (no residuals on it).
+    lockstep_.align(sync_);
+    aligned_on_template_ = true;
+    next_alignment_revolutions_ = 1;
   }
   const std::int64_t earliest =
       std::max(stream_start_, measured_until_ == INT64_MIN ? stream_start_ : measured_until_ + 1);
@@ -829,6 +832,9 @@ void Pipeline::take_identification() {
   f.lock = locks_;
   f.window_revolution = w->revolution;
   f.unexplained = unexplained;
+  if (waiting_fit_) {
+    ++identifications_superseded_;  // never built: this newer one replaces it
+  }
   waiting_fit_ = std::move(f);
   start_fit_build();
 }
@@ -847,11 +853,15 @@ void Pipeline::start_fit_build() {
 
 void Pipeline::apply_fit(const PendingFit& f) {
   if (f.same_lock && f.lock == locks_) {
+    // The fit's alignment, on the window's revolutions: no correlation on the old model's shape.
     lockstep_.set_alignment(f.alignment_rad);
+    aligned_on_template_ = false;
+    next_alignment_revolutions_ = 0;
   } else {
-    lockstep_.align(sync_);  // a lock since: the tracker's angle zero moved
+    // A lock since: the tracker's angle zero moved. On the average as it is (this lock's
+    // template, or its revolutions), the alignments due still to come.
+    lockstep_.align(sync_);
   }
-  realigned_ = true;  // the fit's alignment, not a correlation on the old model's shape
   ++identifications_taken_;
   event(PipelineEventKind::kModelUpdated, input_sample(measured_until_), f.window_revolution,
         f.unexplained, "identified parameters taken by the model in lockstep");
@@ -871,8 +881,9 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   // The model follows the filtered revolution period, not one revolution's jitter.
   follow_speed(rate_hz_ / events_.samples_per_revolution());
   RevolutionRecord& r = record_;
-  analyzer_.analyze(ev, events_.event_template(), ring_,
-                    config_.lockstep && lockstep_.aligned() ? &lockstep_ : nullptr, r);
+  analyzer_.analyze(
+      ev, events_.event_template(), ring_,
+      config_.lockstep && lockstep_.aligned() && !aligned_on_template_ ? &lockstep_ : nullptr, r);
   measured_until_ = static_cast<std::int64_t>(std::floor(ev.event_sample[n]));
 
   // A revolution without cutting force is counted, not reported; a few in a row end the cut.
@@ -907,13 +918,9 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
       window_rpm_sum_ += r.spindle_rpm;
       ++window_rpm_count_;
     }
-    if (config_.lockstep && lockstep_.aligned() && !realigned_ &&
-        sync_.revolutions() >= sync_.window()) {
-      realigned_ = true;  // once more on a full window of revolutions measured one by one
-      if (lockstep_.align(sync_)) {
-        event(PipelineEventKind::kModelAligned, input_sample(first), 0,
-              lockstep_.alignment_correlation(), "model aligned on a full window of revolutions");
-      }
+    if (config_.lockstep && lockstep_.aligned() && next_alignment_revolutions_ > 0 &&
+        sync_.revolutions() >= next_alignment_revolutions_) {
+      align_on_revolutions(ev, input_sample(first), r);
     }
   }
   r.revolution = revolution_base_ + revolutions_++;
@@ -937,6 +944,29 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     // Named by its last revolution (as identification names the window), not the next one.
     sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, last_revolution(),
                           utime_at(ring_.newest()));
+  }
+}
+
+void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sample,
+                                    RevolutionRecord& r) {
+  // The template's tooth events come from another estimator (on the average of two tracker
+  // windows) than the revolutions' searches: on simulated cuts the lock's offset lay 2-6° from
+  // the one on the revolutions, and the residuals of the first window's revolutions, aligned by
+  // the lock's offset, were 7-36 times what the model leaves once aligned on them.
+  const bool first = aligned_on_template_;
+  const bool full = sync_.revolutions() >= sync_.window();
+  next_alignment_revolutions_ = full ? 0 : std::min(2 * sync_.revolutions(), sync_.window());
+  if (!lockstep_.align(sync_)) {
+    return;
+  }
+  if (first) {
+    aligned_on_template_ = false;
+    event(PipelineEventKind::kModelAligned, sample, sync_.revolutions(),
+          lockstep_.alignment_correlation(), "model aligned on the lock's first revolution");
+    analyzer_.analyze_model(ev, events_.event_template(), ring_, lockstep_, r);  // this one's
+  } else if (full) {
+    event(PipelineEventKind::kModelAligned, sample, sync_.revolutions(),
+          lockstep_.alignment_correlation(), "model aligned on a full window of revolutions");
   }
 }
 
@@ -970,6 +1000,7 @@ PipelineStatus Pipeline::status() const {
   s.model_builds = model_builds_;
   s.identifications_taken = identifications_taken_;
   s.identifications_rejected = identifications_rejected_;
+  s.identifications_superseded = identifications_superseded_;
   s.alert_held_revolutions = alerts_.held_revolutions();
   s.alerts_holding = alerts_holding_;
   s.cutting_revolutions = cutting_revolutions_ + finished_tail_revolutions_;

@@ -113,6 +113,9 @@ struct PipelineStatus {
   std::int64_t model_builds = 0;           ///< lockstep model (re)builds: locks and speed changes
   std::int64_t identifications_taken = 0;  ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
+  /// Accepted for the model but never taken by it: a newer fit replaced it while it waited for
+  /// the model builder, or the run ended (or was handed over) before its build was due.
+  std::int64_t identifications_superseded = 0;
   /// Revolutions the flute-force change detectors held: the speed more than the alerts'
   /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
   std::int64_t alert_held_revolutions = 0;
@@ -271,6 +274,9 @@ class Pipeline {
   void take_model_build(bool due_only, bool start_next = true);
   /// Starts building the model of the fit waiting for builder_, if it is free.
   void start_fit_build();
+  /// Aligns the model on the revolutions in the average (the one just added, `ev`, last): the
+  /// schedule's next, the event; on the lock's first, the revolution's model part (`r`).
+  void align_on_revolutions(const RevolutionEvents& ev, std::int64_t sample, RevolutionRecord& r);
   /// Identified parameters taken by the model (built with them): their alignment, the event.
   struct PendingFit;
   void apply_fit(const PendingFit& f);
@@ -340,7 +346,12 @@ class Pipeline {
   };
   std::array<RevolutionSpeed, 32> recent_speeds_{};
   std::size_t recent_speeds_next_ = 0;
-  bool realigned_ = false;  // the model was aligned again on a full window of the average
+  // The lock's alignment is on its template average, in the tracker's angle; the revolutions
+  // place their samples by their tooth events (on_revolution()). Until the model is aligned on
+  // a revolution so placed, it states no residuals; then it is aligned again as the average
+  // doubles, up to a full window (next_alignment_revolutions_: 0, none due).
+  bool aligned_on_template_ = false;
+  int next_alignment_revolutions_ = 0;
   std::int64_t spindle_seq_ = 0;
   std::int64_t sync_revolutions_since_report_ = 0;
   std::int64_t next_health_check_ = 0;
@@ -358,6 +369,7 @@ class Pipeline {
   std::int64_t revolution_base_ = 0;  // the number of this pipeline's first revolution
   std::int64_t identifications_taken_ = 0;
   std::int64_t identifications_rejected_ = 0;
+  std::int64_t identifications_superseded_ = 0;
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
   bool pauses_expected_ = false;  // the commanded cut pauses between flutes (the template's test)

@@ -100,13 +100,22 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
 
   out.model_valid = false;
   out.sectors = 0;
+  if (model != nullptr) {
+    analyze_model(events, tmpl, ring, *model, out);
+  }
+}
+
+void RevolutionAnalyzer::analyze_model(const RevolutionEvents& events,
+                                       const ToothEventTemplate& tmpl, const SampleRing& ring,
+                                       const Lockstep& model, RevolutionRecord& out) {
+  out.model_valid = false;
+  out.sectors = 0;
   const AngleMap map = angle_map(events, tmpl);
-  if (model != nullptr && model->aligned() &&
-      (kept_.turns >= kKeptTurns && kept_.holds(model->revision(), tmpl)
-           ? model_revolution_again(events, map, *model, out)
-           : model_revolution(events, tmpl, map, *model, out))) {
-    out.model_offset_rad = model->offset_rad();
-    residuals(m, ring, map, out);
+  if (model.aligned() && (kept_.turns >= kKeptTurns && kept_.holds(model.revision(), tmpl)
+                              ? model_revolution_again(events, map, model, out)
+                              : model_revolution(events, tmpl, map, model, out))) {
+    out.model_offset_rad = model.offset_rad();
+    residuals(out.measured, ring, map, out);
   }
 }
 

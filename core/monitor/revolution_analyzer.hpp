@@ -61,6 +61,10 @@ class RevolutionAnalyzer {
   /// are the caller's.
   void analyze(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
                const SampleRing& ring, const Lockstep* model, RevolutionRecord& out);
+  /// The model part of analyze() alone, on a revolution analyze() measured: the model
+  /// revolution and the residuals when `model` is aligned (else out.model_valid false).
+  void analyze_model(const RevolutionEvents& events, const ToothEventTemplate& tmpl,
+                     const SampleRing& ring, const Lockstep& model, RevolutionRecord& out);
 
   /// Measure the model revolution once per model and alignment (true, the default) or anew
   /// on every turn.

@@ -347,9 +347,11 @@ nlohmann::json RunSummary::to_json() const {
              {"delta_fy_N", two_edges ? number_or_null(model_delta_fy_.mean()) : json(nullptr)},
              {"lockstep", config_.lockstep},
              {"builds", status_.model_builds},
-             // Identified parameters the model in lockstep took (and fits it did not take).
+             // Identified parameters the model in lockstep took, fits it did not take, and
+             // fits accepted that a newer one (or the run's end) overtook before it could.
              {"identified_parameters_taken", status_.identifications_taken},
              {"identified_parameters_rejected", status_.identifications_rejected},
+             {"identified_parameters_superseded", status_.identifications_superseded},
              {"material", config_.model.material.name}}},
            {"alerts", alerts_},
            {"dropped_samples", in.samples_dropped},

@@ -112,7 +112,8 @@ TEST(Lockstep, ItsRevisionChangesWithTheModelOrItsAlignmentOnly) {
   EXPECT_NE(aligned, rebuilt);
   model::ModelConfig other = cut();
   other.effects.runout.offset_um = 0.5;
-  lockstep.set_parameters(other, 0.3, true);
+  lockstep.build(other, lockstep.spindle_hz());  // identified parameters
+  lockstep.set_alignment(0.3);
   EXPECT_NE(lockstep.revision(), aligned);
   Lockstep second(cut(), filter);
   ASSERT_TRUE(second.set_spindle_hz(420.0));

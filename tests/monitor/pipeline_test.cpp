@@ -436,6 +436,49 @@ TEST(Pipeline, ResidualIsTheKnownDifferenceOfAFinerTruth) {
   }
 }
 
+// The lock aligns the model on its template average, whose angle is the tracker's; each
+// revolution's samples are placed by its own tooth events, which a different estimator finds
+// (on the simulated cuts the two offsets lay 2–6° apart). The model is aligned on the lock's
+// first revolution and states no residual before: the first window's residuals are those of
+// the later revolutions (19 and 36 times them at 50 and 333.3 kHz, 7 times for the 3-flute
+// slot, while the template's offset held a window), from the lock's first revolution on.
+TEST(Pipeline, TheLocksFirstWindowIsAlignedAsTheRest) {
+  sim::Scenario fast = cut_at_50khz(true);
+  fast.sample_rate_hz = 333300.0;
+  fast.duration_s = 0.5;
+  for (const sim::Scenario& s :
+       {cut_at_50khz(true), fast, test::three_flute_cut_with_runout(0.6)}) {
+    MonitorConfig c = monitor_for(s);
+    c.model.resolution.steps_per_rev = 720;
+    Collector out;
+    Pipeline p(c, out);
+    replay(p, record(s), 1000);
+    ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 1);
+    const PipelineEvent* first = out.first(PipelineEventKind::kModelAligned);
+    ASSERT_NE(first, nullptr);
+    EXPECT_EQ(first->count, 1);  // on the first revolution measured
+    double first_window = 0.0, later = 0.0;
+    int n_first = 0, n_later = 0;
+    for (const RevolutionRecord& r : out.revolutions) {
+      if (r.revolution > 0 && r.measured.bounded) {
+        EXPECT_TRUE(r.model_valid) << r.revolution;
+      }
+      if (!r.model_valid) {
+        continue;
+      }
+      (r.revolution < c.sync_window_revolutions ? first_window : later) += r.residual_rms_N[0];
+      ++(r.revolution < c.sync_window_revolutions ? n_first : n_later);
+    }
+    ASSERT_GE(n_first, c.sync_window_revolutions - 1);
+    ASSERT_GT(n_later, 100);
+    first_window /= n_first;
+    later /= n_later;
+    std::printf("%.1f kHz, %d flutes: residual fx %.4f N over the first window, %.4f N after\n",
+                s.sample_rate_hz / 1e3, s.model.tool.flutes, first_window, later);
+    EXPECT_LT(first_window, 1.3 * later);
+  }
+}
+
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the
 // force: the residual is that known difference (far above the noise), flute by flute unequal.
 // (Here runout 1.82 µm against 4 µm/tooth: flute 0 cuts at least 3 µm all along its half turn,

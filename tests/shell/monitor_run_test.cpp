@@ -329,35 +329,6 @@ struct MessageCount {
   void on_message(const lcm::ReceiveBuffer*, const std::string&) { ++messages; }
 };
 
-/// A 3-flute slot with runout, simulated as a real cut would differ from the model (noise,
-/// quantisation, a finer truth, the actual speed 1 % below the commanded one).
-sim::Scenario three_flute_cut_with_runout() {
-  sim::Scenario s;
-  s.sample_rate_hz = kRate_hz;
-  s.duration_s = 0.5;
-  s.seed = 3;
-  auto& m = s.model;
-  m = model::without_effects(m);
-  m.material.law = model::ForceLawKind::kLinearEdge;
-  m.tool.flutes = 3;
-  m.tool.diameter_mm = 0.6;
-  m.process.operation = model::Operation::kSlot;
-  m.process.radial_depth_mm = 0.6;
-  m.process.feed_per_tooth_um = 3.0;
-  m.process.axial_depth_mm = 0.05;
-  model::set_effect(m, "runout", true);
-  m.effects.runout.offset_um = 1.2;
-  m.effects.runout.angle_rad = 0.5;
-  s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
-  s.noise.enabled = true;
-  s.noise.sigma_N = {0.015, 0.015, 0.015};
-  s.quantisation.enabled = true;
-  s.quantisation.bits = 16;
-  s.quantisation.range_N = {327.68, 327.68, 327.68};
-  m.resolution.steps_per_rev = 2880;
-  return s;
-}
-
 /// The monitor's configuration for it: no runout and K_tc 30 % low.
 monitor::MonitorConfig config_without_runout(const sim::Scenario& s) {
   monitor::MonitorConfig c = test::monitor_for(s);
@@ -382,7 +353,7 @@ void feed(MonitorRun& run, const test::Recording& r) {
 // and the peaks are the new tool's alone, with a warning saying from where.
 TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
   const sim::Scenario two = two_flute_cut(0.5);
-  const sim::Scenario three = three_flute_cut_with_runout();
+  const sim::Scenario three = test::three_flute_cut_with_runout();
   const MonitorRun::Options options = without_identification();
   MonitorRun run(test::monitor_for(two), options);
   std::int64_t seq = 0;
@@ -426,7 +397,7 @@ TEST(MonitorRun, AReloadOntoAnotherToolSummarisesTheNewTool) {
 // 1 % below the commanded one): the run identifies it in its worker thread, publishes each
 // window on LCM and puts the last one in the summary.
 TEST(MonitorRun, IdentifiesRunoutAndCoefficientsPublishesThemAndSummarises) {
-  const sim::Scenario s = three_flute_cut_with_runout();
+  const sim::Scenario s = test::three_flute_cut_with_runout();
   const model::ModelConfig& m = s.model;
   const monitor::MonitorConfig c = config_without_runout(s);
 
@@ -508,7 +479,7 @@ double mean(std::span<const double> x) {
 // the residual falls to what the noise leaves. Offline (HandOver::kWait) a run is reproducible
 // to the last bit whatever the fits cost.
 TEST(MonitorRun, TheModelInLockstepTakesTheIdentifiedParametersReproducibly) {
-  const sim::Scenario s = three_flute_cut_with_runout();
+  const sim::Scenario s = test::three_flute_cut_with_runout();
   const monitor::MonitorConfig c = config_without_runout(s);
   const test::Recording r = test::record(s);
   MonitorRun::Options options;
@@ -556,12 +527,7 @@ TEST(MonitorRun, FitsTheOptionalParametersTheConfigurationNames) {
   m.effects.runout.angle_rad = 0.5;
   model::set_effect(m, "min_chip", true);
   m.effects.min_chip.h_min_um = 0.6;
-  s.spindle.actual_rpm = 0.99 * m.process.spindle_rpm;
-  s.noise.enabled = true;
-  s.noise.sigma_N = {0.015, 0.015, 0.015};
-  s.quantisation.enabled = true;
-  s.quantisation.bits = 16;
-  s.quantisation.range_N = {327.68, 327.68, 327.68};
+  test::as_measured(s);
   m.resolution.steps_per_rev = 2880;
   monitor::MonitorConfig c = test::monitor_for(s);
   c.model.resolution.steps_per_rev = 720;

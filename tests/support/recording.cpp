@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "core/model/model_config.hpp"
+
 namespace millwatch::test {
 
 int Collector::count(monitor::PipelineEventKind kind) const {
@@ -54,6 +56,37 @@ void replay(monitor::Pipeline& p, const Recording& r, std::size_t block,
   if (finish) {
     p.finish();
   }
+}
+
+void as_measured(sim::Scenario& s) {
+  s.spindle.actual_rpm = 0.99 * s.model.process.spindle_rpm;
+  s.noise.enabled = true;
+  s.noise.sigma_N = {0.015, 0.015, 0.015};
+  s.quantisation.enabled = true;
+  s.quantisation.bits = 16;
+  s.quantisation.range_N = {327.68, 327.68, 327.68};
+}
+
+sim::Scenario three_flute_cut_with_runout(double duration_s) {
+  sim::Scenario s;
+  s.sample_rate_hz = 50000.0;
+  s.duration_s = duration_s;
+  s.seed = 3;
+  auto& m = s.model;
+  m = model::without_effects(m);
+  m.material.law = model::ForceLawKind::kLinearEdge;
+  m.tool.flutes = 3;
+  m.tool.diameter_mm = 0.6;
+  m.process.operation = model::Operation::kSlot;
+  m.process.radial_depth_mm = 0.6;
+  m.process.feed_per_tooth_um = 3.0;
+  m.process.axial_depth_mm = 0.05;
+  model::set_effect(m, "runout", true);
+  m.effects.runout.offset_um = 1.2;
+  m.effects.runout.angle_rad = 0.5;
+  m.resolution.steps_per_rev = 2880;
+  as_measured(s);
+  return s;
 }
 
 monitor::MonitorConfig monitor_for(const sim::Scenario& s) {
