@@ -51,7 +51,8 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
           source_, e.detail, e.value, t_s);
       return;
     case monitor::PipelineEventKind::kModelAligned:
-      spdlog::info("{}: model aligned (correlation {:.3f})", source_, e.value);
+      spdlog::info("{}: {} ({} in the average, correlation {:.3f}, t = {:.3f} s)", source_,
+                   e.detail, e.count, e.value, t_s);
       return;
     case monitor::PipelineEventKind::kModelUpdated:
       if (n == 1) {  // then every window: the first says it happens

@@ -955,14 +955,26 @@ void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sam
   // the lock's offset, were 7-36 times what the model leaves once aligned on them.
   const bool first = aligned_on_template_;
   const bool full = sync_.revolutions() >= sync_.window();
-  next_alignment_revolutions_ = full ? 0 : std::min(2 * sync_.revolutions(), sync_.window());
+  const double template_rad = lockstep_.offset_rad();
   if (!lockstep_.align(sync_)) {
-    return;
+    return;  // (not with a model and a revolution in the average) the next revolution tries again
+  }
+  next_alignment_revolutions_ = full ? 0 : std::min(2 * sync_.revolutions(), sync_.window());
+  if (first && !full) {
+    // A revolution or two against the template's two windows: a peak a pitch away (a partial
+    // first revolution, a noisy one) waits for more revolutions instead of being taken.
+    const double pitch_rad = kTwoPi / config_.model.tool.flutes;
+    const double moved_rad =
+        std::remainder(lockstep_.offset_rad() - template_rad, kTwoPi);  // (−π, π]
+    if (std::fabs(moved_rad) > 0.25 * pitch_rad) {
+      lockstep_.set_alignment(template_rad);
+      return;
+    }
   }
   if (first) {
     aligned_on_template_ = false;
     event(PipelineEventKind::kModelAligned, sample, sync_.revolutions(),
-          lockstep_.alignment_correlation(), "model aligned on the lock's first revolution");
+          lockstep_.alignment_correlation(), "model aligned on the lock's first revolutions");
     analyzer_.analyze_model(ev, events_.event_template(), ring_, lockstep_, r);  // this one's
   } else if (full) {
     event(PipelineEventKind::kModelAligned, sample, sync_.revolutions(),

@@ -63,7 +63,7 @@ enum class PipelineEventKind {
   kLockAcquired,    ///< value: spindle rpm; count: revolutions found before the lock
   kLockLost,        ///< detail: why; the tooth events' speed leaving the tracker's: value,
                     ///< their rpm; count, the tracker's (rounded)
-  kModelAligned,    ///< value: alignment correlation
+  kModelAligned,    ///< value: alignment correlation; count: revolutions in the average
   kModelUpdated,    ///< identified parameters taken by the model; value: unexplained fraction
   kCuttingStopped,  ///< value: the revolution's peak force, N
   kCuttingResumed,  ///< value: the revolution's peak force, N
@@ -114,7 +114,9 @@ struct PipelineStatus {
   std::int64_t identifications_taken = 0;  ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
   /// Accepted for the model but never taken by it: a newer fit replaced it while it waited for
-  /// the model builder, or the run ended (or was handed over) before its build was due.
+  /// the model builder, or the run ended (or was handed over) before its build was due. (With
+  /// the model in lockstep off, accepted fits go to the alerts alone and count in none of the
+  /// three.)
   std::int64_t identifications_superseded = 0;
   /// Revolutions the flute-force change detectors held: the speed more than the alerts'
   /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
