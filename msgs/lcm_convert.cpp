@@ -134,9 +134,9 @@ tool_alert_t tool_alert(const monitor::Alert& a, std::int64_t seq) {
   return t;
 }
 
-pipeline_status3_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
+pipeline_status4_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
                                    std::int64_t published, std::int64_t dropped) {
-  pipeline_status3_t p;
+  pipeline_status4_t p;
   p.utime = s.utime_us;
   p.seq = seq;
   p.samples_in = s.input.samples_in;
@@ -155,6 +155,7 @@ pipeline_status3_t pipeline_status(const monitor::PipelineStatus& s, std::int64_
   p.model_builds = s.model_builds;
   p.identifications_taken = s.identifications_taken;
   p.identifications_rejected = s.identifications_rejected;
+  p.identifications_superseded = s.identifications_superseded;
   p.alert_held_revolutions = s.alert_held_revolutions;
   p.alerts_holding = s.alerts_holding;
   p.messages_published = published;

@@ -1,6 +1,6 @@
 // A window's identified runout on LCM (runout_estimate_t): every field from the fit, the
 // geometric α included (it was a fixed 0), and a failed fit says why instead of numbers. The
-// pipeline's status (pipeline_status3_t) carries what the summary counts.
+// pipeline's status (pipeline_status4_t) carries what the summary counts.
 
 #include "msgs/lcm_convert.hpp"
 
@@ -108,8 +108,9 @@ TEST(LcmConvert, WhatARevolutionDidNotMeasureIsZeroWithItsFlagDown) {
   EXPECT_EQ(tooth_periods(r).period_s, 0.0);
 }
 
-// What the alert engine held at a changed speed and the identifications the model took or
-// refused reach the daemon's status as they reach replay's summary (they were summary-only).
+// What the alert engine held at a changed speed and the identifications the model took,
+// refused or never took (superseded) reach the daemon's status as they reach replay's summary
+// (they were summary-only).
 TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsAndTheIdentifications) {
   monitor::PipelineStatus s;
   s.revolutions = 1000;
@@ -117,13 +118,15 @@ TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsAndTheIdentifications) {
   s.alerts_holding = true;
   s.identifications_taken = 12;
   s.identifications_rejected = 3;
-  const pipeline_status3_t m = pipeline_status(s, 7, 100, 1);
+  s.identifications_superseded = 4;
+  const pipeline_status4_t m = pipeline_status(s, 7, 100, 1);
   EXPECT_EQ(m.seq, 7);
   EXPECT_EQ(m.revolutions, 1000);
   EXPECT_EQ(m.alert_held_revolutions, 502);
   EXPECT_TRUE(m.alerts_holding);
   EXPECT_EQ(m.identifications_taken, 12);
   EXPECT_EQ(m.identifications_rejected, 3);
+  EXPECT_EQ(m.identifications_superseded, 4);
   EXPECT_EQ(m.messages_published, 100);
   EXPECT_EQ(m.messages_dropped, 1);
 }
