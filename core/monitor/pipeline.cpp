@@ -844,8 +844,9 @@ void Pipeline::start_fit_build() {
   if (!waiting_fit_ || !lockstep_.has_model() || !builder_ || builder_->busy()) {
     return;
   }
-  // At the newest speed the model was asked to follow (a fit's build follows it too).
-  builder_->start(waiting_fit_->config, wanted_hz_ > 0.0 ? wanted_hz_ : lockstep_.spindle_hz());
+  // At the newest speed the model was asked to follow (a fit's build follows it too; set by
+  // follow_speed() before the first model, which this waits for).
+  builder_->start(waiting_fit_->config, wanted_hz_);
   build_due_ = revolutions_ + build_delay_revolutions_;
   building_fit_ = std::move(waiting_fit_);
   waiting_fit_.reset();

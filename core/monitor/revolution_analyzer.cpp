@@ -98,10 +98,11 @@ void RevolutionAnalyzer::analyze(const RevolutionEvents& events, const ToothEven
   measure_revolution([&](std::int64_t s) { return ring.row(s); }, sample_rate_hz_, m);
   out.spindle_rpm = measured_rpm(events, m, sample_rate_hz_);
 
-  out.model_valid = false;
-  out.sectors = 0;
   if (model != nullptr) {
     analyze_model(events, tmpl, ring, *model, out);
+  } else {
+    out.model_valid = false;
+    out.sectors = 0;
   }
 }
 
