@@ -691,10 +691,7 @@ void Pipeline::start_events() {
           "no tooth event where the lock puts one");
     return;
   }
-  sync_.clear();
-  sync_revolutions_since_report_ = 0;
-  window_rpm_sum_ = 0.0;
-  window_rpm_count_ = 0;
+  restart_average();
   // The last lock's speed (events stopped for an idle spell keep it) is no speed of this one:
   // neither the status nor the events' speed check may read it before a revolution here.
   last_rpm_ = 0.0;
@@ -707,6 +704,13 @@ void Pipeline::start_events() {
   event(PipelineEventKind::kLockAcquired, input_sample(anchor), 0, 60.0 * phase_.spindle_hz,
         "spindle locked");
   advance_events();
+}
+
+void Pipeline::restart_average() {
+  sync_.clear();
+  sync_revolutions_since_report_ = 0;
+  window_rpm_sum_ = 0.0;
+  window_rpm_count_ = 0;
 }
 
 void Pipeline::advance_events() {
@@ -962,13 +966,20 @@ void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sam
   }
   next_alignment_revolutions_ = full ? 0 : std::min(2 * sync_.revolutions(), sync_.window());
   if (first && !full) {
-    // A revolution or two against the template's two windows: a peak a pitch away (a partial
-    // first revolution, a noisy one) waits for more revolutions instead of being taken.
+    // A few revolutions against the template's two windows: a peak a pitch away (a tool
+    // entering, a knock) is not taken. Within the lock's first window those revolutions are
+    // unlike the cut: the average starts again without them (kept, they bent the alignment
+    // that took them: up to 5x the cut's residual over the next 15 revolutions). After it, the
+    // template may be what is wrong: the average grows until a full window decides.
     const double pitch_rad = kTwoPi / config_.model.tool.flutes;
     const double moved_rad =
         std::remainder(lockstep_.offset_rad() - template_rad, kTwoPi);  // (−π, π]
     if (std::fabs(moved_rad) > 0.25 * pitch_rad) {
       lockstep_.set_alignment(template_rad);
+      if (revolution_base_ + revolutions_ - lock_revolution_ < config_.sync_window_revolutions) {
+        restart_average();
+        next_alignment_revolutions_ = 1;
+      }
       return;
     }
   }

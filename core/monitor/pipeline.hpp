@@ -257,6 +257,9 @@ class Pipeline {
   /// Turns heard while cutting since the tracker's last window, not counted by it yet.
   [[nodiscard]] double heard_since_update() const;
   void start_events();
+  /// The synchronous average and its window's counts start afresh (a lock; revolutions unlike
+  /// the cut at its start).
+  void restart_average();
   /// The tooth events over the ring's new samples, and a kLockLost event if they stopped on
   /// their own.
   void advance_events();
