@@ -33,6 +33,9 @@ constexpr double kModelSpeedChange = 0.002;  // relative: the lockstep model fol
 // rpm), up to twice that when the speed's build waits for a fit's (a fit's build takes the
 // newest speed, so fits do not hold the speed back).
 constexpr double kModelBuildDelay_s = 0.02;
+// A lock's first alignments refused (a quarter pitch from the template's) that start the
+// synchronous average again: a knock of a few revolutions; more, the template may be wrong.
+constexpr int kFirstAlignmentRestarts = 4;
 // Relative: the tooth events' revolution speed against a consistent tracker window's, beyond
 // which the events follow minima that are not the flutes' (a 6-flute cut after a speed ramp:
 // the events' filter ran on to 16,500 rpm for 13,000, counting 8 turns the spindle did not make).
@@ -683,6 +686,7 @@ void Pipeline::start_events() {
     lockstep_.align(sync_);
     aligned_on_template_ = true;
     next_alignment_revolutions_ = 1;
+    first_alignment_restarts_ = 0;
   }
   const std::int64_t earliest =
       std::max(stream_start_, measured_until_ == INT64_MIN ? stream_start_ : measured_until_ + 1);
@@ -967,16 +971,18 @@ void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sam
   next_alignment_revolutions_ = full ? 0 : std::min(2 * sync_.revolutions(), sync_.window());
   if (first && !full) {
     // A few revolutions against the template's two windows: a peak a pitch away (a tool
-    // entering, a knock) is not taken. Within the lock's first window those revolutions are
-    // unlike the cut: the average starts again without them (kept, they bent the alignment
-    // that took them: up to 5x the cut's residual over the next 15 revolutions). After it, the
-    // template may be what is wrong: the average grows until a full window decides.
+    // entering, a knock) is not taken. Those revolutions are unlike the cut: the average starts
+    // again without them (kept, they bent the alignment that took them: up to 5x the cut's
+    // residual over the next 15 revolutions) — a few times, within the lock's first window.
+    // Then the template may be what is wrong: the average grows until a full window decides.
     const double pitch_rad = kTwoPi / config_.model.tool.flutes;
     const double moved_rad =
         std::remainder(lockstep_.offset_rad() - template_rad, kTwoPi);  // (−π, π]
     if (std::fabs(moved_rad) > 0.25 * pitch_rad) {
       lockstep_.set_alignment(template_rad);
-      if (revolution_base_ + revolutions_ - lock_revolution_ < config_.sync_window_revolutions) {
+      if (first_alignment_restarts_ < kFirstAlignmentRestarts &&
+          revolution_base_ + revolutions_ - lock_revolution_ < config_.sync_window_revolutions) {
+        ++first_alignment_restarts_;
         restart_average();
         next_alignment_revolutions_ = 1;
       }

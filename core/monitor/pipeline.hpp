@@ -354,9 +354,13 @@ class Pipeline {
   // The lock's alignment is on its template average, in the tracker's angle; the revolutions
   // place their samples by their tooth events (on_revolution()). Until the model is aligned on
   // a revolution so placed, it states no residuals; then it is aligned again as the average
-  // doubles, up to a full window (next_alignment_revolutions_: 0, none due).
+  // doubles, up to a full window (next_alignment_revolutions_: 0, none due). A first alignment
+  // more than a quarter pitch from the template's is refused: the average starts again (up to
+  // kFirstAlignmentRestarts times in the lock's first window; first_alignment_restarts_) or,
+  // after that, grows until the next alignment due (align_on_revolutions()).
   bool aligned_on_template_ = false;
   int next_alignment_revolutions_ = 0;
+  int first_alignment_restarts_ = 0;
   std::int64_t spindle_seq_ = 0;
   std::int64_t sync_revolutions_since_report_ = 0;
   std::int64_t next_health_check_ = 0;

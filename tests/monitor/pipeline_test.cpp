@@ -483,10 +483,11 @@ TEST(Pipeline, TheLocksFirstWindowIsAlignedAsTheRest) {
 // first revolution unlike the cut (a tool entering, a knock) would put the model a pitch off,
 // and every residual until the next alignment with it. Here the record's first 2.5 revolutions
 // are replaced by the samples half a turn later: the same valleys, the flutes' forces swapped
-// (runout 1.82 µm against 4 µm/tooth: one flute cuts far more). The model is not aligned on
-// them, and the average starts again without them: every revolution after them has a
-// residual like the cut's. Taken, the swapped revolution left the next three at 0.5-0.6 N
-// (60x the cut's); refused but kept in the average, 15 revolutions at 0.03-0.045 N.
+// (runout 1.82 µm against 4 µm/tooth: one flute cuts far more). The first revolution, wholly
+// swapped, is refused and the average starts again without it; the next (partly swapped, its
+// peak within a quarter pitch) is taken alone, and every revolution after the swapped samples
+// has a residual like the cut's. Taken, the first left the next three at 0.5-0.6 N (60x the
+// cut's); refused but kept in the average, 15 revolutions up to 0.045 N.
 TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
   const sim::Scenario s = cut_at_50khz(true);
   Recording r = record(s);
@@ -504,7 +505,15 @@ TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
   Pipeline p(c, out);
   replay(p, r, 1000);
   ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 1);
-  ASSERT_NE(out.first(PipelineEventKind::kModelAligned), nullptr);
+  // The first revolution (swapped) refused, and the average started again: the model aligned
+  // on one later revolution alone, the first stating no residual.
+  const PipelineEvent* aligned = out.first(PipelineEventKind::kModelAligned);
+  ASSERT_NE(aligned, nullptr);
+  ASSERT_FALSE(out.revolutions.empty());
+  EXPECT_FALSE(out.revolutions.front().model_valid);
+  EXPECT_EQ(aligned->count, 1);
+  EXPECT_GT(static_cast<double>(aligned->utime_us - out.revolutions.front().utime_us),
+            0.5e6 * per_rev / s.sample_rate_hz);
   // The cut's own residual: the median after the first window.
   std::vector<double> later;
   for (const RevolutionRecord& rv : out.revolutions) {
