@@ -13,6 +13,7 @@
 
 #include "core/config/json_reader.hpp"
 #include "core/model/flute_positions.hpp"
+#include "core/model/steady_state.hpp"
 #include "core/sim/channel_stats.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "replay/stop_signal.hpp"
@@ -21,6 +22,26 @@
 
 namespace millwatch::shell {
 namespace {
+
+/// What the played steady states were like, in words: what of the record is not the model's
+/// steady state revolution by revolution (empty: all of it is).
+std::vector<std::string> steady_state_notes(const sim::PlayedSteadyStates& p) {
+  std::vector<std::string> notes;
+  if (p.revolutions_round_again > 0) {
+    notes.push_back(fmt::format(
+        "the model's cycle (the least common multiple of its slots' periods) outgrew {} "
+        "revolutions: {} revolutions of the record play the first {} round again, each exact, "
+        "the seam between rounds not",
+        model::kMaxCycleRevolutions, p.revolutions_round_again, model::kMaxCycleRevolutions));
+  }
+  if (p.unsettled_slots > 0) {
+    notes.push_back(fmt::format(
+        "{} of {} slots (disc, immersion) did not repeat within {} revolutions (accumulation "
+        "without a period): their state at the last of them is played",
+        p.unsettled_slots, p.slots, model::kMaxSlotRevolutions));
+  }
+  return notes;
+}
 
 nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simulator) {
   nlohmann::json rev;
@@ -46,8 +67,17 @@ nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simul
     }
   }
   const auto& r = s.model.effects.runout;
+  const sim::PlayedSteadyStates& played = simulator.played_steady_states();
   return {
       {"spindle_rpm_actual", sim::actual_rpm(s)},
+      {"model_steady_state",
+       {{"evaluations", played.evaluations},
+        {"cycles_cut", played.cycles_cut},
+        {"revolutions_round_again", played.revolutions_round_again},
+        {"longest_cycle_revolutions", played.longest_cycle_revolutions},
+        {"unsettled_slots", played.unsettled_slots},
+        {"slots", played.slots},
+        {"notes", steady_state_notes(played)}}},
       {"spindle_rpm_mean_while_cutting", cutting_revs > 0 ? rpm_sum / cutting_revs : 0.0},
       {"runout", {{"enabled", r.enabled}, {"offset_um", r.offset_um}, {"angle_rad", r.angle_rad}}},
       {"revolutions",
@@ -123,6 +153,12 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
       "  force on tool   peak |Fxy| %.3f N; Fx [%.3f, %.3f] Fy [%.3f, %.3f] Fz [%.3f, %.3f] N\n",
       clean.peak_resultant_xy(), clean.min(0), clean.max(0), clean.min(1), clean.max(1),
       clean.min(2), clean.max(2));
+  const sim::PlayedSteadyStates& played = simulator.played_steady_states();
+  std::printf("  model cycle     %d revolution%s, the longest played\n",
+              played.longest_cycle_revolutions, played.longest_cycle_revolutions == 1 ? "" : "s");
+  for (const std::string& note : steady_state_notes(played)) {
+    std::printf("  note            %s\n", note.c_str());
+  }
   std::printf("  wrote           %s\n                  %s\n                  %s\n",
               csv_path.c_str(), sidecar_path.c_str(), truth_path.c_str());
 }

@@ -141,9 +141,17 @@ void CutSimulator::advance_revolution(double start_s) {
     return;
   }
   if (conditions_changed()) {
-    model::evaluate_steady_state(config_, config_.process.spindle_rpm,
-                                 config_.resolution.steps_per_rev, workspace_,
-                                 model::SteadyStateOutput::kMeanAndCycle);
+    const model::SteadyState& st = model::evaluate_steady_state(
+        config_, config_.process.spindle_rpm, config_.resolution.steps_per_rev, workspace_,
+        model::SteadyStateOutput::kMeanAndCycle);
+    ++played_.evaluations;
+    played_.cycles_cut += st.cycle_exact ? 0 : 1;
+    played_.longest_cycle_revolutions =
+        std::max(played_.longest_cycle_revolutions, st.cycle_revolutions);
+    if (st.stats.unconverged_slots >= played_.unsettled_slots) {
+      played_.unsettled_slots = st.stats.unconverged_slots;
+      played_.slots = st.stats.slots;
+    }
     evaluated_.process = config_.process;
     evaluated_.effects.runout = config_.effects.runout;
     evaluated_.effects.flank_wear.wear_um = config_.effects.flank_wear.wear_um;  // same size
@@ -154,6 +162,7 @@ void CutSimulator::advance_revolution(double start_s) {
   const model::SteadyState& state = workspace_.result();
   const auto n = static_cast<long>(truth_.size()) - 1;
   const int m = static_cast<int>(n % state.cycle_revolutions);
+  played_.revolutions_round_again += !state.cycle_exact && n >= state.cycle_revolutions ? 1 : 0;
   const double scale = factor_ / evaluated_factor_;
   for (int a = 0; a < 3; ++a) {
     const auto revolution = state.revolution(m, a);

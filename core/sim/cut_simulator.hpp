@@ -44,6 +44,23 @@ struct RevolutionTruth {
   bool cutting = true;
 };
 
+/// What the model's steady states played so far were like (model::SteadyState and its stats),
+/// over the simulator's evaluations (one per change of conditions: a ramp's speed, runout, wear).
+struct PlayedSteadyStates {
+  int evaluations = 0;
+  /// Evaluations whose cycle (the least common multiple of the slots' periods) exceeded
+  /// model::kMaxCycleRevolutions: a record that long plays its first revolutions round again,
+  /// each exact, the seam not (SteadyState::cycle_exact false).
+  int cycles_cut = 0;
+  /// Revolutions of the record played from a cut cycle round again (revolution n ≥ its length).
+  long revolutions_round_again = 0;
+  int longest_cycle_revolutions = 0;  ///< as played (at most kMaxCycleRevolutions)
+  /// Slots that did not repeat within model::kMaxSlotRevolutions (their state there is
+  /// played), the most in one evaluation, and the slots of that evaluation.
+  int unsettled_slots = 0;
+  int slots = 0;
+};
+
 class CutSimulator {
  public:
   /// @throws config::ConfigError / std::invalid_argument for an inconsistent scenario.
@@ -64,6 +81,8 @@ class CutSimulator {
   [[nodiscard]] const std::array<double, 3>& last_clean_force_N() const { return last_clean_; }
   /// Statistics of the noise-free force on the tool over every sample produced so far.
   [[nodiscard]] const ChannelStats& clean_stats() const { return clean_stats_; }
+  /// The model's steady states played so far.
+  [[nodiscard]] const PlayedSteadyStates& played_steady_states() const { return played_; }
 
  private:
   /// Sets the configuration to the conditions at start_s (speed, feed, runout, wear, drift).
@@ -78,6 +97,7 @@ class CutSimulator {
   SpindleProfile spindle_;
   model::ModelConfig config_;  // the current revolution's conditions
   model::SteadyStateWorkspace workspace_;
+  PlayedSteadyStates played_;
   model::ModelConfig evaluated_;  // the conditions of the workspace's result
   // Coefficient drift: the current factor, and the one the workspace's result holds. Without
   // deflection the force is linear in the coefficients (the chips, the min-chip regime and the

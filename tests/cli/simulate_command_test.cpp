@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -53,12 +54,36 @@ TEST(SimulateCommand, WritesCsvAndSidecarForEveryPreset) {
     // sidecar, not the truth).
     EXPECT_FALSE(j["truth"].contains("revolutions"));
     EXPECT_TRUE(j["truth"].contains("spindle_rpm_actual"));
+    // What the model's steady states played were like, said where they were not the model's
+    // steady state revolution by revolution (the cp-Ti preset's cycle outgrows 64 revolutions:
+    // CutSimulator.SaysWhenTheModelsCycleIsPlayedRoundAgain).
+    const auto& played = j["truth"]["model_steady_state"];
+    ASSERT_TRUE(played.is_object()) << j["truth"].dump();
+    EXPECT_GE(played["evaluations"].get<int>(), 1);
+    EXPECT_GE(played["longest_cycle_revolutions"].get<int>(), 1);
+    const bool as_is = played["revolutions_round_again"].get<long>() == 0 &&
+                       played["unsettled_slots"].get<int>() == 0;
+    EXPECT_EQ(played["notes"].empty(), as_is) << played.dump();
+    EXPECT_NE(r.output.find("model cycle"), std::string::npos) << r.output;
+    if (entry.path().stem() == "cpti_masrani2023") {
+      EXPECT_EQ(played["cycles_cut"], 1) << played.dump();
+    }
     ASSERT_EQ(j["truth"]["revolutions_file"], entry.path().stem().string() + ".truth.json");
     std::ifstream tj(dir / j["truth"]["revolutions_file"].get<std::string>());
     const auto truth = nlohmann::json::parse(tj);
     EXPECT_EQ(truth["spindle_rpm_actual"], j["truth"]["spindle_rpm_actual"]);
     const auto& rpm = truth["revolutions"]["spindle_rpm"];
     ASSERT_FALSE(rpm.empty());
+    // A cut cycle's revolutions from the 65th on replay the first 64 (the truth lists the
+    // revolutions the record reached; the simulator prepares one ahead).
+    const long beyond = std::max(0L, static_cast<long>(rpm.size()) - 64);
+    const long round_again = played["revolutions_round_again"].get<long>();
+    if (played["cycles_cut"].get<int>() > 0) {
+      EXPECT_GE(round_again, beyond) << played.dump();
+      EXPECT_LE(round_again, beyond + 1) << played.dump();
+    } else {
+      EXPECT_EQ(round_again, 0) << played.dump();
+    }
     EXPECT_EQ(truth["revolutions"]["start_s"].size(), rpm.size());
     // A revolution takes 60/rpm s: the starts (on samples) are that far apart.
     if (rpm.size() >= 2) {
@@ -71,6 +96,46 @@ TEST(SimulateCommand, WritesCsvAndSidecarForEveryPreset) {
         static_cast<long>(std::count(std::istreambuf_iterator<char>(std::ifstream(csv).rdbuf()),
                                      std::istreambuf_iterator<char>(), '\n')));
   }
+}
+
+// A record longer than a cut cycle (the cp-Ti preset's outgrows 64 revolutions; 0.3 s is 126)
+// says, in the summary and the truth, how many of its revolutions replay the first 64.
+TEST(SimulateCommand, SaysWhenTheModelsCycleIsPlayedRoundAgain) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = dir / "cpti.csv";
+  const auto r = test::run_command(
+      test::millwatch_cli() + " simulate " +
+      (test::source_dir() / "config" / "presets" / "cpti_masrani2023.json").string() +
+      " --duration 0.3 -o " + csv.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("play the first 64 round again"), std::string::npos) << r.output;
+  std::ifstream tj(dir / "cpti.truth.json");
+  const auto truth = nlohmann::json::parse(tj);
+  const auto& played = truth["model_steady_state"];
+  const auto revolutions = static_cast<long>(truth["revolutions"]["start_s"].size());
+  EXPECT_EQ(played["cycles_cut"], 1) << played.dump();
+  // Each revolution from the 65th on (the truth lists those the record reached).
+  EXPECT_GE(played["revolutions_round_again"].get<long>(), revolutions - 64) << played.dump();
+  EXPECT_LE(played["revolutions_round_again"].get<long>(), revolutions - 63) << played.dump();
+  ASSERT_EQ(played["notes"].size(), 1U) << played.dump();
+
+  // h_min 3 µm for a 4 µm feed on a tool 5x softer: some slots' accumulation has no period
+  // (a flute cuts every 4 or 5 revolutions, in no fixed order), and the truth says how many.
+  std::ifstream in(test::source_dir() / "config" / "presets" / "cpti_masrani2023.json");
+  nlohmann::json soft = nlohmann::json::parse(in);
+  soft["model"]["effects"]["min_chip"]["h_min_um"] = 3.0;
+  soft["model"]["effects"]["deflection"]["stiffness_N_per_um"] = 0.1;
+  const fs::path soft_csv = dir / "soft.csv";
+  const auto rs = test::run_command(test::millwatch_cli() + " simulate " +
+                                    write_file(dir / "soft.json", soft.dump()).string() +
+                                    " --duration 0.05 -o " + soft_csv.string());
+  ASSERT_EQ(rs.exit_code, 0) << rs.output;
+  EXPECT_NE(rs.output.find("did not repeat within 600 revolutions"), std::string::npos)
+      << rs.output;
+  std::ifstream sj(dir / "soft.truth.json");
+  const auto soft_played = nlohmann::json::parse(sj)["model_steady_state"];
+  EXPECT_GT(soft_played["unsettled_slots"].get<int>(), 0) << soft_played.dump();
+  EXPECT_EQ(soft_played["slots"], 7200) << soft_played.dump();  // 10 discs, 720 steps
 }
 
 // Bad input: a clear error naming the field, value and range; non-zero exit; no files left.

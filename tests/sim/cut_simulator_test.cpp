@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <vector>
 
 #include "core/config/json_reader.hpp"
 #include "core/model/steady_state.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace millwatch::sim {
 namespace {
@@ -454,6 +457,52 @@ TEST(CutSimulator, PlaysTheAccumulationCycleRevolutionByRevolution) {
     peak = std::max(peak, std::fabs(r.fy[i]));
     repeat = std::max(repeat, std::fabs(r.fy[i] - r.fy[i + cycle * 125]));
     neighbour = std::max(neighbour, std::fabs(r.fy[i] - r.fy[i + 125]));
+  }
+  EXPECT_LT(repeat, 1e-9 * peak);
+  EXPECT_GT(neighbour, 1e-3 * peak);
+  // Played as it is: the whole cycle, exactly.
+  const PlayedSteadyStates& played = sim.played_steady_states();
+  EXPECT_EQ(played.evaluations, 1);
+  EXPECT_EQ(played.cycles_cut, 0);
+  EXPECT_EQ(played.revolutions_round_again, 0);
+  EXPECT_EQ(played.longest_cycle_revolutions, state.cycle_revolutions);
+  EXPECT_EQ(played.unsettled_slots, 0);
+}
+
+// The cp-Ti preset's cut ([000]'s slot: deflection, h_min's accumulation, 10 helix discs): its
+// slots' periods have a least common multiple beyond kMaxCycleRevolutions, and the record plays
+// the first 64 revolutions round again. The simulator says so (PlayedSteadyStates, which
+// `millwatch simulate` writes into the truth and prints), and the record shows it: each sample
+// is the one 64 revolutions before, where the next revolution's is not.
+TEST(CutSimulator, SaysWhenTheModelsCycleIsPlayedRoundAgain) {
+  std::ifstream preset(test::source_dir() / "config" / "presets" / "cpti_masrani2023.json");
+  Scenario s = scenario_from_json(nlohmann::json::parse(preset));
+  s.sample_rate_hz = 20000.0;
+  s.duration_s = 0.25;
+  s.spindle.actual_rpm = 25000.0;  // 48 samples a revolution
+  s.noise.enabled = false;
+  s.quantisation.enabled = false;
+  s.hum.enabled = false;
+  s.drift.enabled = false;
+  CutSimulator sim(s);
+  const Record r = run(sim);
+  const PlayedSteadyStates& played = sim.played_steady_states();
+  EXPECT_EQ(played.evaluations, 1);
+  EXPECT_EQ(played.cycles_cut, 1);
+  // Revolutions 64 … 104 (and the one prepared ahead) of 0.25 s at 25,000 rpm.
+  EXPECT_EQ(played.revolutions_round_again,
+            static_cast<long>(sim.truth().size()) - model::kMaxCycleRevolutions);
+  EXPECT_GE(played.revolutions_round_again, 40);
+  EXPECT_EQ(played.longest_cycle_revolutions, model::kMaxCycleRevolutions);
+  EXPECT_EQ(played.unsettled_slots, 0);
+  const std::size_t revolution = 48;
+  const std::size_t round = revolution * static_cast<std::size_t>(model::kMaxCycleRevolutions);
+  ASSERT_GT(r.fy.size(), round + 10 * revolution);
+  double repeat = 0.0, neighbour = 0.0, peak = 0.0;
+  for (std::size_t i = 0; i + round < r.fy.size(); ++i) {
+    peak = std::max(peak, std::fabs(r.fy[i]));
+    repeat = std::max(repeat, std::fabs(r.fy[i] - r.fy[i + round]));
+    neighbour = std::max(neighbour, std::fabs(r.fy[i] - r.fy[i + revolution]));
   }
   EXPECT_LT(repeat, 1e-9 * peak);
   EXPECT_GT(neighbour, 1e-3 * peak);
