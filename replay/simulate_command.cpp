@@ -25,14 +25,15 @@ namespace {
 
 /// What the played steady states were like, in words: what of the record is not the model's
 /// steady state revolution by revolution (empty: all of it is).
-std::vector<std::string> steady_state_notes(const sim::PlayedSteadyStates& p) {
+std::vector<std::string> steady_state_notes(const sim::PlayedSteadyStates& p,
+                                            long revolutions_round_again) {
   std::vector<std::string> notes;
-  if (p.revolutions_round_again > 0) {
+  if (revolutions_round_again > 0) {
     notes.push_back(fmt::format(
         "the model's cycle (the least common multiple of its slots' periods) outgrew {} "
         "revolutions: {} revolutions of the record play the first {} round again, each exact, "
         "the seam between rounds not",
-        model::kMaxCycleRevolutions, p.revolutions_round_again, model::kMaxCycleRevolutions));
+        model::kMaxCycleRevolutions, revolutions_round_again, model::kMaxCycleRevolutions));
   }
   if (p.unsettled_slots > 0) {
     notes.push_back(fmt::format(
@@ -50,6 +51,7 @@ nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simul
   std::vector<bool> cutting;
   double rpm_sum = 0.0;
   int cutting_revs = 0;
+  long round_again = 0;
   for (const auto& t : simulator.truth()) {
     if (t.start_s > s.duration_s) {
       break;  // prepared ahead, never reached
@@ -61,6 +63,7 @@ nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simul
     angle.push_back(t.runout_angle_rad);
     wear.push_back(t.wear_um);
     cutting.push_back(t.cutting);
+    round_again += t.round_again ? 1 : 0;
     if (t.cutting) {
       rpm_sum += t.spindle_rpm;
       ++cutting_revs;
@@ -73,11 +76,11 @@ nlohmann::json truth_json(const sim::Scenario& s, const sim::CutSimulator& simul
       {"model_steady_state",
        {{"evaluations", played.evaluations},
         {"cycles_cut", played.cycles_cut},
-        {"revolutions_round_again", played.revolutions_round_again},
+        {"revolutions_round_again", round_again},
         {"longest_cycle_revolutions", played.longest_cycle_revolutions},
         {"unsettled_slots", played.unsettled_slots},
         {"slots", played.slots},
-        {"notes", steady_state_notes(played)}}},
+        {"notes", steady_state_notes(played, round_again)}}},
       {"spindle_rpm_mean_while_cutting", cutting_revs > 0 ? rpm_sum / cutting_revs : 0.0},
       {"runout", {{"enabled", r.enabled}, {"offset_um", r.offset_um}, {"angle_rad", r.angle_rad}}},
       {"revolutions",
@@ -123,9 +126,11 @@ nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& sim
           {"scenario", sim::to_json(s)}};
 }
 
+/// `steady_state`: the truth's model_steady_state.
 void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
-                   const sim::ChannelStats& clean, const std::string& csv_path,
-                   const std::string& sidecar_path, const std::string& truth_path) {
+                   const sim::ChannelStats& clean, const nlohmann::json& steady_state,
+                   const std::string& csv_path, const std::string& sidecar_path,
+                   const std::string& truth_path) {
   const auto& m = s.model;
   const auto pitch = model::flute_pitch_angles_rad(m.tool);
   const auto& r = m.effects.runout;
@@ -153,11 +158,11 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
       "  force on tool   peak |Fxy| %.3f N; Fx [%.3f, %.3f] Fy [%.3f, %.3f] Fz [%.3f, %.3f] N\n",
       clean.peak_resultant_xy(), clean.min(0), clean.max(0), clean.min(1), clean.max(1),
       clean.min(2), clean.max(2));
-  const sim::PlayedSteadyStates& played = simulator.played_steady_states();
-  std::printf("  model cycle     %d revolution%s, the longest played\n",
-              played.longest_cycle_revolutions, played.longest_cycle_revolutions == 1 ? "" : "s");
-  for (const std::string& note : steady_state_notes(played)) {
-    std::printf("  note            %s\n", note.c_str());
+  const int longest = steady_state["longest_cycle_revolutions"].get<int>();
+  std::printf("  model cycle     %d revolution%s, the longest played\n", longest,
+              longest == 1 ? "" : "s");
+  for (const auto& note : steady_state["notes"]) {
+    std::printf("  note            %s\n", note.get<std::string>().c_str());
   }
   std::printf("  wrote           %s\n                  %s\n                  %s\n",
               csv_path.c_str(), sidecar_path.c_str(), truth_path.c_str());
@@ -240,8 +245,8 @@ int run_simulate(const SimulateOptions& o) {
     csv.commit();
     sidecar.commit();
     truth_file.commit();
-    print_summary(scenario, simulator, simulator.clean_stats(), csv_path.string(),
-                  sidecar_path.string(), truth_path.string());
+    print_summary(scenario, simulator, simulator.clean_stats(), truth["model_steady_state"],
+                  csv_path.string(), sidecar_path.string(), truth_path.string());
   } catch (const config::ConfigError& e) {
     spdlog::error("{}: {}", o.scenario_path, e.what());
     return 2;

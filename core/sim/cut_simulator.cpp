@@ -162,7 +162,7 @@ void CutSimulator::advance_revolution(double start_s) {
   const model::SteadyState& state = workspace_.result();
   const auto n = static_cast<long>(truth_.size()) - 1;
   const int m = static_cast<int>(n % state.cycle_revolutions);
-  played_.revolutions_round_again += !state.cycle_exact && n >= state.cycle_revolutions ? 1 : 0;
+  truth_.back().round_again = !state.cycle_exact && n >= state.cycle_revolutions;
   const double scale = factor_ / evaluated_factor_;
   for (int a = 0; a < 3; ++a) {
     const auto revolution = state.revolution(m, a);

@@ -42,6 +42,9 @@ struct RevolutionTruth {
   std::vector<double> wear_um;      ///< per flute
   double coefficient_factor = 1.0;  ///< every force coefficient × this (coefficient drift)
   bool cutting = true;
+  /// Played from a cut cycle (PlayedSteadyStates::cycles_cut) round again: its revolution
+  /// n mod kMaxCycleRevolutions, not the model's revolution n.
+  bool round_again = false;
 };
 
 /// What the model's steady states played so far were like (model::SteadyState and its stats),
@@ -50,10 +53,8 @@ struct PlayedSteadyStates {
   int evaluations = 0;
   /// Evaluations whose cycle (the least common multiple of the slots' periods) exceeded
   /// model::kMaxCycleRevolutions: a record that long plays its first revolutions round again,
-  /// each exact, the seam not (SteadyState::cycle_exact false).
+  /// each exact, the seam not (SteadyState::cycle_exact false; RevolutionTruth::round_again).
   int cycles_cut = 0;
-  /// Revolutions of the record played from a cut cycle round again (revolution n ≥ its length).
-  long revolutions_round_again = 0;
   int longest_cycle_revolutions = 0;  ///< as played (at most kMaxCycleRevolutions)
   /// Slots that did not repeat within model::kMaxSlotRevolutions (their state there is
   /// played), the most in one evaluation, and the slots of that evaluation.

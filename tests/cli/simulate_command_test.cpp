@@ -75,12 +75,11 @@ TEST(SimulateCommand, WritesCsvAndSidecarForEveryPreset) {
     const auto& rpm = truth["revolutions"]["spindle_rpm"];
     ASSERT_FALSE(rpm.empty());
     // A cut cycle's revolutions from the 65th on replay the first 64 (the truth lists the
-    // revolutions the record reached; the simulator prepares one ahead).
+    // revolutions the record reached, each cutting in a preset).
     const long beyond = std::max(0L, static_cast<long>(rpm.size()) - 64);
     const long round_again = played["revolutions_round_again"].get<long>();
     if (played["cycles_cut"].get<int>() > 0) {
-      EXPECT_GE(round_again, beyond) << played.dump();
-      EXPECT_LE(round_again, beyond + 1) << played.dump();
+      EXPECT_EQ(round_again, beyond) << played.dump();
     } else {
       EXPECT_EQ(round_again, 0) << played.dump();
     }
@@ -115,8 +114,7 @@ TEST(SimulateCommand, SaysWhenTheModelsCycleIsPlayedRoundAgain) {
   const auto revolutions = static_cast<long>(truth["revolutions"]["start_s"].size());
   EXPECT_EQ(played["cycles_cut"], 1) << played.dump();
   // Each revolution from the 65th on (the truth lists those the record reached).
-  EXPECT_GE(played["revolutions_round_again"].get<long>(), revolutions - 64) << played.dump();
-  EXPECT_LE(played["revolutions_round_again"].get<long>(), revolutions - 63) << played.dump();
+  EXPECT_EQ(played["revolutions_round_again"].get<long>(), revolutions - 64) << played.dump();
   ASSERT_EQ(played["notes"].size(), 1U) << played.dump();
 
   // h_min 3 µm for a 4 µm feed on a tool 5x softer: some slots' accumulation has no period
