@@ -4,6 +4,9 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
 
 namespace millwatch::test {
 
@@ -21,6 +24,17 @@ CommandResult run_command(const std::string& command) {
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+std::string optimised_millwatch_cli() {
+  const char* env = std::getenv("MILLWATCH_OPTIMISED_CLI");
+  if (env == nullptr || *env == '\0') {
+    return millwatch_cli();
+  }
+  if (!std::filesystem::is_regular_file(env)) {
+    throw std::runtime_error(std::string("MILLWATCH_OPTIMISED_CLI: no program at ") + env);
+  }
+  return env;
 }
 
 }  // namespace millwatch::test
