@@ -65,14 +65,14 @@ PresetRun diagnose_preset(const fs::path& dir, const nlohmann::json& patch) {
   PresetRun run;
   // Optimised where scripts/test.sh provides it (test::optimised_millwatch_cli()).
   const std::string cli = test::optimised_millwatch_cli();
-  run.diagnose = test::run_command(cli + " simulate " + scenario.string() +
-                                   " -o " + csv.string() + " 2>&1");
+  run.diagnose =
+      test::run_command(cli + " simulate " + scenario.string() + " -o " + csv.string() + " 2>&1");
   if (run.diagnose.exit_code != 0) {
     return run;
   }
   const fs::path report = dir / "report";
-  run.diagnose = test::run_command(cli + " diagnose " + csv.string() +
-                                   " --report " + report.string() + " --no-plots --no-progress");
+  run.diagnose = test::run_command(cli + " diagnose " + csv.string() + " --report " +
+                                   report.string() + " --no-plots --no-progress");
   if (run.diagnose.exit_code == 0) {
     run.report = read_json(report / "report.json");
   }
