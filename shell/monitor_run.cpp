@@ -32,6 +32,12 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.idle_revolutions += s.idle_revolutions;
   total.alert_held_revolutions += s.alert_held_revolutions;
   total.model_builds += s.model_builds;
+  total.model_builds_unsettled += s.model_builds_unsettled;
+  if (s.model_unsettled_slots_most > total.model_unsettled_slots_most) {
+    total.model_unsettled_slots_most = s.model_unsettled_slots_most;
+    total.model_slots_of_most = s.model_slots_of_most;
+  }
+  total.model_builds_area_unsettled += s.model_builds_area_unsettled;
   total.cutting_revolutions += s.cutting_revolutions;
 }
 

@@ -137,6 +137,13 @@ std::string summary_text(const json& j) {
     }
     s += "\n";
   }
+  // What of the lockstep model's revolution was approximate (RunSummary's model.steady_state).
+  const json& steady = j.value("model", json::object()).value("steady_state", json::object());
+  for (const auto& note : steady.value("notes", json::array())) {
+    if (note.is_string()) {
+      s += fmt::format("  model note    {}\n", note.get<std::string>());
+    }
+  }
   // The identified runout (core/identify), when a window was fitted.
   const json& runout = j.value("runout", json::object());
   if (has_number(runout, "rho_um")) {

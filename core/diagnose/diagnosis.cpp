@@ -152,6 +152,12 @@ struct Evaluation {
   double wear_normal = 1.0;
   /// Damping ratios held at a physical bound (name → "lower"/"upper"), from the last segment.
   std::vector<std::pair<std::string, std::string>> at_bound;
+  /// The model's steady state as synthesize() laid it on the record (over the segments): the
+  /// record's revolutions that play a cycle cut at model::kMaxCycleRevolutions round again,
+  /// and the most slots that did not repeat within model::kMaxSlotRevolutions, of `slots`.
+  double revolutions_round_again = 0.0;
+  int unsettled_slots = 0;
+  int slots = 0;
 };
 
 /// One round of the search: every candidate not in the model added to it and refitted.
@@ -727,6 +733,14 @@ class Engine {
                           : 1;
     ev.cycle_revolutions = cycle;
     const double f = rpm / 60.0;
+    if (!st->cycle_exact) {
+      ev.revolutions_round_again +=
+          std::max(0.0, static_cast<double>(i1 - i0) * f / fs_ - static_cast<double>(cycle));
+    }
+    if (st->stats.unconverged_slots >= ev.unsettled_slots) {
+      ev.unsettled_slots = st->stats.unconverged_slots;
+      ev.slots = st->stats.slots;
+    }
     const int length = cycle * steps;  // the cycle's grid
     const int q_max =
         std::min(static_cast<int>(std::floor(band_ * cycle / f + 1e-9)), length / 2 - 1);
@@ -1170,6 +1184,10 @@ class Diagnoser {
   /// it (the cp-Ti preset's cut at 20 kHz: 0.08 µm where chip_accumulation came in before the
   /// deflection, 0.198 µm in the final model, truth 0.2).
   void final_h_min(State& state, Evaluation& current, Diagnosis& out);
+  /// What of the final model's steady state, as laid on the record, is not the model's own
+  /// revolution by revolution (a cycle played round again, slots that never repeated), in
+  /// final_notes.
+  void final_steady_state(const Evaluation& current, Diagnosis& out) const;
   /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
   /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
   /// where the deflection hardly changes the force.
@@ -1307,6 +1325,26 @@ bool Diagnoser::apply(Engine& engine, const std::string& name, State& s, const E
     return false;
   }
   return true;
+}
+
+void Diagnoser::final_steady_state(const Evaluation& current, Diagnosis& out) const {
+  const long round_again = std::lround(std::floor(current.revolutions_round_again));
+  if (round_again > 0) {
+    out.final_notes.push_back(
+        format("The final model's cycle (the least common multiple of its slots' periods) "
+               "outgrew %.0f revolutions: %.0f revolutions of the record are compared with its "
+               "first %.0f played round again, each exact, the seam between rounds not",
+               static_cast<double>(model::kMaxCycleRevolutions), static_cast<double>(round_again),
+               static_cast<double>(model::kMaxCycleRevolutions)));
+  }
+  if (current.unsettled_slots > 0) {
+    out.final_notes.push_back(
+        format("%.0f of the final model's %.0f slots (disc, immersion) did not repeat within "
+               "%.0f revolutions (accumulation without a period): their state at the last of "
+               "them stands in its cycle, which is approximate there",
+               static_cast<double>(current.unsettled_slots), static_cast<double>(current.slots),
+               static_cast<double>(model::kMaxSlotRevolutions)));
+  }
 }
 
 Evaluation Diagnoser::profile_h_min(Engine& engine, State& s, const Evaluation& current,
@@ -2348,6 +2386,7 @@ Diagnosis Diagnoser::run() {
   const bool step_limited = out.stop_reason == "the step limit was reached";
   const bool search_at_floor = at_floor(current);
   final_h_min(state, current, out);
+  final_steady_state(current, out);
   if (!search_at_floor && at_floor(current)) {
     // The search stopped above the floor; the verdict, on the final model, says it is there.
     out.stop_reason +=

@@ -244,7 +244,9 @@ struct Diagnosis {
   /// step's model, and what the model lacks biases its parameters beyond them ("" at the floor).
   std::string sigma_caveat;
   /// What was done to the final model after the search's last step (h_min profiled again in
-  /// it), a sentence each.
+  /// it), and what of its steady state, as compared with the record, is not its own revolution
+  /// by revolution (a cycle longer than model::kMaxCycleRevolutions played round again, slots
+  /// that did not repeat), a sentence each.
   std::vector<std::string> final_notes;
   /// The final model's residual and force coefficients (the last step's, unless final_notes
   /// changed the model after it).

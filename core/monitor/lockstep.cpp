@@ -58,6 +58,7 @@ bool Lockstep::set_spindle_hz(double spindle_hz) {
   const int steps = commanded_.resolution.steps_per_rev;
   const model::SteadyState& s = model::evaluate_steady_state(config_, rpm, steps, workspace_,
                                                              model::SteadyStateOutput::kMean);
+  stats_ = s.stats;
   std::copy(s.mean.fx_N.begin(), s.mean.fx_N.end(), waveform_.fx_N.begin());
   std::copy(s.mean.fy_N.begin(), s.mean.fy_N.end(), waveform_.fy_N.begin());
   std::copy(s.mean.fz_N.begin(), s.mean.fz_N.end(), waveform_.fz_N.begin());
@@ -79,6 +80,7 @@ void Lockstep::take_model(Lockstep& built) {
   std::swap(waveform_, built.waveform_);
   std::swap(filtered_, built.filtered_);
   std::swap(line_table_, built.line_table_);
+  std::swap(stats_, built.stats_);
   std::swap(spindle_hz_, built.spindle_hz_);
   std::swap(built_, built.built_);
   aligned_ = aligned_ && built_;

@@ -91,6 +91,12 @@ class Lockstep {
   /// The model's revolution filtered (periodic steady state) on `bins` tracker-angle bins.
   void filtered_on_tracker_grid(int axis, int bins, std::vector<double>& out) const;
   [[nodiscard]] const model::ModelConfig& model_config() const { return config_; }
+  /// What the evaluation of the model built last did (model::SteadyStateStats): how many of
+  /// its slots did not repeat within model::kMaxSlotRevolutions (their state there stands in
+  /// the mean revolution) and whether the ploughed areas settled with the deflection. The mean
+  /// revolution is exact for a cycle cut at model::kMaxCycleRevolutions (each slot's own
+  /// period), so only these say that the model revolution is approximate.
+  [[nodiscard]] const model::SteadyStateStats& steady_state_stats() const { return stats_; }
 
  private:
   void filter_periodic();
@@ -109,6 +115,7 @@ class Lockstep {
   // Scratch of align(): the model and the measured average on the tracker grid, correlations.
   std::array<std::vector<double>, 3> model_bins_, measured_bins_;
   std::vector<double> correlation_scratch_;
+  model::SteadyStateStats stats_;  // of the build the model is
   std::uint64_t revision_ = 0;
   double spindle_hz_ = 0.0;
   double offset_rad_ = 0.0;

@@ -751,7 +751,7 @@ void Pipeline::follow_speed(double spindle_hz, bool now) {
     take_model_build(false, false);  // the build under way first, then this speed's
     if (moved(lockstep_.spindle_hz())) {
       lockstep_.set_spindle_hz(spindle_hz);
-      ++model_builds_;
+      count_model_build();
     }
     if (!builder_) {  // the later builds' (with the lock's burst, not in a revolution of its own)
       builder_ = std::make_unique<ModelBuilder>(config_.model, filter_, config_.filter_zero_phase);
@@ -776,7 +776,7 @@ void Pipeline::take_model_build(bool due_only, bool start_next) {
     return;
   }
   builder_->take_into(lockstep_);
-  ++model_builds_;
+  count_model_build();
   if (building_fit_) {
     apply_fit(*building_fit_);
     building_fit_.reset();
@@ -784,6 +784,19 @@ void Pipeline::take_model_build(bool due_only, bool start_next) {
   if (start_next) {
     start_fit_build();  // a fit that waited for this build
   }
+}
+
+void Pipeline::count_model_build() {
+  ++model_builds_;
+  const model::SteadyStateStats& st = lockstep_.steady_state_stats();
+  if (st.unconverged_slots > 0) {
+    ++model_builds_unsettled_;
+    if (st.unconverged_slots > model_unsettled_slots_most_) {
+      model_unsettled_slots_most_ = st.unconverged_slots;
+      model_slots_of_most_ = st.slots;
+    }
+  }
+  model_builds_area_unsettled_ += st.area_converged ? 0 : 1;
 }
 
 void Pipeline::submit_window() {
@@ -1028,6 +1041,10 @@ PipelineStatus Pipeline::status() const {
   s.valid_revolutions = valid_revolutions_;
   s.idle_revolutions = idle_revolutions_;
   s.model_builds = model_builds_;
+  s.model_builds_unsettled = model_builds_unsettled_;
+  s.model_unsettled_slots_most = model_unsettled_slots_most_;
+  s.model_slots_of_most = model_slots_of_most_;
+  s.model_builds_area_unsettled = model_builds_area_unsettled_;
   s.identifications_taken = identifications_taken_;
   s.identifications_rejected = identifications_rejected_;
   s.identifications_superseded = identifications_superseded_;

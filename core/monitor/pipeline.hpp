@@ -107,11 +107,19 @@ std::string describe_line_outside_search(const PipelineEvent& e, const MonitorCo
 
 struct PipelineStatus {
   InputCounters input;
-  std::int64_t revolutions = 0;            ///< revolutions reported (cutting)
-  std::int64_t valid_revolutions = 0;      ///< ... with every tooth event found
-  std::int64_t idle_revolutions = 0;       ///< measured without a cutting force (not reported)
-  std::int64_t model_builds = 0;           ///< lockstep model (re)builds: locks and speed changes
-  std::int64_t identifications_taken = 0;  ///< identified parameters the model took
+  std::int64_t revolutions = 0;        ///< revolutions reported (cutting)
+  std::int64_t valid_revolutions = 0;  ///< ... with every tooth event found
+  std::int64_t idle_revolutions = 0;   ///< measured without a cutting force (not reported)
+  std::int64_t model_builds = 0;       ///< lockstep model (re)builds: locks and speed changes
+  /// Builds whose steady state had slots that did not repeat within model::kMaxSlotRevolutions
+  /// (accumulation without a period: their state there stands in the model revolution, which
+  /// is then approximate), the most such slots of one build and that build's slots; builds
+  /// whose ploughed areas did not settle with the deflection (Lockstep::steady_state_stats()).
+  std::int64_t model_builds_unsettled = 0;
+  int model_unsettled_slots_most = 0;
+  int model_slots_of_most = 0;
+  std::int64_t model_builds_area_unsettled = 0;
+  std::int64_t identifications_taken = 0;     ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
   /// Accepted for the model but never taken by it: a newer fit replaced it while it waited for
   /// the model builder, or the run ended (or was handed over) before its build was due. (With
@@ -277,6 +285,8 @@ class Pipeline {
   /// when due (`due_only`), or at once (before anything else changes the model); a fit's with
   /// its alignment. Then, with `start_next`, the build of a fit that waited for it.
   void take_model_build(bool due_only, bool start_next = true);
+  /// Counts the build the lockstep model now is, and what its steady state was like.
+  void count_model_build();
   /// Starts building the model of the fit waiting for builder_, if it is free.
   void start_fit_build();
   /// Aligns the model on the revolutions in the average (the one just added, `ev`, last): the
@@ -325,6 +335,10 @@ class Pipeline {
   std::int64_t measured_until_ = INT64_MIN;  // end of the last revolution measured
   std::int64_t revolutions_ = 0;
   std::int64_t model_builds_ = 0;
+  std::int64_t model_builds_unsettled_ = 0;
+  int model_unsettled_slots_most_ = 0;
+  int model_slots_of_most_ = 0;
+  std::int64_t model_builds_area_unsettled_ = 0;
   std::int64_t valid_revolutions_ = 0;
   std::int64_t idle_revolutions_ = 0;
   bool idle_ = false;  // the last revolution had no cutting force

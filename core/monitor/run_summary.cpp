@@ -6,12 +6,44 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/model/steady_state.hpp"
+
 namespace millwatch::monitor {
 namespace {
 
 /// NaN serialises as null in JSON: say "no data" honestly.
 nlohmann::json number_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
+
+/// The lockstep model's steady states over the run's builds (PipelineStatus), with what of
+/// them was approximate in words (notes: empty when every build was exact).
+nlohmann::json model_steady_state(const PipelineStatus& s) {
+  nlohmann::json notes = nlohmann::json::array();
+  std::array<char, 400> text{};
+  if (s.model_builds_unsettled > 0) {
+    std::snprintf(text.data(), text.size(),
+                  "%lld of %lld model builds had slots (disc, immersion) whose accumulation did "
+                  "not repeat within %d revolutions (%d of %d slots in one build): their state "
+                  "at the last of them stands in the model revolution, which is approximate there",
+                  static_cast<long long>(s.model_builds_unsettled),
+                  static_cast<long long>(s.model_builds), model::kMaxSlotRevolutions,
+                  s.model_unsettled_slots_most, s.model_slots_of_most);
+    notes.push_back(text.data());
+  }
+  if (s.model_builds_area_unsettled > 0) {
+    std::snprintf(text.data(), text.size(),
+                  "%lld of %lld model builds stopped before the ploughed areas and the tool's "
+                  "deflection settled together: their last solution stands",
+                  static_cast<long long>(s.model_builds_area_unsettled),
+                  static_cast<long long>(s.model_builds));
+    notes.push_back(text.data());
+  }
+  return {{"builds_with_unsettled_slots", s.model_builds_unsettled},
+          {"unsettled_slots_most", s.model_unsettled_slots_most},
+          {"slots_of_that_build", s.model_slots_of_most},
+          {"builds_with_areas_unsettled", s.model_builds_area_unsettled},
+          {"notes", notes}};
 }
 
 }  // namespace
@@ -347,6 +379,7 @@ nlohmann::json RunSummary::to_json() const {
              {"delta_fy_N", two_edges ? number_or_null(model_delta_fy_.mean()) : json(nullptr)},
              {"lockstep", config_.lockstep},
              {"builds", status_.model_builds},
+             {"steady_state", model_steady_state(status_)},
              // Identified parameters the model in lockstep took, fits it did not take, and
              // fits accepted that a newer one (or the run's end) overtook before it could.
              {"identified_parameters_taken", status_.identifications_taken},

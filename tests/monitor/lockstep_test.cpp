@@ -9,13 +9,21 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "core/model/milling_model.hpp"
+#include "core/monitor/pipeline.hpp"
+#include "core/monitor/run_summary.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
 #include "core/signal/cpu_features.hpp"
+#include "core/sim/scenario.hpp"
 #include "tests/support/allocation_counter.hpp"
+#include "tests/support/recording.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -188,6 +196,55 @@ TEST(Lockstep, FollowingTheSpeedAllocatesNothing) {
     EXPECT_TRUE(lockstep.set_spindle_hz(400.0 * (1.0 + 0.005 * i)));
   }
   EXPECT_EQ(counter.allocations(), 0);
+}
+
+// What of the model revolution is approximate is said. On a soft tool (0.1 N/µm) with h_min
+// 3 µm for the cp-Ti preset's 4 µm feed, some slots' accumulation repeats within no period
+// the steady state waits for: the simulator's truth counts them (Recording::played), the
+// lockstep's builds count them too, and the run's summary words it. The preset's own cut
+// (h_min 0.2 µm, 0.47 N/µm) has none, and its summary says nothing.
+TEST(Lockstep, TheSummarySaysWhenTheModelsSteadyStateDidNotSettle) {
+  struct Run {
+    sim::PlayedSteadyStates truth;
+    nlohmann::json steady_state;
+    std::int64_t builds = 0;
+  };
+  const auto run = [](double h_min_um, double stiffness_N_per_um) {
+    std::ifstream preset(test::source_dir() / "config" / "presets" / "cpti_masrani2023.json");
+    sim::Scenario s = sim::scenario_from_json(nlohmann::json::parse(preset));
+    s.sample_rate_hz = 20000.0;
+    s.duration_s = 0.5;
+    s.model.effects.min_chip.h_min_um = h_min_um;
+    s.model.effects.deflection.stiffness_N_per_um = stiffness_N_per_um;
+    const test::Recording rec = test::record(s);
+    const MonitorConfig config = test::monitor_for(s);
+    test::Collector sink;
+    Pipeline p(config, sink);
+    test::replay(p, rec, 200);
+    RunSummary summary(config);
+    summary.finish(p.status());
+    return Run{rec.played, summary.to_json()["model"]["steady_state"], p.status().model_builds};
+  };
+
+  const Run soft = run(3.0, 0.1);
+  ASSERT_GT(soft.truth.unsettled_slots, 0);  // the cut as simulated
+  ASSERT_GE(soft.builds, 1);
+  const auto& st = soft.steady_state;
+  EXPECT_GE(st["builds_with_unsettled_slots"].get<std::int64_t>(), 1) << st.dump();
+  EXPECT_LE(st["builds_with_unsettled_slots"].get<std::int64_t>(), soft.builds) << st.dump();
+  EXPECT_GT(st["unsettled_slots_most"].get<int>(), 0) << st.dump();
+  EXPECT_EQ(st["slots_of_that_build"].get<int>(), soft.truth.slots) << st.dump();
+  ASSERT_FALSE(st["notes"].empty()) << st.dump();
+  EXPECT_NE(st["notes"][0].get<std::string>().find("did not repeat within 600 revolutions"),
+            std::string::npos)
+      << st.dump();
+
+  const Run preset = run(0.2, 0.47);
+  ASSERT_EQ(preset.truth.unsettled_slots, 0);
+  ASSERT_GE(preset.builds, 1);
+  EXPECT_EQ(preset.steady_state["builds_with_unsettled_slots"], 0) << preset.steady_state.dump();
+  EXPECT_EQ(preset.steady_state["builds_with_areas_unsettled"], 0) << preset.steady_state.dump();
+  EXPECT_TRUE(preset.steady_state["notes"].empty()) << preset.steady_state.dump();
 }
 
 }  // namespace

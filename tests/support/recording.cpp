@@ -34,6 +34,7 @@ Recording record(const sim::Scenario& s) {
   r.fz.resize(n);
   sim.next_block(r.t, r.fx, r.fy, r.fz);
   r.truth = sim.truth();
+  r.played = sim.played_steady_states();
   r.duration_s = static_cast<double>(n) / s.sample_rate_hz;
   return r;
 }

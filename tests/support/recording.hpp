@@ -32,6 +32,7 @@ struct Recording {
   double sample_rate_hz = 0.0;
   std::vector<double> t, fx, fy, fz;
   std::vector<sim::RevolutionTruth> truth;  ///< one per revolution the simulator started
+  sim::PlayedSteadyStates played;           ///< what the model's steady states played were like
   double duration_s = 0.0;
 };
 
