@@ -31,8 +31,8 @@ std::vector<std::string> steady_state_notes(const sim::PlayedSteadyStates& p,
   if (revolutions_round_again > 0) {
     notes.push_back(fmt::format(
         "the model's cycle (the least common multiple of its slots' periods) outgrew {} "
-        "revolutions: {} revolutions of the record play the first {} round again, each exact, "
-        "the seam between rounds not",
+        "revolutions: {} revolutions of the record play the first {} round again, each exact "
+        "away from the seams between rounds",
         model::kMaxCycleRevolutions, revolutions_round_again, model::kMaxCycleRevolutions));
   }
   if (p.unsettled_slots > 0) {

@@ -35,7 +35,8 @@ cmake --build build/asan -j "$jobs"
 # The cp-Ti preset's two end-to-end diagnoses (tests/cli/diagnose_preset_test.cpp) run the
 # Release program built above from the same sources: sanitized they took about six of the
 # suite's twenty minutes of CPU, for an outcome the optimisation level does not change; the
-# diagnosis's steps and final h_min profile run sanitized in tests/diagnose.
+# diagnosis's search and a final h_min profile run sanitized in tests/diagnose (on cuts whose
+# cycles fit in 64 revolutions).
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
   MILLWATCH_OPTIMISED_CLI=$PWD/build/shipped/replay/millwatch \

@@ -138,8 +138,10 @@ std::string summary_text(const json& j) {
     s += "\n";
   }
   // What of the lockstep model's revolution was approximate (RunSummary's model.steady_state).
-  const json& steady = j.value("model", json::object()).value("steady_state", json::object());
-  for (const auto& note : steady.value("notes", json::array())) {
+  const json& model = j.value("model", json::object());
+  const json& steady = model.is_object() ? model.value("steady_state", json::object()) : json();
+  const json& notes = steady.is_object() ? steady.value("notes", json::array()) : json();
+  for (const auto& note : notes.is_array() ? notes : json::array()) {
     if (note.is_string()) {
       s += fmt::format("  model note    {}\n", note.get<std::string>());
     }

@@ -733,10 +733,6 @@ class Engine {
                           : 1;
     ev.cycle_revolutions = cycle;
     const double f = rpm / 60.0;
-    if (!st->cycle_exact) {
-      ev.revolutions_round_again +=
-          std::max(0.0, static_cast<double>(i1 - i0) * f / fs_ - static_cast<double>(cycle));
-    }
     if (st->stats.unconverged_slots >= ev.unsettled_slots) {
       ev.unsettled_slots = st->stats.unconverged_slots;
       ev.slots = st->stats.slots;
@@ -819,6 +815,10 @@ class Engine {
     }
     ev.alignment_rad = delta;
     const double d0 = delta + kTwoPi * m0;
+    if (!st->cycle_exact) {  // the cycle's revolution at the segment's first sample, then on
+      ev.revolutions_round_again += revolutions_round_again(
+          position(i0, d0) / (kUp * steps), static_cast<double>(i1 - i0) * f / fs_, cycle);
+    }
     for (std::size_t a = 0; a < 2; ++a) {
       ev.model_N[a].resize(n_);
       for (std::size_t i = i0; i < i1; ++i) {
@@ -1328,22 +1328,9 @@ bool Diagnoser::apply(Engine& engine, const std::string& name, State& s, const E
 }
 
 void Diagnoser::final_steady_state(const Evaluation& current, Diagnosis& out) const {
-  const long round_again = std::lround(std::floor(current.revolutions_round_again));
-  if (round_again > 0) {
-    out.final_notes.push_back(
-        format("The final model's cycle (the least common multiple of its slots' periods) "
-               "outgrew %.0f revolutions: %.0f revolutions of the record are compared with its "
-               "first %.0f played round again, each exact, the seam between rounds not",
-               static_cast<double>(model::kMaxCycleRevolutions), static_cast<double>(round_again),
-               static_cast<double>(model::kMaxCycleRevolutions)));
-  }
-  if (current.unsettled_slots > 0) {
-    out.final_notes.push_back(
-        format("%.0f of the final model's %.0f slots (disc, immersion) did not repeat within "
-               "%.0f revolutions (accumulation without a period): their state at the last of "
-               "them stands in its cycle, which is approximate there",
-               static_cast<double>(current.unsettled_slots), static_cast<double>(current.slots),
-               static_cast<double>(model::kMaxSlotRevolutions)));
+  for (auto& note : steady_state_notes(current.revolutions_round_again, current.unsettled_slots,
+                                       current.slots)) {
+    out.final_notes.push_back(std::move(note));
   }
 }
 
@@ -2465,6 +2452,38 @@ Diagnosis Diagnoser::run() {
 
 model::ModelConfig plain_model(const model::ModelConfig& config) {
   return model::without_effects(config);
+}
+
+double revolutions_round_again(double first_cycle_revolution, double revolutions,
+                               int cycle_revolutions) {
+  // The cycle wraps after its remaining revolutions; every revolution after that is one played
+  // again.
+  return std::max(0.0, revolutions - (static_cast<double>(cycle_revolutions) -
+                                      std::clamp(first_cycle_revolution, 0.0,
+                                                 static_cast<double>(cycle_revolutions))));
+}
+
+std::vector<std::string> steady_state_notes(double revolutions_round_again, int unsettled_slots,
+                                            int slots) {
+  std::vector<std::string> notes;
+  const auto round_again = static_cast<double>(std::floor(revolutions_round_again));
+  if (round_again > 0.0) {
+    notes.push_back(
+        format("The final model's cycle (the least common multiple of its slots' periods) "
+               "outgrew %.0f revolutions: %.0f revolutions of the record are compared with its "
+               "first %.0f played round again, each exact away from the seams between rounds",
+               static_cast<double>(model::kMaxCycleRevolutions), round_again,
+               static_cast<double>(model::kMaxCycleRevolutions)));
+  }
+  if (unsettled_slots > 0) {
+    notes.push_back(
+        format("%.0f of the final model's %.0f slots (disc, immersion) did not repeat within "
+               "%.0f revolutions (accumulation without a period): their state at the last of "
+               "them stands in its cycle, which is approximate there",
+               static_cast<double>(unsettled_slots), static_cast<double>(slots),
+               static_cast<double>(model::kMaxSlotRevolutions)));
+  }
+  return notes;
 }
 
 Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,

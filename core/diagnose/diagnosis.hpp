@@ -263,6 +263,19 @@ struct Diagnosis {
   double seconds = 0.0;  ///< wall-clock time
 };
 
+/// How many revolutions of a record laid along a model's cycle of `cycle_revolutions` play it
+/// round again: the record starts at the cycle's revolution `first_cycle_revolution` (fractional,
+/// in [0, cycle)) and spans `revolutions`; those after the cycle's first wrap replay it.
+double revolutions_round_again(double first_cycle_revolution, double revolutions,
+                               int cycle_revolutions);
+
+/// Diagnosis::final_notes on the final model's steady state as laid along the record: the
+/// revolutions compared with a cycle cut at model::kMaxCycleRevolutions played round again (its
+/// whole ones), and its slots that did not repeat within model::kMaxSlotRevolutions (of
+/// `slots`). Empty when neither.
+std::vector<std::string> steady_state_notes(double revolutions_round_again, int unsettled_slots,
+                                            int slots);
+
 /// Diagnoses a record against a starting model (commanded speed in process.spindle_rpm; its
 /// enabled effects are kept, the others are candidates; its values are the fit's starting point,
 /// e.g. the dynamometer's nominal resonance).

@@ -22,7 +22,8 @@
 //
 // scripts/test.sh runs them on the Release program (test::optimised_millwatch_cli()): about
 // three minutes of a core each under the sanitizers, for an outcome the optimisation does not
-// change; tests/diagnose runs the same steps sanitized.
+// change; tests/diagnose runs the search and a final h_min profile sanitized, on cuts whose
+// cycles fit in 64 revolutions.
 
 #include <gtest/gtest.h>
 

@@ -19,8 +19,9 @@ inline std::string millwatch_cli() {
 
 /// The `millwatch` program for a test whose cost is the optimised computation itself and whose
 /// code the sanitized tests also run elsewhere (the cp-Ti preset's diagnosis end to end: about
-/// three minutes of a core under AddressSanitizer, half a minute optimised; its steps and the
-/// final h_min profile run sanitized in tests/diagnose): $MILLWATCH_OPTIMISED_CLI when set —
+/// three minutes of a core under AddressSanitizer, about one optimised beside the rest of the
+/// suite; the search and a final h_min profile run sanitized in tests/diagnose, on cuts whose
+/// cycles fit in 64 revolutions): $MILLWATCH_OPTIMISED_CLI when set —
 /// scripts/test.sh sets the Release program it has just built from the same sources and
 /// checked (build/shipped) —, else millwatch_cli().
 /// @throws std::runtime_error when $MILLWATCH_OPTIMISED_CLI names no file
