@@ -138,9 +138,9 @@ std::string summary_text(const json& j) {
     s += "\n";
   }
   // What of the lockstep model's revolution was approximate (RunSummary's model.steady_state).
-  const json& model = j.value("model", json::object());
-  const json& steady = model.is_object() ? model.value("steady_state", json::object()) : json();
-  const json& notes = steady.is_object() ? steady.value("notes", json::array()) : json();
+  // (A pointer that does not resolve, through a missing key or a value of another kind, gives
+  // the default.)
+  const json notes = j.value(json::json_pointer("/model/steady_state/notes"), json::array());
   for (const auto& note : notes.is_array() ? notes : json::array()) {
     if (note.is_string()) {
       s += fmt::format("  model note    {}\n", note.get<std::string>());

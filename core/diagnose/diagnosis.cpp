@@ -1184,10 +1184,6 @@ class Diagnoser {
   /// it (the cp-Ti preset's cut at 20 kHz: 0.08 µm where chip_accumulation came in before the
   /// deflection, 0.198 µm in the final model, truth 0.2).
   void final_h_min(State& state, Evaluation& current, Diagnosis& out);
-  /// What of the final model's steady state, as laid on the record, is not the model's own
-  /// revolution by revolution (a cycle played round again, slots that never repeated), in
-  /// final_notes.
-  void final_steady_state(const Evaluation& current, Diagnosis& out) const;
   /// The stiffness from a start on a grid (0.05 to 3.2 N/µm, factors of 2, each refined from
   /// the current fit with the stiffness fixed): Levenberg–Marquardt from a far start can stall
   /// where the deflection hardly changes the force.
@@ -1325,13 +1321,6 @@ bool Diagnoser::apply(Engine& engine, const std::string& name, State& s, const E
     return false;
   }
   return true;
-}
-
-void Diagnoser::final_steady_state(const Evaluation& current, Diagnosis& out) const {
-  for (auto& note : steady_state_notes(current.revolutions_round_again, current.unsettled_slots,
-                                       current.slots)) {
-    out.final_notes.push_back(std::move(note));
-  }
 }
 
 Evaluation Diagnoser::profile_h_min(Engine& engine, State& s, const Evaluation& current,
@@ -2373,7 +2362,10 @@ Diagnosis Diagnoser::run() {
   const bool step_limited = out.stop_reason == "the step limit was reached";
   const bool search_at_floor = at_floor(current);
   final_h_min(state, current, out);
-  final_steady_state(current, out);
+  for (auto& note : steady_state_notes(current.revolutions_round_again, current.unsettled_slots,
+                                       current.slots)) {
+    out.final_notes.push_back(std::move(note));
+  }
   if (!search_at_floor && at_floor(current)) {
     // The search stopped above the floor; the verdict, on the final model, says it is there.
     out.stop_reason +=
@@ -2466,7 +2458,7 @@ double revolutions_round_again(double first_cycle_revolution, double revolutions
 std::vector<std::string> steady_state_notes(double revolutions_round_again, int unsettled_slots,
                                             int slots) {
   std::vector<std::string> notes;
-  const auto round_again = static_cast<double>(std::floor(revolutions_round_again));
+  const double round_again = std::floor(revolutions_round_again);
   if (round_again > 0.0) {
     notes.push_back(
         format("The final model's cycle (the least common multiple of its slots' periods) "

@@ -143,5 +143,25 @@ TEST(SummaryText, AlertsSayTheirRevolutionOrThatTheyCameBeforeTheFirst) {
       << text;
 }
 
+// The lockstep model's notes on its steady state (RunSummary's model.steady_state.notes) are
+// printed one a line; a summary without them, or with a model or steady_state of another kind,
+// prints none and does not fail.
+TEST(SummaryText, PrintsTheModelsSteadyStateNotes) {
+  nlohmann::json j = summary(41, 41);
+  j["model"] = {{"steady_state", {{"notes", {"1 of 1 model builds had slots …"}}}}};
+  const std::string text = summary_text(j);
+  EXPECT_NE(text.find("  model note    1 of 1 model builds had slots …\n"), std::string::npos)
+      << text;
+  for (const nlohmann::json& model :
+       {nlohmann::json(nullptr), nlohmann::json(3), nlohmann::json::object(),
+        nlohmann::json{{"steady_state", nullptr}},
+        nlohmann::json{{"steady_state", {{"notes", 7}}}}}) {
+    j["model"] = model;
+    std::string without;
+    ASSERT_NO_THROW(without = summary_text(j)) << model.dump();
+    EXPECT_EQ(without.find("model note"), std::string::npos) << model.dump();
+  }
+}
+
 }  // namespace
 }  // namespace millwatch::shell
