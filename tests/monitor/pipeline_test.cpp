@@ -479,31 +479,72 @@ TEST(Pipeline, TheLocksFirstWindowIsAlignedAsTheRest) {
   }
 }
 
+/// The 50 kHz cut with its first `knocked` revolutions replaced by the samples half a turn
+/// later (a knock: the same valleys, the flutes' forces swapped — runout 1.82 µm against
+/// 4 µm/tooth, one flute cuts far more), replayed with the lockstep model.
+struct KnockedCut {
+  sim::Scenario scenario = cut_at_50khz(true);
+  MonitorConfig config;
+  Collector out;
+  double per_rev = 0.0;         // samples a revolution (118.8)
+  double after_knock_us = 0.0;  // a revolution after the knocked samples (low-pass delay)
+  explicit KnockedCut(double knocked) {
+    const sim::Scenario& s = scenario;
+    Recording r = record(s);
+    per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
+    const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
+    const auto swapped = static_cast<std::size_t>(knocked * per_rev);
+    for (std::size_t i = 0; i < swapped; ++i) {
+      r.fx[i] = r.fx[i + half_turn];
+      r.fy[i] = r.fy[i + half_turn];
+      r.fz[i] = r.fz[i + half_turn];
+    }
+    after_knock_us = 1e6 * (static_cast<double>(swapped) + per_rev) / s.sample_rate_hz;
+    config = monitor_for(s);
+    config.model.resolution.steps_per_rev = 720;
+    Pipeline p(config, out);
+    replay(p, r, 1000);
+  }
+  /// The cut's own residual on fx: the median after the first window.
+  [[nodiscard]] double cut_residual_N() const {
+    std::vector<double> later;
+    for (const RevolutionRecord& rv : out.revolutions) {
+      if (rv.model_valid && rv.revolution >= config.sync_window_revolutions) {
+        later.push_back(rv.residual_rms_N[0]);
+      }
+    }
+    EXPECT_GT(later.size(), 300U);
+    if (later.empty()) {
+      return 0.0;
+    }
+    std::nth_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2),
+                     later.end());
+    return later[later.size() / 2];
+  }
+  /// The first window's revolutions wholly after the knocked samples, bounded.
+  [[nodiscard]] std::vector<const RevolutionRecord*> first_window_after_knock() const {
+    std::vector<const RevolutionRecord*> after;
+    for (const RevolutionRecord& rv : out.revolutions) {
+      if (static_cast<double>(rv.utime_us) >= after_knock_us && rv.measured.bounded &&
+          rv.revolution < config.sync_window_revolutions) {
+        after.push_back(&rv);
+      }
+    }
+    return after;
+  }
+};
+
 // A lock's first alignment rests on one revolution, checked against the lock's template: a
 // first revolution unlike the cut (a tool entering, a knock) would put the model a pitch off,
 // and every residual until the next alignment with it. Here the record's first 2.5 revolutions
-// are replaced by the samples half a turn later: the same valleys, the flutes' forces swapped
-// (runout 1.82 µm against 4 µm/tooth: one flute cuts far more). The first revolution, wholly
-// swapped, is refused and the average starts again without it; the next (partly swapped, its
-// peak within a quarter pitch) is taken alone, and every revolution after the swapped samples
-// has a residual like the cut's. Taken, the first left the next three at 0.5-0.6 N (60x the
-// cut's); refused but kept in the average, 15 revolutions up to 0.045 N.
+// are knocked (KnockedCut). The first revolution, wholly swapped, is refused and the average
+// starts again without it; the next (partly swapped, its peak within a quarter pitch) is taken
+// alone, and every revolution after the swapped samples has a residual like the cut's. Taken,
+// the first left the next three at 0.5-0.6 N (60x the cut's); refused but kept in the average,
+// 15 revolutions up to 0.045 N.
 TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
-  const sim::Scenario s = cut_at_50khz(true);
-  Recording r = record(s);
-  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;  // 118.8 samples
-  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-  const auto swapped = static_cast<std::size_t>(2.5 * per_rev);
-  for (std::size_t i = 0; i < swapped; ++i) {
-    r.fx[i] = r.fx[i + half_turn];
-    r.fy[i] = r.fy[i + half_turn];
-    r.fz[i] = r.fz[i + half_turn];
-  }
-  MonitorConfig c = monitor_for(s);
-  c.model.resolution.steps_per_rev = 720;
-  Collector out;
-  Pipeline p(c, out);
-  replay(p, r, 1000);
+  const KnockedCut k(2.5);
+  const Collector& out = k.out;
   ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 1);
   // The first revolution (swapped) refused, and the average started again: the model aligned
   // on one later revolution alone, the first stating no residual.
@@ -513,36 +554,20 @@ TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
   EXPECT_FALSE(out.revolutions.front().model_valid);
   EXPECT_EQ(aligned->count, 1);
   EXPECT_GT(static_cast<double>(aligned->utime_us - out.revolutions.front().utime_us),
-            0.5e6 * per_rev / s.sample_rate_hz);
-  // The cut's own residual: the median after the first window.
-  std::vector<double> later;
-  for (const RevolutionRecord& rv : out.revolutions) {
-    if (rv.model_valid && rv.revolution >= c.sync_window_revolutions) {
-      later.push_back(rv.residual_rms_N[0]);
-    }
-  }
-  ASSERT_GT(later.size(), 300U);
-  std::nth_element(later.begin(), later.begin() + later.size() / 2, later.end());
-  const double cut_N = later[later.size() / 2];
-  // Every revolution wholly after the swapped samples (its utime is its first event's, less
-  // the low-pass's delay: one revolution of margin).
-  const double after_us = 1e6 * (static_cast<double>(swapped) + per_rev) / s.sample_rate_hz;
+            0.5e6 * k.per_rev / k.scenario.sample_rate_hz);
+  const double cut_N = k.cut_residual_N();
   double worst_N = 0.0;
   int modelled = 0;
-  for (const RevolutionRecord& rv : out.revolutions) {
-    if (static_cast<double>(rv.utime_us) < after_us || !rv.measured.bounded ||
-        rv.revolution >= c.sync_window_revolutions) {
-      continue;
-    }
-    EXPECT_TRUE(rv.model_valid) << rv.revolution;
-    worst_N = std::max(worst_N, rv.model_valid ? rv.residual_rms_N[0] : 0.0);
-    modelled += rv.model_valid ? 1 : 0;
+  for (const RevolutionRecord* rv : k.first_window_after_knock()) {
+    EXPECT_TRUE(rv->model_valid) << rv->revolution;
+    worst_N = std::max(worst_N, rv->model_valid ? rv->residual_rms_N[0] : 0.0);
+    modelled += rv->model_valid ? 1 : 0;
   }
   std::printf(
       "residual fx: worst %.4f N in the first window after the swapped revolutions "
       "(%d), the cut's %.4f N\n",
       worst_N, modelled, cut_N);
-  EXPECT_GE(modelled, c.sync_window_revolutions - 5);
+  EXPECT_GE(modelled, k.config.sync_window_revolutions - 5);
   EXPECT_LT(worst_N, 3.5 * cut_N);
 }
 
@@ -555,60 +580,32 @@ TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
 // 1,000), every knocked revolution started the average again, the first revolution after the
 // knock aligned the model alone, and the first window's residuals reached 0.19 N, 20x the cut's.
 TEST(Pipeline, ALongKnockAtTheLockStartsTheAverageAgainAtMostFourTimes) {
-  const sim::Scenario s = cut_at_50khz(true);
-  Recording r = record(s);
-  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;  // 118.8 samples
-  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-  const auto swapped = static_cast<std::size_t>(9.5 * per_rev);
-  for (std::size_t i = 0; i < swapped; ++i) {
-    r.fx[i] = r.fx[i + half_turn];
-    r.fy[i] = r.fy[i + half_turn];
-    r.fz[i] = r.fz[i + half_turn];
-  }
-  MonitorConfig c = monitor_for(s);
-  c.model.resolution.steps_per_rev = 720;
-  Collector out;
-  Pipeline p(c, out);
-  replay(p, r, 1000);
+  const KnockedCut k(9.5);
+  const Collector& out = k.out;
   ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 1);
   const PipelineEvent* aligned = out.first(PipelineEventKind::kModelAligned);
   ASSERT_NE(aligned, nullptr);
   // Aligned on an average that grew past the restarts (one revolution, had it started again at
   // every knocked one), before a full window.
   EXPECT_GT(aligned->count, 1);
-  EXPECT_LT(aligned->count, c.sync_window_revolutions);
-  // The cut's own residual: the median after the first window.
-  std::vector<double> later;
-  for (const RevolutionRecord& rv : out.revolutions) {
-    if (rv.model_valid && rv.revolution >= c.sync_window_revolutions) {
-      later.push_back(rv.residual_rms_N[0]);
-    }
-  }
-  ASSERT_GT(later.size(), 300U);
-  std::nth_element(later.begin(), later.begin() + later.size() / 2, later.end());
-  const double cut_N = later[later.size() / 2];
-  // Within the first window, every revolution wholly after the knocked samples that states a
-  // residual states the cut's (one revolution of margin for the low-pass's delay), and all of
+  EXPECT_LT(aligned->count, k.config.sync_window_revolutions);
+  const double cut_N = k.cut_residual_N();
+  // Every revolution wholly after the knock that states a residual states the cut's, and all of
   // them state one from the first alignment on.
-  const double after_us = 1e6 * (static_cast<double>(swapped) + per_rev) / s.sample_rate_hz;
   double worst_N = 0.0;
-  int modelled = 0, first_window = 0;
-  for (const RevolutionRecord& rv : out.revolutions) {
-    if (static_cast<double>(rv.utime_us) < after_us || !rv.measured.bounded ||
-        rv.revolution >= c.sync_window_revolutions) {
-      continue;
+  int modelled = 0;
+  const auto after = k.first_window_after_knock();
+  for (const RevolutionRecord* rv : after) {
+    if (rv->utime_us >= aligned->utime_us) {
+      EXPECT_TRUE(rv->model_valid) << rv->revolution;
     }
-    ++first_window;
-    if (rv.utime_us >= aligned->utime_us) {
-      EXPECT_TRUE(rv.model_valid) << rv.revolution;
-    }
-    worst_N = std::max(worst_N, rv.model_valid ? rv.residual_rms_N[0] : 0.0);
-    modelled += rv.model_valid ? 1 : 0;
+    worst_N = std::max(worst_N, rv->model_valid ? rv->residual_rms_N[0] : 0.0);
+    modelled += rv->model_valid ? 1 : 0;
   }
   std::printf(
       "first alignment on %lld revolutions; residual fx: worst %.4f N in the first window after "
-      "the knock (%d of %d revolutions with a model), the cut's %.4f N\n",
-      static_cast<long long>(aligned->count), worst_N, modelled, first_window, cut_N);
+      "the knock (%d of %zu revolutions with a model), the cut's %.4f N\n",
+      static_cast<long long>(aligned->count), worst_N, modelled, after.size(), cut_N);
   EXPECT_GT(modelled, 0);
   EXPECT_LT(worst_N, 3.5 * cut_N);
 }
