@@ -198,6 +198,40 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
   flutes_ = flutes;
 }
 
+void RunSummary::warn_flute_labelling() const {
+  // Flute 0 is CE1, the flute whose period holds the largest force, chosen at the lock on its
+  // template's revolutions. Revolutions there unlike the rest of the cut (a knock, a chip
+  // carried for a while) can leave another flute holding the larger force for the rest of the
+  // record: α and ΔFy then come from the other edge (for two flutes, CE1's are 360° − α and
+  // −ΔFy). A clear margin: flutes of nearly equal force may trade places as the tool wears.
+  constexpr double kMargin = 1.1;
+  constexpr std::int64_t kFewest = 10;
+  const Running& ce1 = peak_resultant_[0];
+  if (flutes_ < 2 || ce1.n < kFewest) {
+    return;
+  }
+  std::size_t strongest = 0;
+  for (std::size_t j = 1; j < static_cast<std::size_t>(flutes_); ++j) {
+    if (peak_resultant_[j].n >= kFewest &&
+        peak_resultant_[j].mean() > peak_resultant_[strongest].mean()) {
+      strongest = j;
+    }
+  }
+  if (strongest == 0 || !(peak_resultant_[strongest].mean() > kMargin * ce1.mean())) {
+    return;
+  }
+  std::array<char, 512> text{};
+  std::snprintf(text.data(), text.size(),
+                "flute %zu's period holds a larger force than flute 1's over the record (mean "
+                "peak |Fxy| %.3g N against %.3g N), but flute 1 is CE1, the flute with the "
+                "largest force at the lock: the revolutions there were unlike the rest of the "
+                "cut (a knock, a chip carried for a while?), and α and ΔFy are stated from "
+                "another edge than CE1%s",
+                strongest + 1, peak_resultant_[strongest].mean(), ce1.mean(),
+                flutes_ == 2 ? " (CE1's are 360° − α and −ΔFy)" : "");
+  warn("flute labelling", text.data());
+}
+
 void RunSummary::warn(const std::string& kind, const std::string& detail) const {
   derived_.push_back({kind, 1, 0, status_.utime_us, detail});
 }
@@ -264,6 +298,7 @@ nlohmann::json RunSummary::to_json() const {
              "flutes' (a dead or swapped channel?); their speeds, periods and α are not the "
              "cut's");
   }
+  warn_flute_labelling();
   if (status_.alert_held_revolutions > 0) {
     std::array<char, 384> text{};
     std::snprintf(

@@ -86,6 +86,8 @@ class RunSummary {
   std::vector<nlohmann::json> alerts_;
   std::vector<Warning> warnings_;
   void warn(const std::string& kind, const std::string& detail) const;
+  /// Warns when another flute than CE1 holds the larger force over the record.
+  void warn_flute_labelling() const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -14,6 +15,7 @@
 
 #include "core/model/periodic_response.hpp"
 #include "core/model/steady_state.hpp"
+#include "core/monitor/run_summary.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "tests/support/allocation_counter.hpp"
 #include "tests/support/recording.hpp"
@@ -608,6 +610,36 @@ TEST(Pipeline, ALongKnockAtTheLockStartsTheAverageAgainAtMostFourTimes) {
       static_cast<long long>(aligned->count), worst_N, modelled, after.size(), cut_N);
   EXPECT_GT(modelled, 0);
   EXPECT_LT(worst_N, 3.5 * cut_N);
+}
+
+// A knock longer than the lock's windows (20.5 revolutions): the lock's template holds the
+// knock, so flute 1, labelled CE1 there, is the weaker flute for the rest of the cut, and α and
+// ΔFy come from the other edge (α 204° where the cut's is 155°). Nothing in the revolutions
+// says so; the run summary does: flute 2 holds the larger force over the record.
+TEST(Pipeline, AKnockLongerThanTheLocksWindowsIsSaidInTheSummary) {
+  const auto summary_of = [](const KnockedCut& k) {
+    RunSummary summary(k.config);
+    for (const RevolutionRecord& r : k.out.revolutions) {
+      summary.add(r);
+    }
+    return summary.to_json();
+  };
+  const auto labelling = [](const nlohmann::json& summary) {
+    for (const auto& w : summary["warnings"]) {
+      if (w["kind"] == "flute labelling") {
+        return w["detail"].get<std::string>();
+      }
+    }
+    return std::string();
+  };
+  const nlohmann::json knocked = summary_of(KnockedCut(20.5));
+  EXPECT_GT(knocked["alpha_deg"]["mean"].get<double>(), 180.0) << knocked["alpha_deg"];
+  EXPECT_NE(labelling(knocked).find("flute 2's period holds a larger force than flute 1's"),
+            std::string::npos)
+      << knocked["warnings"];
+  const nlohmann::json short_knock = summary_of(KnockedCut(2.5));
+  EXPECT_LT(short_knock["alpha_deg"]["mean"].get<double>(), 180.0) << short_knock["alpha_deg"];
+  EXPECT_EQ(labelling(short_knock), "") << short_knock["warnings"];
 }
 
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the

@@ -314,5 +314,32 @@ TEST(RunSummary, DeltaFyComesWithItsSpread) {
   EXPECT_DOUBLE_EQ(j["delta_fy_N_std"].get<double>(), 1.0);
 }
 
+// Flute 0 is CE1, the flute with the largest force at the lock. Over a record where another
+// flute holds clearly more (here 1.6 against 0.9 N: the lock's revolutions were unlike the
+// cut), the summary says that α and ΔFy come from another edge; flutes within the 10 % margin
+// (1.0 against 0.95 N: they may trade places as the tool wears) or a flute that leads only in a
+// few revolutions are no reason.
+TEST(RunSummary, SaysWhenAnotherFluteThanCE1HoldsTheLargerForce) {
+  const auto warnings = [](double ce1_N, double other_N, int revolutions) {
+    MonitorConfig config;
+    RunSummary summary(config);
+    for (int n = 0; n < revolutions; ++n) {
+      RevolutionRecord r = revolution(n);
+      r.measured.peak_resultant_N[0] = ce1_N;
+      r.measured.peak_resultant_N[1] = other_N;
+      summary.add(r);
+    }
+    return summary.to_json()["warnings"];
+  };
+  const std::string swapped = detail_of(warnings(0.9, 1.6, 40), "flute labelling");
+  EXPECT_NE(swapped.find("flute 2's period holds a larger force than flute 1's"), std::string::npos)
+      << swapped;
+  EXPECT_NE(swapped.find("1.6 N against 0.9 N"), std::string::npos) << swapped;
+  EXPECT_NE(swapped.find("360° − α and −ΔFy"), std::string::npos) << swapped;
+  EXPECT_EQ(detail_of(warnings(0.95, 1.0, 40), "flute labelling"), "");
+  EXPECT_EQ(detail_of(warnings(1.6, 0.9, 40), "flute labelling"), "");
+  EXPECT_EQ(detail_of(warnings(0.9, 1.6, 5), "flute labelling"), "");
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
