@@ -201,9 +201,10 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
 void RunSummary::warn_flute_labelling() const {
   // Flute 0 is CE1, the flute whose period holds the largest force, chosen at the lock on its
   // template's revolutions. Revolutions there unlike the rest of the cut (a knock, a chip
-  // carried for a while) can leave another flute holding the larger force for the rest of the
-  // record: α and ΔFy then come from the other edge (for two flutes, CE1's are 360° − α and
-  // −ΔFy). A clear margin: flutes of nearly equal force may trade places as the tool wears.
+  // carried for a while), or a runout change since, can leave another flute holding the larger
+  // force for most of the record: α and ΔFy then come from the other edge (for two flutes,
+  // CE1's are 360° − α and −ΔFy). A clear margin: flutes of nearly equal force may trade places
+  // as the tool wears.
   constexpr double kMargin = 1.1;
   constexpr std::int64_t kFewest = 10;
   const Running& ce1 = peak_resultant_[0];
@@ -224,9 +225,9 @@ void RunSummary::warn_flute_labelling() const {
   std::snprintf(text.data(), text.size(),
                 "flute %zu's period holds a larger force than flute 1's over the record (mean "
                 "peak |Fxy| %.3g N against %.3g N), but flute 1 is CE1, the flute with the "
-                "largest force at the lock: the revolutions there were unlike the rest of the "
-                "cut (a knock, a chip carried for a while?), and α and ΔFy are stated from "
-                "another edge than CE1%s",
+                "largest force at the lock: the cut there was unlike the rest of the record (a "
+                "knock or a chip carried at the lock, or a runout change since?), and α and ΔFy "
+                "are stated from another edge than CE1%s",
                 strongest + 1, peak_resultant_[strongest].mean(), ce1.mean(),
                 flutes_ == 2 ? " (CE1's are 360° − α and −ΔFy)" : "");
   warn("flute labelling", text.data());
