@@ -523,16 +523,29 @@ struct KnockedCut {
                      later.end());
     return later[later.size() / 2];
   }
-  /// The first window's revolutions wholly after the knocked samples, bounded.
-  [[nodiscard]] std::vector<const RevolutionRecord*> first_window_after_knock() const {
-    std::vector<const RevolutionRecord*> after;
+  /// The first window's bounded revolutions wholly after the knocked samples: their worst fx
+  /// residual, how many state one, how many there are; each from `modelled_from_us` on is
+  /// expected to state one.
+  struct AfterKnock {
+    double worst_N = 0.0;
+    int modelled = 0;
+    int revolutions = 0;
+  };
+  [[nodiscard]] AfterKnock first_window_after_knock(std::int64_t modelled_from_us) const {
+    AfterKnock a;
     for (const RevolutionRecord& rv : out.revolutions) {
-      if (static_cast<double>(rv.utime_us) >= after_knock_us && rv.measured.bounded &&
-          rv.revolution < config.sync_window_revolutions) {
-        after.push_back(&rv);
+      if (static_cast<double>(rv.utime_us) < after_knock_us || !rv.measured.bounded ||
+          rv.revolution >= config.sync_window_revolutions) {
+        continue;
       }
+      ++a.revolutions;
+      if (rv.utime_us >= modelled_from_us) {
+        EXPECT_TRUE(rv.model_valid) << rv.revolution;
+      }
+      a.worst_N = std::max(a.worst_N, rv.model_valid ? rv.residual_rms_N[0] : 0.0);
+      a.modelled += rv.model_valid ? 1 : 0;
     }
-    return after;
+    return a;
   }
 };
 
@@ -558,19 +571,14 @@ TEST(Pipeline, AFirstRevolutionUnlikeTheCutDoesNotAlignTheModelAPitchOff) {
   EXPECT_GT(static_cast<double>(aligned->utime_us - out.revolutions.front().utime_us),
             0.5e6 * k.per_rev / k.scenario.sample_rate_hz);
   const double cut_N = k.cut_residual_N();
-  double worst_N = 0.0;
-  int modelled = 0;
-  for (const RevolutionRecord* rv : k.first_window_after_knock()) {
-    EXPECT_TRUE(rv->model_valid) << rv->revolution;
-    worst_N = std::max(worst_N, rv->model_valid ? rv->residual_rms_N[0] : 0.0);
-    modelled += rv->model_valid ? 1 : 0;
-  }
+  // Every one of them states a residual.
+  const auto after = k.first_window_after_knock(std::numeric_limits<std::int64_t>::min());
   std::printf(
       "residual fx: worst %.4f N in the first window after the swapped revolutions "
       "(%d), the cut's %.4f N\n",
-      worst_N, modelled, cut_N);
-  EXPECT_GE(modelled, k.config.sync_window_revolutions - 5);
-  EXPECT_LT(worst_N, 3.5 * cut_N);
+      after.worst_N, after.modelled, cut_N);
+  EXPECT_GE(after.modelled, k.config.sync_window_revolutions - 5);
+  EXPECT_LT(after.worst_N, 3.5 * cut_N);
 }
 
 // The same knock, nine and a half revolutions long: more of them than the lock's first window
@@ -594,22 +602,14 @@ TEST(Pipeline, ALongKnockAtTheLockStartsTheAverageAgainAtMostFourTimes) {
   const double cut_N = k.cut_residual_N();
   // Every revolution wholly after the knock that states a residual states the cut's, and all of
   // them state one from the first alignment on.
-  double worst_N = 0.0;
-  int modelled = 0;
-  const auto after = k.first_window_after_knock();
-  for (const RevolutionRecord* rv : after) {
-    if (rv->utime_us >= aligned->utime_us) {
-      EXPECT_TRUE(rv->model_valid) << rv->revolution;
-    }
-    worst_N = std::max(worst_N, rv->model_valid ? rv->residual_rms_N[0] : 0.0);
-    modelled += rv->model_valid ? 1 : 0;
-  }
+  const auto after = k.first_window_after_knock(aligned->utime_us);
   std::printf(
       "first alignment on %lld revolutions; residual fx: worst %.4f N in the first window after "
-      "the knock (%d of %zu revolutions with a model), the cut's %.4f N\n",
-      static_cast<long long>(aligned->count), worst_N, modelled, after.size(), cut_N);
-  EXPECT_GT(modelled, 0);
-  EXPECT_LT(worst_N, 3.5 * cut_N);
+      "the knock (%d of %d revolutions with a model), the cut's %.4f N\n",
+      static_cast<long long>(aligned->count), after.worst_N, after.modelled, after.revolutions,
+      cut_N);
+  EXPECT_GT(after.modelled, 0);
+  EXPECT_LT(after.worst_N, 3.5 * cut_N);
 }
 
 // A knock longer than the lock's windows (20.5 revolutions): the lock's template holds the
@@ -624,22 +624,16 @@ TEST(Pipeline, AKnockLongerThanTheLocksWindowsIsSaidInTheSummary) {
     }
     return summary.to_json();
   };
-  const auto labelling = [](const nlohmann::json& summary) {
-    for (const auto& w : summary["warnings"]) {
-      if (w["kind"] == "flute labelling") {
-        return w["detail"].get<std::string>();
-      }
-    }
-    return std::string();
-  };
   const nlohmann::json knocked = summary_of(KnockedCut(20.5));
   EXPECT_GT(knocked["alpha_deg"]["mean"].get<double>(), 180.0) << knocked["alpha_deg"];
-  EXPECT_NE(labelling(knocked).find("flute 2's period holds a larger force than flute 1's"),
+  EXPECT_NE(test::warning_detail(knocked["warnings"], "flute labelling")
+                .find("flute 2's period holds a larger force than flute 1's"),
             std::string::npos)
       << knocked["warnings"];
   const nlohmann::json short_knock = summary_of(KnockedCut(2.5));
   EXPECT_LT(short_knock["alpha_deg"]["mean"].get<double>(), 180.0) << short_knock["alpha_deg"];
-  EXPECT_EQ(labelling(short_knock), "") << short_knock["warnings"];
+  EXPECT_EQ(test::warning_detail(short_knock["warnings"], "flute labelling"), "")
+      << short_knock["warnings"];
 }
 
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the

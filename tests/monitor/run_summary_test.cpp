@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "tests/support/recording.hpp"
+
 namespace millwatch::monitor {
 namespace {
 
@@ -29,16 +31,6 @@ bool warns_model_does_not_fit(const nlohmann::json& warnings) {
     }
   }
   return false;
-}
-
-/// The detail of the first warning of `kind` ("" if there is none).
-std::string detail_of(const nlohmann::json& warnings, const std::string& kind) {
-  for (const auto& w : warnings) {
-    if (w["kind"] == kind) {
-      return w["detail"].get<std::string>();
-    }
-  }
-  return "";
 }
 
 /// Revolution n of a 2-flute cut at `rpm`, both CE1 events found (bounded), valid as told, α 180°.
@@ -82,7 +74,7 @@ TEST(RunSummary, SaysHowManyRevolutionsTheAlertsHeldForAnotherSpeed) {
   };
   const nlohmann::json held = summary_with(312);
   EXPECT_EQ(held["counters"]["alert_held_revolutions"], 312);
-  const std::string detail = detail_of(held["warnings"], "alerts held");
+  const std::string detail = test::warning_detail(held["warnings"], "alerts held");
   EXPECT_NE(detail.find("312 revolutions ran more than alerts.conditions_tolerance (2 %)"),
             std::string::npos)
       << held["warnings"].dump();
@@ -114,18 +106,18 @@ TEST(RunSummary, SaysWhenTheWindowsRunoutScattersOrDriftsBeyondItsSigma) {
                                     {"widened_by_drift", drift}}}}}});
     return summary.to_json()["warnings"];
   };
-  const std::string scatter = detail_of(warnings_with(true, false), "runout scatters");
+  const std::string scatter = test::warning_detail(warnings_with(true, false), "runout scatters");
   EXPECT_NE(scatter.find("ρ by 1.278 µm, γ by 29.7° from window to window over 16 windows"),
             std::string::npos)
       << scatter;
-  EXPECT_EQ(detail_of(warnings_with(true, false), "runout drifts"), "");
-  const std::string drift = detail_of(warnings_with(false, true), "runout drifts");
+  EXPECT_EQ(test::warning_detail(warnings_with(true, false), "runout drifts"), "");
+  const std::string drift = test::warning_detail(warnings_with(false, true), "runout drifts");
   EXPECT_NE(drift.find("ρ moved by +2.219 µm (γ by -101.9°) from the oldest quarter of the last "
                        "16 windows to the newest, while the radius differences moved by 0.030 µm "
                        "at most"),
             std::string::npos)
       << drift;
-  EXPECT_EQ(detail_of(warnings_with(false, true), "runout scatters"), "");
+  EXPECT_EQ(test::warning_detail(warnings_with(false, true), "runout scatters"), "");
   EXPECT_TRUE(warnings_with(false, false).empty());
 }
 
@@ -245,8 +237,8 @@ TEST(RunSummary, WarnsWhenMoreThanATenthOfTheRevolutionsLostAnEvent) {
     summary.finish(PipelineStatus{});
     return summary.to_json()["warnings"];
   };
-  EXPECT_EQ(detail_of(warnings_with(10), "flute events missing"), "");
-  const std::string twenty = detail_of(warnings_with(20), "flute events missing");
+  EXPECT_EQ(test::warning_detail(warnings_with(10), "flute events missing"), "");
+  const std::string twenty = test::warning_detail(warnings_with(20), "flute events missing");
   EXPECT_EQ(twenty.rfind("20 of 100 revolutions had a flute without its tooth event", 0), 0u)
       << twenty;
 }
@@ -292,7 +284,7 @@ TEST(RunSummary, SaysWhenMoreRevolutionsWereMeasuredThanTurned) {
     status.cutting_revolutions = 60.0;  // a weak cut: the tracker heard cutting for 0.6 s
     summary.finish(status);
     const nlohmann::json j = summary.to_json();
-    return !detail_of(j["warnings"], "revolutions over-counted").empty();
+    return !test::warning_detail(j["warnings"], "revolutions over-counted").empty();
   };
   EXPECT_FALSE(warned(101));
   EXPECT_TRUE(warned(120));
@@ -331,14 +323,14 @@ TEST(RunSummary, SaysWhenAnotherFluteThanCE1HoldsTheLargerForce) {
     }
     return summary.to_json()["warnings"];
   };
-  const std::string swapped = detail_of(warnings(0.9, 1.6, 40), "flute labelling");
+  const std::string swapped = test::warning_detail(warnings(0.9, 1.6, 40), "flute labelling");
   EXPECT_NE(swapped.find("flute 2's period holds a larger force than flute 1's"), std::string::npos)
       << swapped;
   EXPECT_NE(swapped.find("1.6 N against 0.9 N"), std::string::npos) << swapped;
   EXPECT_NE(swapped.find("360° − α and −ΔFy"), std::string::npos) << swapped;
-  EXPECT_EQ(detail_of(warnings(0.95, 1.0, 40), "flute labelling"), "");
-  EXPECT_EQ(detail_of(warnings(1.6, 0.9, 40), "flute labelling"), "");
-  EXPECT_EQ(detail_of(warnings(0.9, 1.6, 5), "flute labelling"), "");
+  EXPECT_EQ(test::warning_detail(warnings(0.95, 1.0, 40), "flute labelling"), "");
+  EXPECT_EQ(test::warning_detail(warnings(1.6, 0.9, 40), "flute labelling"), "");
+  EXPECT_EQ(test::warning_detail(warnings(0.9, 1.6, 5), "flute labelling"), "");
 }
 
 }  // namespace

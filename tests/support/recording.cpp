@@ -122,4 +122,13 @@ int complete_cutting_revolutions(const Recording& r, double from_s) {
   return n;
 }
 
+std::string warning_detail(const nlohmann::json& warnings, const std::string& kind) {
+  for (const auto& w : warnings) {
+    if (w["kind"] == kind) {
+      return w["detail"].get<std::string>();
+    }
+  }
+  return "";
+}
+
 }  // namespace millwatch::test

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "core/monitor/pipeline.hpp"
@@ -63,5 +65,8 @@ const sim::RevolutionTruth* truth_at(const Recording& r, double time_s);
 
 /// Complete revolutions of the truth that cut, from `from_s` to the end of the record.
 int complete_cutting_revolutions(const Recording& r, double from_s = 0.0);
+
+/// The detail of the first warning of `kind` in a run summary's "warnings" ("" if there is none).
+std::string warning_detail(const nlohmann::json& warnings, const std::string& kind);
 
 }  // namespace millwatch::test
