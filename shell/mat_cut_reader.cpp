@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "core/monitor/input_check.hpp"
+#include "shell/isolated_call.hpp"
 #include "shell/mat_file_check.hpp"
 #include "shell/matio_library.hpp"
 
@@ -229,17 +230,9 @@ void append_as_double(const void* data, std::size_t first, std::size_t count, st
 
 class Reader {
  public:
+  /// Opens a file check_mat_file() passed, after quiet_matio().
   Reader(const fs::path& path, std::int64_t max_elements)
       : name_(path.string()), max_elements_(max_elements) {
-    try {
-      quiet_matio();
-    } catch (const std::runtime_error& e) {  // libmatio could not be loaded
-      throw std::runtime_error(name_ + ": " + e.what());
-    }
-    const MatFileCheck check = check_mat_file(path, max_elements * 8);
-    if (!check.problem.empty()) {
-      throw std::runtime_error(name_ + ": " + check.problem);
-    }
     g_matio_message.clear();
     file_.mat = matio_library().open(path.c_str(), MAT_ACC_RDONLY);
     if (file_.mat == nullptr) {
@@ -458,25 +451,112 @@ std::string number(double v) {
   return {text.data(), r.ptr};
 }
 
-}  // namespace
+/// What a file gives the reader: forces, time, rate and which variables they came from.
+struct Contents {
+  std::array<std::vector<double>, 3> f;
+  std::vector<double> t;  // empty: no time vector
+  double rate_hz = 0.0;
+  bool rate_stated = false;
+  std::string version;
+  std::string variables;
+};
 
-MatCutReader::MatCutReader(const fs::path& path, const ColumnMap& columns, double config_rate_hz,
-                           OnBadSample on_bad_sample, std::int64_t max_elements)
-    : name_(path.string()), on_bad_(std::move(on_bad_sample)) {
+void put(std::string& out, const void* data, std::size_t n) {
+  if (n == 0) {
+    return;  // an empty vector's data() may be null
+  }
+  out.append(static_cast<const char*>(data), n);
+}
+void put_size(std::string& out, std::size_t n) {
+  const std::uint64_t v = n;
+  put(out, &v, sizeof v);
+}
+
+/// Contents as bytes, for the reading process's answer.
+std::string encode(const Contents& c) {
+  std::string out;
+  for (const std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
+    put_size(out, v->size());
+    put(out, v->data(), v->size() * sizeof(double));
+  }
+  put(out, &c.rate_hz, sizeof c.rate_hz);
+  put_size(out, c.rate_stated ? 1 : 0);
+  for (const std::string* text : {&c.version, &c.variables}) {
+    put_size(out, text->size());
+    put(out, text->data(), text->size());
+  }
+  return out;
+}
+
+/// Reads encode()'s bytes; throws if they are not what it wrote.
+class Decoder {
+ public:
+  explicit Decoder(const std::string& bytes) : bytes_(bytes) {}
+  void get(void* data, std::size_t n) {
+    if (n > bytes_.size() - at_) {
+      throw std::runtime_error("the reading process's answer is cut short");
+    }
+    if (n == 0) {
+      return;  // an empty vector's data() may be null, which memcpy may not be given
+    }
+    std::memcpy(data, bytes_.data() + at_, n);
+    at_ += n;
+  }
+  std::size_t get_size(std::size_t most) {
+    std::uint64_t v = 0;
+    get(&v, sizeof v);
+    if (v > most) {
+      throw std::runtime_error("the reading process's answer states " + std::to_string(v) +
+                               " items, more than " + std::to_string(most));
+    }
+    return static_cast<std::size_t>(v);
+  }
+  [[nodiscard]] bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  const std::string& bytes_;
+  std::size_t at_ = 0;
+};
+
+Contents decode(const std::string& bytes, std::int64_t max_elements) {
+  Decoder in(bytes);
+  Contents c;
+  for (std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
+    v->resize(in.get_size(static_cast<std::size_t>(max_elements)));
+    in.get(v->data(), v->size() * sizeof(double));
+  }
+  in.get(&c.rate_hz, sizeof c.rate_hz);
+  c.rate_stated = in.get_size(1) == 1;
+  for (std::string* text : {&c.version, &c.variables}) {
+    text->resize(in.get_size(4096));
+    in.get(text->data(), text->size());
+  }
+  const std::size_t n = c.f[0].size();
+  if (!in.done() || c.f[1].size() != n || c.f[2].size() != n || (!c.t.empty() && c.t.size() != n) ||
+      !std::isfinite(c.rate_hz) || !(c.rate_hz > 0.0)) {
+    throw std::runtime_error("the reading process's answer is not one it can give");
+  }
+  return c;
+}
+
+/// What the constructor reads: the file's forces, time, rate and what they were read from.
+Contents read_contents(const fs::path& path, const std::string& name, const ColumnMap& columns,
+                       double config_rate_hz, std::int64_t max_elements) {
   Reader r(path, max_elements);
-  version_ = r.version();
+  Contents c;
+  c.version = r.version();
   std::array<Selector, 3> force;
   std::optional<Selector> time, rate;
   if (!columns.empty()) {
     for (int a = 0; a < 3; ++a) {
-      force[static_cast<std::size_t>(a)] = parse_selector(
-          columns.force(a), ColumnMap::kKeys[static_cast<std::size_t>(1 + a)], name_);
+      force[static_cast<std::size_t>(a)] =
+          parse_selector(columns.force(a), ColumnMap::kKeys[static_cast<std::size_t>(1 + a)], name);
     }
     if (columns.t().given()) {
-      time = parse_selector(columns.t(), "t", name_);
+      time = parse_selector(columns.t(), "t", name);
     }
     if (columns.fs().given()) {
-      rate = parse_selector(columns.fs(), "fs", name_);
+      rate = parse_selector(columns.fs(), "fs", name);
     }
   } else {
     // By the usual names: three vectors, else a matrix with a dimension of 3.
@@ -499,7 +579,7 @@ MatCutReader::MatCutReader(const fs::path& path, const ColumnMap& columns, doubl
         force[a].k = a;
       }
     } else {
-      throw std::runtime_error(name_ + ": no force variables found (variables: " + r.listing() +
+      throw std::runtime_error(name + ": no force variables found (variables: " + r.listing() +
                                "); name them with --columns fx=Fx,fy=Fy,fz=Fz or "
                                "fx=F(:,1),fy=F(:,2),fz=F(:,3) (and t=..., fs=...)");
     }
@@ -513,59 +593,117 @@ MatCutReader::MatCutReader(const fs::path& path, const ColumnMap& columns, doubl
   }
   const char* keys[] = {"fx", "fy", "fz"};
   for (std::size_t a = 0; a < 3; ++a) {
-    f_[a] = r.read(force[a], keys[a]);
-    variables_ += std::string(a > 0 ? " " : "") + keys[a] + "=" + force[a].text();
+    c.f[a] = r.read(force[a], keys[a]);
+    c.variables += std::string(a > 0 ? " " : "") + keys[a] + "=" + force[a].text();
   }
-  if (f_[1].size() != f_[0].size() || f_[2].size() != f_[0].size()) {
-    throw std::runtime_error(name_ + ": the forces differ in length (fx " +
-                             std::to_string(f_[0].size()) + ", fy " + std::to_string(f_[1].size()) +
-                             ", fz " + std::to_string(f_[2].size()) + " samples)");
+  if (c.f[1].size() != c.f[0].size() || c.f[2].size() != c.f[0].size()) {
+    throw std::runtime_error(
+        name + ": the forces differ in length (fx " + std::to_string(c.f[0].size()) + ", fy " +
+        std::to_string(c.f[1].size()) + ", fz " + std::to_string(c.f[2].size()) + " samples)");
   }
   if (time) {
-    t_ = r.read(*time, "t");
-    variables_ += " t=" + time->text();
-    if (t_.size() != f_[0].size()) {
-      throw std::runtime_error(name_ + ": t: " + time->text() + " has " +
-                               std::to_string(t_.size()) + " samples, the forces " +
-                               std::to_string(f_[0].size()));
+    c.t = r.read(*time, "t");
+    c.variables += " t=" + time->text();
+    if (c.t.size() != c.f[0].size()) {
+      throw std::runtime_error(name + ": t: " + time->text() + " has " +
+                               std::to_string(c.t.size()) + " samples, the forces " +
+                               std::to_string(c.f[0].size()));
     }
   }
   if (rate) {
     const std::vector<double> fs = r.read(*rate, "fs");
-    variables_ += " fs=" + rate->text();
+    c.variables += " fs=" + rate->text();
     if (fs.size() != 1 || !std::isfinite(fs[0]) || !(fs[0] > 0.0)) {
-      throw std::runtime_error(name_ + ": fs: " + rate->text() +
+      throw std::runtime_error(name + ": fs: " + rate->text() +
                                " is not one positive finite number (the sample rate, Hz)");
     }
-    rate_hz_ = fs[0];
-    rate_stated_ = true;
+    c.rate_hz = fs[0];
+    c.rate_stated = true;
   } else if (config_rate_hz > 0.0) {
-    rate_hz_ = config_rate_hz;
-  } else if (t_.size() >= 2) {
+    c.rate_hz = config_rate_hz;
+  } else if (c.t.size() >= 2) {
     // From the time vector: the median step of its first samples.
     std::vector<double> dt;
-    for (std::size_t k = 1; k < std::min<std::size_t>(t_.size(), 4096); ++k) {
-      if (t_[k] > t_[k - 1] && std::isfinite(t_[k] - t_[k - 1])) {
-        dt.push_back(t_[k] - t_[k - 1]);
+    for (std::size_t k = 1; k < std::min<std::size_t>(c.t.size(), 4096); ++k) {
+      if (c.t[k] > c.t[k - 1] && std::isfinite(c.t[k] - c.t[k - 1])) {
+        dt.push_back(c.t[k] - c.t[k - 1]);
       }
     }
     if (!dt.empty()) {
       std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2),
                        dt.end());
-      rate_hz_ = 1.0 / dt[dt.size() / 2];
+      c.rate_hz = 1.0 / dt[dt.size() / 2];
     }
   }
-  if (!std::isfinite(rate_hz_) || !(rate_hz_ > 0.0)) {
-    throw std::runtime_error(name_ +
+  if (!std::isfinite(c.rate_hz) || !(c.rate_hz > 0.0)) {
+    throw std::runtime_error(name +
                              ": no sample rate: no rate variable (fs), no usable time "
                              "vector and none in the configuration (sample_rate_hz)");
   }
   // Without a time vector sample k is at k / rate: that must stay within the utime range.
-  if (t_.empty() && !(static_cast<double>(f_[0].size()) / rate_hz_ * 1e6 <=
-                      static_cast<double>(monitor::kMaxAbsUtime_us))) {
-    throw std::runtime_error(name_ + ": a sample rate of " + number(rate_hz_) + " Hz makes " +
-                             std::to_string(f_[0].size()) + " samples last beyond 2^53 µs");
+  if (c.t.empty() && !(static_cast<double>(c.f[0].size()) / c.rate_hz * 1e6 <=
+                       static_cast<double>(monitor::kMaxAbsUtime_us))) {
+    throw std::runtime_error(name + ": a sample rate of " + number(c.rate_hz) + " Hz makes " +
+                             std::to_string(c.f[0].size()) + " samples last beyond 2^53 µs");
   }
+  return c;
+}
+
+/// read_contents() of a v7.3 file in a child process (shell/isolated_call.hpp): HDF5 1.10.8 reads
+/// past its buffers on a damaged object header and allocates what it read there.
+Contents read_contents_isolated(const fs::path& path, const std::string& name,
+                                const ColumnMap& columns, double config_rate_hz,
+                                std::int64_t max_elements) {
+  const auto elements = static_cast<std::size_t>(max_elements);
+  const std::size_t max_answer = 4 * elements * sizeof(double) + 16384;
+  // Up to four variables of the largest size as read, as doubles and the selected vectors, and
+  // HDF5's own: 8 times the largest variable as doubles, and 512 MiB.
+  const std::size_t budget = 8 * elements * sizeof(double) + (std::size_t{512} << 20);
+  const IsolatedResult r = run_isolated(
+      [&] { return encode(read_contents(path, name, columns, config_rate_hz, max_elements)); },
+      max_answer, budget);
+  switch (r.outcome) {
+    case IsolatedResult::Outcome::kAnswer:
+      try {
+        return decode(r.bytes, max_elements);
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error(name + ": " + e.what());
+      }
+    case IsolatedResult::Outcome::kError:
+      throw std::runtime_error(r.bytes);
+    case IsolatedResult::Outcome::kFailed:
+      break;
+  }
+  throw std::runtime_error(name +
+                           ": this v7.3 MAT-file cannot be read (damaged: HDF5, reading it " +
+                           "in a process of its own, " + r.bytes + ")");
+}
+
+}  // namespace
+
+MatCutReader::MatCutReader(const fs::path& path, const ColumnMap& columns, double config_rate_hz,
+                           OnBadSample on_bad_sample, std::int64_t max_elements)
+    : name_(path.string()), on_bad_(std::move(on_bad_sample)) {
+  try {
+    quiet_matio();  // in this process, before any fork: HDF5 starts here once
+  } catch (const std::runtime_error& e) {  // libmatio could not be loaded
+    throw std::runtime_error(name_ + ": " + e.what());
+  }
+  const MatFileCheck check = check_mat_file(path, max_elements * 8);
+  if (!check.problem.empty()) {
+    throw std::runtime_error(name_ + ": " + check.problem);
+  }
+  Contents c = check.version == MatVersion::kV73
+                   ? read_contents_isolated(path, name_, columns, config_rate_hz, max_elements)
+                   : read_contents(path, name_, columns, config_rate_hz, max_elements);
+  for (std::size_t a = 0; a < 3; ++a) {
+    f_[a] = std::move(c.f[a]);
+  }
+  t_ = std::move(c.t);
+  rate_hz_ = c.rate_hz;
+  rate_stated_ = c.rate_stated;
+  version_ = std::move(c.version);
+  variables_ = std::move(c.variables);
 }
 
 bool MatCutReader::time_ok(std::size_t k) {
