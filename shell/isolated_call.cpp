@@ -1,6 +1,7 @@
 #include "shell/isolated_call.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -149,18 +150,30 @@ IsolatedResult run_isolated(const std::function<std::string()>& work, std::size_
   }
   if (pid == 0) {
     ::close(fds[0]);
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // a parent killed (a time-out) takes the child along
     child(fds[1], work, memory_budget_bytes);
   }
   ::close(fds[1]);
+  // Should the parent throw before the end (bad_alloc for the answer), the child is killed and
+  // reaped and the pipe closed.
+  struct Reaper {
+    pid_t pid;
+    int fd;
+    bool armed = true;
+    ~Reaper() {
+      if (armed) {
+        ::kill(pid, SIGKILL);
+        ::close(fd);
+        wait_for(pid);
+      }
+    }
+  } reaper{pid, fds[0]};
   char header[9];
   std::uint64_t size = 0;
   bool answered = read_all(fds[0], header, sizeof header);
   if (answered) {
     std::memcpy(&size, header + 1, sizeof size);
     if (size > max_answer_bytes || (header[0] != 'A' && header[0] != 'E')) {
-      ::kill(pid, SIGKILL);
-      ::close(fds[0]);
-      wait_for(pid);
       result.bytes = "answered " + std::to_string(size) + " bytes, more than the " +
                      std::to_string(max_answer_bytes) + " it may";
       return result;
@@ -168,6 +181,7 @@ IsolatedResult run_isolated(const std::function<std::string()>& work, std::size_
     result.bytes.resize(size);
     answered = read_all(fds[0], result.bytes.data(), size);
   }
+  reaper.armed = false;
   ::close(fds[0]);
   const int status = wait_for(pid);
   if (!answered || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {

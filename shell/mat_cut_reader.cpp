@@ -669,8 +669,9 @@ Contents read_contents_isolated(const fs::path& path, const std::string& name,
       } catch (const std::runtime_error& e) {
         throw std::runtime_error(name + ": " + e.what());
       }
-    case IsolatedResult::Outcome::kError:
-      throw std::runtime_error(r.bytes);
+    case IsolatedResult::Outcome::kError:  // the reader's errors name the file; others do not
+      throw std::runtime_error(r.bytes.rfind(name + ": ", 0) == 0 ? r.bytes
+                                                                  : name + ": " + r.bytes);
     case IsolatedResult::Outcome::kFailed:
       break;
   }
