@@ -31,35 +31,32 @@ namespace {
 /// The child's exit status when a sanitizer stopped it (its report is not printed).
 constexpr int kSanitizerStopped = 97;
 
-bool write_all(int fd, const char* data, std::size_t n) {
+/// Repeats `io(data, n)` (::read or ::write on a pipe) until all n bytes went through, as a
+/// signal may interrupt it and a pipe passes a part at a time; false at an end of the pipe or an
+/// error.
+template <class Byte, class Io>
+bool all_bytes(Byte* data, std::size_t n, Io io) {
   while (n > 0) {
-    const ssize_t w = ::write(fd, data, n);
-    if (w < 0 && errno == EINTR) {
+    const ssize_t done = io(data, n);
+    if (done < 0 && errno == EINTR) {
       continue;
     }
-    if (w <= 0) {
+    if (done <= 0) {
       return false;
     }
-    data += w;
-    n -= static_cast<std::size_t>(w);
+    data += done;
+    n -= static_cast<std::size_t>(done);
   }
   return true;
 }
 
+bool write_all(int fd, const char* data, std::size_t n) {
+  return all_bytes(data, n, [fd](const char* p, std::size_t k) { return ::write(fd, p, k); });
+}
+
 /// Reads exactly n bytes; false at an early end of the pipe.
 bool read_all(int fd, char* data, std::size_t n) {
-  while (n > 0) {
-    const ssize_t r = ::read(fd, data, n);
-    if (r < 0 && errno == EINTR) {
-      continue;
-    }
-    if (r <= 0) {
-      return false;
-    }
-    data += r;
-    n -= static_cast<std::size_t>(r);
-  }
-  return true;
+  return all_bytes(data, n, [fd](char* p, std::size_t k) { return ::read(fd, p, k); });
 }
 
 void bound_child(std::size_t budget_bytes) {

@@ -474,8 +474,17 @@ void put_size(std::string& out, std::size_t n) {
 
 /// Contents as bytes, for the reading process's answer.
 std::string encode(const Contents& c) {
+  const auto vectors = {&c.f[0], &c.f[1], &c.f[2], &c.t};
+  // Its size first (seven counts, the rate, the numbers and texts): the answer can be gigabytes,
+  // which growing by doubling would copy again.
+  std::size_t size =
+      7 * sizeof(std::uint64_t) + sizeof c.rate_hz + c.version.size() + c.variables.size();
+  for (const std::vector<double>* v : vectors) {
+    size += v->size() * sizeof(double);
+  }
   std::string out;
-  for (const std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
+  out.reserve(size);
+  for (const std::vector<double>* v : vectors) {
     put_size(out, v->size());
     put(out, v->data(), v->size() * sizeof(double));
   }
@@ -502,10 +511,12 @@ class Decoder {
     std::memcpy(data, bytes_.data() + at_, n);
     at_ += n;
   }
-  std::size_t get_size(std::size_t most) {
+  /// A count of items of `item_bytes` each, at most `most` and no more than the bytes left hold
+  /// (checked before anyone allocates for them).
+  std::size_t get_size(std::size_t most, std::size_t item_bytes = 1) {
     std::uint64_t v = 0;
     get(&v, sizeof v);
-    if (v > most) {
+    if (v > most || v > (bytes_.size() - at_) / item_bytes) {
       throw std::runtime_error("the reading process's answer states " + std::to_string(v) +
                                " items, more than " + std::to_string(most));
     }
@@ -522,7 +533,7 @@ Contents decode(const std::string& bytes, std::int64_t max_elements) {
   Decoder in(bytes);
   Contents c;
   for (std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
-    v->resize(in.get_size(static_cast<std::size_t>(max_elements)));
+    v->resize(in.get_size(static_cast<std::size_t>(max_elements), sizeof(double)));
     in.get(v->data(), v->size() * sizeof(double));
   }
   in.get(&c.rate_hz, sizeof c.rate_hz);
