@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdint>
@@ -13,6 +14,8 @@
 #include <exception>
 #include <fstream>
 #include <new>
+#include <stdexcept>
+#include <string>
 
 #if defined(__SANITIZE_ADDRESS__)
 #define MILLWATCH_SANITIZED 1
@@ -79,27 +82,36 @@ void bound_child(std::size_t budget_bytes) {
 #endif
 }
 
-[[noreturn]] void child(int fd, const std::function<std::string()>& work,
+/// The longest error text the child sends (the rest is cut).
+constexpr std::size_t kMaxErrorBytes = 65536;
+
+/// The work's error, tagged: 'E', its length and its text.
+bool send_error(int fd, std::string text) {
+  text.resize(std::min(text.size(), kMaxErrorBytes));
+  const std::uint64_t size = text.size();
+  char header[1 + sizeof size];
+  header[0] = 'E';
+  std::memcpy(header + 1, &size, sizeof size);
+  return write_all(fd, header, sizeof header) && write_all(fd, text.data(), text.size());
+}
+
+[[noreturn]] void child(int fd, const std::function<void(AnswerWriter&)>& work,
                         std::size_t budget_bytes) {
   bound_child(budget_bytes);
-  char tag = 'A';
-  std::string out;
+  AnswerWriter out(fd);
+  std::string error;
   try {
-    out = work();
+    work(out);
+    out.write(nullptr, 0);  // an empty answer's tag
+    _exit(0);
   } catch (const std::bad_alloc&) {
-    tag = 'E';
-    out = "out of memory (the reading process may map " + std::to_string(budget_bytes >> 20) +
-          " MiB beyond what it started with)";
+    error = "out of memory (the reading process may map " + std::to_string(budget_bytes >> 20) +
+            " MiB beyond what it started with)";
   } catch (const std::exception& e) {
-    tag = 'E';
-    out = e.what();
+    error = e.what();
   }
-  const std::uint64_t size = out.size();
-  char header[9];
-  header[0] = tag;
-  std::memcpy(header + 1, &size, sizeof size);
-  const bool ok = write_all(fd, header, sizeof header) && write_all(fd, out.data(), out.size());
-  _exit(ok ? 0 : 1);
+  // After the answer's first bytes an error can only cut it short.
+  _exit(!out.started() && send_error(fd, std::move(error)) ? 0 : 1);
 }
 
 std::string how_it_ended(int status) {
@@ -125,25 +137,129 @@ int wait_for(pid_t pid) {
   return status;
 }
 
+/// The child and the parent's end of its pipe, until finish(); killed, closed and reaped on any
+/// other way out (a throw such as bad_alloc).
+class Child {
+ public:
+  Child(pid_t pid, int fd) : pid_(pid), fd_(fd) {}
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+  ~Child() {
+    if (pid_ > 0) {
+      finish(true);
+    }
+  }
+  [[nodiscard]] int fd() const { return fd_; }
+  /// Kills the child if asked, closes the pipe and returns the child's wait status. (Killed
+  /// first: a pipe closed under a child still writing would end it with SIGPIPE, which would
+  /// read as a crash of its own.)
+  int finish(bool kill) {
+    if (kill) {
+      ::kill(pid_, SIGKILL);  // no effect on a child that has already ended: its status stays
+    }
+    ::close(fd_);
+    const int status = wait_for(pid_);
+    pid_ = -1;
+    return status;
+  }
+
+ private:
+  pid_t pid_;
+  int fd_;
+};
+
+/// Whether the child ended by itself other than with an answer: what went wrong is then its end
+/// (a crash mid-answer), not the answer the parent was left with.
+bool ended_badly(int status) {
+  return (WIFSIGNALED(status) && WTERMSIG(status) != SIGKILL) ||
+         (WIFEXITED(status) && WEXITSTATUS(status) != 0);
+}
+
+IsolatedResult failed(std::string message) {
+  return {IsolatedResult::Outcome::kFailed, std::move(message)};
+}
+
+/// The parent's side after the child's tag 'A': the answer, the pipe's end, the child's exit.
+IsolatedResult take_answer(Child& child, const std::function<void(AnswerReader&)>& read_answer,
+                           std::size_t max_answer_bytes) {
+  std::string problem;
+  try {
+    AnswerReader in(child.fd(), max_answer_bytes);
+    read_answer(in);
+    char extra = 0;
+    if (read_all(child.fd(), &extra, 1)) {
+      problem = "answered more than its reader takes";
+    }
+  } catch (const std::bad_alloc&) {
+    problem = "answered more than this process has memory for";
+  } catch (const std::exception& e) {
+    problem = e.what();
+  }
+  const int status = child.finish(!problem.empty());
+  if (ended_badly(status) || (problem.empty() && !WIFEXITED(status))) {
+    return failed(how_it_ended(status));
+  }
+  if (!problem.empty()) {
+    return failed(problem);
+  }
+  return {IsolatedResult::Outcome::kAnswer, {}};
+}
+
+/// The parent's side after the child's tag 'E': the error's text and the child's exit.
+IsolatedResult take_error(Child& child) {
+  std::uint64_t size = 0;
+  std::string text;
+  bool whole =
+      read_all(child.fd(), reinterpret_cast<char*>(&size), sizeof size) && size <= kMaxErrorBytes;
+  if (whole) {
+    text.resize(size);
+    whole = read_all(child.fd(), text.data(), text.size());
+  }
+  const int status = child.finish(!whole);
+  if (!whole || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    return failed(how_it_ended(status));
+  }
+  return {IsolatedResult::Outcome::kError, std::move(text)};
+}
+
 }  // namespace
 
-IsolatedResult run_isolated(const std::function<std::string()>& work, std::size_t max_answer_bytes,
-                            std::size_t memory_budget_bytes) {
-  IsolatedResult result;
+void AnswerWriter::write(const void* data, std::size_t n) {
+  if (!started_) {
+    const char tag = 'A';
+    if (!write_all(fd_, &tag, 1)) {
+      throw std::runtime_error("the answer's reader is gone");
+    }
+    started_ = true;
+  }
+  if (!write_all(fd_, static_cast<const char*>(data), n)) {
+    throw std::runtime_error("the answer's reader is gone");
+  }
+}
+
+void AnswerReader::read(void* data, std::size_t n) {
+  if (n > left_) {
+    throw std::runtime_error("answered more than the " + std::to_string(max_) + " bytes it may");
+  }
+  if (!read_all(fd_, static_cast<char*>(data), n)) {
+    throw std::runtime_error("its answer ends early");
+  }
+  left_ -= n;
+}
+
+IsolatedResult run_isolated(const std::function<void(AnswerWriter&)>& work,
+                            const std::function<void(AnswerReader&)>& read_answer,
+                            std::size_t max_answer_bytes, std::size_t memory_budget_bytes) {
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) {
-    result.bytes =
-        std::string("could not start the reading process (pipe: ") + std::strerror(errno) + ")";
-    return result;
+    return {IsolatedResult::Outcome::kNotStarted, std::string("pipe: ") + std::strerror(errno)};
   }
   const pid_t pid = fork();
   if (pid < 0) {
     const int e = errno;
     ::close(fds[0]);
     ::close(fds[1]);
-    result.bytes =
-        std::string("could not start the reading process (fork: ") + std::strerror(e) + ")";
-    return result;
+    return {IsolatedResult::Outcome::kNotStarted, std::string("fork: ") + std::strerror(e)};
   }
   if (pid == 0) {
     ::close(fds[0]);
@@ -151,43 +267,20 @@ IsolatedResult run_isolated(const std::function<std::string()>& work, std::size_
     child(fds[1], work, memory_budget_bytes);
   }
   ::close(fds[1]);
-  // Should the parent throw before the end (bad_alloc for the answer), the child is killed and
-  // reaped and the pipe closed.
-  struct Reaper {
-    pid_t pid;
-    int fd;
-    bool armed = true;
-    ~Reaper() {
-      if (armed) {
-        ::kill(pid, SIGKILL);
-        ::close(fd);
-        wait_for(pid);
-      }
-    }
-  } reaper{pid, fds[0]};
-  char header[9];
-  std::uint64_t size = 0;
-  bool answered = read_all(fds[0], header, sizeof header);
-  if (answered) {
-    std::memcpy(&size, header + 1, sizeof size);
-    if (size > max_answer_bytes || (header[0] != 'A' && header[0] != 'E')) {
-      result.bytes = "answered " + std::to_string(size) + " bytes, more than the " +
-                     std::to_string(max_answer_bytes) + " it may";
-      return result;
-    }
-    result.bytes.resize(size);
-    answered = read_all(fds[0], result.bytes.data(), size);
+  Child c(pid, fds[0]);
+  char tag = 0;
+  if (!read_all(c.fd(), &tag, 1)) {
+    return failed(how_it_ended(c.finish(false)));
   }
-  reaper.armed = false;
-  ::close(fds[0]);
-  const int status = wait_for(pid);
-  if (!answered || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    result.bytes = how_it_ended(status);
-    return result;
+  switch (tag) {
+    case 'A':
+      return take_answer(c, read_answer, max_answer_bytes);
+    case 'E':
+      return take_error(c);
+    default:
+      c.finish(true);
+      return failed("its answer is not one it can give");
   }
-  result.outcome =
-      header[0] == 'A' ? IsolatedResult::Outcome::kAnswer : IsolatedResult::Outcome::kError;
-  return result;
 }
 
 }  // namespace millwatch::shell

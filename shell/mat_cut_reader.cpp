@@ -461,89 +461,53 @@ struct Contents {
   std::string variables;
 };
 
-void put(std::string& out, const void* data, std::size_t n) {
-  if (n == 0) {
-    return;  // an empty vector's data() may be null
-  }
-  out.append(static_cast<const char*>(data), n);
-}
-void put_size(std::string& out, std::size_t n) {
+void put_size(AnswerWriter& out, std::size_t n) {
   const std::uint64_t v = n;
-  put(out, &v, sizeof v);
+  out.write(&v, sizeof v);
 }
 
-/// Contents as bytes, for the reading process's answer.
-std::string encode(const Contents& c) {
-  const auto vectors = {&c.f[0], &c.f[1], &c.f[2], &c.t};
-  // Its size first (seven counts, the rate, the numbers and texts): the answer can be gigabytes,
-  // which growing by doubling would copy again.
-  std::size_t size =
-      7 * sizeof(std::uint64_t) + sizeof c.rate_hz + c.version.size() + c.variables.size();
-  for (const std::vector<double>* v : vectors) {
-    size += v->size() * sizeof(double);
-  }
-  std::string out;
-  out.reserve(size);
-  for (const std::vector<double>* v : vectors) {
+/// Contents as the reading process's answer, written straight from its vectors: the answer can
+/// be gigabytes, which a copy would double.
+void write_contents(AnswerWriter& out, const Contents& c) {
+  for (const std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
     put_size(out, v->size());
-    put(out, v->data(), v->size() * sizeof(double));
+    out.write(v->data(), v->size() * sizeof(double));
   }
-  put(out, &c.rate_hz, sizeof c.rate_hz);
+  out.write(&c.rate_hz, sizeof c.rate_hz);
   put_size(out, c.rate_stated ? 1 : 0);
   for (const std::string* text : {&c.version, &c.variables}) {
     put_size(out, text->size());
-    put(out, text->data(), text->size());
+    out.write(text->data(), text->size());
   }
-  return out;
 }
 
-/// Reads encode()'s bytes; throws if they are not what it wrote.
-class Decoder {
- public:
-  explicit Decoder(const std::string& bytes) : bytes_(bytes) {}
-  void get(void* data, std::size_t n) {
-    if (n > bytes_.size() - at_) {
-      throw std::runtime_error("the reading process's answer is cut short");
-    }
-    if (n == 0) {
-      return;  // an empty vector's data() may be null, which memcpy may not be given
-    }
-    std::memcpy(data, bytes_.data() + at_, n);
-    at_ += n;
+/// A count of items of `item_bytes` each, at most `most` and no more than the answer has left
+/// (checked before anyone allocates for them).
+std::size_t get_size(AnswerReader& in, std::size_t most, std::size_t item_bytes) {
+  std::uint64_t v = 0;
+  in.read(&v, sizeof v);
+  if (v > most || v > in.left() / item_bytes) {
+    throw std::runtime_error("the reading process's answer states " + std::to_string(v) +
+                             " items, more than " + std::to_string(std::min(most, in.left())));
   }
-  /// A count of items of `item_bytes` each, at most `most` and no more than the bytes left hold
-  /// (checked before anyone allocates for them).
-  std::size_t get_size(std::size_t most, std::size_t item_bytes = 1) {
-    std::uint64_t v = 0;
-    get(&v, sizeof v);
-    if (v > most || v > (bytes_.size() - at_) / item_bytes) {
-      throw std::runtime_error("the reading process's answer states " + std::to_string(v) +
-                               " items, more than " + std::to_string(most));
-    }
-    return static_cast<std::size_t>(v);
-  }
-  [[nodiscard]] bool done() const { return at_ == bytes_.size(); }
+  return static_cast<std::size_t>(v);
+}
 
- private:
-  const std::string& bytes_;
-  std::size_t at_ = 0;
-};
-
-Contents decode(const std::string& bytes, std::int64_t max_elements) {
-  Decoder in(bytes);
+/// Reads write_contents()'s answer straight into the vectors; throws if it is not what it wrote.
+Contents read_answer(AnswerReader& in, std::size_t max_elements) {
   Contents c;
   for (std::vector<double>* v : {&c.f[0], &c.f[1], &c.f[2], &c.t}) {
-    v->resize(in.get_size(static_cast<std::size_t>(max_elements), sizeof(double)));
-    in.get(v->data(), v->size() * sizeof(double));
+    v->resize(get_size(in, max_elements, sizeof(double)));
+    in.read(v->data(), v->size() * sizeof(double));
   }
-  in.get(&c.rate_hz, sizeof c.rate_hz);
-  c.rate_stated = in.get_size(1) == 1;
+  in.read(&c.rate_hz, sizeof c.rate_hz);
+  c.rate_stated = get_size(in, 1, 1) == 1;
   for (std::string* text : {&c.version, &c.variables}) {
-    text->resize(in.get_size(4096));
-    in.get(text->data(), text->size());
+    text->resize(get_size(in, in.left(), 1));
+    in.read(text->data(), text->size());
   }
   const std::size_t n = c.f[0].size();
-  if (!in.done() || c.f[1].size() != n || c.f[2].size() != n || (!c.t.empty() && c.t.size() != n) ||
+  if (c.f[1].size() != n || c.f[2].size() != n || (!c.t.empty() && c.t.size() != n) ||
       !std::isfinite(c.rate_hz) || !(c.rate_hz > 0.0)) {
     throw std::runtime_error("the reading process's answer is not one it can give");
   }
@@ -665,30 +629,35 @@ Contents read_contents(const fs::path& path, const std::string& name, const Colu
 Contents read_contents_isolated(const fs::path& path, const std::string& name,
                                 const ColumnMap& columns, double config_rate_hz,
                                 std::int64_t max_elements) {
-  const auto elements = static_cast<std::size_t>(max_elements);
-  const std::size_t max_answer = 4 * elements * sizeof(double) + 16384;
+  // Bounded so that the sizes below cannot wrap.
+  const auto elements = std::min(static_cast<std::size_t>(std::max<std::int64_t>(max_elements, 0)),
+                                 std::numeric_limits<std::size_t>::max() / 128);
+  // Four vectors and the texts (their names and selectors, a few hundred characters).
+  const std::size_t max_answer = 4 * elements * sizeof(double) + (std::size_t{1} << 20);
   // Up to four variables of the largest size as read, as doubles and the selected vectors, and
   // HDF5's own: 8 times the largest variable as doubles, and 512 MiB.
   const std::size_t budget = 8 * elements * sizeof(double) + (std::size_t{512} << 20);
+  Contents c;
   const IsolatedResult r = run_isolated(
-      [&] { return encode(read_contents(path, name, columns, config_rate_hz, max_elements)); },
-      max_answer, budget);
+      [&](AnswerWriter& out) {
+        write_contents(out, read_contents(path, name, columns, config_rate_hz, max_elements));
+      },
+      [&](AnswerReader& in) { c = read_answer(in, elements); }, max_answer, budget);
   switch (r.outcome) {
     case IsolatedResult::Outcome::kAnswer:
-      try {
-        return decode(r.bytes, max_elements);
-      } catch (const std::runtime_error& e) {
-        throw std::runtime_error(name + ": " + e.what());
-      }
+      return c;
     case IsolatedResult::Outcome::kError:  // the reader's errors name the file; others do not
-      throw std::runtime_error(r.bytes.rfind(name + ": ", 0) == 0 ? r.bytes
-                                                                  : name + ": " + r.bytes);
+      throw std::runtime_error(r.message.rfind(name + ": ", 0) == 0 ? r.message
+                                                                    : name + ": " + r.message);
+    case IsolatedResult::Outcome::kNotStarted:
+      throw std::runtime_error(name + ": could not start the process that reads a v7.3 MAT-file (" +
+                               r.message + ")");
     case IsolatedResult::Outcome::kFailed:
       break;
   }
   throw std::runtime_error(name +
                            ": this v7.3 MAT-file cannot be read (damaged: HDF5, reading it " +
-                           "in a process of its own, " + r.bytes + ")");
+                           "in a process of its own, " + r.message + ")");
 }
 
 }  // namespace

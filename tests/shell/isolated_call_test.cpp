@@ -1,12 +1,18 @@
-// shell::run_isolated: the work's answer, its error, its crash, its running out of memory and an
-// answer longer than allowed, each as the caller sees it — and the caller still running.
+// shell::run_isolated: the work's answer streamed, its error, its crash before or during its
+// answer, its running out of memory, an answer shorter or longer than its reader takes or than
+// allowed, the reader's own error and no child at all, each as the caller sees it — and the
+// caller still running.
 
 #include "shell/isolated_call.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstddef>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -24,40 +30,134 @@ namespace {
 
 constexpr std::size_t kMiB = std::size_t{1} << 20;
 
-TEST(IsolatedCall, TheAnswerComesBackByteForByte) {
+/// A work that writes `bytes` in pieces of 1, 2, 3 … 4096 bytes.
+std::function<void(AnswerWriter&)> writes(const std::string& bytes) {
+  return [&bytes](AnswerWriter& out) {
+    for (std::size_t at = 0, piece = 1; at < bytes.size(); at += piece, piece = piece % 4096 + 1) {
+      out.write(bytes.data() + at, std::min(piece, bytes.size() - at));
+    }
+  };
+}
+
+/// A reader that takes `n` bytes into `into`, 4000 at a time.
+std::function<void(AnswerReader&)> reads(std::size_t n, std::string& into) {
+  return [n, &into](AnswerReader& in) {
+    into.resize(n);
+    for (std::size_t at = 0; at < n; at += 4000) {
+      in.read(into.data() + at, std::min<std::size_t>(4000, n - at));
+    }
+  };
+}
+
+TEST(IsolatedCall, TheAnswerStreamsBackByteForByte) {
   std::string expected(3 * kMiB, '\0');  // more than a pipe holds: the parent reads as it comes
   for (std::size_t i = 0; i < expected.size(); ++i) {
     expected[i] = static_cast<char>(i * 7919 % 251);
   }
-  const IsolatedResult r = run_isolated([&] { return expected; }, 4 * kMiB, 256 * kMiB);
-  ASSERT_EQ(r.outcome, IsolatedResult::Outcome::kAnswer) << r.bytes;
-  EXPECT_EQ(r.bytes, expected);
+  std::string got;
+  const IsolatedResult r =
+      run_isolated(writes(expected), reads(expected.size(), got), 4 * kMiB, 256 * kMiB);
+  ASSERT_EQ(r.outcome, IsolatedResult::Outcome::kAnswer) << r.message;
+  EXPECT_TRUE(r.message.empty());
+  EXPECT_EQ(got, expected);
+}
+
+TEST(IsolatedCall, AnEmptyAnswerIsAnAnswer) {
+  bool read = false;
+  const IsolatedResult r =
+      run_isolated([](AnswerWriter&) {}, [&](AnswerReader&) { read = true; }, kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kAnswer) << r.message;
+  EXPECT_TRUE(read);
 }
 
 TEST(IsolatedCall, AnExceptionIsTheErrorWithItsText) {
+  bool read = false;
   const IsolatedResult r =
-      run_isolated([]() -> std::string { throw std::runtime_error("x.mat: no variable \"fx\""); },
-                   kMiB, 256 * kMiB);
+      run_isolated([](AnswerWriter&) { throw std::runtime_error("x.mat: no variable \"fx\""); },
+                   [&](AnswerReader&) { read = true; }, kMiB, 256 * kMiB);
   EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kError);
-  EXPECT_EQ(r.bytes, "x.mat: no variable \"fx\"");
+  EXPECT_EQ(r.message, "x.mat: no variable \"fx\"");
+  EXPECT_FALSE(read);
 }
 
 TEST(IsolatedCall, AChildThatDiesIsSaidWithItsSignal) {
   const IsolatedResult r = run_isolated(
-      []() -> std::string {
+      [](AnswerWriter&) {
         std::raise(SIGKILL);  // as the kernel ends a process; no handler can intervene
-        return "never";
       },
-      kMiB, 256 * kMiB);
+      [](AnswerReader&) {}, kMiB, 256 * kMiB);
   EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
-  EXPECT_EQ(r.bytes, "crashed (signal 9, Killed)");
+  EXPECT_EQ(r.message, "crashed (signal 9, Killed)");
+}
+
+TEST(IsolatedCall, AChildThatDiesMidAnswerIsSaidWithItsSignal) {
+  std::string got;
+  const IsolatedResult r = run_isolated(
+      [](AnswerWriter& out) {
+        const std::string half(kMiB, 'x');
+        out.write(half.data(), half.size());
+        std::raise(SIGTERM);
+      },
+      reads(2 * kMiB, got), 4 * kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "crashed (signal 15, Terminated)");
+}
+
+TEST(IsolatedCall, AnAnswerShorterThanItsReaderTakesIsCutShort) {
+  const std::string ten(10, 'x');
+  std::string got;
+  const IsolatedResult r = run_isolated(writes(ten), reads(20, got), kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "its answer ends early");
+}
+
+TEST(IsolatedCall, AnAnswerLongerThanItsReaderTakesIsRefused) {
+  const std::string hundred(100, 'x');
+  std::string got;
+  const IsolatedResult r = run_isolated(writes(hundred), reads(50, got), kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "answered more than its reader takes");
 }
 
 TEST(IsolatedCall, AnAnswerLongerThanAllowedIsRefused) {
-  const IsolatedResult r =
-      run_isolated([] { return std::string(2 * kMiB, 'x'); }, kMiB, 256 * kMiB);
+  const std::string two(2 * kMiB, 'x');  // the child blocks on the full pipe until it is killed
+  std::string got;
+  const IsolatedResult r = run_isolated(writes(two), reads(two.size(), got), kMiB, 256 * kMiB);
   EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
-  EXPECT_EQ(r.bytes, "answered 2097152 bytes, more than the 1048576 it may");
+  EXPECT_EQ(r.message, "answered more than the 1048576 bytes it may");
+}
+
+TEST(IsolatedCall, TheReadersErrorEndsTheChild) {
+  const std::string two(2 * kMiB, 'x');
+  const IsolatedResult r = run_isolated(
+      writes(two),
+      [](AnswerReader& in) {
+        char first = 0;
+        in.read(&first, 1);
+        throw std::runtime_error("the answer states 10^12 samples");
+      },
+      4 * kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "the answer states 10^12 samples");
+}
+
+TEST(IsolatedCall, NoPipeIsNotStartedNotAFailedChild) {
+  // No descriptor free: pipe2 fails with EMFILE (a bound root is held to as well).
+  rlimit before{};
+  ASSERT_EQ(getrlimit(RLIMIT_NOFILE, &before), 0);
+  const int lowest_free = ::dup(0);
+  ASSERT_GE(lowest_free, 0);
+  ::close(lowest_free);
+  rlimit tight = before;
+  tight.rlim_cur = static_cast<rlim_t>(lowest_free);
+  ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &tight), 0);
+  bool ran = false;
+  const IsolatedResult r =
+      run_isolated([&](AnswerWriter&) { ran = true; }, [](AnswerReader&) {}, kMiB, 256 * kMiB);
+  ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &before), 0);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kNotStarted);
+  EXPECT_EQ(r.message, "pipe: Too many open files");
+  EXPECT_FALSE(ran);
 }
 
 TEST(IsolatedCall, TheChildsAddressSpaceIsBounded) {
@@ -66,13 +166,13 @@ TEST(IsolatedCall, TheChildsAddressSpaceIsBounded) {
 #else
   // 4 GiB asked for with a budget of 256 MiB: refused (bad_alloc) in the child, not attempted.
   const IsolatedResult r = run_isolated(
-      [] {
+      [](AnswerWriter& out) {
         std::vector<char> big(4096 * kMiB);
-        return std::string(1, big[big.size() / 2]);
+        out.write(&big[big.size() / 2], 1);
       },
-      kMiB, 256 * kMiB);
+      [](AnswerReader&) {}, kMiB, 256 * kMiB);
   EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kError);
-  EXPECT_EQ(r.bytes,
+  EXPECT_EQ(r.message,
             "out of memory (the reading process may map 256 MiB beyond what it started with)");
 #endif
 }
