@@ -1,19 +1,14 @@
 #include "shell/diagnosis_report.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
 
 #include "core/diagnose/catalogue.hpp"
 #include "core/diagnose/diagnosis_json.hpp"
+#include "shell/gnuplot.hpp"
 #include "shell/output_file.hpp"
-
-extern char** environ;
 
 namespace millwatch::shell {
 namespace {
@@ -21,15 +16,6 @@ namespace {
 namespace fs = std::filesystem;
 using diagnose::Diagnosis;
 using diagnose::Stage;
-
-std::string quoted(const fs::path& p) {
-  std::string s = p.string();
-  std::string out = "'";
-  for (const char c : s) {
-    out += c == '\'' ? std::string("''") : std::string(1, c);
-  }
-  return out + "'";
-}
 
 }  // namespace
 
@@ -54,31 +40,6 @@ std::string stage_label(const Stage& s, std::size_t i) {
   return i == 0              ? std::string("starting model")
          : s.removed.empty() ? "+ " + s.added
                              : "+ " + s.added + " in place of " + s.removed;
-}
-
-/// Runs gnuplot on a script; "" on success, else why not.
-std::string run_gnuplot(const fs::path& script, const fs::path& log) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  const std::string log_s = log.string();
-  posix_spawn_file_actions_addopen(&actions, 2, log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  std::string program = "gnuplot";
-  std::string script_s = script.string();
-  char* argv[] = {program.data(), script_s.data(), nullptr};
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) {
-    return std::string("cannot run gnuplot (") + std::strerror(rc) +
-           "); install it (Debian: gnuplot-nox)";
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    return "gnuplot failed on " + script_s + "; see " + log_s;
-  }
-  return "";
 }
 
 /// The plots' data files and script; returns the PNGs it will draw.
@@ -121,7 +82,8 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
         "'' skip 1 using 1:4 with lines lw 2 lc rgb '#d62728' title 'fy measured', "
         "'' skip 1 using 1:5 with lines dt 2 lw 2 lc rgb '#7a1010' title 'fy model'\n"
         "set xrange [*:*]\n",
-        quoted(rev_png), title, label, s.residual_rms_N[0], s.residual_rms_N[1], quoted(rev_csv));
+        gnuplot_quoted(rev_png), title, label, s.residual_rms_N[0], s.residual_rms_N[1],
+        gnuplot_quoted(rev_csv));
     // A white noise of RMS σ over the band has a mean bin amplitude 2σ/√(2·bins)... shown as the
     // floor's amplitude per bin: 2·σ_floor/√(n_eff).
     const double fx_level = 2.0 * d.noise_floor_N[0] / std::sqrt(std::max(1, d.effective_samples));
@@ -135,7 +97,7 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
         "{4} with lines dt 2 lc rgb '#0b3d66' title 'fx noise floor (mean bin)', "
         "{5} with lines dt 2 lc rgb '#7a1010' title 'fy noise floor (mean bin)'\n"
         "unset logscale y\n",
-        quoted(spec_png), title, label, quoted(spec_csv), fx_level, fy_level);
+        gnuplot_quoted(spec_png), title, label, gnuplot_quoted(spec_csv), fx_level, fy_level);
     pngs.push_back(rev_png);
     pngs.push_back(spec_png);
   }
@@ -554,7 +516,7 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
         "diagnosis', '' skip 1 using 1:4 with linespoints dt 3 pt 6 lc rgb '#d62728' title "
         "'excess before', '' skip 1 using 1:6 with lines dt 2 lc rgb '#555555' title 'noise "
         "floor'\nunset output\n",
-        quoted(png), across.trend.name, quoted(csv_path));
+        gnuplot_quoted(png), across.trend.name, gnuplot_quoted(csv_path));
     const fs::path script_path = abs / "residual_vs_feed.gp";
     write_text_file(script_path, script);
     out.plot_problem = run_gnuplot(script_path, abs / "gnuplot.log");

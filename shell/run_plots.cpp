@@ -1,31 +1,19 @@
 #include "shell/run_plots.hpp"
 
-#include <fcntl.h>
 #include <fftw3.h>
 #include <fmt/format.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <numbers>
 #include <stdexcept>
 
-extern char** environ;
+#include "shell/gnuplot.hpp"
 
 namespace millwatch::shell {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string quoted(const fs::path& p) {
-  std::string s = "'";
-  for (char c : p.string()) {
-    s += c == '\'' ? std::string("''") : std::string(1, c);
-  }
-  return s + "'";
-}
 
 /// gnuplot's text: no enhanced-mode specials from a file name.
 std::string plain(const std::string& text) {
@@ -133,7 +121,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
                          : 0.0;
   auto add_png = [&](const std::string& name) {
     pngs.push_back(abs / name);
-    script += "set output " + quoted(abs / name) + "\n";
+    script += "set output " + gnuplot_quoted(abs / name) + "\n";
   };
 
   // Revolutions with their bounds as data (α and ΔFy NaN, a gap, where not every event was
@@ -177,12 +165,12 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         head, commanded);
     std::string plot = "plot ";
     if (!rec.spindle().empty()) {
-      plot += quoted(abs / "spindle.csv") +
+      plot += gnuplot_quoted(abs / "spindle.csv") +
               " skip 1 using 1:2 with points pt 7 ps 0.6 lc rgb '#7f7f7f' title 'tracker "
               "(spectrum windows)'";
     }
     if (bounded > 0) {
-      plot += std::string(plot.size() > 5 ? ", " : "") + quoted(rev_csv) +
+      plot += std::string(plot.size() > 5 ? ", " : "") + gnuplot_quoted(rev_csv) +
               " skip 1 using 2:3 with lines lc rgb '#1f77b4' lw 2 title 'each revolution'";
     }
     script += plot + "\n";
@@ -201,7 +189,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         "plot {} skip 1 using 1:5 with linespoints pt 7 ps 0.4 lc rgb '#d62728' title 'delta "
         "Fy = |Fy peak CE1| - |Fy peak CE2|'\n"
         "unset multiplot\n",
-        head, quoted(rev_csv), quoted(rev_csv));
+        head, gnuplot_quoted(rev_csv), gnuplot_quoted(rev_csv));
   } else {
     notes += "alpha_delta_fy.png: left out, no revolution had all its tooth events found\n";
   }
@@ -214,7 +202,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     for (int j = 0; j < flutes; ++j) {
       script += fmt::format(
           "{}{} skip 1 using 1:{} with linespoints pt 7 ps 0.4 lc rgb '{}' title 'flute {}{}'",
-          j > 0 ? ", " : "", quoted(rev_csv), 6 + j, kFluteColours[j % 8], j + 1,
+          j > 0 ? ", " : "", gnuplot_quoted(rev_csv), 6 + j, kFluteColours[j % 8], j + 1,
           j == 0 ? " (CE1)" : "");
     }
     script += "\n";
@@ -251,7 +239,8 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
       script += fmt::format(
           "set ylabel '{} [N]'\nset xlabel '{}'\nplot {} skip 1 using 1:{} with "
           "lines lw 2 lc rgb '#1f77b4' title 'measured'",
-          axes[a], a == 2 ? "spindle angle [deg]" : "", quoted(abs / "sync_average.csv"), 2 + a);
+          axes[a], a == 2 ? "spindle angle [deg]" : "", gnuplot_quoted(abs / "sync_average.csv"),
+          2 + a);
       if (sync.model_valid) {
         script += fmt::format(
             ", '' skip 1 using 1:{} with lines lw 2 dt 2 lc rgb '#d62728' "
@@ -312,7 +301,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         "({1:.1f} Hz{2})'\n"
         "unset logscale y\nunset arrow\nunset label\nset xrange [*:*]\nunset format\n"
         "set key top right\n",
-        quoted(abs / "spectrum.csv"), tooth_hz, rpm > 0.0 ? ", measured" : ", commanded");
+        gnuplot_quoted(abs / "spectrum.csv"), tooth_hz, rpm > 0.0 ? ", measured" : ", commanded");
   } else {
     notes += "spectrum.png: left out, too few samples\n";
   }
@@ -321,25 +310,9 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   write_file(abs / "plots.txt", notes.empty() ? "every plot drawn\n" : notes);
 
   // gnuplot plots.gp, its messages in gnuplot.log.
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  const std::string log = (abs / "gnuplot.log").string();
-  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  const std::string script_path = (abs / "plots.gp").string();
-  std::string program = "gnuplot";
-  char* argv[] = {program.data(), const_cast<char*>(script_path.c_str()), nullptr};
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) {
-    throw std::runtime_error(std::string("--plot: cannot run gnuplot (") + std::strerror(rc) +
-                             "); install it (Debian: gnuplot-nox)");
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw std::runtime_error("--plot: gnuplot failed on " + script_path + "; see " + log);
+  if (const std::string problem = run_gnuplot(abs / "plots.gp", abs / "gnuplot.log");
+      !problem.empty()) {
+    throw std::runtime_error("--plot: " + problem);
   }
   return pngs;
 }

@@ -1,0 +1,45 @@
+#include "shell/gnuplot.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace millwatch::shell {
+
+std::string gnuplot_quoted(const std::filesystem::path& file) {
+  std::string out = "'";
+  for (const char c : file.string()) {
+    out += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return out + "'";
+}
+
+std::string run_gnuplot(const std::filesystem::path& script, const std::filesystem::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string log_s = log.string();
+  posix_spawn_file_actions_addopen(&actions, 2, log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  std::string program = "gnuplot";
+  std::string script_s = script.string();
+  char* argv[] = {program.data(), script_s.data(), nullptr};
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    return std::string("cannot run gnuplot (") + std::strerror(rc) +
+           "); install it (Debian: gnuplot-nox)";
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    return "gnuplot failed on " + script_s + "; see " + log_s;
+  }
+  return "";
+}
+
+}  // namespace millwatch::shell

@@ -1,0 +1,78 @@
+// shell::run_gnuplot and gnuplot_quoted: a script that draws, one gnuplot rejects (its message in
+// the log), gnuplot not found, and a file name with quotes and spaces as gnuplot reads it.
+
+#include "shell/gnuplot.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace millwatch::shell {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Gnuplot : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("millwatch_gnuplot_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "it's here");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write_script(const std::string& text) const {
+    const fs::path script = dir_ / "plot.gp";
+    std::ofstream(script) << text;
+    return script;
+  }
+  static std::string read(const fs::path& file) {
+    std::ifstream in(file);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Gnuplot, AScriptDrawsItsPngIntoAFolderWithAQuoteInItsName) {
+  const fs::path png = dir_ / "it's here" / "sine.png";
+  const std::string doubled = (dir_ / "it''s here" / "sine.png").string();
+  EXPECT_EQ(gnuplot_quoted(png), fmt::format("'{}'", doubled));
+  const fs::path script = write_script("set terminal pngcairo size 320,240\nset output " +
+                                       gnuplot_quoted(png) + "\nplot sin(x)\nunset output\n");
+  EXPECT_EQ(run_gnuplot(script, dir_ / "gnuplot.log"), "");
+  ASSERT_TRUE(fs::exists(png));
+  std::ifstream in(png, std::ios::binary);
+  std::string magic(4, '\0');
+  in.read(magic.data(), 4);
+  EXPECT_EQ(magic.substr(1), "PNG");
+}
+
+TEST_F(Gnuplot, AScriptGnuplotRejectsIsSaidWithItsLog) {
+  const fs::path script = write_script("plot no_such_function(x)\n");
+  const fs::path log = dir_ / "gnuplot.log";
+  EXPECT_EQ(run_gnuplot(script, log),
+            "gnuplot failed on " + script.string() + "; see " + log.string());
+  EXPECT_NE(read(log).find("undefined function"), std::string::npos) << read(log);
+}
+
+TEST_F(Gnuplot, NoGnuplotOnThePathIsSaidWithWhatToInstall) {
+  const char* path = std::getenv("PATH");
+  const std::string before = path != nullptr ? path : "";
+  ::setenv("PATH", dir_.c_str(), 1);
+  const std::string problem = run_gnuplot(write_script("plot sin(x)\n"), dir_ / "gnuplot.log");
+  ::setenv("PATH", before.c_str(), 1);
+  EXPECT_EQ(problem,
+            "cannot run gnuplot (No such file or directory); install it (Debian: gnuplot-nox)");
+}
+
+}  // namespace
+}  // namespace millwatch::shell
