@@ -149,6 +149,8 @@ std::string_view to_string(PipelineEventKind kind) {
       return "tooth events not found";
     case PipelineEventKind::kSpeedOutOfRange:
       return "spindle speed outside the search";
+    case PipelineEventKind::kFlutesRelabelled:
+      return "flutes relabelled";
   }
   return "event";
 }
@@ -680,6 +682,12 @@ void Pipeline::start_events() {
     return;
   }
   ++locks_;  // before the model: a fit taken here is no longer this lock's
+  // Its labelling is checked afresh; a relabelling's lock (check_labelling()) is not relabelled
+  // again.
+  label_peak_sum_N_.fill(0.0);
+  label_revolutions_ = 0;
+  relabelled_lock_ = relabelling_;
+  relabelling_ = false;
   if (config_.lockstep) {
     follow_speed(phase_.spindle_hz_at(static_cast<double>(anchor)), true);
     // On the template average: a first offset, in the tracker's angle (no residuals on it).
@@ -957,6 +965,7 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   sink_.on_revolution(r);
   alerts_.on_revolution(r, [this](const Alert& a) { sink_.on_alert(a); });
   tell_alert_state(input_sample(first), r.spindle_rpm);
+  check_labelling(r, input_sample(first));
   // Every window of revolutions as it fills, whatever the block size: a block holding more than
   // a window's revolutions (calibrate's 4,096 samples at 20 kHz and 30,000 rpm: 100) must not
   // leave the windows between its ends unfitted.
@@ -967,6 +976,47 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
     sink_.on_sync_average(sync_, lockstep_.aligned() ? &lockstep_ : nullptr, last_revolution(),
                           utime_at(ring_.newest()));
   }
+}
+
+void Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
+  // CE1 is the flute with the largest force on the lock's template revolutions. Where those
+  // were unlike the cut (a knock of 20 revolutions with the flutes' forces swapped), α and ΔFy
+  // would come from the other edge for as long as the lock lasts (α 204° for the cut's 155°).
+  // So while the alerts' flute-force baseline forms, a full window in which another flute holds
+  // clearly more force locks again. Once the baseline is armed, another flute growing stronger
+  // is the runout change the alerts raise, not a labelling to correct; and a relabelling's lock
+  // whose template chose the same CE1 again is not retried (the run summary then says so).
+  constexpr double kMargin = 1.1;  // as the run summary's flute-labelling warning
+  const int flutes = config_.model.tool.flutes;
+  if (flutes < 2 || !r.measured.bounded || alerts_.baseline().ready) {
+    return;
+  }
+  for (int j = 0; j < flutes; ++j) {
+    label_peak_sum_N_[static_cast<std::size_t>(j)] +=
+        r.measured.peak_resultant_N[static_cast<std::size_t>(j)];
+  }
+  if (++label_revolutions_ < config_.sync_window_revolutions) {
+    return;
+  }
+  std::size_t strongest = 0;
+  for (std::size_t j = 1; j < static_cast<std::size_t>(flutes); ++j) {
+    if (label_peak_sum_N_[j] > label_peak_sum_N_[strongest]) {
+      strongest = j;
+    }
+  }
+  const double ratio = label_peak_sum_N_[strongest] / label_peak_sum_N_[0];
+  label_peak_sum_N_.fill(0.0);
+  label_revolutions_ = 0;
+  if (strongest == 0 || !(ratio > kMargin) || relabelled_lock_) {
+    return;  // the labelling holds, or a relabelling's template chose this CE1 again
+  }
+  events_.stop();
+  relabelling_ = true;
+  event(PipelineEventKind::kFlutesRelabelled, sample, static_cast<std::int64_t>(strongest) + 1,
+        ratio,
+        "another flute held more force than CE1 over a window since the lock: locking "
+        "again, the new template choosing CE1");
+  last_rpm_ = 0.0;
 }
 
 void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sample,

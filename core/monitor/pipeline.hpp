@@ -80,7 +80,14 @@ enum class PipelineEventKind {
   kAlertsHeld,
   /// The flute-force change detectors compare again: a baseline formed (the first, or one at a
   /// new speed) or the speed came back to the baseline's (detail says which); value: its speed.
-  kAlertsArmed
+  kAlertsArmed,
+  /// A full window of revolutions since the lock had another flute (count: its number, 1-based,
+  /// in the lock's labelling) hold more force than CE1 (value: its mean peak |Fxy| over CE1's):
+  /// the lock's template held unusual revolutions (a knock, a carried chip). The tooth events
+  /// stop and the next tracker window locks again, its template choosing CE1 afresh; the
+  /// revolutions since the last one measured are measured from the new CE1 (the part of one
+  /// between the two CE1 events is not).
+  kFlutesRelabelled
 };
 
 std::string_view to_string(PipelineEventKind kind);
@@ -299,6 +306,9 @@ class Pipeline {
   void submit_window();
   /// The identified parameters due at this revolution, if any, go to the model.
   void take_identification();
+  /// Sums the revolution's flute forces and, over each full window since the lock, checks that
+  /// CE1 holds the largest (kFlutesRelabelled).
+  void check_labelling(const RevolutionRecord& r, std::int64_t sample);
   /// Tells the alert engine's flute-force state changes (kAlertsHeld, kAlertsArmed).
   void tell_alert_state(std::int64_t sample, double rpm);
   void event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
@@ -418,6 +428,13 @@ class Pipeline {
   std::optional<PendingFit> waiting_fit_;
   std::optional<PendingFit> building_fit_;
   std::int64_t locks_ = 0;  // locks that reached the model (start_events())
+  // Flute labelling (check_labelling()): each flute's peak |Fxy| summed over the bounded
+  // revolutions since the lock or the last check; whether the events stopped to relabel (the
+  // next lock is the relabelling's) and whether the current lock is a relabelling's.
+  std::array<double, kMaxFlutes> label_peak_sum_N_{};
+  int label_revolutions_ = 0;
+  bool relabelling_ = false;
+  bool relabelled_lock_ = false;
   double wanted_hz_ = 0.0;  // the speed the model was last asked to follow
 };
 

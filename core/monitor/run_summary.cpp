@@ -157,6 +157,18 @@ void RunSummary::add(const PipelineEvent& e) {
     detail = std::to_string(e.count) + " tracker windows: " + detail;
   } else if (e.kind == PipelineEventKind::kSpeedOutOfRange) {
     detail = describe_line_outside_search(e, config_);
+  } else if (e.kind == PipelineEventKind::kFlutesRelabelled) {
+    // The revolutions before it state α, ΔFy and each flute's force from another edge than the
+    // relabelled CE1's: the flutes' statistics start again.
+    restart_flute_statistics();
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "after %lld revolutions, flute %lld held %.2f times CE1's peak |Fxy| over a "
+                  "window since the lock (the lock's revolutions were unlike the cut: a knock, a "
+                  "chip carried?): locked again, its template choosing CE1; alpha, tooth "
+                  "periods, flute peaks and ΔFy cover the revolutions since",
+                  static_cast<long long>(revolutions_), static_cast<long long>(e.count), e.value);
+    detail = text;
   }
   // The warning's samples: events that count samples (a lost block, a gap, bad samples, a short
   // record), not windows.
@@ -180,12 +192,8 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
                              std::int64_t utime_us) {
   const int flutes = config.model.tool.flutes;
   if (flutes != flutes_) {
-    for (Running* r : {&alpha_, &delta_fy_, &model_alpha_, &model_delta_fy_, &measured_rms_}) {
-      *r = Running{};
-    }
-    period_ = {};
-    peak_ = {};
-    peak_resultant_ = {};
+    restart_flute_statistics();
+    measured_rms_ = Running{};
     residual_ = {};
     warnings_.push_back({"tool changed", 1, 0, utime_us,
                          "monitor.model.tool.flutes " + std::to_string(flutes_) + " → " +
@@ -196,6 +204,15 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
   }
   config_ = config;
   flutes_ = flutes;
+}
+
+void RunSummary::restart_flute_statistics() {
+  for (Running* r : {&alpha_, &delta_fy_, &model_alpha_, &model_delta_fy_}) {
+    *r = Running{};
+  }
+  period_ = {};
+  peak_ = {};
+  peak_resultant_ = {};
 }
 
 void RunSummary::warn_flute_labelling() const {

@@ -613,27 +613,76 @@ TEST(Pipeline, ALongKnockAtTheLockStartsTheAverageAgainAtMostFourTimes) {
 }
 
 // A knock longer than the lock's windows (20.5 revolutions): the lock's template holds the
-// knock, so flute 1, labelled CE1 there, is the weaker flute for the rest of the cut, and α and
-// ΔFy come from the other edge (α 204° where the cut's is 155°). Nothing in the revolutions
-// says so; the run summary does: flute 2 holds the larger force over the record.
-TEST(Pipeline, AKnockLongerThanTheLocksWindowsIsSaidInTheSummary) {
-  const auto summary_of = [](const KnockedCut& k) {
-    RunSummary summary(k.config);
-    for (const RevolutionRecord& r : k.out.revolutions) {
-      summary.add(r);
+// knock, so flute 1, labelled CE1 there, is the weaker flute once the knock is over, and α and
+// ΔFy come from the other edge (α 201.5° where the cut's is 158.5°). The first full window
+// since the lock says so: the pipeline locks again and its template chooses CE1 afresh; α and
+// ΔFy are the cut's from there on, the revolutions measured in between lose the part of one
+// between the two CE1 events, and the run summary states α since the relabelling, with a
+// warning. A knock shorter than the lock's windows relabels nothing.
+TEST(Pipeline, AKnockLongerThanTheLocksWindowsRelabelsTheFlutes) {
+  const KnockedCut knocked(20.5);
+  const Collector& out = knocked.out;
+  ASSERT_EQ(out.count(PipelineEventKind::kFlutesRelabelled), 1);
+  const PipelineEvent& relabel = *out.first(PipelineEventKind::kFlutesRelabelled);
+  EXPECT_EQ(relabel.count, 2);    // flute 2 of the lock's labelling
+  EXPECT_GT(relabel.value, 1.1);  // held clearly more force than CE1
+  EXPECT_EQ(out.count(PipelineEventKind::kLockAcquired), 2);
+  // Before: α from the other edge; after: the cut's (truth 155°, as the short knock's below).
+  std::vector<double> before, after;
+  for (const RevolutionRecord& r : out.revolutions) {
+    if (r.measured.valid) {
+      (r.utime_us < relabel.utime_us ? before : after).push_back(r.measured.alpha_deg);
     }
-    return summary.to_json();
+  }
+  std::printf(
+      "relabelled at t = %.4f s (flute %lld, %.2f times CE1's force); valid revolutions "
+      "%zu before, %zu after, %zu in all\n",
+      1e-6 * static_cast<double>(relabel.utime_us), static_cast<long long>(relabel.count),
+      relabel.value, before.size(), after.size(), out.revolutions.size());
+  ASSERT_GE(before.size(), 20U);
+  ASSERT_GE(after.size(), 300U);
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
   };
-  const nlohmann::json knocked = summary_of(KnockedCut(20.5));
-  EXPECT_GT(knocked["alpha_deg"]["mean"].get<double>(), 180.0) << knocked["alpha_deg"];
-  EXPECT_NE(test::warning_detail(knocked["warnings"], "flute labelling")
-                .find("flute 2's period holds a larger force than flute 1's"),
+  // The same cut without the knock: its α, its revolutions.
+  const KnockedCut unknocked(0.0);
+  std::vector<double> cut;
+  for (const RevolutionRecord& r : unknocked.out.revolutions) {
+    if (r.measured.valid) {
+      cut.push_back(r.measured.alpha_deg);
+    }
+  }
+  const double cut_alpha_deg = median(cut);
+  std::printf(
+      "alpha: %.2f deg before, %.2f after, the cut's %.2f; revolutions %zu against the "
+      "cut's %zu\n",
+      median(before), median(after), cut_alpha_deg, out.revolutions.size(),
+      unknocked.out.revolutions.size());
+  EXPECT_GT(median(before), 180.0);
+  EXPECT_NEAR(median(after), cut_alpha_deg, 0.5);
+  // The revolutions are continuous but for the part of one between the two CE1 events.
+  EXPECT_GE(out.revolutions.size() + 2, unknocked.out.revolutions.size());
+
+  // The sink's order: each revolution and event as it came.
+  RunSummary streamed(knocked.config);
+  std::size_t next_event = 0;
+  for (const RevolutionRecord& r : out.revolutions) {
+    while (next_event < out.events.size() && out.events[next_event].utime_us <= r.utime_us) {
+      streamed.add(out.events[next_event++]);
+    }
+    streamed.add(r);
+  }
+  const nlohmann::json j = streamed.to_json();
+  EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), cut_alpha_deg, 0.5) << j["alpha_deg"];
+  EXPECT_NE(test::warning_detail(j["warnings"], "flutes relabelled").find("flute 2 held 1."),
             std::string::npos)
-      << knocked["warnings"];
-  const nlohmann::json short_knock = summary_of(KnockedCut(2.5));
-  EXPECT_LT(short_knock["alpha_deg"]["mean"].get<double>(), 180.0) << short_knock["alpha_deg"];
-  EXPECT_EQ(test::warning_detail(short_knock["warnings"], "flute labelling"), "")
-      << short_knock["warnings"];
+      << j["warnings"];
+  EXPECT_EQ(test::warning_detail(j["warnings"], "flute labelling"), "") << j["warnings"];
+
+  const KnockedCut short_knock(2.5);
+  EXPECT_EQ(short_knock.out.count(PipelineEventKind::kFlutesRelabelled), 0);
+  EXPECT_EQ(short_knock.out.count(PipelineEventKind::kLockAcquired), 1);
 }
 
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the
