@@ -1,6 +1,7 @@
 #include "core/monitor/revolution_stats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace millwatch::monitor {
@@ -35,20 +36,24 @@ void RevolutionStats::add(RevolutionRecord& r) {
     r.alpha_mean_deg = r.alpha_std_deg = r.delta_fy_mean_N = 0.0;
     return;
   }
-  double sa = 0.0, sd = 0.0;
+  // One pass, α shifted by a value of the window (its spread, ~1°, is far below its level,
+  // ~150°: no cancellation in Σd² − (Σd)²/n), each sum in two chains that do not wait on each
+  // other: the three sums of 30 values had been a tenth of a 50 kHz revolution's statistics.
+  const double shift = alpha_[0];
+  std::array<double, 2> sa{}, sd{}, ss{};
   for (int i = 0; i < count_; ++i) {
-    sa += alpha_[static_cast<std::size_t>(i)];
-    sd += delta_fy_[static_cast<std::size_t>(i)];
+    const auto k = static_cast<std::size_t>(i);
+    const double d = alpha_[k] - shift;
+    sa[k & 1U] += d;
+    ss[k & 1U] += d * d;
+    sd[k & 1U] += delta_fy_[k];
   }
-  const double mean = sa / count_;
-  double ss = 0.0;
-  for (int i = 0; i < count_; ++i) {
-    const double d = alpha_[static_cast<std::size_t>(i)] - mean;
-    ss += d * d;
-  }
-  r.alpha_mean_deg = mean;
-  r.alpha_std_deg = count_ > 1 ? std::sqrt(ss / (count_ - 1)) : 0.0;
-  r.delta_fy_mean_N = sd / count_;
+  const double n = count_;
+  const double sum = sa[0] + sa[1];
+  r.alpha_mean_deg = shift + sum / n;
+  r.alpha_std_deg =
+      count_ > 1 ? std::sqrt(std::max(0.0, (ss[0] + ss[1] - sum * sum / n) / (n - 1.0))) : 0.0;
+  r.delta_fy_mean_N = (sd[0] + sd[1]) / n;
 }
 
 void RevolutionStats::clear_window() {
