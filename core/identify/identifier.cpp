@@ -7,6 +7,8 @@
 #include <cmath>
 #include <utility>
 
+#include "core/monitor/background_thread.hpp"
+
 namespace millwatch::identify {
 namespace {
 
@@ -199,6 +201,7 @@ void Identifier::set_cpu_budget(double fraction) {
 }
 
 void Identifier::run() {
+  monitor::make_this_thread_batch();  // a fit's wake-up does not preempt the sample thread
   std::optional<FitResult> previous;
   const auto next = [this]() -> Entry* {
     for (Entry& e : queue_) {

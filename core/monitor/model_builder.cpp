@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "core/monitor/background_thread.hpp"
+
 namespace millwatch::monitor {
 
 ModelBuilder::ModelBuilder(const model::ModelConfig& model, const signal::ButterworthDesign& filter,
@@ -43,6 +45,7 @@ void ModelBuilder::take_into(Lockstep& lockstep) {
 }
 
 void ModelBuilder::run() {
+  make_this_thread_batch();  // a build's wake-up does not preempt the sample thread
   try {
     spare_.emplace(model_, filter_, zero_phase_);  // model_, filter_: never written after
   } catch (...) {
