@@ -986,7 +986,6 @@ void Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
   // clearly more force locks again. Once the baseline is armed, another flute growing stronger
   // is the runout change the alerts raise, not a labelling to correct; and a relabelling's lock
   // whose template chose the same CE1 again is not retried (the run summary then says so).
-  constexpr double kMargin = 1.1;  // as the run summary's flute-labelling warning
   const int flutes = config_.model.tool.flutes;
   if (flutes < 2 || !r.measured.bounded || alerts_.baseline().ready) {
     return;
@@ -1007,7 +1006,7 @@ void Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
   const double ratio = label_peak_sum_N_[strongest] / label_peak_sum_N_[0];
   label_peak_sum_N_.fill(0.0);
   label_revolutions_ = 0;
-  if (strongest == 0 || !(ratio > kMargin) || relabelled_lock_) {
+  if (strongest == 0 || !(ratio > kFluteLabellingMargin) || relabelled_lock_) {
     return;  // the labelling holds, or a relabelling's template chose this CE1 again
   }
   events_.stop();

@@ -92,6 +92,11 @@ enum class PipelineEventKind {
 
 std::string_view to_string(PipelineEventKind kind);
 
+/// How much more force than CE1 another flute must hold for CE1 to be in doubt: the pipeline's
+/// relabelling over a window (kFlutesRelabelled) and the run summary's warning over the record.
+/// A clear margin: flutes of nearly equal force may trade places as the tool wears.
+inline constexpr double kFluteLabellingMargin = 1.1;
+
 struct PipelineEvent {
   PipelineEventKind kind = PipelineEventKind::kGap;
   std::int64_t utime_us = 0;

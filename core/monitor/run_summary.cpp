@@ -220,9 +220,7 @@ void RunSummary::warn_flute_labelling() const {
   // template's revolutions. Revolutions there unlike the rest of the cut (a knock, a chip
   // carried for a while), or a runout change since, can leave another flute holding the larger
   // force for most of the record: α and ΔFy then come from the other edge (for two flutes,
-  // CE1's are 360° − α and −ΔFy). A clear margin: flutes of nearly equal force may trade places
-  // as the tool wears.
-  constexpr double kMargin = 1.1;
+  // CE1's are 360° − α and −ΔFy). Said beyond kFluteLabellingMargin, as the pipeline relabels.
   constexpr std::int64_t kFewest = 10;
   const Running& ce1 = peak_resultant_[0];
   if (flutes_ < 2 || ce1.n < kFewest) {
@@ -235,7 +233,7 @@ void RunSummary::warn_flute_labelling() const {
       strongest = j;
     }
   }
-  if (strongest == 0 || !(peak_resultant_[strongest].mean() > kMargin * ce1.mean())) {
+  if (strongest == 0 || !(peak_resultant_[strongest].mean() > kFluteLabellingMargin * ce1.mean())) {
     return;
   }
   std::array<char, 512> text{};

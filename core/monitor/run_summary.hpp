@@ -86,10 +86,10 @@ class RunSummary {
   std::vector<nlohmann::json> alerts_;
   std::vector<Warning> warnings_;
   void warn(const std::string& kind, const std::string& detail) const;
-  /// Warns when another flute than CE1 holds the larger force over the record.
   /// α, ΔFy, the tooth periods and each flute's peaks (the model's α and ΔFy too) start again:
   /// their flutes are no longer the same (another tool, a relabelling).
   void restart_flute_statistics();
+  /// Warns when another flute than CE1 holds the larger force over the record.
   void warn_flute_labelling() const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
