@@ -92,8 +92,8 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
       return;
     case monitor::PipelineEventKind::kFlutesRelabelled:
       spdlog::warn(
-          "{}: flutes relabelled (t = {:.3f} s): flute {} held {:.2f} times CE1's force over a "
-          "window since the lock; locking again, its template choosing CE1",
+          "{}: flutes relabelled (t = {:.3f} s): flute {} held {:.2f} times CE1's force over the "
+          "windows since the lock; locking again, its template choosing CE1",
           source_, t_s, e.count, e.value);
       return;
     case monitor::PipelineEventKind::kNoTemplate:  // no sample count: the lock's speed instead

@@ -293,6 +293,7 @@ void Pipeline::restart_stream(std::int64_t first_sample) {
   phase_.valid = false;
   was_cutting_ = false;
   events_.stop();
+  forget_labelling();  // the next lock is the tracker's own
   ring_.clear();
   sync_.clear();
   sync_revolutions_since_report_ = 0;
@@ -682,12 +683,6 @@ void Pipeline::start_events() {
     return;
   }
   ++locks_;  // before the model: a fit taken here is no longer this lock's
-  // Its labelling is checked afresh; a relabelling's lock (check_labelling()) is not relabelled
-  // again.
-  label_peak_sum_N_.fill(0.0);
-  label_revolutions_ = 0;
-  relabelled_lock_ = relabelling_;
-  relabelling_ = false;
   if (config_.lockstep) {
     follow_speed(phase_.spindle_hz_at(static_cast<double>(anchor)), true);
     // On the template average: a first offset, in the tracker's angle (no residuals on it).
@@ -709,6 +704,7 @@ void Pipeline::start_events() {
   last_rpm_ = 0.0;
   recent_speeds_.fill({});
   lock_revolution_ = revolution_base_ + revolutions_;
+  start_labelling();
   stats_.clear_window();
   alerts_.rebaseline();
   ever_locked_ = true;
@@ -846,6 +842,10 @@ void Pipeline::take_identification() {
     ++identifications_rejected_;
     return;  // a model that does not fit the cut says nothing reliable about it
   }
+  if (w->revolution - w->window_revolutions + 1 < labelling_revolution_) {
+    ++identifications_superseded_;  // its flutes named from another CE1 (a relabelling since)
+    return;
+  }
   estimate_watch_.estimate_accepted(w->utime_us);
   alerts_.on_identification(*w, [this](const Alert& a) { sink_.on_alert(a); });
   if (!config_.lockstep) {
@@ -965,7 +965,9 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   sink_.on_revolution(r);
   alerts_.on_revolution(r, [this](const Alert& a) { sink_.on_alert(a); });
   tell_alert_state(input_sample(first), r.spindle_rpm);
-  check_labelling(r, input_sample(first));
+  if (check_labelling(r, input_sample(first))) {
+    return;  // its window is another labelling's: the relabelling's lock starts a new one
+  }
   // Every window of revolutions as it fills, whatever the block size: a block holding more than
   // a window's revolutions (calibrate's 4,096 samples at 20 kHz and 30,000 rpm: 100) must not
   // leave the windows between its ends unfitted.
@@ -978,24 +980,44 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   }
 }
 
-void Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
+void Pipeline::start_labelling() {
+  // A lock of the tracker's own starts the count of relabellings; a relabelling's carries it.
+  relabellings_ = relabelling_ ? relabellings_ : 0;
+  relabelling_ = false;
+  if (relabellings_ > 0) {
+    labelling_revolution_ = lock_revolution_;
+  }
+  label_peak_sum_N_.fill(0.0);
+  label_revolutions_ = 0;
+  label_candidate_ = 0;
+  label_windows_ = 0;
+}
+
+void Pipeline::forget_labelling() {
+  relabelling_ = false;
+  relabellings_ = 0;
+}
+
+bool Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
   // CE1 is the flute with the largest force on the lock's template revolutions. Where those
   // were unlike the cut (a knock of 20 revolutions with the flutes' forces swapped), α and ΔFy
   // would come from the other edge for as long as the lock lasts (α 204° for the cut's 155°).
-  // So while the alerts' flute-force baseline forms, a full window in which another flute holds
-  // clearly more force locks again. Once the baseline is armed, another flute growing stronger
-  // is the runout change the alerts raise, not a labelling to correct; and a relabelling's lock
-  // whose template chose the same CE1 again is not retried (the run summary then says so).
+  // So while the alerts' flute-force baseline forms, kFluteLabellingWindows full windows in a
+  // row in which the same other flute holds clearly more force lock again. Once the baseline is
+  // armed, another flute growing stronger is the runout change the alerts raise, not a
+  // labelling to correct. A disturbance after a good lock long enough to relabel is undone the
+  // same way once it ends (the new template chose the disturbance's CE1), up to
+  // kMostRelabellings times.
   const int flutes = config_.model.tool.flutes;
   if (flutes < 2 || !r.measured.bounded || alerts_.baseline().ready) {
-    return;
+    return false;
   }
   for (int j = 0; j < flutes; ++j) {
     label_peak_sum_N_[static_cast<std::size_t>(j)] +=
         r.measured.peak_resultant_N[static_cast<std::size_t>(j)];
   }
   if (++label_revolutions_ < config_.sync_window_revolutions) {
-    return;
+    return false;
   }
   std::size_t strongest = 0;
   for (std::size_t j = 1; j < static_cast<std::size_t>(flutes); ++j) {
@@ -1003,19 +1025,29 @@ void Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
       strongest = j;
     }
   }
-  const double ratio = label_peak_sum_N_[strongest] / label_peak_sum_N_[0];
+  const double ce1_N = label_peak_sum_N_[0];
+  const bool doubt = strongest != 0 && label_peak_sum_N_[strongest] > kFluteLabellingMargin * ce1_N;
+  const double ratio = ce1_N > 0.0 ? label_peak_sum_N_[strongest] / ce1_N : 0.0;
   label_peak_sum_N_.fill(0.0);
   label_revolutions_ = 0;
-  if (strongest == 0 || !(ratio > kFluteLabellingMargin) || relabelled_lock_) {
-    return;  // the labelling holds, or a relabelling's template chose this CE1 again
+  if (doubt) {
+    label_windows_ = strongest == label_candidate_ ? label_windows_ + 1 : 1;
+  } else {
+    label_windows_ = 0;
+  }
+  label_candidate_ = doubt ? strongest : 0;
+  if (label_windows_ < kFluteLabellingWindows || relabellings_ >= kMostRelabellings) {
+    return false;  // the labelling holds (so far), or relabelling gave up for this lock
   }
   events_.stop();
   relabelling_ = true;
+  ++relabellings_;
   event(PipelineEventKind::kFlutesRelabelled, sample, static_cast<std::int64_t>(strongest) + 1,
         ratio,
-        "another flute held more force than CE1 over a window since the lock: locking "
+        "another flute held more force than CE1 over the windows since the lock: locking "
         "again, the new template choosing CE1");
   last_rpm_ = 0.0;
+  return true;
 }
 
 void Pipeline::align_on_revolutions(const RevolutionEvents& ev, std::int64_t sample,

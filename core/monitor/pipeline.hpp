@@ -81,12 +81,14 @@ enum class PipelineEventKind {
   /// The flute-force change detectors compare again: a baseline formed (the first, or one at a
   /// new speed) or the speed came back to the baseline's (detail says which); value: its speed.
   kAlertsArmed,
-  /// A full window of revolutions since the lock had another flute (count: its number, 1-based,
-  /// in the lock's labelling) hold more force than CE1 (value: its mean peak |Fxy| over CE1's):
-  /// the lock's template held unusual revolutions (a knock, a carried chip). The tooth events
-  /// stop and the next tracker window locks again, its template choosing CE1 afresh; the
-  /// revolutions since the last one measured are measured from the new CE1 (the part of one
-  /// between the two CE1 events is not).
+  /// kFluteLabellingWindows full windows in a row since the lock, while the alerts' baseline
+  /// forms, had the same other flute (count: its number, 1-based, in the lock's labelling) hold
+  /// more force than CE1 (value: its peak |Fxy| over CE1's, summed over the last window; 0 when
+  /// CE1 held none): the lock's template held unusual revolutions (a knock, a carried chip). The
+  /// tooth events stop and the next tracker window locks again, its template choosing CE1
+  /// afresh; the revolutions since the last one measured are measured from the new CE1 (the
+  /// part of one between the two CE1 events is not). Windows identified before it are not
+  /// taken (identifications_superseded).
   kFlutesRelabelled
 };
 
@@ -96,6 +98,12 @@ std::string_view to_string(PipelineEventKind kind);
 /// relabelling over a window (kFlutesRelabelled) and the run summary's warning over the record.
 /// A clear margin: flutes of nearly equal force may trade places as the tool wears.
 inline constexpr double kFluteLabellingMargin = 1.1;
+/// Windows in a row in which the same flute must hold that margin over CE1 for the pipeline to
+/// relabel: a knock or a chip carried for a window's revolutions after a good lock is no reason.
+inline constexpr int kFluteLabellingWindows = 2;
+/// Relabellings after one lock, at most: a template that keeps choosing a CE1 the revolutions
+/// disagree with is not relocked for ever (the run summary then warns).
+inline constexpr int kMostRelabellings = 3;
 
 struct PipelineEvent {
   PipelineEventKind kind = PipelineEventKind::kGap;
@@ -134,9 +142,10 @@ struct PipelineStatus {
   std::int64_t identifications_taken = 0;     ///< identified parameters the model took
   std::int64_t identifications_rejected = 0;  ///< ... it did not take (fit failed or poor)
   /// Accepted for the model but never taken by it: a newer fit replaced it while it waited for
-  /// the model builder, or the run ended (or was handed over) before its build was due. (With
-  /// the model in lockstep off, accepted fits go to the alerts alone and count in none of the
-  /// three.)
+  /// the model builder, the run ended (or was handed over) before its build was due, or the
+  /// flutes were relabelled since its window (kFlutesRelabelled; nor do the alerts take it).
+  /// (With the model in lockstep off, accepted fits go to the alerts alone and count in none of
+  /// the three but for those a relabelling overtook.)
   std::int64_t identifications_superseded = 0;
   /// Revolutions the flute-force change detectors held: the speed more than the alerts'
   /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
@@ -311,9 +320,13 @@ class Pipeline {
   void submit_window();
   /// The identified parameters due at this revolution, if any, go to the model.
   void take_identification();
+  /// A lock's labelling starts to be checked (a relabelling's lock counts on).
+  void start_labelling();
+  /// The relabellings are over: the next lock is the tracker's own (a restarted stream).
+  void forget_labelling();
   /// Sums the revolution's flute forces and, over each full window since the lock, checks that
-  /// CE1 holds the largest (kFlutesRelabelled).
-  void check_labelling(const RevolutionRecord& r, std::int64_t sample);
+  /// CE1 holds the largest; true when the events stopped to relabel (kFlutesRelabelled).
+  bool check_labelling(const RevolutionRecord& r, std::int64_t sample);
   /// Tells the alert engine's flute-force state changes (kAlertsHeld, kAlertsArmed).
   void tell_alert_state(std::int64_t sample, double rpm);
   void event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
@@ -434,12 +447,18 @@ class Pipeline {
   std::optional<PendingFit> building_fit_;
   std::int64_t locks_ = 0;  // locks that reached the model (start_events())
   // Flute labelling (check_labelling()): each flute's peak |Fxy| summed over the bounded
-  // revolutions since the lock or the last check; whether the events stopped to relabel (the
-  // next lock is the relabelling's) and whether the current lock is a relabelling's.
+  // revolutions since the lock or the last check; the flute that held clearly more force than
+  // CE1 over the last windows (0: none) and in how many windows in a row; whether the events
+  // stopped to relabel (the next lock is the relabelling's); the relabellings since the last
+  // lock of the tracker's own; the first revolution of the current labelling (identified
+  // windows from before it name the flutes otherwise).
   std::array<double, kMaxFlutes> label_peak_sum_N_{};
   int label_revolutions_ = 0;
+  std::size_t label_candidate_ = 0;
+  int label_windows_ = 0;
   bool relabelling_ = false;
-  bool relabelled_lock_ = false;
+  int relabellings_ = 0;
+  std::int64_t labelling_revolution_ = 0;
   double wanted_hz_ = 0.0;  // the speed the model was last asked to follow
 };
 

@@ -85,25 +85,26 @@ void RunSummary::add(const RevolutionRecord& r) {
   // Bounded (both CE1 events found): each flute's force window is known, even when a flute in
   // between did not cut. Valid (every event found): its periods and α are known too.
   ++bounded_;
+  FluteStatistics& f = since_lock_;
   for (int j = 0; j < flutes_; ++j) {
     const auto uj = static_cast<std::size_t>(j);
     for (std::size_t a = 0; a < 3; ++a) {
-      peak_[uj][a].add(m.peak_N[uj][a]);
+      f.peak[uj][a].add(m.peak_N[uj][a]);
     }
-    peak_resultant_[uj].add(m.peak_resultant_N[uj]);
+    f.peak_resultant[uj].add(m.peak_resultant_N[uj]);
   }
   if (m.valid) {
     ++valid_;
-    alpha_.add(m.alpha_deg);
-    delta_fy_.add(m.delta_fy_N);
+    f.alpha.add(m.alpha_deg);
+    f.delta_fy.add(m.delta_fy_N);
     for (int j = 0; j < flutes_; ++j) {
-      period_[static_cast<std::size_t>(j)].add(m.flute_period_s[static_cast<std::size_t>(j)]);
+      f.period[static_cast<std::size_t>(j)].add(m.flute_period_s[static_cast<std::size_t>(j)]);
     }
   }
   if (r.model_valid) {
     if (r.model.valid && m.valid) {
-      model_alpha_.add(r.model.alpha_deg);
-      model_delta_fy_.add(r.model.delta_fy_N);
+      f.model_alpha.add(r.model.alpha_deg);
+      f.model_delta_fy.add(r.model.delta_fy_N);
     }
     for (std::size_t a = 0; a < 3; ++a) {
       residual_[a].sum_sq += r.residual_rms_N[a] * r.residual_rms_N[a];
@@ -133,6 +134,10 @@ void RunSummary::add(const Alert& a) {
 }
 
 void RunSummary::add(const PipelineEvent& e) {
+  if (e.kind == PipelineEventKind::kLockAcquired) {
+    kept_.merge(since_lock_);  // the last lock's labelling held to its end
+    since_lock_ = {};
+  }
   switch (e.kind) {
     case PipelineEventKind::kLockAcquired:
     case PipelineEventKind::kLockLost:
@@ -158,22 +163,26 @@ void RunSummary::add(const PipelineEvent& e) {
   } else if (e.kind == PipelineEventKind::kSpeedOutOfRange) {
     detail = describe_line_outside_search(e, config_);
   } else if (e.kind == PipelineEventKind::kFlutesRelabelled) {
-    // The revolutions before it state α, ΔFy and each flute's force from another edge than the
-    // relabelled CE1's: the flutes' statistics start again.
-    restart_flute_statistics();
-    char text[512];
+    // The lock's revolutions state α, ΔFy and each flute's force from another edge than the
+    // relabelled CE1's: left out (the earlier locks' stay).
+    relabelled_out_ += since_lock_.alpha.n;
+    since_lock_ = {};
+    char text[640];
     std::snprintf(text, sizeof text,
-                  "after %lld revolutions, flute %lld held %.2f times CE1's peak |Fxy| over a "
-                  "window since the lock (the lock's revolutions were unlike the cut: a knock, a "
-                  "chip carried?): locked again, its template choosing CE1; alpha, tooth "
-                  "periods, flute peaks and ΔFy cover the revolutions since",
-                  static_cast<long long>(revolutions_), static_cast<long long>(e.count), e.value);
+                  "after %lld revolutions, flute %lld held %.2f times CE1's peak |Fxy| over the "
+                  "windows since the lock (the lock's revolutions were unlike the cut: a knock, "
+                  "a chip carried?): locked again, its template choosing CE1; alpha, tooth "
+                  "periods, flute peaks and ΔFy leave out that lock's revolutions (%lld valid "
+                  "revolutions in all so far)",
+                  static_cast<long long>(revolutions_), static_cast<long long>(e.count), e.value,
+                  static_cast<long long>(relabelled_out_));
     detail = text;
   }
   // The warning's samples: events that count samples (a lost block, a gap, bad samples, a short
-  // record), not windows.
-  const bool counts_samples =
-      e.kind != PipelineEventKind::kNoSteadySignal && e.kind != PipelineEventKind::kSpeedOutOfRange;
+  // record), not windows or flutes.
+  const bool counts_samples = e.kind != PipelineEventKind::kNoSteadySignal &&
+                              e.kind != PipelineEventKind::kSpeedOutOfRange &&
+                              e.kind != PipelineEventKind::kFlutesRelabelled;
   auto it = std::find_if(warnings_.begin(), warnings_.end(),
                          [&](const Warning& w) { return w.kind == kind; });
   if (it == warnings_.end()) {
@@ -192,7 +201,8 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
                              std::int64_t utime_us) {
   const int flutes = config.model.tool.flutes;
   if (flutes != flutes_) {
-    restart_flute_statistics();
+    kept_ = {};  // one tool's flutes are not another's
+    since_lock_ = {};
     measured_rms_ = Running{};
     residual_ = {};
     warnings_.push_back({"tool changed", 1, 0, utime_us,
@@ -206,34 +216,47 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
   flutes_ = flutes;
 }
 
-void RunSummary::restart_flute_statistics() {
-  for (Running* r : {&alpha_, &delta_fy_, &model_alpha_, &model_delta_fy_}) {
-    *r = Running{};
+void RunSummary::FluteStatistics::merge(const FluteStatistics& o) {
+  for (auto [to, from] :
+       {std::pair{&alpha, &o.alpha}, std::pair{&delta_fy, &o.delta_fy},
+        std::pair{&model_alpha, &o.model_alpha}, std::pair{&model_delta_fy, &o.model_delta_fy}}) {
+    to->merge(*from);
   }
-  period_ = {};
-  peak_ = {};
-  peak_resultant_ = {};
+  for (std::size_t j = 0; j < kMaxFlutes; ++j) {
+    period[j].merge(o.period[j]);
+    peak_resultant[j].merge(o.peak_resultant[j]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      peak[j][a].merge(o.peak[j][a]);
+    }
+  }
 }
 
-void RunSummary::warn_flute_labelling() const {
+RunSummary::FluteStatistics RunSummary::flute_statistics() const {
+  FluteStatistics f = kept_;
+  f.merge(since_lock_);
+  return f;
+}
+
+void RunSummary::warn_flute_labelling(const FluteStatistics& f) const {
   // Flute 0 is CE1, the flute whose period holds the largest force, chosen at the lock on its
   // template's revolutions. Revolutions there unlike the rest of the cut (a knock, a chip
   // carried for a while), or a runout change since, can leave another flute holding the larger
   // force for most of the record: α and ΔFy then come from the other edge (for two flutes,
   // CE1's are 360° − α and −ΔFy). Said beyond kFluteLabellingMargin, as the pipeline relabels.
   constexpr std::int64_t kFewest = 10;
-  const Running& ce1 = peak_resultant_[0];
+  const Running& ce1 = f.peak_resultant[0];
   if (flutes_ < 2 || ce1.n < kFewest) {
     return;
   }
   std::size_t strongest = 0;
   for (std::size_t j = 1; j < static_cast<std::size_t>(flutes_); ++j) {
-    if (peak_resultant_[j].n >= kFewest &&
-        peak_resultant_[j].mean() > peak_resultant_[strongest].mean()) {
+    if (f.peak_resultant[j].n >= kFewest &&
+        f.peak_resultant[j].mean() > f.peak_resultant[strongest].mean()) {
       strongest = j;
     }
   }
-  if (strongest == 0 || !(peak_resultant_[strongest].mean() > kFluteLabellingMargin * ce1.mean())) {
+  if (strongest == 0 ||
+      !(f.peak_resultant[strongest].mean() > kFluteLabellingMargin * ce1.mean())) {
     return;
   }
   std::array<char, 512> text{};
@@ -243,7 +266,7 @@ void RunSummary::warn_flute_labelling() const {
                 "largest force at the lock: the cut there was unlike the rest of the record (a "
                 "knock or a chip carried at the lock, or a runout change since?), and α and ΔFy "
                 "are stated from another edge than CE1%s",
-                strongest + 1, peak_resultant_[strongest].mean(), ce1.mean(),
+                strongest + 1, f.peak_resultant[strongest].mean(), ce1.mean(),
                 flutes_ == 2 ? " (CE1's are 360° − α and −ΔFy)" : "");
   warn("flute labelling", text.data());
 }
@@ -255,15 +278,16 @@ void RunSummary::warn(const std::string& kind, const std::string& detail) const 
 nlohmann::json RunSummary::to_json() const {
   using nlohmann::json;
   derived_.clear();
+  const FluteStatistics f = flute_statistics();
   json periods = json::array(), fx = json::array(), fy = json::array(), fz = json::array(),
        resultant = json::array();
   for (int j = 0; j < flutes_; ++j) {
     const auto uj = static_cast<std::size_t>(j);
-    periods.push_back(number_or_null(period_[uj].mean()));
-    fx.push_back(number_or_null(peak_[uj][0].mean()));
-    fy.push_back(number_or_null(peak_[uj][1].mean()));
-    fz.push_back(number_or_null(peak_[uj][2].mean()));
-    resultant.push_back(number_or_null(peak_resultant_[uj].mean()));
+    periods.push_back(number_or_null(f.period[uj].mean()));
+    fx.push_back(number_or_null(f.peak[uj][0].mean()));
+    fy.push_back(number_or_null(f.peak[uj][1].mean()));
+    fz.push_back(number_or_null(f.peak[uj][2].mean()));
+    resultant.push_back(number_or_null(f.peak_resultant[uj].mean()));
   }
   const auto& in = status_.input;
   const std::int64_t samples = in.samples_accepted;
@@ -314,7 +338,7 @@ nlohmann::json RunSummary::to_json() const {
              "flutes' (a dead or swapped channel?); their speeds, periods and α are not the "
              "cut's");
   }
-  warn_flute_labelling();
+  warn_flute_labelling(f);
   if (status_.alert_held_revolutions > 0) {
     std::array<char, 384> text{};
     std::snprintf(
@@ -335,8 +359,8 @@ nlohmann::json RunSummary::to_json() const {
   if (flutes_ < 2) {
     // With one flute α is 360° and ΔFy 0 by definition [000]: they say nothing of the cut.
     warn("no alpha", "one flute: α and ΔFy compare two cutting edges");
-  } else if (alpha_.n > 0 && alpha_.n < config_.alpha_window_revolutions) {
-    warn("short window", "α and ΔFy are averaged over " + std::to_string(alpha_.n) +
+  } else if (f.alpha.n > 0 && f.alpha.n < config_.alpha_window_revolutions) {
+    warn("short window", "α and ΔFy are averaged over " + std::to_string(f.alpha.n) +
                              " revolutions, fewer than tooth_periods.window_revolutions (" +
                              std::to_string(config_.alpha_window_revolutions) + ")");
   }
@@ -404,8 +428,10 @@ nlohmann::json RunSummary::to_json() const {
                    {"fz", number_or_null(residual_[2].rms())},
                    {"measured", number_or_null(measured_rms_.rms())}};
   const bool two_edges = flutes_ >= 2;
-  const json alpha = {{"mean", two_edges ? number_or_null(alpha_.mean()) : json(nullptr)},
-                      {"std", two_edges ? number_or_null(alpha_.stddev()) : json(nullptr)}};
+  // Over the revolutions since a relabelling's lock, if there was one: fewer than "revolutions".
+  const json alpha = {{"mean", two_edges ? number_or_null(f.alpha.mean()) : json(nullptr)},
+                      {"std", two_edges ? number_or_null(f.alpha.stddev()) : json(nullptr)},
+                      {"revolutions", f.alpha.n}};
   json out{{"samples", samples},
            {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
            {"revolutions", valid_},
@@ -422,12 +448,12 @@ nlohmann::json RunSummary::to_json() const {
            {"alpha_deg", alpha},
            {"tooth_period_s", periods},
            {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
-           {"delta_fy_N", two_edges ? number_or_null(delta_fy_.mean()) : json(nullptr)},
-           {"delta_fy_N_std", two_edges ? number_or_null(delta_fy_.stddev()) : json(nullptr)},
+           {"delta_fy_N", two_edges ? number_or_null(f.delta_fy.mean()) : json(nullptr)},
+           {"delta_fy_N_std", two_edges ? number_or_null(f.delta_fy.stddev()) : json(nullptr)},
            {"residual_rms_N", residual},
            {"model",
-            {{"alpha_deg", two_edges ? number_or_null(model_alpha_.mean()) : json(nullptr)},
-             {"delta_fy_N", two_edges ? number_or_null(model_delta_fy_.mean()) : json(nullptr)},
+            {{"alpha_deg", two_edges ? number_or_null(f.model_alpha.mean()) : json(nullptr)},
+             {"delta_fy_N", two_edges ? number_or_null(f.model_delta_fy.mean()) : json(nullptr)},
              {"lockstep", config_.lockstep},
              {"builds", status_.model_builds},
              {"steady_state", model_steady_state(status_)},

@@ -59,9 +59,23 @@ class RunSummary {
       sum_sq += v * v;
       ++n;
     }
+    void merge(const Running& o) {
+      sum += o.sum;
+      sum_sq += o.sum_sq;
+      n += o.n;
+    }
     [[nodiscard]] double mean() const;
     [[nodiscard]] double stddev() const;
     [[nodiscard]] double rms() const;
+  };
+  /// What the flutes' labelling names: α, ΔFy (measured and the model's), each flute's tooth
+  /// period and peaks.
+  struct FluteStatistics {
+    Running alpha, delta_fy, model_alpha, model_delta_fy;
+    std::array<Running, kMaxFlutes> period{};
+    std::array<std::array<Running, 3>, kMaxFlutes> peak{};
+    std::array<Running, kMaxFlutes> peak_resultant{};
+    void merge(const FluteStatistics& o);
   };
   struct Warning {
     std::string kind;
@@ -76,21 +90,22 @@ class RunSummary {
   std::int64_t revolutions_ = 0;
   std::int64_t valid_ = 0;
   std::int64_t bounded_ = 0;
-  Running rpm_, tracker_rpm_, alpha_, delta_fy_, model_alpha_, model_delta_fy_;
+  Running rpm_, tracker_rpm_;
   std::int64_t first_revolution_utime_us_ = 0, last_revolution_utime_us_ = 0;
-  std::array<Running, kMaxFlutes> period_{};
-  std::array<std::array<Running, 3>, kMaxFlutes> peak_{};
-  std::array<Running, kMaxFlutes> peak_resultant_{};
+  // The flute statistics of the locks before the current one, and of the current one: a
+  // relabelling (kFlutesRelabelled) leaves the current lock's out (its flutes named from
+  // another CE1), not the earlier locks'. The valid revolutions left out so far.
+  FluteStatistics kept_, since_lock_;
+  std::int64_t relabelled_out_ = 0;
   std::array<Running, 3> residual_{};
   Running measured_rms_;
   std::vector<nlohmann::json> alerts_;
   std::vector<Warning> warnings_;
   void warn(const std::string& kind, const std::string& detail) const;
-  /// α, ΔFy, the tooth periods and each flute's peaks (the model's α and ΔFy too) start again:
-  /// their flutes are no longer the same (another tool, a relabelling).
-  void restart_flute_statistics();
+  /// The flute statistics of the whole record (those kept and the current lock's).
+  [[nodiscard]] FluteStatistics flute_statistics() const;
   /// Warns when another flute than CE1 holds the larger force over the record.
-  void warn_flute_labelling() const;
+  void warn_flute_labelling(const FluteStatistics& f) const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted

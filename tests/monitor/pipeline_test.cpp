@@ -9,10 +9,12 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/identify/identifier.hpp"
 #include "core/model/periodic_response.hpp"
 #include "core/model/steady_state.hpp"
 #include "core/monitor/run_summary.hpp"
@@ -484,19 +486,42 @@ TEST(Pipeline, TheLocksFirstWindowIsAlignedAsTheRest) {
 /// The 50 kHz cut with its first `knocked` revolutions replaced by the samples half a turn
 /// later (a knock: the same valleys, the flutes' forces swapped — runout 1.82 µm against
 /// 4 µm/tooth, one flute cuts far more), replayed with the lockstep model.
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+/// A Collector that gives the run summary each revolution and event in the sink's order.
+struct SummarizingCollector : Collector {
+  RunSummary* summary = nullptr;
+  void on_revolution(const RevolutionRecord& r) override {
+    Collector::on_revolution(r);
+    summary->add(r);
+  }
+  void on_event(const PipelineEvent& e) override {
+    Collector::on_event(e);
+    summary->add(e);
+  }
+};
+
 struct KnockedCut {
   sim::Scenario scenario = cut_at_50khz(true);
   MonitorConfig config;
-  Collector out;
+  std::optional<RunSummary> summary;
+  SummarizingCollector out;
   double per_rev = 0.0;         // samples a revolution (118.8)
   double after_knock_us = 0.0;  // a revolution after the knocked samples (low-pass delay)
-  explicit KnockedCut(double knocked) {
+  PipelineStatus status;
+  /// The flutes' forces swapped (the samples half a turn on) over `knocked` revolutions from
+  /// revolution `from` of the record; each window identified (handed over when due) if told.
+  explicit KnockedCut(double knocked, double from = 0.0, bool identify = false) {
     const sim::Scenario& s = scenario;
     Recording r = record(s);
     per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
     const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-    const auto swapped = static_cast<std::size_t>(knocked * per_rev);
-    for (std::size_t i = 0; i < swapped; ++i) {
+    const auto first = static_cast<std::size_t>(from * per_rev);
+    const auto swapped = static_cast<std::size_t>((from + knocked) * per_rev);
+    for (std::size_t i = first; i < swapped; ++i) {
       r.fx[i] = r.fx[i + half_turn];
       r.fy[i] = r.fy[i + half_turn];
       r.fz[i] = r.fz[i + half_turn];
@@ -504,8 +529,22 @@ struct KnockedCut {
     after_knock_us = 1e6 * (static_cast<double>(swapped) + per_rev) / s.sample_rate_hz;
     config = monitor_for(s);
     config.model.resolution.steps_per_rev = 720;
+    out.summary = &summary.emplace(config);
     Pipeline p(config, out);
+    if (!identify) {
+      replay(p, r, 1000);
+      status = p.status();
+      return;
+    }
+    const signal::ButterworthDesign filter = p.filter();
+    identify::Identifier identifier(
+        config.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
+        [](const identify::IdentifiedWindow&) {}, identify::HandOver::kWait);
+    p.attach_identifier(&identifier);
     replay(p, r, 1000);
+    p.attach_identifier(nullptr);
+    identifier.finish();
+    status = p.status();
   }
   /// The cut's own residual on fx: the median after the first window.
   [[nodiscard]] double cut_residual_N() const {
@@ -641,10 +680,6 @@ TEST(Pipeline, AKnockLongerThanTheLocksWindowsRelabelsTheFlutes) {
       relabel.value, before.size(), after.size(), out.revolutions.size());
   ASSERT_GE(before.size(), 20U);
   ASSERT_GE(after.size(), 300U);
-  const auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
   // The same cut without the knock: its α, its revolutions.
   const KnockedCut unknocked(0.0);
   std::vector<double> cut;
@@ -653,27 +688,18 @@ TEST(Pipeline, AKnockLongerThanTheLocksWindowsRelabelsTheFlutes) {
       cut.push_back(r.measured.alpha_deg);
     }
   }
-  const double cut_alpha_deg = median(cut);
+  const double cut_alpha_deg = median_of(cut);
   std::printf(
       "alpha: %.2f deg before, %.2f after, the cut's %.2f; revolutions %zu against the "
       "cut's %zu\n",
-      median(before), median(after), cut_alpha_deg, out.revolutions.size(),
+      median_of(before), median_of(after), cut_alpha_deg, out.revolutions.size(),
       unknocked.out.revolutions.size());
-  EXPECT_GT(median(before), 180.0);
-  EXPECT_NEAR(median(after), cut_alpha_deg, 0.5);
+  EXPECT_GT(median_of(before), 180.0);
+  EXPECT_NEAR(median_of(after), cut_alpha_deg, 0.5);
   // The revolutions are continuous but for the part of one between the two CE1 events.
   EXPECT_GE(out.revolutions.size() + 2, unknocked.out.revolutions.size());
 
-  // The sink's order: each revolution and event as it came.
-  RunSummary streamed(knocked.config);
-  std::size_t next_event = 0;
-  for (const RevolutionRecord& r : out.revolutions) {
-    while (next_event < out.events.size() && out.events[next_event].utime_us <= r.utime_us) {
-      streamed.add(out.events[next_event++]);
-    }
-    streamed.add(r);
-  }
-  const nlohmann::json j = streamed.to_json();
+  const nlohmann::json j = knocked.summary->to_json();
   EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), cut_alpha_deg, 0.5) << j["alpha_deg"];
   EXPECT_NE(test::warning_detail(j["warnings"], "flutes relabelled").find("flute 2 held 1."),
             std::string::npos)
@@ -683,6 +709,94 @@ TEST(Pipeline, AKnockLongerThanTheLocksWindowsRelabelsTheFlutes) {
   const KnockedCut short_knock(2.5);
   EXPECT_EQ(short_knock.out.count(PipelineEventKind::kFlutesRelabelled), 0);
   EXPECT_EQ(short_knock.out.count(PipelineEventKind::kLockAcquired), 1);
+}
+
+// A knock after a good lock, while the alerts' baseline forms: one of 45 revolutions (a full
+// window's flute forces swapped, the next window's a half at most) relabels nothing, where a
+// single window's check had relabelled to the weaker flute for the rest of the lock (α 201.5°
+// for the cut's 158.5°). One of 120 revolutions relabels twice: to the knock's CE1 once it has
+// held two windows, and back to the cut's once the cut has held two windows again; α ends at
+// the cut's, and the run summary states α over the revolutions since the last relabelling.
+TEST(Pipeline, AKnockAfterAGoodLockRelabelsOnlyIfItLastsAndIsUndoneAfter) {
+  const KnockedCut unknocked(0.0);
+  std::vector<double> cut;
+  for (const RevolutionRecord& r : unknocked.out.revolutions) {
+    if (r.measured.valid) {
+      cut.push_back(r.measured.alpha_deg);
+    }
+  }
+  ASSERT_GT(cut.size(), 300U);
+  const double cut_alpha_deg = median_of(cut);
+
+  const KnockedCut short_knock(45.0, 150.0);
+  EXPECT_EQ(short_knock.out.count(PipelineEventKind::kFlutesRelabelled), 0);
+  EXPECT_EQ(short_knock.out.count(PipelineEventKind::kLockAcquired), 1);
+
+  const KnockedCut long_knock(120.0, 60.0, true);
+  const Collector& out = long_knock.out;
+  ASSERT_EQ(out.count(PipelineEventKind::kFlutesRelabelled), 2);
+  EXPECT_EQ(out.count(PipelineEventKind::kLockAcquired), 3);
+  std::vector<std::int64_t> relabelled_us;
+  for (const PipelineEvent& e : out.events) {
+    if (e.kind == PipelineEventKind::kFlutesRelabelled) {
+      EXPECT_EQ(e.count, 2);  // the other of two flutes, each time
+      EXPECT_GT(e.value, kFluteLabellingMargin);
+      relabelled_us.push_back(e.utime_us);
+    }
+  }
+  const double knock_end_us = 1e6 * 180.0 * long_knock.per_rev / long_knock.scenario.sample_rate_hz;
+  EXPECT_GT(static_cast<double>(relabelled_us[0]),
+            1e6 * 60.0 * long_knock.per_rev / long_knock.scenario.sample_rate_hz);
+  EXPECT_LT(static_cast<double>(relabelled_us[0]), knock_end_us);
+  EXPECT_GT(static_cast<double>(relabelled_us[1]), knock_end_us);
+  std::vector<double> after;
+  for (const RevolutionRecord& r : out.revolutions) {
+    if (r.measured.valid && r.utime_us > relabelled_us[1]) {
+      after.push_back(r.measured.alpha_deg);
+    }
+  }
+  std::printf(
+      "relabelled at t = %.4f s and %.4f s (knock %.4f-%.4f s); alpha after: %.2f deg "
+      "(%zu revolutions), the cut's %.2f\n",
+      1e-6 * static_cast<double>(relabelled_us[0]), 1e-6 * static_cast<double>(relabelled_us[1]),
+      60.0 * long_knock.per_rev / long_knock.scenario.sample_rate_hz, 1e-6 * knock_end_us,
+      after.empty() ? 0.0 : median_of(after), after.size(), cut_alpha_deg);
+  ASSERT_GE(after.size(), 60U);
+  EXPECT_NEAR(median_of(after), cut_alpha_deg, 0.5);
+  // The model takes no identified window from before a relabelling after it (each names the
+  // flutes from another CE1): the revolutions after the relabelling's are its lock's.
+  std::int64_t labelling_from = 0;
+  std::size_t next = 0;
+  int updates_after = 0;
+  for (const PipelineEvent& e : out.events) {
+    if (e.kind == PipelineEventKind::kFlutesRelabelled) {
+      while (next < out.revolutions.size() && out.revolutions[next].utime_us <= e.utime_us) {
+        ++next;
+      }
+      ASSERT_LT(next, out.revolutions.size());
+      labelling_from = out.revolutions[next].revolution;
+    } else if (e.kind == PipelineEventKind::kModelUpdated && labelling_from > 0) {
+      EXPECT_GE(e.count - long_knock.config.sync_window_revolutions + 1, labelling_from)
+          << "a window of revolution " << e.count << " in the labelling from " << labelling_from;
+      ++updates_after;
+    }
+  }
+  std::printf(
+      "identified windows: %lld taken, %lld rejected, %lld superseded (%d taken after a "
+      "relabelling)\n",
+      static_cast<long long>(long_knock.status.identifications_taken),
+      static_cast<long long>(long_knock.status.identifications_rejected),
+      static_cast<long long>(long_knock.status.identifications_superseded), updates_after);
+  EXPECT_GT(updates_after, 0);
+  EXPECT_GE(long_knock.status.identifications_superseded, 1);
+  // The summary leaves out each relabelled lock's revolutions: the first lock's (the knock came
+  // in it) and the second's (on the knock's CE1); it states the third's.
+  const nlohmann::json j = long_knock.summary->to_json();
+  std::printf("summary: alpha %.2f deg over %lld of %lld valid revolutions\n",
+              j["alpha_deg"]["mean"].get<double>(), j["alpha_deg"]["revolutions"].get<long long>(),
+              j["revolutions"].get<long long>());
+  EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), cut_alpha_deg, 0.5) << j["alpha_deg"];
+  EXPECT_EQ(j["alpha_deg"]["revolutions"].get<std::size_t>(), after.size());
 }
 
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the

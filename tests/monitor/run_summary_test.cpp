@@ -333,5 +333,55 @@ TEST(RunSummary, SaysWhenAnotherFluteThanCE1HoldsTheLargerForce) {
   EXPECT_EQ(test::warning_detail(warnings(0.9, 1.6, 5), "flute labelling"), "");
 }
 
+// A relabelling (kFlutesRelabelled) leaves out the revolutions of its lock, named from the
+// other CE1, and keeps those of the locks before: a good lock (α 150°, 50 revolutions), one that
+// locked on a knock (α 210°, 30), relabelled, and its relabelling's lock (α 150°, 40). The
+// warning counts no samples, and says how many revolutions were left out.
+TEST(RunSummary, ARelabellingLeavesOutItsLockAloneAndCountsNoSamples) {
+  MonitorConfig config;
+  RunSummary summary(config);
+  int n = 0;
+  const auto lock = [&](PipelineEventKind kind) {
+    PipelineEvent e;
+    e.kind = kind;
+    e.utime_us = n;
+    e.count = kind == PipelineEventKind::kFlutesRelabelled ? 2 : 0;
+    e.value = kind == PipelineEventKind::kFlutesRelabelled ? 1.6 : 25000.0;
+    e.detail = "test";
+    summary.add(e);
+  };
+  const auto revolutions = [&](int count, double alpha_deg, double ce1_N, double other_N) {
+    for (int i = 0; i < count; ++i, ++n) {
+      RevolutionRecord r = revolution(n);
+      r.measured.alpha_deg = alpha_deg;
+      r.measured.peak_resultant_N[0] = ce1_N;
+      r.measured.peak_resultant_N[1] = other_N;
+      summary.add(r);
+    }
+  };
+  lock(PipelineEventKind::kLockAcquired);
+  revolutions(50, 150.0, 1.6, 0.9);
+  lock(PipelineEventKind::kLockLost);
+  lock(PipelineEventKind::kLockAcquired);
+  revolutions(30, 210.0, 0.9, 1.6);
+  lock(PipelineEventKind::kFlutesRelabelled);
+  lock(PipelineEventKind::kLockAcquired);
+  revolutions(40, 150.0, 1.6, 0.9);
+  const nlohmann::json j = summary.to_json();
+  EXPECT_DOUBLE_EQ(j["alpha_deg"]["mean"].get<double>(), 150.0) << j["alpha_deg"];
+  EXPECT_EQ(j["alpha_deg"]["revolutions"], 90);
+  EXPECT_EQ(j["revolutions"], 120);
+  EXPECT_DOUBLE_EQ(j["peak_force_N"]["resultant"][0].get<double>(), 1.6);
+  const std::string detail = test::warning_detail(j["warnings"], "flutes relabelled");
+  EXPECT_NE(detail.find("flute 2 held 1.60 times"), std::string::npos) << detail;
+  EXPECT_NE(detail.find("(30 valid revolutions in all so far)"), std::string::npos) << detail;
+  EXPECT_EQ(test::warning_detail(j["warnings"], "flute labelling"), "");
+  for (const auto& w : j["warnings"]) {
+    if (w["kind"] == "flutes relabelled") {
+      EXPECT_EQ(w["samples"], 0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
