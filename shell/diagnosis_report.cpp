@@ -74,30 +74,34 @@ std::vector<fs::path> write_plot_files(const Diagnosis& d, const fs::path& dir,
     const fs::path spec_png = dir / fmt::format("spectrum_{}.png", i);
     const std::string label = stage_label(s, i);
     script += fmt::format(
-        "set output {0}\nset title \"{1}: {2} — residual {3:.4f}, {4:.4f} N\"\n"
+        "set output {0}\nset title {1}\n"
         "set xlabel 'model angle (deg)'\nset ylabel 'force on the tool (N)'\nset xrange [0:360]\n"
         "set key outside right\n"
-        "plot {5} skip 1 using 1:2 with lines lw 2 lc rgb '#1f77b4' title 'fx measured', "
+        "plot {2} skip 1 using 1:2 with lines lw 2 lc rgb '#1f77b4' title 'fx measured', "
         "'' skip 1 using 1:3 with lines dt 2 lw 2 lc rgb '#0b3d66' title 'fx model', "
         "'' skip 1 using 1:4 with lines lw 2 lc rgb '#d62728' title 'fy measured', "
         "'' skip 1 using 1:5 with lines dt 2 lw 2 lc rgb '#7a1010' title 'fy model'\n"
         "set xrange [*:*]\n",
-        gnuplot_quoted(rev_png), title, label, s.residual_rms_N[0], s.residual_rms_N[1],
+        gnuplot_quoted(rev_png),
+        gnuplot_text(fmt::format("{}: {} — residual {:.4f}, {:.4f} N", title, label,
+                                 s.residual_rms_N[0], s.residual_rms_N[1]),
+                     false),
         gnuplot_quoted(rev_csv));
     // A white noise of RMS σ over the band has a mean bin amplitude 2σ/√(2·bins)... shown as the
     // floor's amplitude per bin: 2·σ_floor/√(n_eff).
     const double fx_level = 2.0 * d.noise_floor_N[0] / std::sqrt(std::max(1, d.effective_samples));
     const double fy_level = 2.0 * d.noise_floor_N[1] / std::sqrt(std::max(1, d.effective_samples));
     script += fmt::format(
-        "set output {0}\nset title \"{1}: {2} — residual spectrum\"\nset logscale y\nset key "
-        "inside top right\n"
+        "set output {0}\nset title {1}\nset logscale y\nset key inside top right\n"
         "set xlabel 'frequency (Hz)'\nset ylabel 'amplitude (N)'\n"
-        "plot {3} skip 1 using 1:2 with lines lc rgb '#1f77b4' title 'fx', "
+        "plot {2} skip 1 using 1:2 with lines lc rgb '#1f77b4' title 'fx', "
         "'' skip 1 using 1:3 with lines lc rgb '#d62728' title 'fy', "
-        "{4} with lines dt 2 lc rgb '#0b3d66' title 'fx noise floor (mean bin)', "
-        "{5} with lines dt 2 lc rgb '#7a1010' title 'fy noise floor (mean bin)'\n"
+        "{3} with lines dt 2 lc rgb '#0b3d66' title 'fx noise floor (mean bin)', "
+        "{4} with lines dt 2 lc rgb '#7a1010' title 'fy noise floor (mean bin)'\n"
         "unset logscale y\n",
-        gnuplot_quoted(spec_png), title, label, gnuplot_quoted(spec_csv), fx_level, fy_level);
+        gnuplot_quoted(spec_png),
+        gnuplot_text(fmt::format("{}: {} — residual spectrum", title, label), false),
+        gnuplot_quoted(spec_csv), fx_level, fy_level);
     pngs.push_back(rev_png);
     pngs.push_back(spec_png);
   }
@@ -508,7 +512,7 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
     const fs::path png = abs / "residual_vs_feed.png";
     const std::string script = fmt::format(
         "set terminal pngcairo size 900,600 noenhanced\nset grid\nset datafile separator ','\n"
-        "set output {0}\nset title \"residual against the feed: {1}\"\nset logscale xy\n"
+        "set output {0}\nset title {1}\nset logscale xy\n"
         "set xlabel 'feed per tooth (um)'\nset ylabel '|residual| over fx, fy (N)'\n"
         "set key outside right\n"
         "plot {2} skip 1 using 1:2 with linespoints lw 2 pt 7 lc rgb '#d62728' title 'starting "
@@ -516,7 +520,8 @@ ReportFiles write_across_feeds_report(const diagnose::AcrossFeeds& across,
         "diagnosis', '' skip 1 using 1:4 with linespoints dt 3 pt 6 lc rgb '#d62728' title "
         "'excess before', '' skip 1 using 1:6 with lines dt 2 lc rgb '#555555' title 'noise "
         "floor'\nunset output\n",
-        gnuplot_quoted(png), across.trend.name, gnuplot_quoted(csv_path));
+        gnuplot_quoted(png), gnuplot_text("residual against the feed: " + across.trend.name, false),
+        gnuplot_quoted(csv_path));
     const fs::path script_path = abs / "residual_vs_feed.gp";
     write_text_file(script_path, script);
     out.plot_problem = run_gnuplot(script_path, abs / "gnuplot.log");

@@ -3,9 +3,11 @@
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <string_view>
 
 namespace millwatch::shell {
 
@@ -13,6 +15,23 @@ std::string gnuplot_quoted(const std::filesystem::path& file) {
   std::string out = "'";
   for (const char c : file.string()) {
     out += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return out + "'";
+}
+
+std::string gnuplot_text(std::string_view text, bool enhanced) {
+  std::string out = "'";
+  for (const char c : text) {
+    if (c == '\'') {
+      out += "''";
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      out += ' ';
+    } else {
+      if (enhanced && std::string_view("_^{}@&~\\").find(c) != std::string_view::npos) {
+        out += '\\';
+      }
+      out += c;
+    }
   }
   return out + "'";
 }

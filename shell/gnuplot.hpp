@@ -4,11 +4,18 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace millwatch::shell {
 
 /// A file name as a gnuplot string: in single quotes, each quote in it doubled.
 std::string gnuplot_quoted(const std::filesystem::path& file);
+
+/// Any text (a title made of a file name, a stage's name) as a gnuplot string read literally: in
+/// single quotes, where gnuplot substitutes no `command` and no escape, each quote in it doubled
+/// and each control character a space. For an enhanced-text terminal, its markup characters
+/// (_ ^ { } @ & ~ \) each get the backslash that makes them plain.
+std::string gnuplot_text(std::string_view text, bool enhanced);
 
 /// Runs `gnuplot script`, its standard error into `log` (its standard output discarded), and
 /// waits for it. "" when it drew, else why not (not installed, or failed: see the log).

@@ -15,22 +15,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// gnuplot's text: no enhanced-mode specials from a file name.
-std::string plain(const std::string& text) {
-  std::string s;
-  for (char c : text) {
-    if (c == '_' || c == '^' || c == '{' || c == '}' || c == '@' || c == '&' || c == '~') {
-      s += '\\';
-      s += '\\';
-    }
-    if (c == '"') {
-      s += '\\';
-    }
-    s += c;
-  }
-  return s;
-}
-
 void write_file(const fs::path& p, const std::string& text) {
   std::ofstream out(p, std::ios::binary);
   out << text;
@@ -114,7 +98,10 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   std::string script = kTerminal;
   std::string notes;
   std::vector<fs::path> pngs;
-  const std::string head = plain(title);
+  // Each title gnuplot reads literally (a file name's markup and backquotes too).
+  const auto titled = [&](const std::string& what) {
+    return gnuplot_text(title + " — " + what, true);
+  };
   const double commanded = summary.value("spindle_rpm_commanded", 0.0);
   const double rpm = summary.contains("spindle_rpm") && summary["spindle_rpm"].is_number()
                          ? summary["spindle_rpm"].get<double>()
@@ -159,10 +146,8 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   // 1. Speed over time.
   if (!rec.spindle().empty() || bounded > 0) {
     add_png("speed.png");
-    script += fmt::format(
-        "set title \"{} — spindle speed (commanded {:.0f} rpm)\"\nset xlabel 'time [s]'\n"
-        "set ylabel 'speed [rpm]'\n",
-        head, commanded);
+    script += fmt::format("set title {}\nset xlabel 'time [s]'\nset ylabel 'speed [rpm]'\n",
+                          titled(fmt::format("spindle speed (commanded {:.0f} rpm)", commanded)));
     std::string plot = "plot ";
     if (!rec.spindle().empty()) {
       plot += gnuplot_quoted(abs / "spindle.csv") +
@@ -182,23 +167,22 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   if (valid > 0) {
     add_png("alpha_delta_fy.png");
     script += fmt::format(
-        "set multiplot layout 2,1 title \"{} — per revolution\"\nunset title\n"
+        "set multiplot layout 2,1 title {}\nunset title\n"
         "set xlabel ''\nset ylabel 'alpha [deg]'\n"
         "plot {} skip 1 using 1:4 with linespoints pt 7 ps 0.4 lc rgb '#1f77b4' title 'alpha'\n"
         "set xlabel 'revolution'\nset ylabel 'delta Fy [N]'\n"
         "plot {} skip 1 using 1:5 with linespoints pt 7 ps 0.4 lc rgb '#d62728' title 'delta "
         "Fy = |Fy peak CE1| - |Fy peak CE2|'\n"
         "unset multiplot\n",
-        head, gnuplot_quoted(rev_csv), gnuplot_quoted(rev_csv));
+        titled("per revolution"), gnuplot_quoted(rev_csv), gnuplot_quoted(rev_csv));
   } else {
     notes += "alpha_delta_fy.png: left out, no revolution had all its tooth events found\n";
   }
   if (bounded > 0) {
     add_png("flute_peaks.png");
-    script += fmt::format(
-        "set title \"{} — peak in-plane force per flute\"\nset xlabel 'revolution'\n"
-        "set ylabel 'peak |Fxy| [N]'\nplot ",
-        head);
+    script +=
+        fmt::format("set title {}\nset xlabel 'revolution'\nset ylabel 'peak |Fxy| [N]'\nplot ",
+                    titled("peak in-plane force per flute"));
     for (int j = 0; j < flutes; ++j) {
       script += fmt::format(
           "{}{} skip 1 using 1:{} with linespoints pt 7 ps 0.4 lc rgb '{}' title 'flute {}{}'",
@@ -231,9 +215,10 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     write_file(abs / "sync_average.csv", data);
     add_png("sync_average.png");
     script += fmt::format(
-        "set multiplot layout 3,1 title \"{} — synchronous average of {} revolutions (at "
-        "revolution {}), force on the tool\"\nunset title\nset xrange [0:360]\nset xtics 45\n",
-        head, sync.window_revolutions, sync.revolution);
+        "set multiplot layout 3,1 title {}\nunset title\nset xrange [0:360]\nset xtics 45\n",
+        titled(fmt::format("synchronous average of {} revolutions (at revolution {}), force on "
+                           "the tool",
+                           sync.window_revolutions, sync.revolution)));
     const char* axes[] = {"Fx", "Fy", "Fz"};
     for (int a = 0; a < 3; ++a) {
       script += fmt::format(
@@ -281,11 +266,12 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         segment > 0 && total >= segment ? 1 + (total - segment) / (segment / 2) : 0;
     const std::size_t covered = segments > 0 ? segment + (segments - 1) * (segment / 2) : 0;
     script += fmt::format(
-        "set title \"{} — force spectrum ({} of the {} samples as recorded, in {} Hann "
-        "segment(s) of {}; {:.1f} Hz resolution)\"\n"
-        "set xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
+        "set title {}\nset xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
         "set format y '10^{{%L}}'\nset xrange [0:{}]\nset key bottom right\n",
-        head, covered, total, segments, segment, f.size() > 1 ? f[1] : 0.0, num(f_max));
+        titled(fmt::format("force spectrum ({} of the {} samples as recorded, in {} Hann "
+                           "segment(s) of {}; {:.1f} Hz resolution)",
+                           covered, total, segments, segment, f.size() > 1 ? f[1] : 0.0)),
+        num(f_max));
     if (tooth_hz > 0.0) {
       for (int k = 1; k * tooth_hz <= f_max; ++k) {
         script += fmt::format(

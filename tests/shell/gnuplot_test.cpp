@@ -1,5 +1,6 @@
-// shell::run_gnuplot and gnuplot_quoted: a script that draws, one gnuplot rejects (its message in
-// the log), gnuplot not found, and a file name with quotes and spaces as gnuplot reads it.
+// shell::run_gnuplot, gnuplot_quoted and gnuplot_text: a script that draws, one gnuplot rejects
+// (its message in the log), gnuplot not found, a file name with quotes and spaces as gnuplot
+// reads it, and text with a command, quotes and markup in it read literally.
 
 #include "shell/gnuplot.hpp"
 
@@ -72,6 +73,31 @@ TEST_F(Gnuplot, NoGnuplotOnThePathIsSaidWithWhatToInstall) {
   ::setenv("PATH", before.c_str(), 1);
   EXPECT_EQ(problem,
             "cannot run gnuplot (No such file or directory); install it (Debian: gnuplot-nox)");
+}
+
+// A title made of a file name reaches gnuplot as text: a backquoted command in it does not run
+// (it would in a double-quoted string), quotes and markup come out as written, a line break as a
+// space; for an enhanced terminal the markup gets its escape, and the title still draws.
+TEST_F(Gnuplot, TextFromAFileNameIsReadLiterallyAndRunsNothing) {
+  const fs::path ran = dir_ / "ran";
+  const std::string name = "cut_1^2 {\"a\"} it's `touch " + ran.string() + "` @x & ~y \\n\nend";
+  const fs::path printed = dir_ / "printed.txt";
+  const fs::path script = write_script(
+      "set print " + gnuplot_quoted(printed) + "\nprint " + gnuplot_text(name, false) + "\nprint " +
+      gnuplot_text(name, true) + "\nset terminal pngcairo size 320,240 enhanced\n" + "set output " +
+      gnuplot_quoted(dir_ / "titled.png") + "\nset title " + gnuplot_text(name, true) +
+      "\nplot sin(x)\nunset output\n");
+  EXPECT_EQ(run_gnuplot(script, dir_ / "gnuplot.log"), "") << read(dir_ / "gnuplot.log");
+  EXPECT_FALSE(fs::exists(ran));
+  EXPECT_TRUE(fs::exists(dir_ / "titled.png"));
+  std::string plain = name;
+  plain[plain.size() - 4] = ' ';  // the line break
+  std::string marked;
+  for (const char c : plain) {
+    marked += std::string("_^{}@&~\\").find(c) != std::string::npos ? "\\" : "";
+    marked += c;
+  }
+  EXPECT_EQ(read(printed), plain + "\n" + marked + "\n");
 }
 
 }  // namespace
