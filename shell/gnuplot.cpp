@@ -37,10 +37,15 @@ std::string gnuplot_text(std::string_view text, bool enhanced) {
 }
 
 std::string run_gnuplot(const std::filesystem::path& script, const std::filesystem::path& log) {
+  // The log opened here: a log that cannot be written is said as such, not as gnuplot missing.
+  const std::string log_s = log.string();
+  const int log_fd = ::open(log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (log_fd < 0) {
+    return "cannot write gnuplot's log " + log_s + " (" + std::strerror(errno) + ")";
+  }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  const std::string log_s = log.string();
-  posix_spawn_file_actions_addopen(&actions, 2, log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, log_fd, 2);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
   std::string program = "gnuplot";
   std::string script_s = script.string();
@@ -48,12 +53,16 @@ std::string run_gnuplot(const std::filesystem::path& script, const std::filesyst
   pid_t pid = 0;
   const int rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
   posix_spawn_file_actions_destroy(&actions);
+  ::close(log_fd);
   if (rc != 0) {
     return std::string("cannot run gnuplot (") + std::strerror(rc) +
            "); install it (Debian: gnuplot-nox)";
   }
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      return "gnuplot on " + script_s + " could not be waited for (" + std::strerror(errno) + ")";
+    }
   }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     return "gnuplot failed on " + script_s + "; see " + log_s;

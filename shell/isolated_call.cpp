@@ -1,6 +1,7 @@
 #include "shell/isolated_call.hpp"
 
 #include <fcntl.h>
+#include <limits.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -33,6 +34,11 @@ namespace {
 
 /// The child's exit status when a sanitizer stopped it (its report is not printed).
 constexpr int kSanitizerStopped = 97;
+/// The wait status wait_for() gives for a child it could not wait for (waitpid failed).
+constexpr int kNotWaited = W_EXITCODE(98, 0);
+/// The longest text of an error after the answer began (within one atomic pipe write, so that
+/// the child never blocks on it).
+constexpr std::size_t kMaxLateErrorBytes = PIPE_BUF;
 
 /// Repeats `io(data, n)` (::read or ::write on a pipe) until all n bytes went through, as a
 /// signal may interrupt it and a pipe passes a part at a time; false at an end of the pipe or an
@@ -95,7 +101,7 @@ bool send_error(int fd, std::string text) {
   return write_all(fd, header, sizeof header) && write_all(fd, text.data(), text.size());
 }
 
-[[noreturn]] void child(int fd, const std::function<void(AnswerWriter&)>& work,
+[[noreturn]] void child(int fd, int late_error_fd, const std::function<void(AnswerWriter&)>& work,
                         std::size_t budget_bytes) {
   bound_child(budget_bytes);
   AnswerWriter out(fd);
@@ -109,9 +115,16 @@ bool send_error(int fd, std::string text) {
             " MiB beyond what it started with)";
   } catch (const std::exception& e) {
     error = e.what();
+  } catch (...) {
+    error = "an exception of no standard type";
   }
-  // After the answer's first bytes an error can only cut it short.
-  _exit(!out.started() && send_error(fd, std::move(error)) ? 0 : 1);
+  if (!out.started()) {
+    _exit(send_error(fd, std::move(error)) ? 0 : 1);
+  }
+  // After the answer's first bytes an error cuts it short: its text goes by the other pipe.
+  error.resize(std::min(error.size(), kMaxLateErrorBytes));
+  (void)!::write(late_error_fd, error.data(), error.size());
+  _exit(1);
 }
 
 std::string how_it_ended(int status) {
@@ -124,6 +137,9 @@ std::string how_it_ended(int status) {
   if (WIFEXITED(status) && WEXITSTATUS(status) == kSanitizerStopped) {
     return "was stopped by a sanitizer";
   }
+  if (status == kNotWaited) {
+    return "could not be waited for";
+  }
   if (WIFEXITED(status)) {
     return "exited (status " + std::to_string(WEXITSTATUS(status)) + ") without an answer";
   }
@@ -132,16 +148,19 @@ std::string how_it_ended(int status) {
 
 int wait_for(pid_t pid) {
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      return kNotWaited;  // not a status of the child's (ECHILD: SIGCHLD ignored, reaped)
+    }
   }
   return status;
 }
 
-/// The child and the parent's end of its pipe, until finish(); killed, closed and reaped on any
-/// other way out (a throw such as bad_alloc).
+/// The child and the parent's ends of its pipes (the answer, an error after the answer began),
+/// until finish(); killed, closed and reaped on any other way out (a throw such as bad_alloc).
 class Child {
  public:
-  Child(pid_t pid, int fd) : pid_(pid), fd_(fd) {}
+  Child(pid_t pid, int fd, int late_error_fd) : pid_(pid), fd_(fd), late_error_fd_(late_error_fd) {}
   Child(const Child&) = delete;
   Child& operator=(const Child&) = delete;
   ~Child() {
@@ -160,12 +179,29 @@ class Child {
     ::close(fd_);
     const int status = wait_for(pid_);
     pid_ = -1;
+    late_error_ = read_late_error();
+    ::close(late_error_fd_);
     return status;
   }
+  /// After finish(): the text of an error the work threw after its answer began ("" if none).
+  [[nodiscard]] const std::string& late_error() const { return late_error_; }
 
  private:
+  /// The child has ended: its end of the pipe is closed, and what it wrote is there whole.
+  std::string read_late_error() const {
+    std::string text(kMaxLateErrorBytes, '\0');
+    ssize_t n = 0;
+    do {
+      n = ::read(late_error_fd_, text.data(), text.size());
+    } while (n < 0 && errno == EINTR);
+    text.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+    return text;
+  }
+
   pid_t pid_;
   int fd_;
+  int late_error_fd_;
+  std::string late_error_;
 };
 
 /// Whether the child ended by itself other than with an answer: what went wrong is then its end
@@ -183,8 +219,8 @@ IsolatedResult failed(std::string message) {
 IsolatedResult take_answer(Child& child, const std::function<void(AnswerReader&)>& read_answer,
                            std::size_t max_answer_bytes) {
   std::string problem;
+  AnswerReader in(child.fd(), max_answer_bytes);
   try {
-    AnswerReader in(child.fd(), max_answer_bytes);
     read_answer(in);
     char extra = 0;
     if (read_all(child.fd(), &extra, 1)) {
@@ -195,8 +231,15 @@ IsolatedResult take_answer(Child& child, const std::function<void(AnswerReader&)
   } catch (const std::exception& e) {
     problem = e.what();
   }
-  const int status = child.finish(!problem.empty());
-  if (ended_badly(status) || (problem.empty() && !WIFEXITED(status))) {
+  // An answer that ended early: the child has ended (or is ending) by itself, not to be killed,
+  // so that how it ended (the kernel's SIGKILL when out of memory, an error) is its own.
+  const bool ended = in.ended();
+  const int status = child.finish(!problem.empty() && !ended);
+  if (ended && !child.late_error().empty()) {
+    return failed("its answer broke off: " + child.late_error());
+  }
+  if (ended_badly(status) || (problem.empty() && !WIFEXITED(status)) ||
+      (ended && !WIFEXITED(status))) {
     return failed(how_it_ended(status));
   }
   if (!problem.empty()) {
@@ -215,7 +258,12 @@ IsolatedResult take_error(Child& child) {
     text.resize(size);
     whole = read_all(child.fd(), text.data(), text.size());
   }
+  const bool too_long = size > kMaxErrorBytes;
   const int status = child.finish(!whole);
+  if (too_long) {
+    return failed("its error states " + std::to_string(size) + " bytes, more than the " +
+                  std::to_string(kMaxErrorBytes) + " it may");
+  }
   if (!whole || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     return failed(how_it_ended(status));
   }
@@ -242,6 +290,7 @@ void AnswerReader::read(void* data, std::size_t n) {
     throw std::runtime_error("answered more than the " + std::to_string(max_) + " bytes it may");
   }
   if (!read_all(fd_, static_cast<char*>(data), n)) {
+    ended_ = true;
     throw std::runtime_error("its answer ends early");
   }
   left_ -= n;
@@ -254,20 +303,34 @@ IsolatedResult run_isolated(const std::function<void(AnswerWriter&)>& work,
   if (pipe2(fds, O_CLOEXEC) != 0) {
     return {IsolatedResult::Outcome::kNotStarted, std::string("pipe: ") + std::strerror(errno)};
   }
-  const pid_t pid = fork();
-  if (pid < 0) {
+  int late[2];  // the late error's: read only once the child has ended
+  if (pipe2(late, O_CLOEXEC | O_NONBLOCK) != 0) {
     const int e = errno;
     ::close(fds[0]);
     ::close(fds[1]);
+    return {IsolatedResult::Outcome::kNotStarted, std::string("pipe: ") + std::strerror(e)};
+  }
+  const pid_t parent = ::getpid();
+  const pid_t pid = fork();
+  if (pid < 0) {
+    const int e = errno;
+    for (const int fd : {fds[0], fds[1], late[0], late[1]}) {
+      ::close(fd);
+    }
     return {IsolatedResult::Outcome::kNotStarted, std::string("fork: ") + std::strerror(e)};
   }
   if (pid == 0) {
     ::close(fds[0]);
+    ::close(late[0]);
     prctl(PR_SET_PDEATHSIG, SIGKILL);  // a parent killed (a time-out) takes the child along
-    child(fds[1], work, memory_budget_bytes);
+    if (::getppid() != parent) {
+      _exit(1);  // it died before the line above: nobody would read the answer
+    }
+    child(fds[1], late[1], work, memory_budget_bytes);
   }
   ::close(fds[1]);
-  Child c(pid, fds[0]);
+  ::close(late[1]);
+  Child c(pid, fds[0], late[0]);
   char tag = 0;
   if (!read_all(c.fd(), &tag, 1)) {
     return failed(how_it_ended(c.finish(false)));

@@ -43,11 +43,14 @@ class AnswerReader {
   void read(void* data, std::size_t n);
   /// The bytes the answer may still hold (check a count against it before allocating for it).
   [[nodiscard]] std::size_t left() const { return left_; }
+  /// Whether the answer ended before a read's bytes (the child closed its end: it has ended).
+  [[nodiscard]] bool ended() const { return ended_; }
 
  private:
   int fd_;
   std::size_t max_;
   std::size_t left_;
+  bool ended_ = false;
 };
 
 struct IsolatedResult {
@@ -63,8 +66,9 @@ struct IsolatedResult {
 };
 
 /// Runs `work` in a child process with at most `memory_budget_bytes` more address space than the
-/// caller has now; `work` writes its answer with the AnswerWriter (and should throw only before
-/// its first write: an error after it reaches the parent as an answer cut short). In the caller,
+/// caller has now; `work` writes its answer with the AnswerWriter (an error it throws after its
+/// first write cuts the answer short: kFailed, "its answer broke off: " and the error's text, up
+/// to PIPE_BUF bytes of it). In the caller,
 /// `read_answer` reads the answer as it comes, at most `max_answer_bytes` of it; whatever it
 /// throws (std::exception) makes the outcome kFailed, and the child is killed. Blocks until the
 /// child has answered and exited. Call it with no other thread inside the library the work uses

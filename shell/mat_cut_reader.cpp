@@ -486,12 +486,16 @@ void write_contents(AnswerWriter& out, const Contents& c) {
 std::size_t get_size(AnswerReader& in, std::size_t most, std::size_t item_bytes) {
   std::uint64_t v = 0;
   in.read(&v, sizeof v);
-  if (v > most || v > in.left() / item_bytes) {
+  const std::size_t limit = std::min(most, in.left() / item_bytes);
+  if (v > limit) {
     throw std::runtime_error("the reading process's answer states " + std::to_string(v) +
-                             " items, more than " + std::to_string(std::min(most, in.left())));
+                             " items, more than the " + std::to_string(limit) + " it may");
   }
   return static_cast<std::size_t>(v);
 }
+
+/// The most a text of the answer may hold (its names and selectors: a few hundred characters).
+constexpr std::size_t kMaxAnswerTextBytes = std::size_t{1} << 20;
 
 /// Reads write_contents()'s answer straight into the vectors; throws if it is not what it wrote.
 Contents read_answer(AnswerReader& in, std::size_t max_elements) {
@@ -503,7 +507,7 @@ Contents read_answer(AnswerReader& in, std::size_t max_elements) {
   in.read(&c.rate_hz, sizeof c.rate_hz);
   c.rate_stated = get_size(in, 1, 1) == 1;
   for (std::string* text : {&c.version, &c.variables}) {
-    text->resize(get_size(in, in.left(), 1));
+    text->resize(get_size(in, kMaxAnswerTextBytes, 1));
     in.read(text->data(), text->size());
   }
   const std::size_t n = c.f[0].size();
@@ -632,8 +636,8 @@ Contents read_contents_isolated(const fs::path& path, const std::string& name,
   // Bounded so that the sizes below cannot wrap.
   const auto elements = std::min(static_cast<std::size_t>(std::max<std::int64_t>(max_elements, 0)),
                                  std::numeric_limits<std::size_t>::max() / 128);
-  // Four vectors and the texts (their names and selectors, a few hundred characters).
-  const std::size_t max_answer = 4 * elements * sizeof(double) + (std::size_t{1} << 20);
+  // Four vectors, the two texts and the sizes and rate between them.
+  const std::size_t max_answer = 4 * elements * sizeof(double) + 2 * kMaxAnswerTextBytes + 4096;
   // Up to four variables of the largest size as read, as doubles and the selected vectors, and
   // HDF5's own: 8 times the largest variable as doubles, and 512 MiB.
   const std::size_t budget = 8 * elements * sizeof(double) + (std::size_t{512} << 20);

@@ -75,6 +75,12 @@ TEST_F(Gnuplot, NoGnuplotOnThePathIsSaidWithWhatToInstall) {
             "cannot run gnuplot (No such file or directory); install it (Debian: gnuplot-nox)");
 }
 
+TEST_F(Gnuplot, ALogThatCannotBeWrittenIsSaidAsSuch) {
+  const fs::path log = dir_ / "no such folder" / "gnuplot.log";
+  EXPECT_EQ(run_gnuplot(write_script("plot sin(x)\n"), log),
+            "cannot write gnuplot's log " + log.string() + " (No such file or directory)");
+}
+
 // A title made of a file name reaches gnuplot as text: a backquoted command in it does not run
 // (it would in a double-quoted string), quotes and markup come out as written, a line break as a
 // space; for an enhanced terminal the markup gets its escape, and the title still draws.

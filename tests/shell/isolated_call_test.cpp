@@ -103,6 +103,43 @@ TEST(IsolatedCall, AChildThatDiesMidAnswerIsSaidWithItsSignal) {
   EXPECT_EQ(r.message, "crashed (signal 15, Terminated)");
 }
 
+// The kernel's out-of-memory killer ends a process with SIGKILL, as the parent ends a child whose
+// answer it refuses: a child killed mid-answer by another is said so, not as an answer cut short.
+TEST(IsolatedCall, AChildKilledMidAnswerIsSaidKilledNotCutShort) {
+  std::string got;
+  const IsolatedResult r = run_isolated(
+      [](AnswerWriter& out) {
+        const std::string half(kMiB, 'x');
+        out.write(half.data(), half.size());
+        std::raise(SIGKILL);
+      },
+      reads(2 * kMiB, got), 4 * kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "crashed (signal 9, Killed)");
+}
+
+// An error after the answer began cuts it short, and its text still reaches the caller.
+TEST(IsolatedCall, AnErrorAfterTheAnswerBeganIsSaidWithItsText) {
+  std::string got;
+  const IsolatedResult r = run_isolated(
+      [](AnswerWriter& out) {
+        const std::string part(3 * kMiB, 'x');  // more than the pipe holds: the parent reads it
+        out.write(part.data(), part.size());
+        throw std::runtime_error("x.mat: the dataset fy ends at row 12");
+      },
+      reads(4 * kMiB, got), 8 * kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "its answer broke off: x.mat: the dataset fy ends at row 12");
+}
+
+// Something thrown that is no std::exception is an error too, not a crash.
+TEST(IsolatedCall, AThrowOfNoStandardTypeIsAnError) {
+  const IsolatedResult r =
+      run_isolated([](AnswerWriter&) { throw 42; }, [](AnswerReader&) {}, kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kError);
+  EXPECT_EQ(r.message, "an exception of no standard type");
+}
+
 TEST(IsolatedCall, AnAnswerShorterThanItsReaderTakesIsCutShort) {
   const std::string ten(10, 'x');
   std::string got;
