@@ -134,9 +134,9 @@ tool_alert_t tool_alert(const monitor::Alert& a, std::int64_t seq) {
   return t;
 }
 
-pipeline_status4_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
+pipeline_status5_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
                                    std::int64_t published, std::int64_t dropped) {
-  pipeline_status4_t p;
+  pipeline_status5_t p;
   p.utime = s.utime_us;
   p.seq = seq;
   p.samples_in = s.input.samples_in;
@@ -158,6 +158,8 @@ pipeline_status4_t pipeline_status(const monitor::PipelineStatus& s, std::int64_
   p.identifications_superseded = s.identifications_superseded;
   p.alert_held_revolutions = s.alert_held_revolutions;
   p.alerts_holding = s.alerts_holding;
+  p.flutes_relabelled = s.flutes_relabelled;
+  p.relabelled_from_revolution = s.relabelled_from_revolution;
   p.messages_published = published;
   p.messages_dropped = dropped;
   p.spindle_rpm = s.spindle_rpm;

@@ -11,7 +11,7 @@
 #include "millwatch/force_block_t.hpp"
 #include "millwatch/force_coefficients_t.hpp"
 #include "millwatch/model_residual_t.hpp"
-#include "millwatch/pipeline_status4_t.hpp"
+#include "millwatch/pipeline_status5_t.hpp"
 #include "millwatch/runout_estimate_t.hpp"
 #include "millwatch/spindle_state2_t.hpp"
 #include "millwatch/sync_average2_t.hpp"
@@ -34,7 +34,7 @@ tool_alert_t tool_alert(const monitor::Alert& a, std::int64_t seq);
 /// force coefficients, each with σ; `valid` false (and zeros) when the fit failed.
 runout_estimate_t runout_estimate(const identify::IdentifiedWindow& w);
 force_coefficients_t force_coefficients(const identify::IdentifiedWindow& w);
-pipeline_status4_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
+pipeline_status5_t pipeline_status(const monitor::PipelineStatus& s, std::int64_t seq,
                                    std::int64_t published, std::int64_t dropped);
 
 }  // namespace millwatch::messaging

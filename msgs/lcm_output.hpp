@@ -3,7 +3,7 @@
 //
 // The pipeline calls this sink from the sample thread: each call copies a fixed-size value into
 // a bounded lock-free queue and wakes the publisher — no allocation, no lock, no LCM call there.
-// A full queue drops the value and counts it (pipeline_status4_t.messages_dropped). The publisher
+// A full queue drops the value and counts it (pipeline_status5_t.messages_dropped). The publisher
 // thread turns the values into LCM messages and publishes them, encoded into one buffer it
 // reuses. It wakes at most every kPace: after a round it sleeps kPace and takes what came
 // meanwhile, and only a publisher asleep with nothing to do is woken by the sample thread (a
@@ -69,7 +69,7 @@ class LcmOutput : public monitor::PipelineSink {
                        std::int64_t revolution, std::int64_t utime_us) override;
   void on_alert(const monitor::Alert& a) override;
   void on_event(const monitor::PipelineEvent& e) override;
-  /// Queues a pipeline_status4_t message.
+  /// Queues a pipeline_status5_t message.
   void publish_status(const monitor::PipelineStatus& s);
 
   /// Waits (up to `timeout_s`) until everything queued so far has been published.

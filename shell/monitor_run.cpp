@@ -31,6 +31,9 @@ void carry(monitor::PipelineStatus& total, const monitor::PipelineStatus& s) {
   total.valid_revolutions += s.valid_revolutions;
   total.idle_revolutions += s.idle_revolutions;
   total.alert_held_revolutions += s.alert_held_revolutions;
+  total.flutes_relabelled += s.flutes_relabelled;
+  total.relabelled_from_revolution =
+      std::max(total.relabelled_from_revolution, s.relabelled_from_revolution);
   total.model_builds += s.model_builds;
   total.model_builds_unsettled += s.model_builds_unsettled;
   if (s.model_unsettled_slots_most > total.model_unsettled_slots_most) {

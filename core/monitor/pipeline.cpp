@@ -1042,6 +1042,7 @@ bool Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
   events_.stop();
   relabelling_ = true;
   ++relabellings_;
+  ++flutes_relabelled_;
   event(PipelineEventKind::kFlutesRelabelled, sample, static_cast<std::int64_t>(strongest) + 1,
         ratio,
         "another flute held more force than CE1 over the windows since the lock: locking "
@@ -1131,6 +1132,8 @@ PipelineStatus Pipeline::status() const {
   s.identifications_superseded = identifications_superseded_;
   s.alert_held_revolutions = alerts_.held_revolutions();
   s.alerts_holding = alerts_holding_;
+  s.flutes_relabelled = flutes_relabelled_;
+  s.relabelled_from_revolution = labelling_revolution_;
   s.cutting_revolutions = cutting_revolutions_ + finished_tail_revolutions_;
   s.utime_us = input_.utime_of(std::max<std::int64_t>(0, input_.next_sample() - 1));
   const auto& e = tracker_.estimate();

@@ -151,6 +151,10 @@ struct PipelineStatus {
   /// conditions_tolerance off their baseline's (AlertEngine::held_revolutions()).
   std::int64_t alert_held_revolutions = 0;
   bool alerts_holding = false;  ///< they hold now (AlertEngine::holding())
+  /// Relabellings of the flutes (kFlutesRelabelled) and the first revolution of the last one's
+  /// lock: the revolutions before it name their flutes from another CE1 (0: none).
+  std::int64_t flutes_relabelled = 0;
+  std::int64_t relabelled_from_revolution = 0;
   /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
   /// durations times their speeds, and the samples since its last window at the last speed) —
   /// what "every revolution" is measured against.
@@ -458,6 +462,7 @@ class Pipeline {
   int label_windows_ = 0;
   bool relabelling_ = false;
   int relabellings_ = 0;
+  std::int64_t flutes_relabelled_ = 0;  // in all (PipelineStatus::flutes_relabelled)
   std::int64_t labelling_revolution_ = 0;
   double wanted_hz_ = 0.0;  // the speed the model was last asked to follow
 };

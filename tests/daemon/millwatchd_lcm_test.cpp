@@ -23,7 +23,7 @@
 #include "core/sim/scenario.hpp"
 #include "millwatch/flute_peaks2_t.hpp"
 #include "millwatch/model_residual_t.hpp"
-#include "millwatch/pipeline_status4_t.hpp"
+#include "millwatch/pipeline_status5_t.hpp"
 #include "millwatch/spindle_state2_t.hpp"
 #include "millwatch/sync_average2_t.hpp"
 #include "millwatch/tool_alert_t.hpp"
@@ -168,7 +168,7 @@ TEST_F(MillwatchdSession, PublishesItsResultsOnTheOutputUrlOnly) {
   EXPECT_GE(decode_all<flute_peaks2_t>(events(out, "MILLWATCH_FLUTE_PEAKS")).size(),
             static_cast<std::size_t>(0.95 * revolutions))
       << loggers;
-  const auto status = decode_all<pipeline_status4_t>(events(out, "MILLWATCH_STATUS"));
+  const auto status = decode_all<pipeline_status5_t>(events(out, "MILLWATCH_STATUS"));
   ASSERT_FALSE(status.empty());
   EXPECT_EQ(status.back().samples_in, 50000);  // the final status, published on SIGTERM
   EXPECT_EQ(status.back().revolutions, revolutions);
@@ -309,7 +309,7 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
     EXPECT_EQ(alerts[i].quantity, live["alerts"][i]["quantity"].get<std::string>());
   }
 
-  const auto status = decode_all<pipeline_status4_t>(events(log, "MILLWATCH_STATUS"));
+  const auto status = decode_all<pipeline_status5_t>(events(log, "MILLWATCH_STATUS"));
   ASSERT_FALSE(status.empty());
   for (std::size_t i = 1; i < status.size(); ++i) {
     EXPECT_GT(status[i].seq, status[i - 1].seq);
@@ -485,7 +485,7 @@ TEST_F(MillwatchdSession, ReloadsKeepsRunningOnBadConfigAndCountsGarbage) {
 
   // What the daemon said on LCM meanwhile.
   const auto recorded = read_log(dir_ / "reload.lcmlog");
-  const auto status = decode_all<pipeline_status4_t>(events(recorded, "MILLWATCH_STATUS"));
+  const auto status = decode_all<pipeline_status5_t>(events(recorded, "MILLWATCH_STATUS"));
   ASSERT_FALSE(status.empty());
   int before_reload = 0;
   int late_in_part2 = 0;

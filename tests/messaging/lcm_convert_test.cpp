@@ -1,6 +1,6 @@
 // A window's identified runout on LCM (runout_estimate_t): every field from the fit, the
 // geometric α included (it was a fixed 0), and a failed fit says why instead of numbers. The
-// pipeline's status (pipeline_status4_t) carries what the summary counts.
+// pipeline's status (pipeline_status5_t) carries what the summary counts.
 
 #include "msgs/lcm_convert.hpp"
 
@@ -108,10 +108,10 @@ TEST(LcmConvert, WhatARevolutionDidNotMeasureIsZeroWithItsFlagDown) {
   EXPECT_EQ(tooth_periods(r).period_s, 0.0);
 }
 
-// What the alert engine held at a changed speed and the identifications the model took,
-// refused or never took (superseded) reach the daemon's status as they reach replay's summary
-// (they were summary-only).
-TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsAndTheIdentifications) {
+// What the alert engine held at a changed speed, the identifications the model took, refused or
+// never took (superseded) and the flutes' relabellings reach the daemon's status as they reach
+// replay's summary (they were summary-only).
+TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsTheIdentificationsAndTheRelabellings) {
   monitor::PipelineStatus s;
   s.revolutions = 1000;
   s.alert_held_revolutions = 502;
@@ -119,7 +119,9 @@ TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsAndTheIdentifications) {
   s.identifications_taken = 12;
   s.identifications_rejected = 3;
   s.identifications_superseded = 4;
-  const pipeline_status4_t m = pipeline_status(s, 7, 100, 1);
+  s.flutes_relabelled = 2;
+  s.relabelled_from_revolution = 244;
+  const pipeline_status5_t m = pipeline_status(s, 7, 100, 1);
   EXPECT_EQ(m.seq, 7);
   EXPECT_EQ(m.revolutions, 1000);
   EXPECT_EQ(m.alert_held_revolutions, 502);
@@ -127,6 +129,8 @@ TEST(LcmConvert, TheStatusCarriesTheHeldRevolutionsAndTheIdentifications) {
   EXPECT_EQ(m.identifications_taken, 12);
   EXPECT_EQ(m.identifications_rejected, 3);
   EXPECT_EQ(m.identifications_superseded, 4);
+  EXPECT_EQ(m.flutes_relabelled, 2);
+  EXPECT_EQ(m.relabelled_from_revolution, 244);
   EXPECT_EQ(m.messages_published, 100);
   EXPECT_EQ(m.messages_dropped, 1);
 }

@@ -21,7 +21,7 @@ struct Received {
   std::vector<flute_peaks2_t> peaks;
   std::vector<model_residual_t> residuals;
   std::vector<spindle_state2_t> spindle;
-  std::vector<pipeline_status4_t> status;
+  std::vector<pipeline_status5_t> status;
   std::vector<tool_alert_t> alerts;
   std::vector<sync_average2_t> sync;
   void on_periods(const lcm::ReceiveBuffer*, const std::string&, const tooth_periods2_t* m) {
@@ -36,7 +36,7 @@ struct Received {
   void on_spindle(const lcm::ReceiveBuffer*, const std::string&, const spindle_state2_t* m) {
     spindle.push_back(*m);
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status4_t* m) {
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status5_t* m) {
     status.push_back(*m);
   }
   void on_alert(const lcm::ReceiveBuffer*, const std::string&, const tool_alert_t* m) {

@@ -789,6 +789,9 @@ TEST(Pipeline, AKnockAfterAGoodLockRelabelsOnlyIfItLastsAndIsUndoneAfter) {
       static_cast<long long>(long_knock.status.identifications_superseded), updates_after);
   EXPECT_GT(updates_after, 0);
   EXPECT_GE(long_knock.status.identifications_superseded, 1);
+  // The status says so (millwatchd's pipeline_status5_t).
+  EXPECT_EQ(long_knock.status.flutes_relabelled, 2);
+  EXPECT_EQ(long_knock.status.relabelled_from_revolution, labelling_from);
   // The summary leaves out each relabelled lock's revolutions: the first lock's (the knock came
   // in it) and the second's (on the knock's CE1); it states the third's.
   const nlohmann::json j = long_knock.summary->to_json();

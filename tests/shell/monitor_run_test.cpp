@@ -18,7 +18,7 @@
 #include "core/model/flute_positions.hpp"
 #include "core/sim/scenario.hpp"
 #include "millwatch/force_coefficients_t.hpp"
-#include "millwatch/pipeline_status4_t.hpp"
+#include "millwatch/pipeline_status5_t.hpp"
 #include "millwatch/runout_estimate_t.hpp"
 #include "tests/support/recording.hpp"
 
@@ -73,8 +73,8 @@ MonitorRun::Options without_identification() {
 }
 
 struct StatusLog {
-  std::vector<pipeline_status4_t> messages;
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status4_t* m) {
+  std::vector<pipeline_status5_t> messages;
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const pipeline_status5_t* m) {
     messages.push_back(*m);
   }
 };
