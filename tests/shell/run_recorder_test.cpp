@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -139,6 +140,37 @@ TEST(RunRecorder, CuttingAgainFromTheNextLock) {
     column += fields(line)[cutting];
   }
   EXPECT_EQ(column, "10101");
+}
+
+// Rows after a relabelling of the flutes say which labelling they are of, in CSV and JSON Lines.
+TEST(RunRecorder, RowsSayTheirLabelling) {
+  for (const char* name : {"revolutions.csv", "revolutions.jsonl"}) {
+    const fs::path path = test::fresh_temp_dir() / name;
+    RunRecorder rec(2, path, false);
+    monitor::PipelineEvent relabelled;
+    relabelled.kind = monitor::PipelineEventKind::kFlutesRelabelled;
+    rec.on_revolution(revolution(0, true, true));
+    rec.on_event(relabelled);
+    rec.on_revolution(revolution(1, true, true));
+    rec.on_event(relabelled);
+    rec.on_revolution(revolution(2, true, true));
+    rec.commit();
+    std::ifstream in(path);
+    std::string line, column;
+    if (path.extension() == ".csv") {
+      std::getline(in, line);
+      const std::vector<std::string> header = fields(line);
+      ASSERT_EQ(header.back(), "labelling") << line;
+      while (std::getline(in, line)) {
+        column += fields(line).back();
+      }
+    } else {
+      while (std::getline(in, line)) {
+        column += std::to_string(nlohmann::json::parse(line)["labelling"].get<int>());
+      }
+    }
+    EXPECT_EQ(column, "012") << name;
+  }
 }
 
 TEST(RunRecorder, ABinNoSampleReachedTakesItsNeighboursMean) {
