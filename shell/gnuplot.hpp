@@ -8,7 +8,9 @@
 
 namespace millwatch::shell {
 
-/// A file name as a gnuplot string: in single quotes, each quote in it doubled.
+/// A file name as a gnuplot string: in single quotes, each quote in it doubled. Throws
+/// std::invalid_argument for a name with a control character (a line break would end gnuplot's
+/// command there).
 std::string gnuplot_quoted(const std::filesystem::path& file);
 
 /// Any text (a title made of a file name, a stage's name) as a gnuplot string read literally: in

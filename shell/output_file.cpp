@@ -62,6 +62,9 @@ std::vector<std::string> unique_stems(const std::vector<std::string>& inputs) {
   std::map<std::string, int> seen;
   for (const auto& in : inputs) {
     std::string stem = std::filesystem::path(in).stem().string();
+    for (char& c : stem) {  // a line break in a folder's name would break the scripts that plot
+      c = static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '_' : c;
+    }
     const int n = ++seen[stem];
     stems.push_back(n == 1 ? stem : stem + "_" + std::to_string(n));
   }

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace millwatch::shell {
@@ -73,6 +74,20 @@ TEST_F(Gnuplot, NoGnuplotOnThePathIsSaidWithWhatToInstall) {
   ::setenv("PATH", before.c_str(), 1);
   EXPECT_EQ(problem,
             "cannot run gnuplot (No such file or directory); install it (Debian: gnuplot-nox)");
+}
+
+// A line break in a path would end gnuplot's string and command there, and a line after it
+// starting with ! would run in the shell: such a path is refused, naming it.
+TEST_F(Gnuplot, APathWithALineBreakIsRefused) {
+  const fs::path evil = dir_ / "cut\n!touch ran\n.png";
+  try {
+    (void)gnuplot_quoted(evil);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cut !touch ran .png': it holds a line break"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(Gnuplot, ALogThatCannotBeWrittenIsSaidAsSuch) {
