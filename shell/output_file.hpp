@@ -35,8 +35,8 @@ class OutputFile {
 /// Writes `text` to `path` through an OutputFile. @throws std::runtime_error naming the path.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
-/// Names for per-cut outputs (files, folders): each input's stem, made unique ("cut", "cut_2"), each
-/// control character in it (a line break) replaced by _.
+/// Names for per-cut outputs (files, folders): each input's stem, made unique ("cut", "cut_2"),
+/// each control character in it (a line break) replaced by _.
 std::vector<std::string> unique_stems(const std::vector<std::string>& inputs);
 
 }  // namespace millwatch::shell
