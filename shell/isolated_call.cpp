@@ -34,8 +34,6 @@ namespace {
 
 /// The child's exit status when a sanitizer stopped it (its report is not printed).
 constexpr int kSanitizerStopped = 97;
-/// The wait status wait_for() gives for a child it could not wait for (waitpid failed).
-constexpr int kNotWaited = W_EXITCODE(98, 0);
 /// The longest text of an error after the answer began (within one atomic pipe write, so that
 /// the child never blocks on it).
 constexpr std::size_t kMaxLateErrorBytes = PIPE_BUF;
@@ -127,7 +125,18 @@ bool send_error(int fd, std::string text) {
   _exit(1);
 }
 
-std::string how_it_ended(int status) {
+/// How the child ended, as waitpid told, if it could wait for it (not with SIGCHLD ignored: the
+/// kernel reaps the child then, and waitpid fails with ECHILD).
+struct End {
+  bool waited = false;
+  int status = 0;
+};
+
+std::string how_it_ended(End end) {
+  if (!end.waited) {
+    return "ended, how is not known (it could not be waited for)";
+  }
+  const int status = end.status;
   if (WIFSIGNALED(status)) {
     const int s = WTERMSIG(status);
     const char* name = strsignal(s);
@@ -137,23 +146,21 @@ std::string how_it_ended(int status) {
   if (WIFEXITED(status) && WEXITSTATUS(status) == kSanitizerStopped) {
     return "was stopped by a sanitizer";
   }
-  if (status == kNotWaited) {
-    return "could not be waited for";
-  }
   if (WIFEXITED(status)) {
     return "exited (status " + std::to_string(WEXITSTATUS(status)) + ") without an answer";
   }
   return "ended without an answer";
 }
 
-int wait_for(pid_t pid) {
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
+End wait_for(pid_t pid) {
+  End end;
+  while (waitpid(pid, &end.status, 0) < 0) {
     if (errno != EINTR) {
-      return kNotWaited;  // not a status of the child's (ECHILD: SIGCHLD ignored, reaped)
+      return {};
     }
   }
-  return status;
+  end.waited = true;
+  return end;
 }
 
 /// The child and the parent's ends of its pipes (the answer, an error after the answer began),
@@ -172,16 +179,16 @@ class Child {
   /// Kills the child if asked, closes the pipe and returns the child's wait status. (Killed
   /// first: a pipe closed under a child still writing would end it with SIGPIPE, which would
   /// read as a crash of its own.)
-  int finish(bool kill) {
+  End finish(bool kill) {
     if (kill) {
       ::kill(pid_, SIGKILL);  // no effect on a child that has already ended: its status stays
     }
     ::close(fd_);
-    const int status = wait_for(pid_);
+    const End end = wait_for(pid_);
     pid_ = -1;
     late_error_ = read_late_error();
     ::close(late_error_fd_);
-    return status;
+    return end;
   }
   /// After finish(): the text of an error the work threw after its answer began ("" if none).
   [[nodiscard]] const std::string& late_error() const { return late_error_; }
@@ -205,10 +212,16 @@ class Child {
 };
 
 /// Whether the child ended by itself other than with an answer: what went wrong is then its end
-/// (a crash mid-answer), not the answer the parent was left with.
-bool ended_badly(int status) {
-  return (WIFSIGNALED(status) && WTERMSIG(status) != SIGKILL) ||
-         (WIFEXITED(status) && WEXITSTATUS(status) != 0);
+/// (a crash mid-answer), not the answer the parent was left with. (Not known unless waited for.)
+bool ended_badly(End end) {
+  return end.waited && ((WIFSIGNALED(end.status) && WTERMSIG(end.status) != SIGKILL) ||
+                        (WIFEXITED(end.status) && WEXITSTATUS(end.status) != 0));
+}
+
+/// Whether the child exited (of itself), as far as known: a child not waited for is taken at
+/// what it sent.
+bool exited(End end) {
+  return !end.waited || WIFEXITED(end.status);
 }
 
 IsolatedResult failed(std::string message) {
@@ -234,13 +247,12 @@ IsolatedResult take_answer(Child& child, const std::function<void(AnswerReader&)
   // An answer that ended early: the child has ended (or is ending) by itself, not to be killed,
   // so that how it ended (the kernel's SIGKILL when out of memory, an error) is its own.
   const bool ended = in.ended();
-  const int status = child.finish(!problem.empty() && !ended);
-  if (ended && !child.late_error().empty()) {
+  const End end = child.finish(!problem.empty() && !ended);
+  if (!child.late_error().empty()) {  // also after all the reader took: the work did not finish
     return failed("its answer broke off: " + child.late_error());
   }
-  if (ended_badly(status) || (problem.empty() && !WIFEXITED(status)) ||
-      (ended && !WIFEXITED(status))) {
-    return failed(how_it_ended(status));
+  if (ended_badly(end) || ((problem.empty() || ended) && !exited(end))) {
+    return failed(how_it_ended(end));
   }
   if (!problem.empty()) {
     return failed(problem);
@@ -259,13 +271,13 @@ IsolatedResult take_error(Child& child) {
     whole = read_all(child.fd(), text.data(), text.size());
   }
   const bool too_long = size > kMaxErrorBytes;
-  const int status = child.finish(!whole);
+  const End end = child.finish(!whole);
   if (too_long) {
     return failed("its error states " + std::to_string(size) + " bytes, more than the " +
                   std::to_string(kMaxErrorBytes) + " it may");
   }
-  if (!whole || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    return failed(how_it_ended(status));
+  if (!whole || !exited(end) || ended_badly(end)) {
+    return failed(how_it_ended(end));
   }
   return {IsolatedResult::Outcome::kError, std::move(text)};
 }

@@ -6,6 +6,7 @@
 #include "shell/isolated_call.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -130,6 +131,47 @@ TEST(IsolatedCall, AnErrorAfterTheAnswerBeganIsSaidWithItsText) {
       reads(4 * kMiB, got), 8 * kMiB, 256 * kMiB);
   EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
   EXPECT_EQ(r.message, "its answer broke off: x.mat: the dataset fy ends at row 12");
+}
+
+// An error thrown once the reader has taken all it wanted: the answer is not whole (the work
+// did not finish it), and the error says why.
+TEST(IsolatedCall, AnErrorAfterAllTheReaderTookIsSaidWithItsText) {
+  const std::string ten(10, 'x');
+  std::string got;
+  const IsolatedResult r = run_isolated(
+      [&](AnswerWriter& out) {
+        out.write(ten.data(), ten.size());
+        throw std::runtime_error("x.mat: the time vector is not increasing");
+      },
+      reads(ten.size(), got), kMiB, 256 * kMiB);
+  EXPECT_EQ(r.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(r.message, "its answer broke off: x.mat: the time vector is not increasing");
+}
+
+// A caller that ignores SIGCHLD (inherited across exec) has its children reaped by the kernel:
+// waitpid cannot say how they ended. What they sent is taken at its word; a child that sent
+// nothing is said to have ended, how not known.
+TEST(IsolatedCall, WithSigchldIgnoredAnAnswerOrAnErrorStillCounts) {
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  struct sigaction before {};
+  ASSERT_EQ(sigaction(SIGCHLD, &ignore, &before), 0);
+  const std::string hundred(100, 'y');
+  std::string got;
+  const IsolatedResult answer =
+      run_isolated(writes(hundred), reads(hundred.size(), got), kMiB, 256 * kMiB);
+  const IsolatedResult error =
+      run_isolated([](AnswerWriter&) { throw std::runtime_error("x.mat: no variable fx"); },
+                   [](AnswerReader&) {}, kMiB, 256 * kMiB);
+  const IsolatedResult crash = run_isolated([](AnswerWriter&) { std::raise(SIGKILL); },
+                                            [](AnswerReader&) {}, kMiB, 256 * kMiB);
+  sigaction(SIGCHLD, &before, nullptr);
+  EXPECT_EQ(answer.outcome, IsolatedResult::Outcome::kAnswer) << answer.message;
+  EXPECT_EQ(got, hundred);
+  EXPECT_EQ(error.outcome, IsolatedResult::Outcome::kError) << error.message;
+  EXPECT_EQ(error.message, "x.mat: no variable fx");
+  EXPECT_EQ(crash.outcome, IsolatedResult::Outcome::kFailed);
+  EXPECT_EQ(crash.message, "ended, how is not known (it could not be waited for)");
 }
 
 // Something thrown that is no std::exception is an error too, not a crash.
