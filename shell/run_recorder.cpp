@@ -51,7 +51,7 @@ void RunRecorder::write_header() {
     const std::string f = std::to_string(j);
     h += ",peak_fx_N_" + f + ",peak_fy_N_" + f + ",peak_fz_N_" + f + ",peak_resultant_N_" + f;
   }
-  h += ",delta_fy_N,residual_rms_fx_N,residual_rms_fy_N,residual_rms_fz_N,alerts,labelling\n";
+  h += ",delta_fy_N,residual_rms_fx_N,residual_rms_fy_N,residual_rms_fz_N,alerts,lock,labelling\n";
   file_->write(h);
 }
 
@@ -132,7 +132,8 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         s += std::string(from > 0 ? "," : "") + "\"" + alerts.substr(from, to - from) + "\"";
         from = to + 1;
       }
-      s += "],\"labelling\":" + std::to_string(labelling_) + "}\n";
+      s += "],\"lock\":" + std::to_string(lock_) + ",\"labelling\":" + std::to_string(labelling_) +
+           "}\n";
     } else {
       s += std::to_string(r.revolution) + ",";
       append_number(s, t_s);
@@ -160,7 +161,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         s += ",";
         append_number(s, r.model_valid ? r.residual_rms_N[a] : nan);
       }
-      s += "," + alerts + "," + std::to_string(labelling_) + "\n";
+      s += "," + alerts + "," + std::to_string(lock_) + "," + std::to_string(labelling_) + "\n";
     }
     file_->write(s);
     ++written_;
@@ -239,6 +240,7 @@ void RunRecorder::on_event(const monitor::PipelineEvent& e) {
     cutting_ = false;
   } else if (e.kind == monitor::PipelineEventKind::kCuttingResumed ||
              e.kind == monitor::PipelineEventKind::kLockAcquired) {
+    lock_ += e.kind == monitor::PipelineEventKind::kLockAcquired ? 1 : 0;
     cutting_ = true;  // a lock needs a cutting force: the pipeline is no longer idle after it
   }
 }

@@ -90,6 +90,7 @@ class RunRecorder : public monitor::PipelineSink {
   bool raw_done_ = false;
   std::array<bool, 8> active_{};  // by AlertKind
   bool cutting_ = true;
+  std::int64_t lock_ = 0;       // the locks so far (kLockAcquired): the row's lock
   std::int64_t labelling_ = 0;  // the flutes' relabellings so far (kFlutesRelabelled)
 };
 

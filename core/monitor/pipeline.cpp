@@ -704,7 +704,7 @@ void Pipeline::start_events() {
   last_rpm_ = 0.0;
   recent_speeds_.fill({});
   lock_revolution_ = revolution_base_ + revolutions_;
-  start_labelling();
+  start_labelling(anchor);
   stats_.clear_window();
   alerts_.rebaseline();
   ever_locked_ = true;
@@ -777,6 +777,18 @@ void Pipeline::follow_speed(double spindle_hz, bool now) {
 
 void Pipeline::take_model_build(bool due_only, bool start_next) {
   if (!builder_ || !builder_->busy() || (due_only && revolutions_ < build_due_)) {
+    return;
+  }
+  if (building_fit_ && building_fit_->stale) {
+    // A fit of a window from before a relabelling: its build is taken (the builder hands over
+    // nothing else) and the model built again, as it was, at once.
+    const model::ModelConfig before = lockstep_.commanded_config();
+    builder_->take_into(lockstep_);
+    count_model_build();
+    ++identifications_superseded_;
+    building_fit_.reset();
+    builder_->start(before, wanted_hz_);
+    build_due_ = revolutions_ + build_delay_revolutions_;
     return;
   }
   builder_->take_into(lockstep_);
@@ -980,8 +992,12 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   }
 }
 
-void Pipeline::start_labelling() {
-  // A lock of the tracker's own starts the count of relabellings; a relabelling's carries it.
+void Pipeline::start_labelling(std::int64_t anchor) {
+  // A lock of the tracker's own starts the count of relabellings; a relabelling's carries it. A
+  // lock long after a relabelling (the cut stopped before its lock came) is the tracker's own.
+  const auto soon = static_cast<std::int64_t>(kRelabellingLockWindows * tracker_.window_samples() *
+                                              static_cast<std::size_t>(decimation_));
+  relabelling_ = relabelling_ && anchor - relabelled_at_ <= soon;
   relabellings_ = relabelling_ ? relabellings_ : 0;
   relabelling_ = false;
   if (relabellings_ > 0) {
@@ -1041,8 +1057,17 @@ bool Pipeline::check_labelling(const RevolutionRecord& r, std::int64_t sample) {
   }
   events_.stop();
   relabelling_ = true;
+  relabelled_at_ = ring_.newest();
   ++relabellings_;
   ++flutes_relabelled_;
+  // Fits of windows before it name the flutes otherwise: not taken.
+  if (waiting_fit_) {
+    ++identifications_superseded_;
+    waiting_fit_.reset();
+  }
+  if (building_fit_) {
+    building_fit_->stale = true;
+  }
   event(PipelineEventKind::kFlutesRelabelled, sample, static_cast<std::int64_t>(strongest) + 1,
         ratio,
         "another flute held more force than CE1 over the windows since the lock: locking "

@@ -104,6 +104,9 @@ inline constexpr int kFluteLabellingWindows = 2;
 /// Relabellings after one lock, at most: a template that keeps choosing a CE1 the revolutions
 /// disagree with is not relocked for ever (the run summary then warns).
 inline constexpr int kMostRelabellings = 3;
+/// A relabelling's lock comes within this many tracker windows of it (the next consistent ones);
+/// a later lock (the cut stopped first) is the tracker's own.
+inline constexpr std::size_t kRelabellingLockWindows = 4;
 
 struct PipelineEvent {
   PipelineEventKind kind = PipelineEventKind::kGap;
@@ -324,8 +327,9 @@ class Pipeline {
   void submit_window();
   /// The identified parameters due at this revolution, if any, go to the model.
   void take_identification();
-  /// A lock's labelling starts to be checked (a relabelling's lock counts on).
-  void start_labelling();
+  /// A lock's labelling starts to be checked (a relabelling's lock, at `anchor` soon after it,
+  /// counts on).
+  void start_labelling(std::int64_t anchor);
   /// The relabellings are over: the next lock is the tracker's own (a restarted stream).
   void forget_labelling();
   /// Sums the revolution's flute forces and, over each full window since the lock, checks that
@@ -446,6 +450,7 @@ class Pipeline {
     std::int64_t lock = 0;   // that lock's number (locks_)
     std::int64_t window_revolution = 0;
     double unexplained = 0.0;
+    bool stale = false;  // the flutes were relabelled while it was built: not to be taken
   };
   std::optional<PendingFit> waiting_fit_;
   std::optional<PendingFit> building_fit_;
@@ -461,6 +466,7 @@ class Pipeline {
   std::size_t label_candidate_ = 0;
   int label_windows_ = 0;
   bool relabelling_ = false;
+  std::int64_t relabelled_at_ = 0;  // the stream's newest sample when it relabelled
   int relabellings_ = 0;
   std::int64_t flutes_relabelled_ = 0;  // in all (PipelineStatus::flutes_relabelled)
   std::int64_t labelling_revolution_ = 0;

@@ -299,10 +299,11 @@ TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {
   const auto rows = lines_of(read_text(dir / "revs.csv"));
   ASSERT_EQ(static_cast<int>(rows.size()), measured + 1);
   const auto header = split(rows[0]);
-  EXPECT_EQ(header.size(), 5u + 2u + 1u + 8u + 4u + 1u + 1u);
+  EXPECT_EQ(header.size(), 5u + 2u + 1u + 8u + 4u + 1u + 2u);
   EXPECT_EQ(header[0], "revolution");
   EXPECT_EQ(header[7], "alpha_deg");
-  EXPECT_EQ(header[header.size() - 2], "alerts");
+  EXPECT_EQ(header[header.size() - 3], "alerts");
+  EXPECT_EQ(header[header.size() - 2], "lock");
   EXPECT_EQ(header.back(), "labelling");
   double alpha_sum = 0.0;
   int valid = 0;
@@ -310,7 +311,8 @@ TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {
     const auto f = split(rows[i]);
     ASSERT_EQ(f.size(), header.size()) << rows[i];
     EXPECT_EQ(std::stoi(f[0]), static_cast<int>(i - 1));
-    EXPECT_EQ(f.back(), "0");  // no relabelling on the demo cut
+    EXPECT_EQ(f[f.size() - 2], "1");  // one lock, no relabelling on the demo cut
+    EXPECT_EQ(f.back(), "0");
     if (f[3] == "1") {
       alpha_sum += std::stod(f[7]);
       ++valid;
@@ -327,6 +329,7 @@ TEST(ReplayFormats, ReadableSummaryJsonRevolutionsAndPlots) {
   EXPECT_EQ(last["peak_N"]["resultant"].size(), 2u);
   EXPECT_TRUE(last["residual_rms_N"].is_object());
   EXPECT_TRUE(last["alerts"].is_array());
+  EXPECT_EQ(last["lock"], 1);
   EXPECT_EQ(last["labelling"], 0);
 
   // Five PNGs, each a real picture of some size.

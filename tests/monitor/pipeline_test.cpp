@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -513,8 +514,10 @@ struct KnockedCut {
   double after_knock_us = 0.0;  // a revolution after the knocked samples (low-pass delay)
   PipelineStatus status;
   /// The flutes' forces swapped (the samples half a turn on) over `knocked` revolutions from
-  /// revolution `from` of the record; each window identified (handed over when due) if told.
-  explicit KnockedCut(double knocked, double from = 0.0, bool identify = false) {
+  /// revolution `from` of the record; each window identified (handed over when due) if told; the
+  /// cut stopped (amplifier noise alone, 0.01 N) over `quiet` revolutions from `quiet_from`.
+  explicit KnockedCut(double knocked, double from = 0.0, bool identify = false,
+                      double quiet_from = 0.0, double quiet = 0.0) {
     const sim::Scenario& s = scenario;
     Recording r = record(s);
     per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
@@ -525,6 +528,14 @@ struct KnockedCut {
       r.fx[i] = r.fx[i + half_turn];
       r.fy[i] = r.fy[i + half_turn];
       r.fz[i] = r.fz[i + half_turn];
+    }
+    std::mt19937 noise(7);
+    std::normal_distribution<double> amplifier(0.0, 0.01);
+    for (auto i = static_cast<std::size_t>(quiet_from * per_rev);
+         i < static_cast<std::size_t>((quiet_from + quiet) * per_rev); ++i) {
+      r.fx[i] = amplifier(noise);
+      r.fy[i] = amplifier(noise);
+      r.fz[i] = amplifier(noise);
     }
     after_knock_us = 1e6 * (static_cast<double>(swapped) + per_rev) / s.sample_rate_hz;
     config = monitor_for(s);
@@ -800,6 +811,28 @@ TEST(Pipeline, AKnockAfterAGoodLockRelabelsOnlyIfItLastsAndIsUndoneAfter) {
               j["revolutions"].get<long long>());
   EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), cut_alpha_deg, 0.5) << j["alpha_deg"];
   EXPECT_EQ(j["alpha_deg"]["revolutions"].get<std::size_t>(), after.size());
+}
+
+// A relabelling whose lock never comes (the cut stops at once) is over when the cut comes back:
+// the lock then is the tracker's own, its labelling checked afresh, and the status names no
+// revolution a relabelling's lock started.
+TEST(Pipeline, ARelabellingWhoseLockNeverCameIsOverWhenTheCutComesBack) {
+  const KnockedCut first(120.0, 60.0);
+  const PipelineEvent* relabel = first.out.first(PipelineEventKind::kFlutesRelabelled);
+  ASSERT_NE(relabel, nullptr);
+  const double relabel_revolution =
+      1e-6 * static_cast<double>(relabel->utime_us) * first.scenario.sample_rate_hz / first.per_rev;
+  const KnockedCut stopped(120.0, 60.0, false, relabel_revolution + 2.0, 150.0);
+  const Collector& out = stopped.out;
+  std::printf(
+      "relabelled at revolution %.1f; the cut stopped there for 150 revolutions: %d "
+      "relabellings, %d locks\n",
+      relabel_revolution, out.count(PipelineEventKind::kFlutesRelabelled),
+      out.count(PipelineEventKind::kLockAcquired));
+  ASSERT_EQ(out.count(PipelineEventKind::kFlutesRelabelled), 1);
+  ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 2);
+  EXPECT_EQ(stopped.status.flutes_relabelled, 1);
+  EXPECT_EQ(stopped.status.relabelled_from_revolution, 0);
 }
 
 // Issue 6 §7: a lockstep model that leaves runout out misses exactly what runout adds to the

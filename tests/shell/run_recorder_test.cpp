@@ -142,18 +142,25 @@ TEST(RunRecorder, CuttingAgainFromTheNextLock) {
   EXPECT_EQ(column, "10101");
 }
 
-// Rows after a relabelling of the flutes say which labelling they are of, in CSV and JSON Lines.
-TEST(RunRecorder, RowsSayTheirLabelling) {
+// Rows say their lock and, after a relabelling of the flutes, which labelling they are of, in
+// CSV and JSON Lines.
+TEST(RunRecorder, RowsSayTheirLockAndLabelling) {
   for (const char* name : {"revolutions.csv", "revolutions.jsonl"}) {
     const fs::path path = test::fresh_temp_dir() / name;
     RunRecorder rec(2, path, false);
-    monitor::PipelineEvent relabelled;
+    monitor::PipelineEvent relabelled, locked;
     relabelled.kind = monitor::PipelineEventKind::kFlutesRelabelled;
+    locked.kind = monitor::PipelineEventKind::kLockAcquired;
+    rec.on_event(locked);
     rec.on_revolution(revolution(0, true, true));
     rec.on_event(relabelled);
+    rec.on_event(locked);
     rec.on_revolution(revolution(1, true, true));
     rec.on_event(relabelled);
+    rec.on_event(locked);
     rec.on_revolution(revolution(2, true, true));
+    rec.on_event(locked);
+    rec.on_revolution(revolution(3, true, true));
     rec.commit();
     std::ifstream in(path);
     std::string line, column;
@@ -161,15 +168,19 @@ TEST(RunRecorder, RowsSayTheirLabelling) {
       std::getline(in, line);
       const std::vector<std::string> header = fields(line);
       ASSERT_EQ(header.back(), "labelling") << line;
+      ASSERT_EQ(header[header.size() - 2], "lock") << line;
       while (std::getline(in, line)) {
-        column += fields(line).back();
+        const std::vector<std::string> f = fields(line);
+        column += f[f.size() - 2] + f.back() + " ";
       }
     } else {
       while (std::getline(in, line)) {
-        column += std::to_string(nlohmann::json::parse(line)["labelling"].get<int>());
+        const nlohmann::json j = nlohmann::json::parse(line);
+        column +=
+            std::to_string(j["lock"].get<int>()) + std::to_string(j["labelling"].get<int>()) + " ";
       }
     }
-    EXPECT_EQ(column, "012") << name;
+    EXPECT_EQ(column, "10 21 32 42 ") << name;
   }
 }
 
