@@ -13,18 +13,16 @@
 namespace millwatch::shell {
 
 std::string gnuplot_quoted(const std::filesystem::path& file) {
-  std::string out = "'";
-  for (const char c : file.string()) {
+  const std::string name = file.string();
+  for (const char c : name) {
     if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
       // gnuplot would end the string and the command at a line break: what follows would be a
       // command of its own (one starting with ! runs in the shell).
-      throw std::invalid_argument("gnuplot cannot be given the path " +
-                                  gnuplot_text(file.string(), false) +
+      throw std::invalid_argument("gnuplot cannot be given the path " + gnuplot_text(name, false) +
                                   ": it holds a line break or another control character");
     }
-    out += c == '\'' ? std::string("''") : std::string(1, c);
   }
-  return out + "'";
+  return gnuplot_text(name, false);  // with no control character: the name as it is, quoted
 }
 
 std::string gnuplot_text(std::string_view text, bool enhanced) {

@@ -779,20 +779,21 @@ void Pipeline::take_model_build(bool due_only, bool start_next) {
   if (!builder_ || !builder_->busy() || (due_only && revolutions_ < build_due_)) {
     return;
   }
+  // A fit of a window from before a relabelling: its build is taken (the builder hands over
+  // nothing else) and the model built again, as it was, at once.
+  std::optional<model::ModelConfig> before;
   if (building_fit_ && building_fit_->stale) {
-    // A fit of a window from before a relabelling: its build is taken (the builder hands over
-    // nothing else) and the model built again, as it was, at once.
-    const model::ModelConfig before = lockstep_.commanded_config();
-    builder_->take_into(lockstep_);
-    count_model_build();
-    ++identifications_superseded_;
-    building_fit_.reset();
-    builder_->start(before, wanted_hz_);
-    build_due_ = revolutions_ + build_delay_revolutions_;
-    return;
+    before = lockstep_.commanded_config();
   }
   builder_->take_into(lockstep_);
   count_model_build();
+  if (before) {
+    ++identifications_superseded_;
+    building_fit_.reset();
+    builder_->start(*before, wanted_hz_);
+    build_due_ = revolutions_ + build_delay_revolutions_;
+    return;
+  }
   if (building_fit_) {
     apply_fit(*building_fit_);
     building_fit_.reset();
@@ -997,8 +998,8 @@ void Pipeline::start_labelling(std::int64_t anchor) {
   // lock long after a relabelling (the cut stopped before its lock came) is the tracker's own.
   const auto soon = static_cast<std::int64_t>(kRelabellingLockWindows * tracker_.window_samples() *
                                               static_cast<std::size_t>(decimation_));
-  relabelling_ = relabelling_ && anchor - relabelled_at_ <= soon;
-  relabellings_ = relabelling_ ? relabellings_ : 0;
+  const bool relabelling_lock = relabelling_ && anchor - relabelled_at_ <= soon;
+  relabellings_ = relabelling_lock ? relabellings_ : 0;
   relabelling_ = false;
   if (relabellings_ > 0) {
     labelling_revolution_ = lock_revolution_;
