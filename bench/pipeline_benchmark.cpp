@@ -441,16 +441,17 @@ void BM_LowPassThree(benchmark::State& state) {
 }
 BENCHMARK(BM_LowPassThree)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
 
-/// The same low-pass on the measuring grid alone (signal::GridLowPass: every third sample at
-/// 333.3 kHz, what the conditioner runs there; arg: 0 the fastest kernel, 1 scalar), over the same
-/// second in the same blocks: the time to compare with BM_LowPassThree's.
+/// The same low-pass on the measuring grid alone (signal::GridLowPass; args: 0 the fastest
+/// kernel, 1 scalar; the stride: 3 what the conditioner runs at 333.3 kHz and 25,000 rpm, 5 and
+/// 12 other speeds', unrolled and not), over the same second in the same blocks: the time to
+/// compare with BM_LowPassThree's.
 void BM_LowPassOnGrid(benchmark::State& state) {
   const auto kernel = static_cast<signal::GridLowPass::Kernel>(state.range(0));
   const double fs = 333300.0;
   const std::size_t block = 333;
   const Recording r = make_recording(fs, 1.0);
   const auto d = signal::ButterworthDesign::lowpass(fs, 3300.0, 4);
-  signal::GridLowPass grid(d, 3, {1.0, 1.0, 1.0});
+  signal::GridLowPass grid(d, static_cast<int>(state.range(1)), {1.0, 1.0, 1.0});
   grid.settle(0, {r.fx[0], r.fy[0], r.fz[0]});
   std::vector<double> x(block), y(block), z(block);
   for (auto _ : state) {
@@ -463,7 +464,13 @@ void BM_LowPassOnGrid(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(r.fx.size()) * state.iterations());
 }
-BENCHMARK(BM_LowPassOnGrid)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LowPassOnGrid)
+    ->Args({0, 3})
+    ->Args({1, 3})
+    ->Args({0, 5})
+    ->Args({1, 5})
+    ->Args({0, 12})
+    ->Unit(benchmark::kMillisecond);
 
 /// The machine's own latency: a fixed job of about a revolution's work (a chain of 5,000
 /// dependent multiply-adds, ~10 µs) run back to back for `seconds`, timed by the wall clock as
