@@ -226,6 +226,51 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
   EXPECT_NEAR(after.cutting_revolutions, 25252.0 / 60.0, 5.0);
 }
 
+// The flutes' relabellings across a reload: a knock (the samples half a turn on, the flutes'
+// forces swapped, over revolutions 60–180) relabels the first pipeline's flutes; the pipeline a
+// reload puts in its place mid-knock locks on its own, and relabels when the knock is over. The
+// run counts both, and its last relabelling's first revolution is the newest, numbered on from
+// the replaced pipeline's revolutions.
+TEST(MonitorRun, AReloadCarriesTheFlutesRelabellings) {
+  const sim::Scenario s = two_flute_cut(1.0);
+  test::Recording r = test::record(s);
+  const double per_rev = kRate_hz * 60.0 / s.spindle.actual_rpm;
+  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
+  for (auto i = static_cast<std::size_t>(60.0 * per_rev);
+       i < static_cast<std::size_t>(180.0 * per_rev); ++i) {
+    r.fx[i] = r.fx[i + half_turn];
+    r.fy[i] = r.fy[i + half_turn];
+    r.fz[i] = r.fz[i + half_turn];
+  }
+  MonitorRun run(test::monitor_for(s), without_identification());
+  constexpr std::size_t kReloadBlock = 18;  // 0.36 s: revolution 151
+  for (std::size_t k = 0; k < kReloadBlock; ++k) {
+    run.process(block_of(r, k));
+  }
+  auto next = std::make_unique<monitor::Pipeline>(test::monitor_for(s), run.sink());
+  const monitor::Pipeline& second = *next;
+  const auto old = run.replace_pipeline(std::move(next));
+  const monitor::PipelineStatus before = old->status();
+  ASSERT_EQ(before.flutes_relabelled, 1);  // once into the knock
+  EXPECT_GT(before.relabelled_from_revolution, 60);
+  EXPECT_LT(before.relabelled_from_revolution, 151);
+  const monitor::PipelineStatus reloaded = run.status();
+  EXPECT_EQ(reloaded.flutes_relabelled, 1);
+  EXPECT_EQ(reloaded.relabelled_from_revolution, before.relabelled_from_revolution);
+  for (std::size_t k = kReloadBlock; k < r.t.size() / kBlock; ++k) {
+    run.process(block_of(r, k));
+  }
+  const monitor::PipelineStatus last = second.status();
+  ASSERT_EQ(last.flutes_relabelled, 1);  // once out of it
+  EXPECT_GT(last.relabelled_from_revolution, 180);
+  const monitor::PipelineStatus after = run.status();
+  EXPECT_EQ(after.flutes_relabelled, 2);
+  EXPECT_EQ(after.relabelled_from_revolution, last.relabelled_from_revolution);
+  std::printf("relabelled from revolution %lld, and after the reload from %lld\n",
+              static_cast<long long>(before.relabelled_from_revolution),
+              static_cast<long long>(after.relabelled_from_revolution));
+}
+
 // A reload clears the replaced pipeline's alerts (with the figures they were raised on): its
 // successor starts with none raised and raises again what still holds, so no alert stays raised
 // on LCM and in the summary without an engine behind it. Until the new pipeline's first block
