@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -12,6 +14,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -505,6 +508,22 @@ struct SummarizingCollector : Collector {
   }
 };
 
+/// The record of cut `s` with `knocked` revolutions from revolution `from` replaced by the
+/// samples half a turn later.
+Recording knocked_record(const sim::Scenario& s, double knocked, double from) {
+  Recording r = record(s);
+  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
+  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
+  const auto first = static_cast<std::size_t>(from * per_rev);
+  const auto swapped = static_cast<std::size_t>((from + knocked) * per_rev);
+  for (std::size_t i = first; i < swapped; ++i) {
+    r.fx[i] = r.fx[i + half_turn];
+    r.fy[i] = r.fy[i + half_turn];
+    r.fz[i] = r.fz[i + half_turn];
+  }
+  return r;
+}
+
 struct KnockedCut {
   sim::Scenario scenario = cut_at_50khz(true);
   MonitorConfig config;
@@ -519,16 +538,9 @@ struct KnockedCut {
   explicit KnockedCut(double knocked, double from = 0.0, bool identify = false,
                       double quiet_from = 0.0, double quiet = 0.0) {
     const sim::Scenario& s = scenario;
-    Recording r = record(s);
     per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
-    const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-    const auto first = static_cast<std::size_t>(from * per_rev);
+    Recording r = knocked_record(s, knocked, from);
     const auto swapped = static_cast<std::size_t>((from + knocked) * per_rev);
-    for (std::size_t i = first; i < swapped; ++i) {
-      r.fx[i] = r.fx[i + half_turn];
-      r.fy[i] = r.fy[i + half_turn];
-      r.fz[i] = r.fz[i + half_turn];
-    }
     std::mt19937 noise(7);
     std::normal_distribution<double> amplifier(0.0, 0.01);
     for (auto i = static_cast<std::size_t>(quiet_from * per_rev);
@@ -811,6 +823,71 @@ TEST(Pipeline, AKnockAfterAGoodLockRelabelsOnlyIfItLastsAndIsUndoneAfter) {
               j["revolutions"].get<long long>());
   EXPECT_NEAR(j["alpha_deg"]["mean"].get<double>(), cut_alpha_deg, 0.5) << j["alpha_deg"];
   EXPECT_EQ(j["alpha_deg"]["revolutions"].get<std::size_t>(), after.size());
+}
+
+// Fits that wait for the model builder, or are in it, when the flutes are relabelled name the
+// flutes from the CE1 before: live, neither reaches the model. The knock of revolutions 60–180
+// relabels at revolution 120; the replay holds at revolution 113 until the fits of the windows
+// ending at 30 and 60 are done (live, they come late), so that the first is taken into the
+// builder (~9 revolutions a build) and the second waits for it when the relabelling comes.
+TEST(Pipeline, FitsWaitingForOrInTheBuilderAtARelabellingAreNotTaken) {
+  const sim::Scenario s = cut_at_50khz(true);
+  const Recording r = knocked_record(s, 120.0, 60.0);
+  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
+  MonitorConfig c = monitor_for(s);
+  c.model.resolution.steps_per_rev = 720;
+  Collector out;
+  Pipeline p(c, out);
+  std::atomic<int> fitted = 0;
+  const signal::ButterworthDesign filter = p.filter();
+  identify::Identifier identifier(
+      c.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
+      [&fitted](const identify::IdentifiedWindow&) { ++fitted; }, identify::HandOver::kWhenReady);
+  p.attach_identifier(&identifier);
+  constexpr std::size_t kBlock = 200;
+  const auto hold_at =
+      static_cast<std::int64_t>(113.0 * per_rev) / static_cast<std::int64_t>(kBlock);
+  replay(p, r, kBlock, [&](std::int64_t seq, SampleBlock&) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (seq == hold_at && fitted < 2 && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  });
+  p.attach_identifier(nullptr);
+  identifier.finish();
+  ASSERT_GE(fitted, 2);  // else the held fits never came: nothing to test
+  std::int64_t labelling_from = 0;
+  std::size_t next = 0;
+  int before = 0, after = 0;
+  for (const PipelineEvent& e : out.events) {
+    if (e.kind == PipelineEventKind::kFlutesRelabelled && labelling_from == 0) {
+      while (next < out.revolutions.size() && out.revolutions[next].utime_us <= e.utime_us) {
+        ++next;
+      }
+      ASSERT_LT(next, out.revolutions.size());
+      labelling_from = out.revolutions[next].revolution;
+    } else if (e.kind == PipelineEventKind::kModelUpdated) {
+      const std::int64_t window_from = e.count - c.sync_window_revolutions + 1;
+      ++(labelling_from == 0 ? before : after);
+      if (labelling_from > 0) {
+        EXPECT_GE(window_from, labelling_from) << "the window of revolution " << e.count;
+      }
+    }
+  }
+  const PipelineStatus status = p.status();
+  std::printf(
+      "relabelled from revolution %lld; model updates %d before, %d after; identified windows: "
+      "%lld taken, %lld rejected, %lld superseded\n",
+      static_cast<long long>(labelling_from), before, after,
+      static_cast<long long>(status.identifications_taken),
+      static_cast<long long>(status.identifications_rejected),
+      static_cast<long long>(status.identifications_superseded));
+  ASSERT_GT(labelling_from, 100);
+  ASSERT_LT(labelling_from, 140);
+  EXPECT_EQ(before, 0);  // the held fits were not taken before the relabelling
+  // The one in the builder and the one waiting (the later windows' fits come after the replay).
+  EXPECT_GE(status.identifications_superseded, 2);
 }
 
 // A relabelling whose lock never comes (the cut stops at once) is over when the cut comes back:
