@@ -243,8 +243,9 @@ template <typename Kernels, int... kStride>
 Strides pick_strides(int stride, std::integer_sequence<int, kStride...>) {
   constexpr std::array<Strides, sizeof...(kStride)> unrolled = {
       Kernels::template kernel<kStride>...};
-  return stride > 0 && stride <= kUnrolledStrides ? unrolled[static_cast<std::size_t>(stride)]
-                                                  : Kernels::template kernel<0>;
+  // Entry 0 is the loop too (a stride is at least 1).
+  return stride <= kUnrolledStrides ? unrolled[static_cast<std::size_t>(stride)]
+                                    : Kernels::template kernel<0>;
 }
 
 template <typename Kernels>

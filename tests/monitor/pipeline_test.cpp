@@ -30,6 +30,7 @@ namespace millwatch::monitor {
 namespace {
 
 using test::Collector;
+using test::knocked_record;
 using test::monitor_for;
 using test::record;
 using test::Recording;
@@ -508,20 +509,12 @@ struct SummarizingCollector : Collector {
   }
 };
 
-/// The record of cut `s` with `knocked` revolutions from revolution `from` replaced by the
-/// samples half a turn later.
-Recording knocked_record(const sim::Scenario& s, double knocked, double from) {
-  Recording r = record(s);
-  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
-  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-  const auto first = static_cast<std::size_t>(from * per_rev);
-  const auto swapped = static_cast<std::size_t>((from + knocked) * per_rev);
-  for (std::size_t i = first; i < swapped; ++i) {
-    r.fx[i] = r.fx[i + half_turn];
-    r.fy[i] = r.fy[i + half_turn];
-    r.fz[i] = r.fz[i + half_turn];
-  }
-  return r;
+/// The number of the first revolution `out` heard after `utime_us` (−1: none).
+std::int64_t first_revolution_after(const Collector& out, std::int64_t utime_us) {
+  const auto r =
+      std::find_if(out.revolutions.begin(), out.revolutions.end(),
+                   [utime_us](const RevolutionRecord& x) { return x.utime_us > utime_us; });
+  return r == out.revolutions.end() ? -1 : r->revolution;
 }
 
 struct KnockedCut {
@@ -789,15 +782,11 @@ TEST(Pipeline, AKnockAfterAGoodLockRelabelsOnlyIfItLastsAndIsUndoneAfter) {
   // The model takes no identified window from before a relabelling after it (each names the
   // flutes from another CE1): the revolutions after the relabelling's are its lock's.
   std::int64_t labelling_from = 0;
-  std::size_t next = 0;
   int updates_after = 0;
   for (const PipelineEvent& e : out.events) {
     if (e.kind == PipelineEventKind::kFlutesRelabelled) {
-      while (next < out.revolutions.size() && out.revolutions[next].utime_us <= e.utime_us) {
-        ++next;
-      }
-      ASSERT_LT(next, out.revolutions.size());
-      labelling_from = out.revolutions[next].revolution;
+      labelling_from = first_revolution_after(out, e.utime_us);
+      ASSERT_GE(labelling_from, 0);
     } else if (e.kind == PipelineEventKind::kModelUpdated && labelling_from > 0) {
       EXPECT_GE(e.count - long_knock.config.sync_window_revolutions + 1, labelling_from)
           << "a window of revolution " << e.count << " in the labelling from " << labelling_from;
@@ -858,15 +847,11 @@ TEST(Pipeline, FitsWaitingForOrInTheBuilderAtARelabellingAreNotTaken) {
   identifier.finish();
   ASSERT_GE(fitted, 2);  // else the held fits never came: nothing to test
   std::int64_t labelling_from = 0;
-  std::size_t next = 0;
   int before = 0, after = 0;
   for (const PipelineEvent& e : out.events) {
     if (e.kind == PipelineEventKind::kFlutesRelabelled && labelling_from == 0) {
-      while (next < out.revolutions.size() && out.revolutions[next].utime_us <= e.utime_us) {
-        ++next;
-      }
-      ASSERT_LT(next, out.revolutions.size());
-      labelling_from = out.revolutions[next].revolution;
+      labelling_from = first_revolution_after(out, e.utime_us);
+      ASSERT_GE(labelling_from, 0);
     } else if (e.kind == PipelineEventKind::kModelUpdated) {
       const std::int64_t window_from = e.count - c.sync_window_revolutions + 1;
       ++(labelling_from == 0 ? before : after);

@@ -233,15 +233,7 @@ TEST(MonitorRun, AReloadMidCutCarriesEveryCount) {
 // the replaced pipeline's revolutions.
 TEST(MonitorRun, AReloadCarriesTheFlutesRelabellings) {
   const sim::Scenario s = two_flute_cut(1.0);
-  test::Recording r = test::record(s);
-  const double per_rev = kRate_hz * 60.0 / s.spindle.actual_rpm;
-  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
-  for (auto i = static_cast<std::size_t>(60.0 * per_rev);
-       i < static_cast<std::size_t>(180.0 * per_rev); ++i) {
-    r.fx[i] = r.fx[i + half_turn];
-    r.fy[i] = r.fy[i + half_turn];
-    r.fz[i] = r.fz[i + half_turn];
-  }
+  const test::Recording r = test::knocked_record(s, 120.0, 60.0);
   MonitorRun run(test::monitor_for(s), without_identification());
   constexpr std::size_t kReloadBlock = 18;  // 0.36 s: revolution 151
   for (std::size_t k = 0; k < kReloadBlock; ++k) {

@@ -39,6 +39,20 @@ Recording record(const sim::Scenario& s) {
   return r;
 }
 
+Recording knocked_record(const sim::Scenario& s, double knocked, double from) {
+  Recording r = record(s);
+  const double per_rev = s.sample_rate_hz * 60.0 / s.spindle.actual_rpm;
+  const auto half_turn = static_cast<std::size_t>(std::lround(0.5 * per_rev));
+  const auto first = static_cast<std::size_t>(from * per_rev);
+  const auto swapped = static_cast<std::size_t>((from + knocked) * per_rev);
+  for (std::size_t i = first; i < swapped; ++i) {
+    r.fx[i] = r.fx[i + half_turn];
+    r.fy[i] = r.fy[i + half_turn];
+    r.fz[i] = r.fz[i + half_turn];
+  }
+  return r;
+}
+
 void replay(monitor::Pipeline& p, const Recording& r, std::size_t block,
             const std::function<bool(std::int64_t, monitor::SampleBlock&)>& tamper, bool finish) {
   for (std::size_t i = 0, seq = 0; i < r.t.size(); i += block, ++seq) {

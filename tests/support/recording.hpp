@@ -40,6 +40,10 @@ struct Recording {
 
 Recording record(const sim::Scenario& s);
 
+/// The record of cut `s` with `knocked` revolutions from revolution `from` replaced by the
+/// samples half a turn later (a knock: the same valleys, the flutes' forces swapped).
+Recording knocked_record(const sim::Scenario& s, double knocked, double from);
+
 /// Feeds a recording in blocks of `block` samples; `tamper` may change a block's samples or
 /// timing first, or return false to lose the block. Calls finish() at the end unless told not.
 void replay(monitor::Pipeline& p, const Recording& r, std::size_t block,
