@@ -13,6 +13,10 @@
 namespace millwatch::monitor {
 
 InputCheck::InputCheck(const InputCheckConfig& config) : config_(config) {
+  const double plausible = std::min(config_.plausible_N, std::numeric_limits<double>::max());
+  for (std::size_t a = 0; a < 3; ++a) {
+    limits_[a] = std::min(plausible, std::nextafter(config_.saturation_N[a], 0.0));
+  }
   for (auto& channel : out_) {
     channel = std::make_unique_for_overwrite<double[]>(config_.max_block_samples);
   }
@@ -161,6 +165,11 @@ CheckedBlock InputCheck::reject(const SampleBlock& block, std::string_view why) 
 }
 
 CheckedBlock InputCheck::check(const SampleBlock& block) {
+  const CheckedBlock timed = check_time(block);
+  return timed.verdict == BlockVerdict::kRejected ? timed : check_samples(block, timed, false);
+}
+
+CheckedBlock InputCheck::check_time(const SampleBlock& block) {
   const std::size_t n = block.fx_N.size();
   counters_.samples_in += static_cast<std::int64_t>(n);
   if (n == 0) {
@@ -237,16 +246,22 @@ CheckedBlock InputCheck::check(const SampleBlock& block) {
     }
   }
 
+  out.verdict = BlockVerdict::kAccepted;  // its samples not yet tested (check_samples())
+  out.first_sample = next_sample_;
+  out.fx_N = block.fx_N;
+  out.fy_N = block.fy_N;
+  out.fz_N = block.fz_N;
+  return out;
+}
+
+CheckedBlock InputCheck::check_samples(const SampleBlock& block, CheckedBlock timed,
+                                       bool known_within) {
+  CheckedBlock out = timed;
+  const std::size_t n = block.fx_N.size();
   const std::array<std::span<const double>, 3> in = {block.fx_N, block.fy_N, block.fz_N};
   // The usual block: every sample plausible and below saturation (a NaN fails both tests). It
   // is handed on as it is, without copies.
-  const double plausible = std::min(config_.plausible_N, std::numeric_limits<double>::max());
-  std::array<double, 3> limit{};
-  for (std::size_t a = 0; a < 3; ++a) {
-    limit[a] = std::min(plausible, std::nextafter(config_.saturation_N[a], 0.0));
-  }
-  const bool clean = all_within(in, n, limit);
-  if (clean) {
+  if (known_within || all_within(in, n, sample_limits())) {
     for (std::size_t a = 0; a < 3; ++a) {
       last_good_[a] = in[a][n - 1];
     }

@@ -86,6 +86,18 @@ class InputCheck {
   /// when no sample needed replacing, into the block itself (valid as long as the block).
   CheckedBlock check(const SampleBlock& block);
 
+  /// check() in two steps, for a caller that tests the samples in a pass of its own (the
+  /// conditioner's filter: Conditioner::filter_checked): check_time() does all but the samples'
+  /// test (the block's length, rate and time, a gap before it); for a block it did not reject,
+  /// check_samples() must follow at once, given what it gave and whether every sample is known
+  /// to be within sample_limits() — it then tests none (else it tests and replaces as check()
+  /// does). The two give what check() gives.
+  CheckedBlock check_time(const SampleBlock& block);
+  CheckedBlock check_samples(const SampleBlock& block, CheckedBlock timed, bool known_within);
+  /// A sample of input channel a (fx, fy, fz) is handed on as it is when |x| ≤ limit[a] (a NaN
+  /// is not): plausible and below the channel's saturation.
+  [[nodiscard]] const std::array<double, 3>& sample_limits() const { return limits_; }
+
   [[nodiscard]] const InputCounters& counters() const { return counters_; }
   /// utime (µs) of sample index n.
   [[nodiscard]] std::int64_t utime_of(std::int64_t sample) const;
@@ -123,6 +135,7 @@ class InputCheck {
   [[nodiscard]] double samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const;
 
   InputCheckConfig config_;
+  std::array<double, 3> limits_{};  // sample_limits()
   InputCounters counters_;
   bool started_ = false;
   std::int64_t start_utime_us_ = 0;  // utime of sample start_sample_

@@ -318,12 +318,20 @@ void Pipeline::bridge_gap(std::int64_t first_sample) {
 
 bool Pipeline::process(const SampleBlock& block) {
   const std::int64_t expected_sample = input_.next_sample();  // the block's, were it on time
-  const CheckedBlock c = input_.check(block);
-  if (c.verdict == BlockVerdict::kRejected) {
+  const CheckedBlock timed = input_.check_time(block);
+  if (timed.verdict == BlockVerdict::kRejected) {
     event(PipelineEventKind::kBlockRejected, expected_sample,
-          static_cast<std::int64_t>(block.fx_N.size()), 0.0, c.problem, block.seq);
+          static_cast<std::int64_t>(block.fx_N.size()), 0.0, timed.problem, block.seq);
     return false;
   }
+  // The usual block, the stream going on without a gap: its samples are tested as the filter
+  // reads them (the block's first read, which a pass of its own would wait for); one that fails
+  // goes the input check's way, every sample tested and replaced, and then through the filter.
+  const bool going_on = timed.gap_samples == 0 && timed.first_sample > 0 && last_sample_ >= 0;
+  const bool filtered = going_on && check_in_filter_ &&
+                        conditioner_.filter_checked(timed.first_sample, block.fx_N, block.fy_N,
+                                                    block.fz_N, input_.sample_limits());
+  const CheckedBlock c = input_.check_samples(block, timed, filtered);
   if (c.gap_samples > 0) {
     const bool fill = c.gap_samples <= max_filled_gap_ && last_sample_ >= 0 && !c.fx_N.empty();
     event(PipelineEventKind::kGap, c.first_sample, c.gap_samples, 0.0,
@@ -350,7 +358,15 @@ bool Pipeline::process(const SampleBlock& block) {
   }
 
   const std::size_t count = c.fx_N.size();
-  condition(c.first_sample, c.fx_N, c.fy_N, c.fz_N);
+  if (filtered) {
+    conditioner_.hand_on_checked(
+        [this](std::int64_t n) { return run_limit(n); },
+        [this](std::int64_t n, std::size_t run, const double* x, const double* y, const double* z) {
+          downstream_run(n, run, x, y, z);
+        });
+  } else {
+    condition(c.first_sample, c.fx_N, c.fy_N, c.fz_N);
+  }
   last_sample_ = c.first_sample + static_cast<std::int64_t>(count) - 1;
   if (count > 0) {
     last_reading_ = {c.fx_N[count - 1], c.fy_N[count - 1], c.fz_N[count - 1]};

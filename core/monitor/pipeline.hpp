@@ -249,6 +249,10 @@ class Pipeline {
   /// Whether the model revolution is measured once per model and alignment and placed on each
   /// turn (the default), or measured anew on every turn (the tests compare the two).
   void keep_model_revolution(bool keep) { analyzer_.keep_model_revolution(keep); }
+  /// Whether a block on the measuring grid has its samples checked in the filter's pass (the
+  /// default; Conditioner::filter_checked) or in the input check's own pass before it (the
+  /// tests compare the two).
+  void check_samples_in_filter(bool in_filter) { check_in_filter_ = in_filter; }
   [[nodiscard]] const signal::ButterworthDesign& filter() const { return filter_; }
   /// The tooth-event template of the current (or last) lock.
   [[nodiscard]] const ToothEventTemplate& event_template() const {
@@ -377,7 +381,8 @@ class Pipeline {
   std::int64_t model_builds_area_unsettled_ = 0;
   std::int64_t valid_revolutions_ = 0;
   std::int64_t idle_revolutions_ = 0;
-  bool idle_ = false;  // the last revolution had no cutting force
+  bool check_in_filter_ = true;  // check_samples_in_filter()
+  bool idle_ = false;            // the last revolution had no cutting force
   int idle_streak_ = 0;
   bool ever_locked_ = false;     // the tooth events started at least once
   bool tracker_locked_ = false;  // the tracker locked at least once (kNoTemplate said the rest)

@@ -1,6 +1,7 @@
 #include "core/signal/grid_lowpass.hpp"
 
 #include <Eigen/Core>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -97,31 +98,46 @@ inline void grid_advance(const LookAhead& l, int stride, double sign, State& z, 
   z[3] = ((p[3][0] * z0 + p[3][1] * z1) + (p[3][2] * z2 + p[3][3] * z3)) + u[3];
 }
 
-/// A kernel: `strides` whole strides from a grid sample (strides_scalar, strides_avx).
-using Strides = void (*)(const LookAhead&, int, const std::array<double, 3>&, std::array<State, 3>&,
+/// A kernel: `strides` whole strides from a grid sample (strides_scalar, strides_avx). A
+/// checking one (kCheck) also tests every input it reads against `limit` (its channel's) and
+/// returns whether all were within (|x| ≤ limit; a NaN is not); an unchecking one returns true.
+using Strides = bool (*)(const LookAhead&, int, const std::array<double, 3>&, std::array<State, 3>&,
                          const std::array<const double*, 3>&, const std::array<double*, 3>&,
-                         std::size_t);
+                         std::size_t, const std::array<double, 3>&);
+
+/// Whether |x| ≤ limit (false for a NaN): InputCheck's test of a sample.
+inline bool within(double x, double limit) {
+  return std::fabs(x) <= limit;
+}
 
 /// Whole strides from a grid sample: the output at each stride's first sample, the state
 /// advanced past it; the three channels in step (three independent chains). kStride as
 /// strides_avx's.
-template <int kStride>
-void strides_scalar(const LookAhead& l, int stride, const std::array<double, 3>& sign,
+template <bool kCheck, int kStride>
+bool strides_scalar(const LookAhead& l, int stride, const std::array<double, 3>& sign,
                     std::array<State, 3>& z, const std::array<const double*, 3>& in,
-                    const std::array<double*, 3>& out, std::size_t strides) {
+                    const std::array<double*, 3>& out, std::size_t strides,
+                    const std::array<double, 3>& limit) {
   const LookAhead c = l;  // a local copy: the stores to out cannot touch it
   const int k = kStride > 0 ? kStride : stride;
   std::array<State, 3> zs = z;
   const auto step = static_cast<std::size_t>(k);
+  bool ok = true;
   for (std::size_t s = 0; s < strides; ++s) {
     const std::size_t at = s * step;
     for (std::size_t a = 0; a < 3; ++a) {
       const double* xs = in[a] + at;
       out[a][at] = grid_output(c, zs[a], c.direct * sign[a], xs[0]);
       grid_advance(c, k, sign[a], zs[a], [xs](int j) { return xs[j]; });
+      if constexpr (kCheck) {
+        for (int j = 0; j < k; ++j) {
+          ok = ok && within(xs[j], limit[a]);
+        }
+      }
     }
   }
   z = zs;
+  return ok;
 }
 
 #if defined(__SSE2__)
@@ -138,17 +154,26 @@ __attribute__((target("avx"), always_inline)) inline __m256d state_lanes(
   return _mm256_set_pd(z[2][i], z[2][i], z[1][i], z[0][i]);
 }
 
+/// `beyond` with the lanes of x that are not within their limit set: |x| > limit, or a NaN
+/// (unordered).
+__attribute__((target("avx"), always_inline)) inline __m256d lanes_beyond(__m256d beyond, __m256d x,
+                                                                          __m256d limit) {
+  const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
+  return _mm256_or_pd(beyond, _mm256_cmp_pd(_mm256_and_pd(x, magnitude), limit, _CMP_NLE_UQ));
+}
+
 /// strides_scalar() with the three channels as lanes (fx, fy, fz, fz) of one AVX register: the
 /// same operations in the same order on each lane (no FMA: target "avx" alone), so the same
 /// results bit for bit.
 /// kStride: the stride, known when compiled (its inputs' loop unrolled), or 0: `stride`.
-template <int kStride>
-__attribute__((target("avx"))) void strides_avx(const LookAhead& l, int stride,
-                                                const std::array<double, 3>& sign,
-                                                std::array<State, 3>& z,
-                                                const std::array<const double*, 3>& in,
-                                                const std::array<double*, 3>& out,
-                                                std::size_t strides) {
+/// kCheck: every input's |x| is compared with its channel's limit as it is read (two more
+/// operations an input beside the recursion, whose latency bounds the kernel): the check of a
+/// block read from memory costs no pass of its own.
+template <bool kCheck, int kStride>
+__attribute__((target("avx"))) bool strides_avx(
+    const LookAhead& l, int stride, const std::array<double, 3>& sign, std::array<State, 3>& z,
+    const std::array<const double*, 3>& in, const std::array<double*, 3>& out, std::size_t strides,
+    const std::array<double, 3>& limit) {
   if constexpr (kStride > 0) {
     stride = kStride;
   }
@@ -172,10 +197,15 @@ __attribute__((target("avx"))) void strides_avx(const LookAhead& l, int stride,
   const __m256d ds = _mm256_mul_pd(_mm256_set1_pd(l.direct), m);
   __m256d z0 = state_lanes(z, 0), z1 = state_lanes(z, 1), z2 = state_lanes(z, 2),
           z3 = state_lanes(z, 3);
+  const __m256d lim = _mm256_set_pd(limit[2], limit[2], limit[1], limit[0]);
+  __m256d beyond = _mm256_setzero_pd();  // lanes that read a sample not within its limit
   const auto k = static_cast<std::size_t>(stride);
   for (std::size_t s = 0; s < strides; ++s) {
     const std::size_t at = s * k;
     const __m256d x0 = sample_lanes(in, at);
+    if constexpr (kCheck) {
+      beyond = lanes_beyond(beyond, x0, lim);
+    }
     const __m256d y =
         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c0, z0), _mm256_mul_pd(c1, z1)),
                       _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c2, z2), _mm256_mul_pd(c3, z3)),
@@ -184,6 +214,9 @@ __attribute__((target("avx"))) void strides_avx(const LookAhead& l, int stride,
     __m256d u2 = _mm256_mul_pd(g[0][2], x0), u3 = _mm256_mul_pd(g[0][3], x0);
     for (std::size_t j = 1; j < k; ++j) {
       const __m256d xj = sample_lanes(in, at + j);
+      if constexpr (kCheck) {
+        beyond = lanes_beyond(beyond, xj, lim);
+      }
       u0 = _mm256_add_pd(u0, _mm256_mul_pd(g[j][0], xj));
       u1 = _mm256_add_pd(u1, _mm256_mul_pd(g[j][1], xj));
       u2 = _mm256_add_pd(u2, _mm256_mul_pd(g[j][2], xj));
@@ -218,19 +251,22 @@ __attribute__((target("avx"))) void strides_avx(const LookAhead& l, int stride,
   for (std::size_t a = 0; a < 3; ++a) {
     z[a] = {v[0][a], v[1][a], v[2][a], v[3][a]};
   }
+  return _mm256_movemask_pd(beyond) == 0;
 }
 
 #endif
 
 /// The kernels by name, for pick_strides().
+template <bool kCheck>
 struct Scalar {
   template <int kStride>
-  static constexpr Strides kernel = strides_scalar<kStride>;
+  static constexpr Strides kernel = strides_scalar<kCheck, kStride>;
 };
 #if defined(__SSE2__)
+template <bool kCheck>
 struct Avx {
   template <int kStride>
-  static constexpr Strides kernel = strides_avx<kStride>;
+  static constexpr Strides kernel = strides_avx<kCheck, kStride>;
 };
 #endif
 
@@ -297,18 +333,44 @@ void GridLowPass::advance_pending() {
 
 void GridLowPass::process(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
                           std::size_t count, Kernel kernel) {
+  run(in, out, count, kernel, nullptr);
+}
+
+bool GridLowPass::process_checked(const std::array<const double*, 3>& in,
+                                  const std::array<double*, 3>& out, std::size_t count,
+                                  const std::array<double, 3>& limit, Kernel kernel) {
+  const std::array<State, 3> z = z_;
+  const auto pending = pending_;
+  const int pending_count = pending_count_;
+  if (run(in, out, count, kernel, &limit)) {
+    return true;
+  }
+  z_ = z;
+  pending_ = pending;
+  pending_count_ = pending_count;
+  return false;
+}
+
+bool GridLowPass::run(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
+                      std::size_t count, Kernel kernel, const std::array<double, 3>* limit) {
+  static constexpr std::array<double, 3> kNoLimit{};
+  bool ok = true;
+  // Holds sample i of every channel for a later stride (checked first, if asked).
+  const auto hold = [&](std::size_t i) {
+    const auto p = static_cast<std::size_t>(pending_count_++);
+    for (std::size_t a = 0; a < 3; ++a) {
+      pending_[a][p] = in[a][i];
+      ok = ok && (limit == nullptr || within(in[a][i], (*limit)[a]));
+    }
+  };
   std::size_t i = 0;
   // A stride a block left unfinished: its output went out with its first sample.
   if (pending_count_ > 0) {
-    while (pending_count_ < stride_ && i < count) {
-      const auto p = static_cast<std::size_t>(pending_count_++);
-      for (std::size_t a = 0; a < 3; ++a) {
-        pending_[a][p] = in[a][i];
-      }
-      ++i;
+    for (; pending_count_ < stride_ && i < count; ++i) {
+      hold(i);
     }
     if (pending_count_ < stride_) {
-      return;
+      return ok;
     }
     advance_pending();
   }
@@ -316,29 +378,29 @@ void GridLowPass::process(const std::array<const double*, 3>& in, const std::arr
   const std::size_t strides = (count - i) / k;
   const std::array<const double*, 3> from = {in[0] + i, in[1] + i, in[2] + i};
   const std::array<double*, 3> to = {out[0] + i, out[1] + i, out[2] + i};
-  Strides run = pick_strides<Scalar>(stride_);
+  const bool check = limit != nullptr;
+  Strides kernel_run =
+      check ? pick_strides<Scalar<true>>(stride_) : pick_strides<Scalar<false>>(stride_);
 #if defined(__SSE2__)
   if (kernel != Kernel::kScalar && cpu_has_avx()) {
-    run = pick_strides<Avx>(stride_);
+    kernel_run = check ? pick_strides<Avx<true>>(stride_) : pick_strides<Avx<false>>(stride_);
   }
 #else
   static_cast<void>(kernel);
 #endif
-  run(look_, stride_, sign_, z_, from, to, strides);
+  ok = kernel_run(look_, stride_, sign_, z_, from, to, strides, check ? *limit : kNoLimit) && ok;
   i += strides * k;
   if (i == count) {
-    return;
+    return ok;
   }
   // The rest starts a stride: its first sample is on the grid.
   for (std::size_t a = 0; a < 3; ++a) {
     out[a][i] = grid_output(look_, z_[a], look_.direct * sign_[a], in[a][i]);
   }
   for (; i < count; ++i) {
-    const auto p = static_cast<std::size_t>(pending_count_++);
-    for (std::size_t a = 0; a < 3; ++a) {
-      pending_[a][p] = in[a][i];
-    }
+    hold(i);
   }
+  return ok;
 }
 
 }  // namespace millwatch::signal

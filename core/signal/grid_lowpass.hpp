@@ -63,6 +63,16 @@ class GridLowPass {
   void process(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
                std::size_t count, Kernel kernel = Kernel::kAuto);
 
+  /// process() testing every input on the way, as the monitor's input check does: true when
+  /// |in[a][i]| ≤ limit[a] for every channel and sample (a NaN is not), the samples then
+  /// filtered as process() filters them, bit for bit; false otherwise, the filter then as it was
+  /// before the call (out written with anything). The check of a block the filter reads first
+  /// costs no pass of its own over the block (monitor::Conditioner::filter_checked).
+  [[nodiscard]] bool process_checked(const std::array<const double*, 3>& in,
+                                     const std::array<double*, 3>& out, std::size_t count,
+                                     const std::array<double, 3>& limit,
+                                     Kernel kernel = Kernel::kAuto);
+
   /// Look-ahead coefficients (row-major A^k; column j of the input gain A^(k−1−j)·B; C; D).
   struct LookAhead {
     std::array<std::array<double, 4>, 4> power{};
@@ -72,6 +82,9 @@ class GridLowPass {
   };
 
  private:
+  /// process(), and with `limit` its check: whether every input was within.
+  bool run(const std::array<const double*, 3>& in, const std::array<double*, 3>& out,
+           std::size_t count, Kernel kernel, const std::array<double, 3>* limit);
   void advance_pending();
 
   ButterworthDesign design_;

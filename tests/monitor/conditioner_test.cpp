@@ -13,7 +13,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <limits>
 #include <numbers>
+#include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/signal/butterworth_lowpass.hpp"
@@ -72,9 +77,23 @@ Output sample_by_sample() {
   return o;
 }
 
+/// Changes block `index`'s instrument channels (x, y, z) before they are pushed.
+using Tamper = std::function<void(std::int64_t index, std::vector<double>& x,
+                                  std::vector<double>& y, std::vector<double>& z)>;
+
+/// A block's way in with filter_checked(): each block is offered to it with `limit` (by input
+/// channel) first, and pushed by push_block() when refused, after `repair` if any (as the
+/// pipeline does, after the input check); `refused` counts those.
+struct Checked {
+  std::array<double, 3> limit{};
+  Tamper repair;
+  int refused = 0;
+};
+
 /// push_block() in blocks of 333 and runs of up to `run` samples, sample n numbered origin + n;
 /// what the caller reads: every sample on the stride's grid (NaN elsewhere).
-Output in_blocks(int stride, std::size_t run, std::int64_t origin = 0) {
+Output in_blocks(int stride, std::size_t run, std::int64_t origin = 0, Checked* checked = nullptr,
+                 const Tamper& tamper = {}) {
   Conditioner c(config(), signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4));
   c.set_stride(stride);
   Output o;
@@ -92,22 +111,35 @@ Output in_blocks(int stride, std::size_t run, std::int64_t origin = 0) {
       y.push_back(r[1]);
       z.push_back(r[2]);
     }
+    if (tamper) {
+      tamper(first / kBlock, x, y, z);
+    }
     set_state(c, first);
-    c.push_block(
-        origin + first, x, y, z, [run](std::int64_t) { return run; },
-        [&](std::int64_t n, std::size_t count, const double* fx, const double* fy,
-            const double* fz) {
-          ASSERT_LE(count, static_cast<std::size_t>(kBlock));
-          for (std::size_t i = 0; i < count; ++i) {
-            const std::int64_t s = n + static_cast<std::int64_t>(i);
-            if (s % stride == 0) {
-              const auto at = static_cast<std::size_t>(s - origin);
-              o.fx[at] = fx[i];
-              o.fy[at] = fy[i];
-              o.fz[at] = fz[i];
-            }
-          }
-        });
+    const auto limit = [run](std::int64_t) { return run; };
+    const auto out = [&](std::int64_t n, std::size_t count, const double* fx, const double* fy,
+                         const double* fz) {
+      ASSERT_LE(count, static_cast<std::size_t>(kBlock));
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::int64_t s = n + static_cast<std::int64_t>(i);
+        if (s % stride == 0) {
+          const auto at = static_cast<std::size_t>(s - origin);
+          o.fx[at] = fx[i];
+          o.fy[at] = fy[i];
+          o.fz[at] = fz[i];
+        }
+      }
+    };
+    if (checked != nullptr && c.filter_checked(origin + first, x, y, z, checked->limit)) {
+      c.hand_on_checked(limit, out);
+    } else {
+      if (checked != nullptr) {
+        ++checked->refused;
+        if (checked->repair) {
+          checked->repair(first / kBlock, x, y, z);
+        }
+      }
+      c.push_block(origin + first, x, y, z, limit, out);
+    }
     o.envelope_sq.push_back(c.envelope_sq_N2());
   }
   o.tare_N = c.tare_N();
@@ -176,6 +208,98 @@ TEST(Conditioner, AStrideGivesTheSampleBySampleValuesOnTheGrid) {
       }
     }
   }
+}
+
+/// Output a and b the same, bit for bit (NaN where neither is on the grid).
+void expect_same(const Output& a, const Output& b, const std::string& what) {
+  for (std::size_t i = 0; i < a.fx.size(); ++i) {
+    for (const auto& [p, q] :
+         {std::pair{a.fx[i], b.fx[i]}, std::pair{a.fy[i], b.fy[i]}, std::pair{a.fz[i], b.fz[i]}}) {
+      ASSERT_TRUE(p == q || (std::isnan(p) && std::isnan(q))) << what << " at " << i;
+    }
+  }
+  EXPECT_EQ(a.tare_N, b.tare_N) << what;
+  EXPECT_EQ(a.envelope_sq, b.envelope_sq) << what;
+}
+
+// Blocks whose samples are all within their limits, filtered with their check and handed on
+// by hand_on_checked(), give what push_block() gives, bit for bit: values, runs, tare,
+// envelope; on every grid and from any sample number.
+TEST(Conditioner, FilterCheckedHandsOnWhatPushBlockDoes) {
+  for (const std::int64_t origin : {std::int64_t{0}, std::int64_t{-100001}}) {
+    for (const int stride : {3, 6, signal::kMaxGridStride}) {
+      for (const std::size_t run : {1U, 7U, 1000U}) {
+        Checked checked{{1e6, 1e6, 1e6}, {}};
+        const Output o = in_blocks(stride, run, origin, &checked);
+        EXPECT_EQ(checked.refused, 0);
+        expect_same(o, in_blocks(stride, run, origin),
+                    "stride " + std::to_string(stride) + " run " + std::to_string(run));
+      }
+    }
+  }
+}
+
+// Each sample is held to its input channel's limit, whatever model axis the axis map makes of
+// it (x from the second channel, y from the first): 50 N is beyond the second channel's 40 N
+// but within the first's 100 N, 1,001 N beyond the third's 1,000 N; a NaN is beyond every
+// limit. A block refused (the first, whose first sample settles the filter; one while quiet;
+// one while cutting) leaves the conditioner as it was: push_block() then gives everything
+// after as if the block had gone that way alone — repaired as the input check repairs it (a
+// NaN replaced by a good value), the first block's filter settled on what it was repaired to.
+TEST(Conditioner, FilterCheckedRefusesASampleBeyondItsInputChannelsLimit) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  struct Change {
+    std::size_t channel;
+    double value;
+    bool refused;
+  };
+  for (const Change change :
+       {Change{1, 50.0, true}, Change{0, 50.0, false}, Change{2, 1001.0, true},
+        Change{2, 999.0, false}, Change{0, nan, true}}) {
+    for (const int stride : {3, 6}) {
+      for (const std::size_t at : {std::size_t{0}, std::size_t{160}, std::size_t{kBlock - 1}}) {
+        const Tamper tamper = [&](std::int64_t index, std::vector<double>& x,
+                                  std::vector<double>& y, std::vector<double>& z) {
+          if (index == 0 || index == 5 || index == 185) {
+            (change.channel == 0 ? x : change.channel == 1 ? y : z)[at] = change.value;
+          }
+        };
+        const Tamper repair = [&](std::int64_t, std::vector<double>& x, std::vector<double>& y,
+                                  std::vector<double>& z) {
+          for (auto* channel : {&x, &y, &z}) {
+            for (double& v : *channel) {
+              v = std::isnan(v) ? 7.0 : v;
+            }
+          }
+        };
+        Checked checked{{100.0, 40.0, 1000.0}, repair};
+        const Output o = in_blocks(stride, 7, 0, &checked, tamper);
+        EXPECT_EQ(checked.refused, change.refused ? 3 : 0) << change.channel << " " << change.value;
+        const Tamper repaired = [&](std::int64_t index, std::vector<double>& x,
+                                    std::vector<double>& y, std::vector<double>& z) {
+          tamper(index, x, y, z);
+          repair(index, x, y, z);
+        };
+        expect_same(o, in_blocks(stride, 7, 0, nullptr, repaired),
+                    "channel " + std::to_string(change.channel) + " value " +
+                        std::to_string(change.value) + " stride " + std::to_string(stride));
+      }
+    }
+  }
+}
+
+// filter_checked() takes blocks of up to kCheckedBlock samples on a grid: longer ones, and any
+// without a grid, are left to push_block() (refused, the conditioner untouched).
+TEST(Conditioner, FilterCheckedTakesBlocksUpToItsLengthOnAGrid) {
+  const std::vector<double> quiet(Conditioner::kCheckedBlock + 1, 1.0);
+  const std::span<const double> all(quiet), most = all.first(Conditioner::kCheckedBlock);
+  const std::array<double, 3> limit = {1e6, 1e6, 1e6};
+  Conditioner on_grid(config(), signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4));
+  on_grid.set_stride(3);
+  EXPECT_FALSE(on_grid.filter_checked(0, all, all, all, limit));
+  EXPECT_TRUE(on_grid.filter_checked(0, most, most, most, limit));
+  Conditioner every(config(), signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4));
+  EXPECT_FALSE(every.filter_checked(0, most, most, most, limit));
 }
 
 // On a grid, push() is a block of one sample: the grid's samples alone come out, the values of

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "tests/support/allocation_counter.hpp"
@@ -517,6 +519,104 @@ TEST(InputCheck, EachChannelIsHeldToItsOwnRange) {
       }
     }
   }
+}
+
+/// Whether a sample of input channel a is handed on as it is, by the definition: finite,
+/// plausible and below the channel's saturation.
+bool as_it_is(double v, const InputCheckConfig& c, std::size_t a) {
+  return std::isfinite(v) && std::fabs(v) <= c.plausible_N && std::fabs(v) < c.saturation_N[a];
+}
+
+// sample_limits() is the definition: |v| ≤ limit[a] exactly when a sample of channel a is
+// handed on as it is, at the edges of the saturation and of plausibility.
+TEST(InputCheck, SampleLimitsAreWhatIsHandedOnAsItIs) {
+  InputCheckConfig cfg = config();
+  cfg.saturation_N = {50.0, 2e6, std::numeric_limits<double>::infinity()};
+  const InputCheck check(cfg);
+  const std::array<double, 3>& limit = check.sample_limits();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (const double edge : {50.0, 1e6, 2e6}) {
+      for (const double v : {std::nextafter(edge, 0.0), edge, std::nextafter(edge, inf)}) {
+        for (const double sv : {v, -v}) {
+          EXPECT_EQ(std::fabs(sv) <= limit[a], as_it_is(sv, cfg, a)) << a << " " << sv;
+        }
+      }
+    }
+    EXPECT_FALSE(std::numeric_limits<double>::quiet_NaN() <= limit[a]);
+    EXPECT_FALSE(inf <= limit[a]);
+  }
+}
+
+// check_time() and check_samples() — given whether every sample is handed on as it is, found
+// by the definition — give what check() gives, block after block and in the counters: on time
+// and late, with a NaN, a saturated or an implausible sample, a rejected block, a gap.
+TEST(InputCheck, InTwoStepsItIsCheck) {
+  InputCheckConfig cfg = config();
+  cfg.saturation_N = {50.0, 200.0, 30.0};
+  InputCheck one(cfg), two(cfg);
+  struct Step {
+    std::int64_t utime_us;
+    std::size_t at;  // a sample to change (n: none)
+    double value;
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Step> steps = {
+      {1'000'000, 99, 0.0},  {1'000'200, 3, nan},  {1'000'400, 9, 40.0},   // saturated in z
+      {1'000'600, 0, 2e6},   {1'000'600, 99, 0.0},                         // then out of order
+      {1'001'000, 99, 0.0},                                                // a gap of 10
+      {1'001'200, 9, -31.0}, {1'001'400, 99, 0.0}, {1'001'400, 99, 0.0}};  // repeated
+  std::int64_t k = 0;
+  for (const Step& step : steps) {
+    Block b = ramp(10, static_cast<double>(k++));
+    for (auto* channel : {&b.fx, &b.fy, &b.fz}) {
+      if (step.at < channel->size()) {
+        (*channel)[step.at] = step.value;
+      }
+    }
+    const SampleBlock view = b.view(step.utime_us);
+    const CheckedBlock a = one.check(view);
+    const CheckedBlock timed = two.check_time(view);
+    CheckedBlock c = timed;
+    if (timed.verdict == BlockVerdict::kAccepted) {
+      bool within = true;
+      for (std::size_t i = 0; i < b.fx.size(); ++i) {
+        within = within && as_it_is(b.fx[i], cfg, 0) && as_it_is(b.fy[i], cfg, 1) &&
+                 as_it_is(b.fz[i], cfg, 2);
+      }
+      c = two.check_samples(view, timed, within);
+    }
+    ASSERT_EQ(a.verdict, c.verdict) << step.utime_us;
+    EXPECT_EQ(a.first_sample, c.first_sample) << step.utime_us;
+    EXPECT_EQ(a.gap_samples, c.gap_samples) << step.utime_us;
+    EXPECT_EQ(a.nonfinite_samples, c.nonfinite_samples) << step.utime_us;
+    EXPECT_EQ(a.saturated_samples, c.saturated_samples) << step.utime_us;
+    EXPECT_EQ(a.problem, c.problem) << step.utime_us;
+    ASSERT_EQ(a.fx_N.size(), c.fx_N.size());
+    for (std::size_t i = 0; i < a.fx_N.size(); ++i) {
+      EXPECT_EQ(a.flags[i], c.flags[i]) << step.utime_us << " " << i;
+      for (const auto& [x, y] : {std::pair{a.fx_N[i], c.fx_N[i]}, std::pair{a.fy_N[i], c.fy_N[i]},
+                                 std::pair{a.fz_N[i], c.fz_N[i]}}) {
+        EXPECT_TRUE(x == y || (std::isnan(x) && std::isnan(y))) << step.utime_us << " " << i;
+      }
+    }
+    const InputCounters& p = one.counters();
+    const InputCounters& q = two.counters();
+    EXPECT_EQ(p.samples_in, q.samples_in);
+    EXPECT_EQ(p.samples_accepted, q.samples_accepted);
+    EXPECT_EQ(p.samples_dropped, q.samples_dropped);
+    EXPECT_EQ(p.samples_flagged, q.samples_flagged);
+    EXPECT_EQ(p.nonfinite_samples, q.nonfinite_samples);
+    EXPECT_EQ(p.saturated_samples, q.saturated_samples);
+    EXPECT_EQ(p.gaps, q.gaps);
+    EXPECT_EQ(p.out_of_order_blocks, q.out_of_order_blocks);
+    EXPECT_EQ(p.blocks_rejected, q.blocks_rejected);
+    EXPECT_EQ(one.next_sample(), two.next_sample());
+  }
+  EXPECT_EQ(one.counters().blocks_rejected, 2);  // both out of order
+  EXPECT_EQ(one.counters().gaps, 1);
+  EXPECT_EQ(one.counters().nonfinite_samples, 2);
+  EXPECT_EQ(one.counters().saturated_samples, 2);
 }
 
 TEST(InputCheck, GapsAreCountedAsDroppedSamplesAndKeepTime) {

@@ -959,6 +959,82 @@ TEST(Pipeline, MeasuredRmsIsTheResultantsInNewtons) {
   EXPECT_NEAR(std::sqrt(rms / m), truth, 0.01 * truth);
 }
 
+// Issue 10: at 333.3 kHz a block going on from the last one has its samples checked as the
+// grid's filter reads them (Conditioner::filter_checked), not in a pass of their own before.
+// The two ways give the same run, bit for bit — revolutions, events, counters — on a cut with
+// bad samples of every kind (NaN, infinite, implausible, saturated; at a block's first sample,
+// its last, within it) and a lost block (a gap: the block after it goes the input check's way).
+TEST(Pipeline, SamplesCheckedInTheFilterGiveWhatTheInputCheckGives) {
+  sim::Scenario s = cut_at_50khz(true);
+  s.sample_rate_hz = 333300.0;
+  s.duration_s = 0.6;
+  Recording r = record(s);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::array<std::pair<std::size_t, double>, 6> bad = {
+      std::pair{std::size_t{99 * 333}, nan},       // a block's first sample, fx
+      std::pair{std::size_t{120 * 333 - 1}, inf},  // a block's last, fy below
+      std::pair{std::size_t{150 * 333 + 100}, -2e6},
+      std::pair{std::size_t{180 * 333 + 7}, 1500.0},  // saturated, kept
+      std::pair{std::size_t{181 * 333 + 8}, -1500.0},
+      std::pair{std::size_t{400 * 333 + 200}, nan}};
+  for (std::size_t k = 0; k < bad.size(); ++k) {
+    std::vector<double>& channel = k % 3 == 0 ? r.fx : k % 3 == 1 ? r.fy : r.fz;
+    channel[bad[k].first] = bad[k].second;
+  }
+  MonitorConfig c = monitor_for(s);
+  c.saturation_N = {1000.0, 1000.0, 1000.0};
+  Collector in_filter, apart;
+  Pipeline p(c, in_filter);
+  Pipeline q(c, apart);
+  q.check_samples_in_filter(false);
+  const auto lose_one = [](std::int64_t seq, SampleBlock&) { return seq != 300; };
+  replay(p, r, 333, lose_one);
+  replay(q, r, 333, lose_one);
+  ASSERT_GT(in_filter.revolutions.size(), 200u);
+  ASSERT_EQ(in_filter.revolutions.size(), apart.revolutions.size());
+  for (std::size_t i = 0; i < apart.revolutions.size(); ++i) {
+    const RevolutionRecord& a = in_filter.revolutions[i];
+    const RevolutionRecord& b = apart.revolutions[i];
+    ASSERT_EQ(a.revolution, b.revolution);
+    EXPECT_EQ(a.utime_us, b.utime_us) << a.revolution;
+    EXPECT_EQ(a.spindle_rpm, b.spindle_rpm) << a.revolution;
+    EXPECT_EQ(a.measured.valid, b.measured.valid) << a.revolution;
+    EXPECT_EQ(a.measured.alpha_deg, b.measured.alpha_deg) << a.revolution;
+    EXPECT_EQ(a.measured.delta_fy_N, b.measured.delta_fy_N) << a.revolution;
+    EXPECT_EQ(a.measured.event_sample, b.measured.event_sample) << a.revolution;
+    EXPECT_EQ(a.measured_rms_N, b.measured_rms_N) << a.revolution;
+    EXPECT_EQ(a.model_valid, b.model_valid) << a.revolution;
+    EXPECT_EQ(a.residual_rms_N, b.residual_rms_N) << a.revolution;
+  }
+  ASSERT_EQ(in_filter.events.size(), apart.events.size());
+  for (std::size_t i = 0; i < apart.events.size(); ++i) {
+    const PipelineEvent& a = in_filter.events[i];
+    const PipelineEvent& b = apart.events[i];
+    EXPECT_EQ(a.kind, b.kind) << i;
+    EXPECT_EQ(a.sample, b.sample) << i;
+    EXPECT_EQ(a.count, b.count) << i;
+    EXPECT_EQ(a.value, b.value) << i;
+    EXPECT_EQ(a.detail, b.detail) << i;
+  }
+  EXPECT_EQ(in_filter.spindle.size(), apart.spindle.size());
+  EXPECT_EQ(in_filter.alerts.size(), apart.alerts.size());
+  const InputCounters& a = p.status().input;
+  const InputCounters& b = q.status().input;
+  EXPECT_EQ(a.samples_accepted, b.samples_accepted);
+  EXPECT_EQ(a.samples_dropped, b.samples_dropped);
+  EXPECT_EQ(a.gaps, 1);
+  EXPECT_EQ(b.gaps, 1);
+  EXPECT_EQ(a.nonfinite_samples, 4);  // NaN, inf, implausible, NaN
+  EXPECT_EQ(b.nonfinite_samples, 4);
+  EXPECT_EQ(a.saturated_samples, 2);
+  EXPECT_EQ(b.saturated_samples, 2);
+  EXPECT_EQ(in_filter.count(PipelineEventKind::kNonFinite), 4);
+  EXPECT_EQ(in_filter.count(PipelineEventKind::kSaturated), 2);
+  std::printf("%zu revolutions, %zu events the same either way\n", apart.revolutions.size(),
+              apart.events.size());
+}
+
 // Bad input is counted and reported; the pipeline keeps measuring.
 TEST(Pipeline, BadSamplesGapsAndBadBlocksAreCountedAndSurvived) {
   const sim::Scenario s = cut_at_50khz(true);

@@ -15,6 +15,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/signal/butterworth_lowpass.hpp"
@@ -62,26 +63,54 @@ std::array<std::vector<double>, 3> sample_by_sample(const ButterworthDesign& d,
   return y;
 }
 
+/// A grid filter settled on the cut's first sample, and where it writes (NaN where it does not).
+struct GridRun {
+  GridRun(const ButterworthDesign& d, int stride, const std::array<std::vector<double>, 3>& x)
+      : filter(d, stride, kSign) {
+    filter.settle(kFirst, {x[0][0], x[1][0], x[2][0]});
+    for (auto& c : y) {
+      c.assign(kSamples, std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  /// The output from sample `from` on.
+  std::array<double*, 3> out(std::size_t from) {
+    return {y[0].data() + from, y[1].data() + from, y[2].data() + from};
+  }
+  GridLowPass filter;
+  std::array<std::vector<double>, 3> y;
+};
+
+/// The input from sample `from` on.
+std::array<const double*, 3> in(const std::array<std::vector<double>, 3>& x, std::size_t from) {
+  return {x[0].data() + from, x[1].data() + from, x[2].data() + from};
+}
+
 /// The grid filter over the cut in blocks of `block` samples (NaN where it writes nothing).
 std::array<std::vector<double>, 3> on_grid(
     const ButterworthDesign& d, int stride, const std::array<std::vector<double>, 3>& x,
     std::size_t block, GridLowPass::Kernel kernel = GridLowPass::Kernel::kAuto) {
-  GridLowPass g(d, stride, kSign);
-  g.settle(kFirst, {x[0][0], x[1][0], x[2][0]});
-  std::array<std::vector<double>, 3> y;
-  for (auto& c : y) {
-    c.assign(kSamples, std::numeric_limits<double>::quiet_NaN());
-  }
+  GridRun run(d, stride, x);
   for (std::size_t from = 0; from < kSamples; from += block) {
-    const std::size_t n = std::min(block, kSamples - from);
-    g.process({x[0].data() + from, x[1].data() + from, x[2].data() + from},
-              {y[0].data() + from, y[1].data() + from, y[2].data() + from}, n, kernel);
+    run.filter.process(in(x, from), run.out(from), std::min(block, kSamples - from), kernel);
   }
-  return y;
+  return run.y;
 }
 
 bool on_the_grid(std::size_t i, int stride) {
   return (kFirst + static_cast<std::int64_t>(i)) % stride == 0;
+}
+
+/// y and `whole` the same on every grid sample, bit for bit.
+void expect_same_on_grid(const std::array<std::vector<double>, 3>& y,
+                         const std::array<std::vector<double>, 3>& whole, int stride,
+                         const std::string& what) {
+  for (std::size_t i = 0; i < kSamples; ++i) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (on_the_grid(i, stride)) {
+        ASSERT_EQ(y[a][i], whole[a][i]) << what << " channel " << a << " at " << i;
+      }
+    }
+  }
 }
 
 TEST(GridLowPass, GivesTheFiltersValuesOnEveryGridSample) {
@@ -116,18 +145,102 @@ TEST(GridLowPass, IsTheSameWhateverTheBlocksAndTheKernel) {
     const auto whole = on_grid(d, stride, x, kSamples);
     for (const std::size_t block : {1U, 2U, 5U, 333U}) {
       for (const auto kernel : {GridLowPass::Kernel::kAuto, GridLowPass::Kernel::kScalar}) {
-        const auto y = on_grid(d, stride, x, block, kernel);
-        for (std::size_t i = 0; i < kSamples; ++i) {
-          for (std::size_t a = 0; a < 3; ++a) {
-            if (on_the_grid(i, stride)) {
-              ASSERT_EQ(y[a][i], whole[a][i])
-                  << "stride " << stride << " block " << block << " channel " << a << " at " << i;
+        expect_same_on_grid(on_grid(d, stride, x, block, kernel), whole, stride,
+                            "stride " + std::to_string(stride) + " block " + std::to_string(block));
+      }
+    }
+  }
+}
+
+/// Each channel's largest |x| over the cut: a limit every input is within (equal counts).
+std::array<double, 3> largest(const std::array<std::vector<double>, 3>& x) {
+  std::array<double, 3> m{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (const double v : x[a]) {
+      m[a] = std::max(m[a], std::fabs(v));
+    }
+  }
+  return m;
+}
+
+// process_checked() on inputs within their limits (the largest reaching it exactly) filters
+// as process() does, bit for bit, whatever the blocks and the kernel.
+TEST(GridLowPass, ProcessCheckedIsProcessWhileEveryInputIsWithin) {
+  const auto x = cut();
+  const std::array<double, 3> limit = largest(x);
+  const ButterworthDesign d = ButterworthDesign::lowpass(kRate_hz, 3300.0, 4);
+  for (const int stride : {1, 2, 3, 5, 6, 8, 9, kMaxGridStride}) {
+    const auto whole = on_grid(d, stride, x, kSamples);
+    for (const std::size_t block : {1U, 5U, 333U, 4096U}) {
+      for (const auto kernel : {GridLowPass::Kernel::kAuto, GridLowPass::Kernel::kScalar}) {
+        GridRun run(d, stride, x);
+        for (std::size_t from = 0; from < kSamples; from += block) {
+          ASSERT_TRUE(run.filter.process_checked(in(x, from), run.out(from),
+                                                 std::min(block, kSamples - from), limit, kernel))
+              << "stride " << stride << " block " << block << " from " << from;
+        }
+        expect_same_on_grid(run.y, whole, stride,
+                            "stride " + std::to_string(stride) + " block " + std::to_string(block));
+      }
+    }
+  }
+}
+
+// One input not within its channel's limit — a NaN, an infinity, the next double above the
+// limit either side, or another channel's largest value where it exceeds this channel's —
+// anywhere in a block (a stride's first input or a later one, the inputs a block leaves for the
+// next stride, those that complete the last block's): process_checked() says so and leaves the
+// filter as it was, so that the block filtered again (as the monitor does once the input check
+// has replaced the sample) gives every later value as if the refused call had not been made.
+TEST(GridLowPass, ProcessCheckedRefusesAnInputBeyondItsLimitAndLeavesTheFilterAsItWas) {
+  const auto x = cut();
+  const std::array<double, 3> limit = largest(x);  // ~45, ~27 and ~12 N
+  const ButterworthDesign d = ButterworthDesign::lowpass(kRate_hz, 3300.0, 4);
+  const double inf = std::numeric_limits<double>::infinity();
+  int refused = 0;
+  for (const int stride : {3, 6, 9}) {
+    const auto whole = on_grid(d, stride, x, kSamples);
+    for (const std::size_t block : {5U, 333U}) {
+      const std::size_t tampered_from = 7 * block;  // the eighth block
+      for (const std::size_t at : {std::size_t{0}, std::size_t{1}, block / 2, block - 1}) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          const std::array<double, 5> bad = {std::numeric_limits<double>::quiet_NaN(), inf, -inf,
+                                             std::nextafter(limit[a], inf),
+                                             -std::nextafter(limit[a], inf)};
+          std::vector<double> values(bad.begin(), bad.end());
+          if (a > 0) {
+            values.push_back(limit[0]);  // within channel 0's limit, beyond this one's
+          }
+          for (const double v : values) {
+            for (const auto kernel : {GridLowPass::Kernel::kAuto, GridLowPass::Kernel::kScalar}) {
+              GridRun run(d, stride, x);
+              for (std::size_t from = 0; from < kSamples; from += block) {
+                const std::size_t n = std::min(block, kSamples - from);
+                if (from == tampered_from) {
+                  std::array<std::vector<double>, 3> t;
+                  for (std::size_t c = 0; c < 3; ++c) {
+                    t[c].assign(in(x, from)[c], in(x, from)[c] + n);
+                  }
+                  t[a][at] = v;
+                  ASSERT_FALSE(run.filter.process_checked({t[0].data(), t[1].data(), t[2].data()},
+                                                          run.out(from), n, limit, kernel))
+                      << "stride " << stride << " block " << block << " at " << at << " channel "
+                      << a << " value " << v;
+                  ++refused;
+                }
+                ASSERT_TRUE(
+                    run.filter.process_checked(in(x, from), run.out(from), n, limit, kernel));
+              }
+              expect_same_on_grid(run.y, whole, stride,
+                                  "stride " + std::to_string(stride) + " block " +
+                                      std::to_string(block) + " refused at " + std::to_string(at));
             }
           }
         }
       }
     }
   }
+  EXPECT_EQ(refused, 3 * 2 * 4 * (5 + 6 + 6) * 2);
 }
 
 TEST(GridLowPass, HoldsAConstantInputWithoutATransient) {
