@@ -39,8 +39,10 @@ double kth_smallest(std::span<double> values, std::size_t k, std::span<double> s
     if (split == 0) {
       // Nothing below the pivot (the smallest of the range): its copies go left.
       split = partition(v, other, n, [pivot](double x) { return x <= pivot; });
-      if (k < split) {
-        return pivot;  // among the copies of the smallest value
+      if (k < split || split == 0) {
+        // Among the copies of the smallest value; or (none, the pivot itself not ≤ itself) a
+        // NaN, outside the contract: it is the answer rather than a range that never shrinks.
+        return pivot;
       }
     }
     std::swap(v, other);  // the partitioned range is in the other buffer now

@@ -12,7 +12,8 @@
 namespace millwatch::signal {
 
 /// The value that would stand at index k (< values.size()) if `values` were sorted ascending.
-/// `values` and `scratch` (at least as long) are reordered.
+/// `values` and `scratch` (at least as long) are reordered. With a NaN among them (outside the
+/// contract) it still returns, some value of the set or a NaN.
 double kth_smallest(std::span<double> values, std::size_t k, std::span<double> scratch);
 
 }  // namespace millwatch::signal
