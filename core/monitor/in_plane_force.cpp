@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstddef>
 
+#include "core/monitor/input_check.hpp"
+
 namespace millwatch::monitor {
 
 void InPlaneForce::add(std::span<const double> x_N, std::span<const double> y_N) {
@@ -15,7 +17,7 @@ void InPlaneForce::add(std::span<const double> x_N, std::span<const double> y_N)
   const std::size_t n = std::min(x_N.size(), y_N.size());
   for (std::size_t k = 0; k < n; ++k) {
     const double r2 = x_N[k] * x_N[k] + y_N[k] * y_N[k];
-    if (std::isfinite(r2)) {
+    if (std::fabs(x_N[k]) <= kPlausibleForce_N && std::fabs(y_N[k]) <= kPlausibleForce_N) {
       sum_sq += r2;
       max_sq = std::max(max_sq, r2);
       ++samples;

@@ -1,7 +1,8 @@
 #pragma once
 // A record's in-plane force √(Fx² + Fy²) over all its samples, before any filter: what a record
-// holds even where no revolution can be measured (a campaign's first, light cuts). Samples whose
-// square is not finite (a NaN or an overflow) are left out and not counted.
+// holds even where no revolution can be measured (a campaign's first, light cuts). Samples the
+// input check would not take for a force — a NaN, an infinity, or beyond ±kPlausibleForce_N
+// (1e6 N, a corrupt value) on either axis — are left out and not counted.
 
 #include <cstdint>
 #include <optional>

@@ -32,6 +32,10 @@
 
 namespace millwatch::monitor {
 
+/// Largest |reading| a dynamometer can have measured, N: beyond it a value is corrupt, not a
+/// force (InputCheckConfig::plausible_N's default).
+inline constexpr double kPlausibleForce_N = 1e6;
+
 /// Largest |utime| a block may carry, µs: 2⁵³ µs ≈ 285 years either side of the epoch, where a
 /// utime still converts to and from double exactly. Beyond it a time is corrupt.
 inline constexpr std::int64_t kMaxAbsUtime_us = std::int64_t{1} << 53;
@@ -44,7 +48,7 @@ struct InputCheckConfig {
                                         std::numeric_limits<double>::infinity()};
   /// A reading beyond this is no force a dynamometer can have measured (a corrupt value):
   /// treated like a non-finite one.
-  double plausible_N = 1e6;
+  double plausible_N = kPlausibleForce_N;
   /// Timing mismatch tolerated before a block counts as a gap or out of order, in samples.
   double tolerance_samples = 0.5;
   std::size_t max_block_samples = 65536;
