@@ -324,11 +324,12 @@ bool Pipeline::process(const SampleBlock& block) {
           static_cast<std::int64_t>(block.fx_N.size()), 0.0, timed.problem, block.seq);
     return false;
   }
+  // The stream's first block (or the first since a restart) starts it anew.
+  const bool starts = timed.first_sample == 0 || last_sample_ < 0;
   // The usual block, the stream going on without a gap: its samples are tested as the filter
   // reads them (the block's first read, which a pass of its own would wait for); one that fails
   // goes the input check's way, every sample tested and replaced, and then through the filter.
-  const bool going_on = timed.gap_samples == 0 && timed.first_sample > 0 && last_sample_ >= 0;
-  const bool filtered = going_on && check_in_filter_ &&
+  const bool filtered = timed.gap_samples == 0 && !starts && check_in_filter_ &&
                         conditioner_.filter_checked(timed.first_sample, block.fx_N, block.fy_N,
                                                     block.fz_N, input_.sample_limits());
   const CheckedBlock c = input_.check_samples(block, timed, filtered);
@@ -343,7 +344,7 @@ bool Pipeline::process(const SampleBlock& block) {
     } else {
       restart_stream(c.first_sample);
     }
-  } else if (c.first_sample == 0 || last_sample_ < 0) {
+  } else if (starts) {
     restart_stream(c.first_sample);
   }
   const std::int64_t nonfinite = c.nonfinite_samples;
