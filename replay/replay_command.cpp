@@ -129,12 +129,14 @@ int replay_one(const ReplayOptions& o) {
   ProgressLine progress(o.progress, 2.0, 0.25);
   // The record's in-plane force, in the model's frame and before any filter.
   monitor::InPlaneForce in_plane;
+  std::int64_t samples_read = 0;
   while (!stop_requested()) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
       break;
     }
     const monitor::SampleBlock& block = *next;
+    samples_read += static_cast<std::int64_t>(block.fx_N.size());
     if (!have_first) {
       first_utime = block.utime_us;
       have_first = true;
@@ -202,6 +204,12 @@ int replay_one(const ReplayOptions& o) {
     std::printf("%s", summary_text(j).c_str());
   }
   std::fflush(stdout);
+  if (samples_read == 0 && source->bad_records() == 0 && !stop_requested()) {
+    // Not a cut without cutting either: nothing to measure at all (a header alone, a log
+    // without the raw channel).
+    spdlog::error("{}: no samples to replay: {}", input.string(), source->what_it_held());
+    return 2;
+  }
   if (in_plane.samples() == 0 && source->bad_records() > 0) {
     // Not a cut without cutting: a file this reader could not read (a column map past its
     // columns, a trailing delimiter on every row).

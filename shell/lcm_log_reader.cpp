@@ -61,6 +61,11 @@ void LcmLogReader::open(const std::string& name) {
 std::optional<monitor::SampleBlock> LcmLogReader::next() {
   while (read_event()) {
     ++events_;
+    if (const auto it = channel_events_.find(event_channel_); it != channel_events_.end()) {
+      ++it->second;
+    } else if (channel_events_.size() < kMaxChannelsTallied) {
+      channel_events_.emplace(event_channel_, 1);
+    }
     if (event_channel_ != channel_) {
       continue;
     }

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <istream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -47,6 +48,13 @@ class LcmLogReader {
     return size_bytes_ > 0 ? static_cast<double>(position_) / static_cast<double>(size_bytes_)
                            : 1.0;
   }
+  /// The events read so far on each channel (this reader's and the others', at most
+  /// kMaxChannelsTallied names; events on names past them are not tallied): what a log that
+  /// gave no block holds.
+  [[nodiscard]] const std::map<std::string, std::int64_t>& channel_events() const {
+    return channel_events_;
+  }
+  static constexpr std::size_t kMaxChannelsTallied = 32;
   /// Sample rate of the first block (0 before it).
   [[nodiscard]] double first_sample_rate_hz() const { return first_rate_hz_; }
 
@@ -78,6 +86,7 @@ class LcmLogReader {
   force_block_t message_;
   std::int64_t events_ = 0;
   std::int64_t bad_events_ = 0;
+  std::map<std::string, std::int64_t> channel_events_;
   double first_rate_hz_ = 0.0;
 };
 

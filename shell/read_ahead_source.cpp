@@ -91,6 +91,7 @@ class ReadAheadSource : public RecordingSource {
     }
     if (s.end) {
       ended_ = true;
+      held_ = s.held;
       return std::nullopt;
     }
     monitor::SampleBlock b;
@@ -104,6 +105,7 @@ class ReadAheadSource : public RecordingSource {
   }
   [[nodiscard]] std::int64_t bad_records() const override { return bad_records_; }
   [[nodiscard]] double progress() const override { return progress_; }
+  [[nodiscard]] std::string what_it_held() const override { return held_; }
 
  private:
   /// A block read ahead, with what the reader reported while reading it.
@@ -116,6 +118,7 @@ class ReadAheadSource : public RecordingSource {
     std::int64_t bad_records = 0;
     double progress = 0.0;
     bool end = false;  // no block: the recording ends here
+    std::string held;  // at the end: the source's what_it_held()
     std::exception_ptr error;
   };
   /// Up to 256 blocks ahead, and at most ~256 Ki samples (6 MiB; --block 65536: four blocks):
@@ -157,6 +160,7 @@ class ReadAheadSource : public RecordingSource {
           s.sample_rate_hz = b->sample_rate_hz;
         } else {
           s.end = true;
+          s.held = source_->what_it_held();
         }
       } catch (...) {
         s.error = std::current_exception();
@@ -184,6 +188,7 @@ class ReadAheadSource : public RecordingSource {
   bool ended_ = false;
   std::int64_t bad_records_ = 0;
   double progress_ = 0.0;
+  std::string held_;  // the source's what_it_held(), once it ended
   // Shared, under mutex_: slots [head_, head_ + filled_) are read (the first one held while
   // holding_), the rest free.
   std::mutex mutex_;

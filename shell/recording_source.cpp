@@ -81,9 +81,16 @@ class TextSource : public RecordingSource {
   }
   std::optional<monitor::SampleBlock> next(std::size_t max_samples) override {
     const monitor::SampleBlock b = reader_->next(max_samples);
+    rows_ += static_cast<std::int64_t>(b.fx_N.size());
     return b.fx_N.empty() ? std::nullopt : std::optional(b);
   }
   [[nodiscard]] std::int64_t bad_records() const override { return reader_->bad_lines(); }
+  [[nodiscard]] std::string what_it_held() const override {
+    if (rows_ + bad_records() == 0) {
+      return "no rows after its header";
+    }
+    return std::to_string(rows_) + " rows read, " + std::to_string(bad_records()) + " bad";
+  }
   [[nodiscard]] double progress() const override {
     const auto at = in_.tellg();
     return at < 0 || size_bytes_ <= 0 ? 1.0 : static_cast<double>(at) / size_bytes_;
@@ -93,6 +100,7 @@ class TextSource : public RecordingSource {
   mutable std::ifstream in_;  // tellg() is not const
   double size_bytes_ = 0.0;
   std::unique_ptr<CsvCutReader> reader_;
+  std::int64_t rows_ = 0;  // samples read
 };
 
 class MatSource : public RecordingSource {
@@ -113,6 +121,13 @@ class MatSource : public RecordingSource {
   }
   [[nodiscard]] std::int64_t bad_records() const override { return reader_.bad_samples(); }
   [[nodiscard]] double progress() const override { return reader_.progress(); }
+  [[nodiscard]] std::string what_it_held() const override {
+    if (reader_.samples() == 0) {
+      return "no samples in its variables";
+    }
+    return std::to_string(reader_.samples()) + " samples, " +
+           std::to_string(reader_.bad_samples()) + " bad";
+  }
 
  private:
   MatCutReader reader_;
@@ -121,7 +136,7 @@ class MatSource : public RecordingSource {
 class LogSource : public RecordingSource {
  public:
   LogSource(const fs::path& path, const RecordingOptions& o)
-      : reader_(path, o.lcm_channel, o.on_bad) {
+      : reader_(path, o.lcm_channel, o.on_bad), channel_(o.lcm_channel) {
     format_ = RecordingFormat::kLcmLog;
     first_ = reader_.next();  // to learn the rate
     rate_hz_ = reader_.first_sample_rate_hz();
@@ -135,9 +150,30 @@ class LogSource : public RecordingSource {
   }
   [[nodiscard]] std::int64_t bad_records() const override { return reader_.bad_events(); }
   [[nodiscard]] double progress() const override { return reader_.progress(); }
+  [[nodiscard]] std::string what_it_held() const override {
+    const auto& tally = reader_.channel_events();
+    if (tally.empty()) {
+      return "the log holds no event";
+    }
+    if (const auto own = tally.find(channel_); own != tally.end()) {
+      return "its " + events(own->second) + " on " + channel_ + " hold no samples";
+    }
+    std::string held;
+    for (const auto& [name, count] : tally) {
+      held += (held.empty() ? "" : ", ") + name + " (" + events(count) + ")";
+    }
+    if (tally.size() == LcmLogReader::kMaxChannelsTallied) {
+      held += ", ...";
+    }
+    return "no event on channel " + channel_ + " (--channel); the log holds " + held;
+  }
 
  private:
+  static std::string events(std::int64_t n) {
+    return std::to_string(n) + (n == 1 ? " event" : " events");
+  }
   LcmLogReader reader_;
+  std::string channel_;
   std::optional<monitor::SampleBlock> first_;
 };
 

@@ -47,6 +47,10 @@ class RecordingSource {
   [[nodiscard]] virtual std::int64_t bad_records() const = 0;
   /// Fraction of the recording read so far, [0, 1].
   [[nodiscard]] virtual double progress() const = 0;
+  /// What the recording held, for a user told that it gave no sample: "no rows after its
+  /// header", "no event on channel X; the log holds A (12 events)". Asked once next() has
+  /// said the recording ended.
+  [[nodiscard]] virtual std::string what_it_held() const = 0;
 
   [[nodiscard]] RecordingFormat format() const { return format_; }
   /// "DynoWare export (Time, Fx, Fy, Fz; 10000 Hz stated)", for the log.

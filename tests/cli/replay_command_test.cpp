@@ -185,6 +185,22 @@ TEST(ReplayCommand, AFileWithNoReadableRowFails) {
       << r.log;
 }
 
+// A record with nothing to measure in it is a failed replay that says what the file held: a CSV
+// of its header alone (it had passed with exit code 0 and a summary of 0 samples; in a campaign
+// table its row said "ok").
+TEST(ReplayCommand, ARecordWithNoSamplesFailsAndSaysWhatItHeld) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  std::string header;
+  std::getline(std::ifstream(csv), header);
+  std::ofstream(csv) << header << '\n';
+  const ReplayRun r = replay(csv.string(), dir / "summary.json");
+  EXPECT_EQ(r.exit_code, 2) << r.log;
+  EXPECT_NE(r.log.find("cut.csv: no samples to replay: no rows after its header"),
+            std::string::npos)
+      << r.log;
+}
+
 // A damaged time column: each bad time is reported by line and what is wrong with it, and its
 // row skipped like any bad row (a one-sample gap); the rest of the cut is measured. (A time of
 // 1e300 used to reach the pipeline as utime −2⁶³ and overflow in InputCheck under UBSan.)
@@ -389,6 +405,22 @@ TEST(ReplayCommand, ReplaysAnLcmLogAndSurvivesCorruptionAndTruncation) {
   EXPECT_NE(bad.log.find("log ends inside an event"), std::string::npos) << bad.log;
   EXPECT_GT(bad.summary["revolutions"].get<int>(), 100);
   EXPECT_NEAR(bad.summary["spindle_rpm"].get<double>(), 25252.0, 0.0005 * 25252.0);
+}
+
+// A log whose events are all on other channels than --channel's (a mistyped channel, a log of
+// results alone) is a failed replay naming the channels it does hold; it had read as an empty
+// record, exit code 0.
+TEST(ReplayCommand, ALogWithoutTheRawChannelFailsAndNamesTheChannelsItHolds) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path log = write_log(dir, 0.2);
+  const ReplayRun r = replay(
+      log.string() + " --config " + monitor_config(dir).string() + " --channel FORCE_RAW_TYPO",
+      dir / "summary.json");
+  EXPECT_EQ(r.exit_code, 2) << r.log;
+  EXPECT_NE(r.log.find("raw.lcmlog: no samples to replay: no event on channel FORCE_RAW_TYPO "
+                       "(--channel); the log holds MILLWATCH_FORCE_RAW (10 events)"),
+            std::string::npos)
+      << r.log;
 }
 
 // Well-framed events whose force_block_t is malformed (a sample count that wraps lcm-gen's size

@@ -46,6 +46,9 @@ class ScriptedSource : public RecordingSource {
   }
   [[nodiscard]] std::int64_t bad_records() const override { return bad_; }
   [[nodiscard]] double progress() const override { return progress_; }
+  [[nodiscard]] std::string what_it_held() const override {
+    return std::to_string(blocks_) + " blocks in " + std::to_string(next_) + " calls";
+  }
 
  private:
   void bad(std::int64_t where, const std::string& problem) {
@@ -68,7 +71,8 @@ std::vector<std::string> drain(RecordingSource& source, std::vector<std::string>
     for (int k = 0; k < max_blocks; ++k) {
       const auto b = source.next(max_samples);
       if (!b) {
-        log.push_back("end, " + std::to_string(source.bad_records()) + " bad");
+        log.push_back("end, " + std::to_string(source.bad_records()) + " bad; " +
+                      source.what_it_held());
         break;
       }
       const double sum = std::accumulate(b->fx_N.begin(), b->fx_N.end(), 0.0) +
@@ -113,7 +117,7 @@ TEST(ReadAheadSource, GivesTheSameBlocksAndReportsInTheSameOrder) {
   const std::vector<std::string> expected = in_line(100, -1, 64);
   ASSERT_EQ(expected.size(), 1u + 34u + 100u + 1u + 1u);  // opening, every 3rd, blocks, end
   EXPECT_EQ(expected.front(), "bad -1: while opening");
-  EXPECT_EQ(expected.back(), "end, 36 bad");
+  EXPECT_EQ(expected.back(), "end, 36 bad; 100 blocks in 101 calls");
   EXPECT_EQ(ahead(100, -1, 64), expected);
   EXPECT_EQ(ahead(0, -1, 1), in_line(0, -1, 1));
   EXPECT_EQ(ahead(30, -1, 40000), in_line(30, -1, 40000));  // large blocks: two slots
@@ -170,7 +174,7 @@ TEST(ReadAheadSource, ReadsAFileAsOpenRecordingDoes) {
   const std::vector<std::string> expected = run(false);
   ASSERT_GT(expected.size(), 50u);
   EXPECT_EQ(expected[0].substr(0, 8), "bad 7: a");
-  EXPECT_EQ(expected.back(), "end, 8 bad");
+  EXPECT_EQ(expected.back(), "end, 8 bad; 4992 rows read, 8 bad");
   EXPECT_EQ(run(true), expected);
 }
 
