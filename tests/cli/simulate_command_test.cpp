@@ -200,6 +200,33 @@ TEST(SimulateCommand, ANumberOptionThatIsNoneSaysSoPlainly) {
   }
 }
 
+// The other commands' numbers the same way, before anything runs: publish --start-utime nan
+// had published every block at utime −2⁶³ (an unchecked cast), diagnose --band −5 or nan had
+// been taken for the default band without a word.
+TEST(SimulateCommand, OtherCommandsRefuseNumbersOutsideWhatTheyMean) {
+  const std::string scenario = (test::source_dir() / "config" / "demo.json").string();
+  const fs::path log = test::fresh_temp_dir() / "never.lcmlog";
+  const std::string publish = test::millwatch_cli() + " publish " + scenario +
+                              " --duration 0.01 --speed 0 --url 'file://" + log.string() +
+                              "?mode=w' ";
+  const std::string diagnose = test::millwatch_cli() + " diagnose " + scenario + " --report " +
+                               (log.parent_path() / "report").string() + " ";
+  const std::pair<std::string, const char*> cases[] = {
+      {publish + "--start-utime nan", "--start-utime: \"nan\" is not a number"},
+      {publish + "--start-utime -1", "--start-utime: -1 is not a non-negative number"},
+      {publish + "--start-utime 2e10", "--start-utime: 2e10 is beyond 1e+10"},
+      {diagnose + "--band -5", "--band: -5 is not a positive number"},
+      {diagnose + "--band nan", "--band: \"nan\" is not a number"},
+      {diagnose + "--from-s -1", "--from-s: -1 is not a non-negative number"}};
+  for (const auto& [command, said] : cases) {
+    const auto r = test::run_command(command + " 2>&1");
+    EXPECT_NE(r.exit_code, 0) << command;
+    EXPECT_NE(r.output.find(said), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(log));
+  EXPECT_FALSE(fs::exists(log.parent_path() / "report"));
+}
+
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
   const auto r = test::run_command(test::millwatch_cli() + " simulate " +
                                    (test::source_dir() / "config" / "demo.json").string() +
