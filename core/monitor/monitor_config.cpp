@@ -108,18 +108,47 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
 }
 
 void validate(const MonitorConfig& c, const std::string& path) {
+  using config::format_number;
+  // Said with where a value that is not in the file comes from: a default that the file's
+  // sample rate or speed does not suit is not the user's typing.
+  const auto set_or_default = [](double value, double fallback) {
+    return value == fallback ? " (the default)" : "";
+  };
+  const MonitorConfig defaults;
   if (c.filter_cutoff_hz >= 0.45 * c.sample_rate_hz) {
     config::fail(join(path, "filter.cutoff_hz"),
-                 "value " + std::to_string(c.filter_cutoff_hz) +
-                     " Hz must stay below 0.45 x the sample rate (" +
-                     std::to_string(0.45 * c.sample_rate_hz) + " Hz)");
+                 "value " + format_number(c.filter_cutoff_hz) + " Hz" +
+                     set_or_default(c.filter_cutoff_hz, defaults.filter_cutoff_hz) +
+                     " must stay below 0.45 x the sample rate (" +
+                     format_number(0.45 * c.sample_rate_hz) + " Hz)");
   }
   const double tooth_hz = c.model.process.spindle_rpm / 60.0 * c.model.tool.flutes;
   if (c.filter_cutoff_hz < 1.5 * tooth_hz) {
     config::fail(join(path, "filter.cutoff_hz"),
-                 "value " + std::to_string(c.filter_cutoff_hz) +
-                     " Hz must pass at least 1.5 x the tooth-passing frequency (" +
-                     std::to_string(1.5 * tooth_hz) + " Hz)");
+                 "value " + format_number(c.filter_cutoff_hz) + " Hz" +
+                     set_or_default(c.filter_cutoff_hz, defaults.filter_cutoff_hz) +
+                     " must pass at least 1.5 x the tooth-passing frequency (" +
+                     format_number(1.5 * tooth_hz) + " Hz at model.process.spindle_rpm " +
+                     format_number(c.model.process.spindle_rpm) + ")");
+  }
+  // The spindle tracker's window as the pipeline sets it up (signal::validate() says the same
+  // there, without the file and the speed).
+  signal::SpindleTrackerConfig tracker = c.spindle;
+  tracker.commanded_rpm = c.model.process.spindle_rpm;
+  const double window_s = signal::tracker_timing(tracker).window_s;
+  const double revolutions = window_s * tracker.commanded_rpm / 60.0;
+  if (tracker.commanded_rpm > 0.0 && revolutions < signal::kMinWindowRevolutions) {
+    config::fail(
+        join(path, "spindle.window_s"),
+        (c.spindle.window_s > 0.0 ? "value " + format_number(window_s) + " s"
+                                  : "automatic, " + format_number(window_s) + " s,") +
+            " holds " + format_number(std::round(revolutions * 100.0) / 100.0) +
+            " revolutions at model.process.spindle_rpm " + format_number(tracker.commanded_rpm) +
+            ": at least " + format_number(signal::kMinWindowRevolutions) + " needed (" +
+            format_number(
+                std::ceil(signal::kMinWindowRevolutions * 60.0 / tracker.commanded_rpm * 1e4) /
+                1e4) +
+            " s or more)");
   }
   if (c.model.tool.flutes > kMaxFlutes) {
     config::fail(join(path, "model.tool.flutes"), "at most " + std::to_string(kMaxFlutes));

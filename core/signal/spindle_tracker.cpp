@@ -181,9 +181,10 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             " Hz is too low for a spindle at up to " +
                                             std::to_string(f_max) + " Hz");
   }
-  if (tracker_timing(c).window_s * c.commanded_rpm / 60.0 < 5.0) {
-    config::fail(at + "window_s",
-                 "value " + std::to_string(c.window_s) + " s must hold at least 5 revolutions");
+  if (tracker_timing(c).window_s * c.commanded_rpm / 60.0 < kMinWindowRevolutions) {
+    config::fail(at + "window_s", "value " + config::format_number(tracker_timing(c).window_s) +
+                                      " s must hold at least 5 revolutions at " +
+                                      config::format_number(c.commanded_rpm) + " rpm");
   }
 }
 

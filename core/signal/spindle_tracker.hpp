@@ -76,6 +76,9 @@ struct SpindleTrackerConfig {
 };
 
 /// The window and hop a configuration resolves to (automatic values filled in), in seconds.
+/// The fewest revolutions a tracker window may hold (validate()).
+inline constexpr double kMinWindowRevolutions = 5.0;
+
 struct TrackerTiming {
   double window_s = 0.0;
   double hop_s = 0.0;

@@ -88,5 +88,32 @@ TEST(MonitorConfig, CpuBudgetIsAFractionOfOneCore) {
             std::string::npos);
 }
 
+// A value that the rest of the configuration does not suit is named with what it does not suit
+// and where it came from: the spindle window checked against the speed when the configuration
+// is read (it had been found only when the pipeline started, "spindle.window_s: value 0.050000 s
+// must hold at least 5 revolutions", without the file or the speed), a default cut-off against
+// a low sample rate.
+TEST(MonitorConfig, CrossFieldErrorsSayWhatTheValueDoesNotSuit) {
+  const auto at_rpm = [](double rpm, double window_s) {
+    return error_of(
+        {{"model", {{"process", {{"spindle_rpm", rpm}}}}}, {"spindle", {{"window_s", window_s}}}});
+  };
+  EXPECT_EQ(at_rpm(5000.0, 0.05),
+            "config.spindle.window_s: value 0.05 s holds 4.17 revolutions at "
+            "model.process.spindle_rpm 5000: at least 5 needed (0.06 s or more)");
+  EXPECT_EQ(at_rpm(6000.0, 0.05), "");  // 5 revolutions exactly
+  // The automatic window: ten revolutions, at most a quarter second.
+  EXPECT_EQ(at_rpm(1000.0, 0.0),
+            "config.spindle.window_s: automatic, 0.25 s, holds 4.17 revolutions at "
+            "model.process.spindle_rpm 1000: at least 5 needed (0.3 s or more)");
+
+  EXPECT_EQ(error_of({{"sample_rate_hz", 1000.0}}),
+            "config.filter.cutoff_hz: value 3300 Hz (the default) must stay below 0.45 x the "
+            "sample rate (450 Hz)");
+  EXPECT_EQ(error_of({{"sample_rate_hz", 1000.0}, {"filter", {{"cutoff_hz", 3000.0}}}}),
+            "config.filter.cutoff_hz: value 3000 Hz must stay below 0.45 x the sample rate "
+            "(450 Hz)");
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
