@@ -14,6 +14,7 @@
 #include "core/config/json_reader.hpp"
 #include "core/model/flute_positions.hpp"
 #include "core/model/steady_state.hpp"
+#include "core/monitor/monitor_config.hpp"
 #include "core/sim/channel_stats.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "replay/stop_signal.hpp"
@@ -126,6 +127,20 @@ nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& sim
           {"scenario", sim::to_json(s)}};
 }
 
+/// Says so when `millwatch replay` would refuse the recording as its sidecar describes it
+/// (a sample rate too low for the monitor's default low-pass, a spindle window the speed does
+/// not suit): the recording is written all the same, a --config can replay it.
+void warn_if_replay_refuses(const nlohmann::json& sidecar, const std::filesystem::path& path) {
+  try {
+    (void)monitor::monitor_config_from_json(monitor::monitor_json_from_sidecar(sidecar));
+  } catch (const config::ConfigError& e) {
+    spdlog::warn(
+        "{}: replay will refuse this recording as its sidecar describes it ({}); set "
+        "the value in replay's --config",
+        path.string(), e.what());
+  }
+}
+
 /// `steady_state`: the truth's model_steady_state.
 void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
                    const sim::ChannelStats& clean, const nlohmann::json& steady_state,
@@ -209,6 +224,29 @@ int run_simulate(const SimulateOptions& o) {
     spdlog::error("--truth-json {}: the CSV and its sidecar go there", truth_path.string());
     return 2;
   }
+  // `simulate cut.json -o cut.csv` would write the sidecar over the scenario it reads.
+  const auto same_file = [](const std::filesystem::path& a, const std::filesystem::path& b) {
+    std::error_code ec;
+    return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec) &&
+           !ec;
+  };
+  for (const auto& [output, what] :
+       {std::pair{csv_path, "the CSV"}, std::pair{sidecar_path, "its sidecar"},
+        std::pair{truth_path, "the truth"}}) {
+    if (same_file(output, o.scenario_path)) {
+      if (output == truth_path && !o.truth_json.empty()) {
+        spdlog::error("--truth-json {}: the scenario being read; name the truth file otherwise",
+                      truth_path.string());
+        return 2;
+      }
+      spdlog::error(
+          "-o {}: {} would go to {}, the scenario being read: name the output "
+          "otherwise (e.g. -o {})",
+          csv_path.string(), what, output.string(),
+          (csv_path.parent_path() / (csv_path.stem().string() + "_cut.csv")).string());
+      return 2;
+    }
+  }
 
   install_stop_signals();
   try {
@@ -238,13 +276,13 @@ int run_simulate(const SimulateOptions& o) {
     const std::string truth_name = truth_path.parent_path() == sidecar_path.parent_path()
                                        ? truth_path.filename().string()
                                        : std::filesystem::absolute(truth_path).string();
-    sidecar.write(sidecar_json(scenario, simulator, truth_summary_json(truth, truth_name),
-                               csv_path.filename().string())
-                      .dump(2) +
-                  "\n");
+    const nlohmann::json side = sidecar_json(
+        scenario, simulator, truth_summary_json(truth, truth_name), csv_path.filename().string());
+    sidecar.write(side.dump(2) + "\n");
     csv.commit();
     sidecar.commit();
     truth_file.commit();
+    warn_if_replay_refuses(side, sidecar_path);
     print_summary(scenario, simulator, simulator.clean_stats(), truth["model_steady_state"],
                   csv_path.string(), sidecar_path.string(), truth_path.string());
   } catch (const config::ConfigError& e) {

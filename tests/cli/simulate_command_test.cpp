@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
@@ -125,7 +126,7 @@ TEST(SimulateCommand, SaysWhenTheModelsCycleIsPlayedRoundAgain) {
   soft["model"]["effects"]["deflection"]["stiffness_N_per_um"] = 0.1;
   const fs::path soft_csv = dir / "soft.csv";
   const auto rs = test::run_command(test::millwatch_cli() + " simulate " +
-                                    write_file(dir / "soft.json", soft.dump()).string() +
+                                    write_file(dir / "soft_scenario.json", soft.dump()).string() +
                                     " --duration 0.05 -o " + soft_csv.string());
   ASSERT_EQ(rs.exit_code, 0) << rs.output;
   EXPECT_NE(rs.output.find("did not repeat within 600 revolutions"), std::string::npos)
@@ -225,6 +226,62 @@ TEST(SimulateCommand, OtherCommandsRefuseNumbersOutsideWhatTheyMean) {
   }
   EXPECT_FALSE(fs::exists(log));
   EXPECT_FALSE(fs::exists(log.parent_path() / "report"));
+}
+
+// `simulate cut.json -o cut.csv` had written the sidecar (cut.json) over the scenario it read:
+// refused, the scenario left as it was, whichever way the paths are spelled; --truth-json too.
+TEST(SimulateCommand, RefusesToWriteOverTheScenarioItReads) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path scenario = dir / "cut.json";
+  fs::copy_file(test::source_dir() / "config" / "demo.json", scenario);
+  const auto original = fs::file_size(scenario);
+  const std::string simulate =
+      test::millwatch_cli() + " simulate " + scenario.string() + " --duration 0.01 ";
+  const std::pair<std::string, std::string> cases[] = {
+      {"-o " + (dir / "cut.csv").string(),
+       "its sidecar would go to " + (dir / "cut.json").string() +
+           ", the scenario being read: name the output otherwise (e.g. -o " +
+           (dir / "cut_cut.csv").string() + ")"},
+      {"-o " + (dir / "sub" / ".." / "cut.csv").string(), "the scenario being read"},
+      {"-o " + (dir / "other.csv").string() + " --truth-json " + scenario.string(),
+       "--truth-json " + scenario.string() + ": the scenario being read"}};
+  fs::create_directory(dir / "sub");
+  for (const auto& [options, said] : cases) {
+    const auto r = test::run_command(simulate + options + " 2>&1");
+    EXPECT_EQ(r.exit_code, 2) << options;
+    EXPECT_NE(r.output.find(said), std::string::npos) << r.output;
+    EXPECT_EQ(fs::file_size(scenario), original);
+  }
+  EXPECT_FALSE(fs::exists(dir / "cut.csv"));
+  EXPECT_FALSE(fs::exists(dir / "other.csv"));
+}
+
+// A recording that the monitor would refuse as its sidecar describes it (1 kHz: below the
+// default 3.3 kHz low-pass's reach) is written, with a warning naming why; it had been written
+// silently and replay then named a key that was in neither file.
+TEST(SimulateCommand, WarnsWhenReplayWouldRefuseTheRecording) {
+  const fs::path dir = test::fresh_temp_dir();
+  nlohmann::json s =
+      nlohmann::json::parse(std::ifstream(test::source_dir() / "config" / "demo.json"));
+  s["recording"]["sample_rate_hz"] = 1000.0;
+  write_file(dir / "slow.json", s.dump());
+  const auto r =
+      test::run_command(test::millwatch_cli() + " simulate " + (dir / "slow.json").string() +
+                        " --duration 0.2 -o " + (dir / "cut.csv").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cut.json: replay will refuse this recording as its sidecar describes "
+                          "it (filter.cutoff_hz: value 3300 Hz (the default) must stay below "
+                          "0.45 x the sample rate (450 Hz)); set the value in replay's --config"),
+            std::string::npos)
+      << r.output;
+  EXPECT_TRUE(fs::exists(dir / "cut.csv"));
+  // The demo itself replays as it is: no such warning.
+  const auto demo =
+      test::run_command(test::millwatch_cli() + " simulate " +
+                        (test::source_dir() / "config" / "demo.json").string() +
+                        " --duration 0.05 -o " + (dir / "demo.csv").string() + " 2>&1");
+  EXPECT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_EQ(demo.output.find("replay will refuse"), std::string::npos) << demo.output;
 }
 
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
