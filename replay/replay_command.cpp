@@ -50,13 +50,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string progress_text(double fraction, double sample_time_s, double wall_s) {
-  const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
-  return fmt::format(
-      "{:5.1f} %  {:.1f} s of recording in {:.1f} s ({:.0f}× real time), {:.0f} s left",
-      100.0 * fraction, sample_time_s, wall_s, sample_time_s / wall_s, left_s);
-}
-
 int replay_one(const ReplayOptions& o) {
   const fs::path input = o.inputs.front();
   // The summary is written last: a folder that is not there must not cost the whole replay.
@@ -164,9 +157,9 @@ int replay_one(const ReplayOptions& o) {
     }
     run.process(block);
     if (progress.due()) {
-      progress.show(progress_text(source->progress(),
-                                  static_cast<double>(block.utime_us - first_utime) * 1e-6,
-                                  progress.elapsed_s()));
+      progress.show(replay_progress_text(source->progress(),
+                                         static_cast<double>(block.utime_us - first_utime) * 1e-6,
+                                         progress.elapsed_s(), o.identify));
     }
   }
   progress.done();

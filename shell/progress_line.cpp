@@ -1,7 +1,10 @@
 #include "shell/progress_line.hpp"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace millwatch::shell {
@@ -47,6 +50,31 @@ void ProgressLine::done() {
     std::fflush(stderr);
     shown_ = false;
   }
+}
+
+std::string times_real_time(double ratio) {
+  if (!(ratio >= 0.0) || !std::isfinite(ratio)) {
+    return "—";
+  }
+  if (ratio >= 9.95) {
+    return fmt::format("{:.0f}", ratio);
+  }
+  if (ratio >= 0.995) {
+    return fmt::format("{:.1f}", ratio);
+  }
+  return fmt::format("{:.2g}", std::max(ratio, 0.001));
+}
+
+std::string replay_progress_text(double fraction, double sample_time_s, double wall_s,
+                                 bool identifying) {
+  const std::string done = fmt::format(
+      "{:5.1f} %  {:.1f} s of recording in {:.1f} s ({}× real time)", 100.0 * fraction,
+      sample_time_s, wall_s, times_real_time(wall_s > 0.0 ? sample_time_s / wall_s : 0.0));
+  if (fraction >= 0.999) {
+    return done + (identifying ? ", finishing (identification's last fits)" : ", finishing");
+  }
+  const double left_s = fraction > 0.01 ? wall_s * (1.0 - fraction) / fraction : 0.0;
+  return done + (fraction > 0.01 ? fmt::format(", {:.0f} s left", left_s) : "");
 }
 
 }  // namespace millwatch::shell

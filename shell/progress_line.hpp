@@ -4,6 +4,7 @@
 // by done() (or on destruction) so that what follows starts on a clean line.
 
 #include <chrono>
+#include <string>
 #include <string_view>
 
 namespace millwatch::shell {
@@ -33,5 +34,15 @@ class ProgressLine {
   std::chrono::steady_clock::time_point start_, next_;
   std::chrono::steady_clock::duration interval_;
 };
+
+/// A speed as a multiple of real time: "35", "2.1", "0.02" (two significant digits below 10:
+/// a replay slowed by identification's fits is not "0×").
+std::string times_real_time(double ratio);
+
+/// The replay's progress: "42.0 %  4.2 s of recording in 2.1 s (2.0× real time), 3 s left".
+/// Once the recording is read (`fraction` ≥ 0.999) it says "finishing" (with `identifying`:
+/// the last identification windows' fits, which can take seconds) instead of "0 s left".
+std::string replay_progress_text(double fraction, double sample_time_s, double wall_s,
+                                 bool identifying);
 
 }  // namespace millwatch::shell
