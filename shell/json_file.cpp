@@ -148,6 +148,10 @@ std::size_t too_deep(const std::string& text, std::size_t max_depth) {
 }  // namespace
 
 nlohmann::json read_json_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw std::runtime_error(path.string() + ": a folder, not a JSON file");
+  }
   std::ifstream in(path);
   if (!in) {
     throw std::runtime_error(path.string() + ": cannot read: " + std::strerror(errno));

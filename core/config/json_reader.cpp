@@ -41,6 +41,9 @@ std::string Range::describe() const {
 }
 
 std::string describe_json(const nlohmann::json& value) {
+  if (value.is_null()) {
+    return "null";  // not "null null"
+  }
   std::string dumped = value.dump();
   if (dumped.size() > 60) {
     dumped = dumped.substr(0, 57) + "...";

@@ -43,6 +43,14 @@ TEST(JsonReader, WrongTypeNamesFieldAndType) {
   EXPECT_EQ(msg, "tool.flutes: expected an integer, got string \"two\"");
 }
 
+// A null said once ("got null null" had named the type and then its text).
+TEST(JsonReader, WrongTypeNullIsSaidOnce) {
+  const json j = {{"sample_rate_hz", nullptr}};
+  ObjectReader r(j, "monitor");
+  EXPECT_EQ(error_of([&] { r.number("sample_rate_hz", 1.0, positive(1e7, "Hz")); }),
+            "monitor.sample_rate_hz: expected a number, got null");
+}
+
 TEST(JsonReader, IntegerZeroFlutesIsOutOfRange) {
   const json j = {{"flutes", 0}};
   ObjectReader r(j, "tool");

@@ -45,6 +45,18 @@ TEST(JsonFile, ErrorsNameTheLineColumnAndField) {
       << not_finite;
 }
 
+// A folder given for a configuration is said to be one (it had read as "JSON syntax error at
+// line 1").
+TEST(JsonFile, AFolderIsSaidToBeOne) {
+  const auto dir = test::fresh_temp_dir();
+  try {
+    read_json_file(dir);
+    ADD_FAILURE() << "a folder was read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), dir.string() + ": a folder, not a JSON file");
+  }
+}
+
 // 100,000 nested arrays used to overflow the stack as soon as a configuration reader quoted the
 // value in its error (nlohmann's dump() recurses per level): found with the fuzz targets'
 // harness on a crafted input.
