@@ -37,14 +37,18 @@ const char* parse_row(const char*& p, const char* end, double* v) {
     while (*p == ' ') {
       ++p;
     }
+    const bool row_ends = *p == '\n' || (*p == '\r' && p[1] == '\n');
+    if (*p != ',' && !row_ends) {  // the cell goes on after its number: "0x10", "1;2"
+      return i == 0 ? "t_s is not a number" : "a force is not a number";
+    }
     if (i < 3) {
-      if (*p != ',') {
+      if (row_ends) {
         return "fewer than 4 columns";
       }
       ++p;
     }
   }
-  if (*p == '\r' && p[1] == '\n') {
+  if (*p == '\r') {
     ++p;  // CRLF
   }
   return *p == '\n' ? nullptr : "more than 4 columns";
@@ -128,8 +132,8 @@ std::string CsvCutReader::parse_mapped(std::string_view line, double* v) {
 void CsvCutReader::read_header(const std::string& name) {
   std::string_view line;
   if (!take_line(line) || line != kHeader) {
-    throw std::runtime_error(name + ":1: header is \"" + std::string(line.substr(0, 80)) +
-                             "\"; expected \"" + kHeader + "\"");
+    throw std::runtime_error(name + ":1: header is \"" + excerpt(line, 80) + "\"; expected \"" +
+                             kHeader + "\"");
   }
 }
 
@@ -208,7 +212,7 @@ bool CsvCutReader::parse_next(Row& row) {
                  problem != nullptr) {
         take_line(line);
         if (!line.empty()) {  // an empty line is no row
-          bad(line_, std::string(problem) + " in \"" + std::string(line.substr(0, 60)) + "\"");
+          bad(line_, std::string(problem) + " in \"" + excerpt(line, 60) + "\"");
         }
         continue;
       }
@@ -221,7 +225,7 @@ bool CsvCutReader::parse_next(Row& row) {
       }
       ++data_rows_;
       if (const std::string problem = parse_mapped(line, v); !problem.empty()) {
-        bad(line_, problem + " in \"" + std::string(line.substr(0, 60)) + "\"");
+        bad(line_, problem + " in \"" + excerpt(line, 60) + "\"");
         continue;
       }
     }

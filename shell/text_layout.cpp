@@ -401,7 +401,7 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
   } else {
     if (map.empty()) {
       throw std::runtime_error(
-          name + ":1: header is \"" + first.substr(0, 80) + "\"; expected \"" +
+          name + ":1: header is \"" + excerpt(first, 80) + "\"; expected \"" +
           std::string(kMillwatchHeader) +
           "\" (millwatch's CSV), a DynoWare export, or a column map: --columns "
           "t=Time,fx=Fx,fy=Fy,fz=Fz (header names or 1-based indices; without a time column, "
@@ -465,6 +465,22 @@ bool misplaces_rows(const TextLayout& l, double rate_hz) {
     }
   }
   return false;
+}
+
+std::string excerpt(std::string_view line, std::size_t max_bytes) {
+  std::string out;
+  for (const char c : line.substr(0, max_bytes)) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && c != '\t') || byte == 0x7f) {
+      constexpr std::string_view kHex = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[byte >> 4U];
+      out += kHex[byte & 15U];
+    } else {
+      out += c;
+    }
+  }
+  return out;
 }
 
 }  // namespace millwatch::shell

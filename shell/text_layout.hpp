@@ -68,4 +68,8 @@ void split_fields(std::string_view line, char delimiter, std::vector<std::string
 /// a decimal comma is read as a point when `decimal_comma`. False: not a number.
 bool parse_number(std::string_view field, bool decimal_comma, double& value);
 
+/// At most `max_bytes` of a line as a message quotes it: control bytes (a binary file's, an
+/// escape sequence's) as \xNN, so that an error never writes them to the user's terminal.
+std::string excerpt(std::string_view line, std::size_t max_bytes);
+
 }  // namespace millwatch::shell

@@ -141,6 +141,23 @@ TEST(CsvCutReader, MalformedRowsAreReportedByLine) {
   EXPECT_EQ(r.bad[3].second, "more than 4 columns in \"0.00002,1,2,3,4\"");
 }
 
+// A cell whose number is followed by more text is a cell that is not a number: these rows have
+// their four columns (they had been said to have fewer); CRLF rows read as before.
+TEST(CsvCutReader, ACellWithTextAfterItsNumberIsNotANumber) {
+  const Read r = read(kHeader +
+                      "0,1,2,3\r\n0.00002x,1,2,3\n0.00004,0x10,2,3\n0.00006,1;2,3,4\n0.00008,1,2,3 "
+                      "N\n0.0001,1,2\r\n0.00012,5,2,3\r\n");
+  ASSERT_EQ(r.bad.size(), 5u);
+  EXPECT_EQ(r.bad[0].second, "t_s is not a number in \"0.00002x,1,2,3\"");
+  EXPECT_EQ(r.bad[1].second, "a force is not a number in \"0.00004,0x10,2,3\"");
+  EXPECT_EQ(r.bad[2].second, "a force is not a number in \"0.00006,1;2,3,4\"");
+  EXPECT_EQ(r.bad[3].second, "a force is not a number in \"0.00008,1,2,3 N\"");
+  EXPECT_EQ(r.bad[4].second, "fewer than 4 columns in \"0.0001,1,2\"");
+  ASSERT_EQ(r.fx_N.size(), 2u);  // the gap splits the good rows' blocks
+  EXPECT_EQ(r.fx_N[0], std::vector<double>{1.0});
+  EXPECT_EQ(r.fx_N[1], std::vector<double>{5.0});
+}
+
 TEST(CsvCutReader, ReadsTheSameWhereverTheBufferEnds) {
   // Reads of 1 to 70 bytes cut every number, every CRLF and the header somewhere; a line longer
   // than the read (the bad one, 80 characters) spans several; the last line has no end-of-line.

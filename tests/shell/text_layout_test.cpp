@@ -244,5 +244,19 @@ TEST(TextLayout, MillwatchCsvNeedsNoMapAndOtherTextsSayWhatToDo) {
             "mem.csv: a DynoWare export that ends before its channel row");
 }
 
+// A binary file given as a recording: the header the error quotes shows its control bytes as
+// \xNN (they had gone to the terminal as they were, an escape sequence among them).
+TEST(TextLayout, AnErrorQuotesControlBytesAsEscapes) {
+  const std::string e = error_of(std::string("\x7f"
+                                             "ELF\x02\x01\x1b[2J\tx\0y",
+                                             14) +
+                                 "\n");
+  EXPECT_EQ(e.rfind("mem.csv:1: header is \"\\x7fELF\\x02\\x01\\x1b[2J\tx\\x00y\"; expected", 0),
+            0u)
+      << e;
+  EXPECT_EQ(excerpt("abc,d\x01", 4), "abc,");
+  EXPECT_EQ(excerpt("Kraft [N]\tZeit", 80), "Kraft [N]\tZeit");  // tabs and text unchanged
+}
+
 }  // namespace
 }  // namespace millwatch::shell
