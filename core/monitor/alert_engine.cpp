@@ -1304,18 +1304,26 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
     // The revolution the alert comes at: the last one reported (−1: none yet).
     Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
                     fraction, config_.sensor_bad_fraction, "bad_sample_fraction");
+    const char* gap_s = new_gaps == 1 ? "" : "s";
     if (dead_channel_ >= 0) {
       write_message(a,
                     "sensor trouble: %s carries no cutting force while %s does (a dead amplifier "
-                    "or cable?); %.3f %% of recent samples saturated or not finite, %lld new gaps",
+                    "or cable?); %.3f %% of recent samples saturated or not finite, %lld new "
+                    "gap%s",
                     dead_channel_ == 0 ? "fx" : "fy", dead_channel_ == 0 ? "fy" : "fx",
-                    percent(fraction), static_cast<long long>(new_gaps));
-    } else {
+                    percent(fraction), static_cast<long long>(new_gaps), gap_s);
+    } else if (fraction > config_.sensor_bad_fraction) {
       write_message(a,
                     "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
-                    "%.3f %%), %lld new gaps",
+                    "%.3f %%), %lld new gap%s",
                     percent(fraction), percent(config_.sensor_bad_fraction),
-                    static_cast<long long>(new_gaps));
+                    static_cast<long long>(new_gaps), gap_s);
+    } else {  // raised for the gaps: said first, the bad samples (below their limit) after
+      write_message(a,
+                    "sensor trouble: %lld new gap%s in the stream (samples lost); %.3f %% of "
+                    "recent samples saturated or not finite (limit %.3f %%)",
+                    static_cast<long long>(new_gaps), gap_s, percent(fraction),
+                    percent(config_.sensor_bad_fraction));
     }
   } else if (!trouble && sensor_.active && new_samples > 0) {
     sensor_.active = false;
