@@ -163,6 +163,9 @@ int replay_one(const ReplayOptions& o) {
     }
   }
   progress.done();
+  if (const std::string note = source->end_note(); !note.empty() && !stop_requested()) {
+    spdlog::warn("{}: {}", input.string(), note);
+  }
   run.finish();
   if (stop_requested()) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");

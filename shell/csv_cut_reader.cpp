@@ -161,6 +161,7 @@ bool CsvCutReader::fill() {
         return false;
       }
       buffer_[data_end_++] = '\n';  // a last line without its end-of-line
+      unterminated_ = true;
       lines_end_ = data_end_;
       return true;
     }

@@ -59,6 +59,9 @@ class CsvCutReader {
   monitor::SampleBlock next(std::size_t max_samples);
   [[nodiscard]] std::int64_t bad_lines() const { return bad_lines_; }
   [[nodiscard]] std::int64_t lines() const { return line_; }
+  /// Whether the file's last line had no end-of-line (read as it stands, but a file cut short
+  /// mid-number ends that way too).
+  [[nodiscard]] bool last_line_unterminated() const { return unterminated_; }
   [[nodiscard]] const TextLayout& layout() const { return layout_; }
 
  private:
@@ -107,7 +110,8 @@ class CsvCutReader {
   std::size_t next_ = 0;
   std::size_t lines_end_ = 0;
   std::size_t data_end_ = 0;
-  bool at_end_ = false;  // the input has nothing more to read
+  bool at_end_ = false;        // the input has nothing more to read
+  bool unterminated_ = false;  // the last line had no '\n' (one was added)
 };
 
 }  // namespace millwatch::shell

@@ -92,6 +92,7 @@ class ReadAheadSource : public RecordingSource {
     if (s.end) {
       ended_ = true;
       held_ = s.held;
+      end_note_ = s.end_note;
       return std::nullopt;
     }
     monitor::SampleBlock b;
@@ -106,6 +107,7 @@ class ReadAheadSource : public RecordingSource {
   [[nodiscard]] std::int64_t bad_records() const override { return bad_records_; }
   [[nodiscard]] double progress() const override { return progress_; }
   [[nodiscard]] std::string what_it_held() const override { return held_; }
+  [[nodiscard]] std::string end_note() const override { return end_note_; }
 
  private:
   /// A block read ahead, with what the reader reported while reading it.
@@ -117,8 +119,9 @@ class ReadAheadSource : public RecordingSource {
     std::vector<std::pair<std::int64_t, std::string>> bad;  // where, problem
     std::int64_t bad_records = 0;
     double progress = 0.0;
-    bool end = false;  // no block: the recording ends here
-    std::string held;  // at the end: the source's what_it_held()
+    bool end = false;      // no block: the recording ends here
+    std::string held;      // at the end: the source's what_it_held()
+    std::string end_note;  // and its end_note()
     std::exception_ptr error;
   };
   /// Up to 256 blocks ahead, and at most ~256 Ki samples (6 MiB; --block 65536: four blocks):
@@ -161,6 +164,7 @@ class ReadAheadSource : public RecordingSource {
         } else {
           s.end = true;
           s.held = source_->what_it_held();
+          s.end_note = source_->end_note();
         }
       } catch (...) {
         s.error = std::current_exception();
@@ -188,7 +192,8 @@ class ReadAheadSource : public RecordingSource {
   bool ended_ = false;
   std::int64_t bad_records_ = 0;
   double progress_ = 0.0;
-  std::string held_;  // the source's what_it_held(), once it ended
+  std::string held_;      // the source's what_it_held(), once it ended
+  std::string end_note_;  // and its end_note()
   // Shared, under mutex_: slots [head_, head_ + filled_) are read (the first one held while
   // holding_), the rest free.
   std::mutex mutex_;

@@ -91,6 +91,14 @@ class TextSource : public RecordingSource {
     }
     return std::to_string(rows_) + " rows read, " + std::to_string(bad_records()) + " bad";
   }
+  [[nodiscard]] std::string end_note() const override {
+    if (!reader_->last_line_unterminated()) {
+      return {};
+    }
+    return "line " + std::to_string(reader_->lines()) +
+           ", the last, has no end-of-line: if the file was cut short there, its last number may "
+           "be too (the row was read as it stands)";
+  }
   [[nodiscard]] double progress() const override {
     const auto at = in_.tellg();
     return at < 0 || size_bytes_ <= 0 ? 1.0 : static_cast<double>(at) / size_bytes_;

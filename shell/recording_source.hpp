@@ -51,6 +51,9 @@ class RecordingSource {
   /// header", "no event on channel X; the log holds A (12 events)". Asked once next() has
   /// said the recording ended.
   [[nodiscard]] virtual std::string what_it_held() const = 0;
+  /// What a user should hear about how the recording ended (empty: nothing), e.g. a text whose
+  /// last line has no end-of-line, as a file cut short mid-number has. Asked at its end too.
+  [[nodiscard]] virtual std::string end_note() const { return {}; }
 
   [[nodiscard]] RecordingFormat format() const { return format_; }
   /// "DynoWare export (Time, Fx, Fy, Fz; 10000 Hz stated)", for the log.

@@ -201,6 +201,25 @@ TEST(ReplayCommand, ARecordWithNoSamplesFailsAndSaysWhatItHeld) {
       << r.log;
 }
 
+// A file cut short mid-number reads its last row as it stands ("-8.8" for "-8.858"): that the
+// last line had no end-of-line is said, with its number; a whole file says nothing.
+TEST(ReplayCommand, ALastLineWithoutItsEndOfLineIsSaid) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const ReplayRun whole = replay(csv.string(), dir / "whole.json");
+  ASSERT_EQ(whole.exit_code, 0) << whole.log;
+  EXPECT_EQ(whole.log.find("end-of-line"), std::string::npos) << whole.log;
+  fs::resize_file(csv, fs::file_size(csv) - 3);  // the newline and two digits
+  const ReplayRun cut = replay(csv.string(), dir / "cut.json");
+  ASSERT_EQ(cut.exit_code, 0) << cut.log;
+  EXPECT_NE(cut.log.find("cut.csv: line 50001, the last, has no end-of-line: if the file was cut "
+                         "short there, its last number may be too (the row was read as it "
+                         "stands)"),
+            std::string::npos)
+      << cut.log;
+  EXPECT_EQ(cut.summary["samples"], 50000);
+}
+
 // A damaged time column: each bad time is reported by line and what is wrong with it, and its
 // row skipped like any bad row (a one-sample gap); the rest of the cut is measured. (A time of
 // 1e300 used to reach the pipeline as utime −2⁶³ and overflow in InputCheck under UBSan.)
@@ -457,12 +476,10 @@ TEST(ReplayCommand, MalformedRawBlocksInALogAreReportedAndSkipped) {
       replay((dir / "bad.lcmlog").string() + " --config " + monitor_config(dir).string(),
              dir / "bad.json");
   ASSERT_EQ(r.exit_code, 0) << r.log;
-  const std::string prefix =
-      "bad.lcmlog:{}: event on MILLWATCH_FORCE_RAW of 24036 bytes does not decode as "
-      "millwatch.force_block_t: ";
   auto expect_line = [&](int event, const std::string& reason) {
-    std::string line = prefix;
-    line.replace(line.find("{}"), 2, std::to_string(event));
+    const std::string line = "bad.lcmlog:" + std::to_string(event) +
+                             ": event on MILLWATCH_FORCE_RAW of 24036 bytes does not decode as "
+                             "millwatch.force_block_t: ";
     EXPECT_NE(r.log.find(line + reason + "; skipped"), std::string::npos) << line << reason << "\n"
                                                                           << r.log;
   };
