@@ -24,6 +24,13 @@ ConfigFile read_config_file(const std::string& path) {
     throw std::runtime_error(path + ": configuration not found (--config)");
   }
   nlohmann::json j = read_json_file(path);
+  // A recording's sidecar (millwatch simulate's, a CSV's) given where a configuration goes: its
+  // "columns" list the CSV's header, which a configuration's column map is not.
+  if (j.is_object() && j.contains("force_sign_convention") && j.contains("sample_rate_hz")) {
+    throw std::runtime_error(path +
+                             ": a recording's sidecar, not a monitor configuration: give it with "
+                             "--sidecar (--config takes a configuration, e.g. config/*.json)");
+  }
   resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
   auto take_columns = [&](nlohmann::json& object, const std::string& where) {
     if (object.is_object() && object.contains("columns")) {

@@ -220,6 +220,20 @@ TEST(ReplayCommand, ALastLineWithoutItsEndOfLineIsSaid) {
   EXPECT_EQ(cut.summary["samples"], 50000);
 }
 
+// A sidecar given as --config (as one replaying an LCM log of a simulated cut might) is said to
+// be one, with the option that takes it; it had failed on its "columns" list, "expected text".
+TEST(ReplayCommand, ASidecarGivenAsTheConfigurationIsSaidToBeOne) {
+  const fs::path dir = test::fresh_temp_dir();
+  const fs::path csv = simulate(dir, "cut", base_scenario());
+  const ReplayRun r =
+      replay(csv.string() + " --config " + (dir / "cut.json").string(), dir / "summary.json");
+  EXPECT_EQ(r.exit_code, 2) << r.log;
+  EXPECT_NE(r.log.find("cut.json: a recording's sidecar, not a monitor configuration: give it "
+                       "with --sidecar"),
+            std::string::npos)
+      << r.log;
+}
+
 // A damaged time column: each bad time is reported by line and what is wrong with it, and its
 // row skipped like any bad row (a one-sample gap); the rest of the cut is measured. (A time of
 // 1e300 used to reach the pipeline as utime −2⁶³ and overflow in InputCheck under UBSan.)
