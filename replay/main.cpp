@@ -145,9 +145,17 @@ void add_publish_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "publish",
       "Publish raw sample blocks on LCM like a DAQ bridge (from a CSV cut or a scenario)");
-  cmd->add_option("input", o->input, "CUT.csv (sidecar beside it) or a scenario JSON to simulate")
+  cmd->add_option("input", o->input,
+                  "A recording as replay reads it (CSV, DynoWare, text, .mat, LCM log) or a "
+                  "scenario .json to simulate")
       ->required()
       ->check(CLI::ExistingFile);
+  cmd->add_option("--sidecar", o->sidecar, "JSON describing the cut (default: beside the file)");
+  cmd->add_option("--config", o->config,
+                  "Monitor configuration JSON, merged over the sidecar (e.g. the rate of a text "
+                  "without a time column)");
+  cmd->add_option("--columns", o->columns,
+                  "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
   cmd->add_option("--url", o->url, "LCM URL");
   cmd->add_option("--channel", o->channel, "Channel of the raw blocks");
   cmd->add_option("--speed", o->speed, "Pace: k times real time, 0 as fast as possible")

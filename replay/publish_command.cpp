@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -14,8 +15,9 @@
 #include "core/config/json_reader.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "msgs/lcm_convert.hpp"
-#include "shell/csv_cut_reader.hpp"
 #include "shell/json_file.hpp"
+#include "shell/monitor_config_file.hpp"
+#include "shell/recording_source.hpp"
 
 namespace millwatch::shell {
 
@@ -28,17 +30,9 @@ int run_publish(const PublishOptions& o) {
   }
   const fs::path input = o.input;
   std::unique_ptr<sim::CutSimulator> simulator;
-  std::unique_ptr<CsvCutReader> csv;
+  std::unique_ptr<RecordingSource> recording;
   double rate_hz = 0.0;
-  if (input.extension() == ".csv") {
-    fs::path sidecar = input;
-    sidecar.replace_extension(".json");
-    rate_hz = read_json_file(sidecar).at("sample_rate_hz").get<double>();
-    csv = std::make_unique<CsvCutReader>(
-        input, rate_hz, [&](std::int64_t line, const std::string& p) {
-          spdlog::warn("{}:{}: {}; skipped", input.string(), line, p);
-        });
-  } else {
+  if (input.extension() == ".json") {  // a scenario, simulated on the fly
     sim::Scenario s;
     try {
       s = sim::scenario_from_json(read_json_file(input));
@@ -50,6 +44,20 @@ int run_publish(const PublishOptions& o) {
     }
     rate_hz = s.sample_rate_hz;
     simulator = std::make_unique<sim::CutSimulator>(s);
+  } else {  // a recording in any format replay reads, described as replay's are
+    const LoadedMonitorConfig loaded = load_monitor_config(
+        {input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
+    RecordingOptions ro;
+    ro.columns = loaded.columns;
+    ro.config_rate_hz = loaded.config_rate_hz();
+    std::int64_t bad = 0;
+    ro.on_bad = [&](std::int64_t where, const std::string& problem) {
+      if (++bad <= 20) {
+        spdlog::warn("{}:{}: {}; skipped", input.string(), where, problem);
+      }
+    };
+    recording = open_recording(input, ro);
+    spdlog::info("{}: {}", input.string(), recording->description());
   }
   const auto n = static_cast<std::size_t>(o.block_samples);
   std::vector<double> t(n), fx(n), fy(n), fz(n);
@@ -67,10 +75,11 @@ int run_publish(const PublishOptions& o) {
       }
       b = {std::llround(t[0] * 1e6), seq, rate_hz, {fx.data(), k}, {fy.data(), k}, {fz.data(), k}};
     } else {
-      b = csv->next(n);
-      if (b.fx_N.empty()) {
+      const std::optional<monitor::SampleBlock> next = recording->next(n);
+      if (!next) {
         break;
       }
+      b = *next;
     }
     b.utime_us += offset_us;
     b.seq = seq++;
@@ -85,6 +94,19 @@ int run_publish(const PublishOptions& o) {
     const force_block_t m = messaging::to_message(b);
     lcm.publish(o.channel, &m);
     samples += static_cast<std::int64_t>(b.fx_N.size());
+  }
+  if (recording) {
+    if (const std::string note = recording->end_note(); !note.empty()) {
+      spdlog::warn("{}: {}", input.string(), note);
+    }
+    if (samples == 0) {
+      spdlog::error("{}: no samples to publish: {}", input.string(),
+                    recording->bad_records() > 0
+                        ? "all " + std::to_string(recording->bad_records()) + " " +
+                              recording->record_unit() + " were bad"
+                        : recording->what_it_held());
+      return 2;
+    }
   }
   spdlog::info("published {} blocks, {} samples on {}", seq, samples, o.channel);
   return 0;

@@ -70,6 +70,49 @@ TEST(RecordCommand, RecordsAPublishedCutThatReplaysAsTheCutsFile) {
   EXPECT_EQ(from_log["alpha_deg"], from_csv["alpha_deg"]);
 }
 
+// publish sends any recording replay reads, described the same way: a real PHM 2010 window
+// with its configuration (no sidecar), as an LCM log that replays to the CSV's own summary. It
+// had taken a millwatch CSV with a sidecar only (and any other file for a scenario); a file it
+// cannot read or that holds no sample is an error that names it.
+TEST(RecordCommand, PublishSendsARealRecordingDescribedAsForReplay) {
+  const fs::path data = test::shared_dir() / "data" / "phm2010";
+  if (!fs::exists(data / "c1_cut158_window.csv")) {
+    GTEST_SKIP() << "real recordings not found at " << data;
+  }
+  const fs::path dir = test::fresh_temp_dir();
+  const std::string cli = test::millwatch_cli();
+  const std::string config = (test::source_dir() / "config" / "phm2010_c1.json").string();
+  const fs::path csv = data / "c1_cut158_window.csv";
+  const auto published = test::run_command(
+      cli + " publish " + csv.string() + " --config " + config + " --url 'file://" +
+      (dir / "cut.lcmlog").string() + "?mode=w' --speed 0 2>&1");
+  ASSERT_EQ(published.exit_code, 0) << published.output;
+  EXPECT_NE(published.output.find("published 5 blocks, 5000 samples"), std::string::npos)
+      << published.output;
+  const nlohmann::json from_log = replay_json(dir / "cut.lcmlog", "--config " + config);
+  const nlohmann::json from_csv = replay_json(csv, "--config " + config);
+  ASSERT_FALSE(from_log.is_null());
+  EXPECT_EQ(from_log["samples"], 5000);
+  EXPECT_EQ(from_log["revolutions"], from_csv["revolutions"]);
+  EXPECT_EQ(from_log["alpha_deg"], from_csv["alpha_deg"]);
+  EXPECT_EQ(from_log["spindle_rpm"], from_csv["spindle_rpm"]);
+
+  const auto no_sidecar =
+      test::run_command(cli + " publish " + csv.string() + " --url memq:// --speed 0 2>&1");
+  EXPECT_EQ(no_sidecar.exit_code, 2);
+  EXPECT_NE(no_sidecar.output.find("c1_cut158_window.json: sidecar not found (describe the cut "
+                                   "with --sidecar or --config)"),
+            std::string::npos)
+      << no_sidecar.output;
+  std::ofstream(dir / "header.csv") << "t_s,fx_N,fy_N,fz_N\n";
+  const auto empty = test::run_command(cli + " publish " + (dir / "header.csv").string() +
+                                       " --config " + config + " --url memq:// --speed 0 2>&1");
+  EXPECT_EQ(empty.exit_code, 2);
+  EXPECT_NE(empty.output.find("header.csv: no samples to publish: no rows after its header"),
+            std::string::npos)
+      << empty.output;
+}
+
 TEST(RecordCommand, KeepsAnExistingLogUnlessForced) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path log = dir / "kept.lcmlog";
