@@ -58,16 +58,27 @@ messaging::ChannelNames read_channels(ObjectReader r) {
 /// "cannot open" at start.
 std::string read_url(ObjectReader& r, std::string_view key, const std::string& fallback) {
   std::string url = r.string(key, fallback);
-  const auto scheme = url.find("://");
-  if (scheme == std::string::npos || scheme == 0) {
-    config::fail(r.path_of(key), "\"" + url +
-                                     "\" is not an LCM URL (provider://..., e.g. "
-                                     "udpm://239.255.76.67:7667?ttl=0)");
-  }
+  check_lcm_url(url, r.path_of(key));
   return url;
 }
 
 }  // namespace
+
+void check_lcm_url(const std::string& url, const std::string& where) {
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos || scheme == 0) {
+    config::fail(where, "\"" + url +
+                            "\" is not an LCM URL (provider://..., e.g. "
+                            "udpm://239.255.76.67:7667?ttl=0)");
+  }
+  // LCM 1.3.1's providers: another name fails only when the daemon starts, with a hint about
+  // multicast routes that does not apply.
+  const std::string provider = url.substr(0, scheme);
+  if (provider != "udpm" && provider != "tcpq" && provider != "file" && provider != "memq") {
+    config::fail(where, "\"" + url + "\": no LCM provider \"" + provider +
+                            "\" (LCM 1.3.1 has udpm, tcpq, file and memq)");
+  }
+}
 
 DaemonConfig daemon_config_from_json(const nlohmann::json& j) {
   ObjectReader r(j, "");

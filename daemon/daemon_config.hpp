@@ -52,6 +52,10 @@ struct DaemonConfig {
   std::string log_level = "info";
 };
 
+/// Whether `url` names an LCM provider this LCM has (udpm, tcpq, file, memq).
+/// @throws config::ConfigError(where, ...) if not
+void check_lcm_url(const std::string& url, const std::string& where);
+
 /// @throws config::ConfigError naming the field, its value and the allowed range.
 DaemonConfig daemon_config_from_json(const nlohmann::json& j);
 

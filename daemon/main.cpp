@@ -63,10 +63,12 @@ daemon::DaemonConfig load(const std::string& path, const UrlOverrides& urls) {
     shell::resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
     daemon::DaemonConfig c = daemon::daemon_config_from_json(j);
     if (!urls.input.empty()) {
+      daemon::check_lcm_url(urls.input, "--lcm-url");
       c.lcm_url = urls.input;
       c.lcm_output_url = urls.input;
     }
     if (!urls.output.empty()) {
+      daemon::check_lcm_url(urls.output, "--lcm-output-url");
       c.lcm_output_url = urls.output;
     }
     return c;
@@ -352,6 +354,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
 int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("millwatchd"));
   CLI::App app{"millwatchd: live micro-milling process monitor"};
+  app.set_version_flag("--version", "millwatchd " MILLWATCH_VERSION);
   std::string config_path;
   UrlOverrides urls;
   std::string summary_path;

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <memory>
@@ -127,7 +128,7 @@ void add_replay_command(CLI::App& app) {
                 "configured parameters; faster)");
   cmd->add_option("--speed", o->speed, "Pace: k times real time (default: as fast as possible)")
       ->check(kNonNegative);
-  cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)");
+  cmd->add_flag("--realtime", o->realtime, "Pace at real time (--speed 1)")->excludes("--speed");
   cmd->add_option("--publish", o->publish_url,
                   "Publish the results on LCM at this URL (e.g. udpm://239.255.76.67:7667?ttl=0)");
   cmd->add_flag("--publish-raw", o->publish_raw, "Also publish the raw sample blocks");
@@ -269,12 +270,28 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("millwatch"));
   CLI::App app{"millwatch: micro-milling process monitor, offline tools"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "millwatch " MILLWATCH_VERSION);
   millwatch::shell::add_simulate_command(app);
   millwatch::shell::add_replay_command(app);
   millwatch::shell::add_publish_command(app);
   millwatch::shell::add_record_command(app);
   millwatch::shell::add_calibrate_command(app);
   millwatch::shell::add_diagnose_command(app);
+  // A word that is no command: CLI11 would say only "A subcommand is required".
+  const auto is_command = [&app](const char* word) {
+    try {
+      return app.get_subcommand(word) != nullptr;
+    } catch (const CLI::OptionNotFound&) {
+      return false;
+    }
+  };
+  if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
+    std::fprintf(stderr,
+                 "millwatch: no command \"%s\" (commands: simulate, replay, publish, record, "
+                 "calibrate, diagnose; millwatch COMMAND --help)\n",
+                 argv[1]);
+    return 109;  // CLI11's exit code for an argument it does not expect
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

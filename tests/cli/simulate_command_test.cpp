@@ -284,6 +284,33 @@ TEST(SimulateCommand, WarnsWhenReplayWouldRefuseTheRecording) {
   EXPECT_EQ(demo.output.find("replay will refuse"), std::string::npos) << demo.output;
 }
 
+// The command line as a new user tries it: a word that is no command is named as such (it had
+// said "A subcommand is required"), --version answers, --speed and --realtime are not both taken
+// (--realtime had won silently), the daemon's --lcm-url is checked like its file's.
+TEST(SimulateCommand, TheCommandLineSaysWhatItDoesNotKnow) {
+  const std::string cli = test::millwatch_cli();
+  const auto bogus = test::run_command(cli + " simulat 2>&1");
+  EXPECT_NE(bogus.exit_code, 0);
+  EXPECT_NE(bogus.output.find("millwatch: no command \"simulat\" (commands: simulate, replay, "
+                              "publish, record, calibrate, diagnose"),
+            std::string::npos)
+      << bogus.output;
+  const auto version = test::run_command(cli + " --version 2>&1");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_EQ(version.output.rfind("millwatch 0.", 0), 0u) << version.output;
+  const std::string demo = (test::source_dir() / "config" / "demo.json").string();
+  const auto both = test::run_command(cli + " replay " + demo + " --speed 4 --realtime 2>&1");
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.output.find("excludes"), std::string::npos) << both.output;
+  const auto url = test::run_command(std::string(MILLWATCH_DAEMON) + " -c " +
+                                     (test::source_dir() / "config" / "millwatchd.json").string() +
+                                     " --check --lcm-url udp://239.255.76.67:7667 2>&1");
+  EXPECT_NE(url.exit_code, 0);
+  EXPECT_NE(url.output.find("--lcm-url: \"udp://239.255.76.67:7667\": no LCM provider \"udp\""),
+            std::string::npos)
+      << url.output;
+}
+
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
   const auto r = test::run_command(test::millwatch_cli() + " simulate " +
                                    (test::source_dir() / "config" / "demo.json").string() +

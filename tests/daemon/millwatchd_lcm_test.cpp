@@ -572,6 +572,10 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
       {"output_url", "/lcm/output_url", 7, "lcm.output_url"},
       {"output_url_form", "/lcm/output_url", "239.255.76.67:7668",
        "lcm.output_url: \"239.255.76.67:7668\" is not an LCM URL"},
+      // A provider LCM does not have had passed --check and failed only at start.
+      {"url_provider", "/lcm/url", "bogus://x",
+       "lcm.url: \"bogus://x\": no LCM provider \"bogus\" (LCM 1.3.1 has udpm, tcpq, file and "
+       "memq)"},
       {"max_block", "/source/max_block_samples", 5000,
        "source.max_block_samples: value 5000 is out of range [1, 4096]"},
       {"wake_period", "/source/wake_period_s", 0.5,
