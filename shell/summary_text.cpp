@@ -106,7 +106,15 @@ std::string summary_text(const json& j) {
       s += fmt::format("{:>10}", f + 1);
     }
     s += "\n";
+    // Under the period and the resultant peak, their spread from revolution to revolution.
+    const auto spread_row = [&](const json& values) {
+      return values.is_array() ? flute_row("  ± rev to rev", values, 1.0, "{:>10.3f}") : "";
+    };
     s += flute_row("period [ms]", periods, 1e3, "{:>10.4f}");
+    const json& periods_std = j.value("tooth_period_s_std", json());
+    if (periods_std.is_array()) {
+      s += flute_row("  ± rev to rev", periods_std, 1e3, "{:>10.4f}");
+    }
     const char* axes[][2] = {{"fx", "peak Fx [N]"},
                              {"fy", "peak Fy [N]"},
                              {"fz", "peak Fz [N]"},
@@ -116,6 +124,7 @@ std::string summary_text(const json& j) {
         s += flute_row(a[1], peaks[a[0]], 1.0, "{:>10.3f}");
       }
     }
+    s += spread_row(j.value("peak_force_N_std", json::object()).value("resultant", json()));
   }
   if (has_number(j, "delta_fy_N")) {
     s += fmt::format("  delta Fy      {:.3f} N", num(j, "delta_fy_N"));

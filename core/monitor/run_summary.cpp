@@ -279,15 +279,24 @@ nlohmann::json RunSummary::to_json() const {
   using nlohmann::json;
   derived_.clear();
   const FluteStatistics f = flute_statistics();
-  json periods = json::array(), fx = json::array(), fy = json::array(), fz = json::array(),
-       resultant = json::array();
+  // Each flute's mean, and beside it its spread from revolution to revolution (as α's and ΔFy's).
+  json periods = json::array(), periods_std = json::array();
+  json peak = json::object(), peak_std = json::object();
+  for (const char* axis : {"fx", "fy", "fz", "resultant"}) {
+    peak[axis] = json::array();
+    peak_std[axis] = json::array();
+  }
   for (int j = 0; j < flutes_; ++j) {
     const auto uj = static_cast<std::size_t>(j);
     periods.push_back(number_or_null(f.period[uj].mean()));
-    fx.push_back(number_or_null(f.peak[uj][0].mean()));
-    fy.push_back(number_or_null(f.peak[uj][1].mean()));
-    fz.push_back(number_or_null(f.peak[uj][2].mean()));
-    resultant.push_back(number_or_null(f.peak_resultant[uj].mean()));
+    periods_std.push_back(number_or_null(f.period[uj].stddev()));
+    const std::array<const Running*, 4> of = {&f.peak[uj][0], &f.peak[uj][1], &f.peak[uj][2],
+                                              &f.peak_resultant[uj]};
+    const std::array<const char*, 4> axes = {"fx", "fy", "fz", "resultant"};
+    for (std::size_t a = 0; a < axes.size(); ++a) {
+      peak[axes[a]].push_back(number_or_null(of[a]->mean()));
+      peak_std[axes[a]].push_back(number_or_null(of[a]->stddev()));
+    }
   }
   const auto& in = status_.input;
   const std::int64_t samples = in.samples_accepted;
@@ -447,7 +456,9 @@ nlohmann::json RunSummary::to_json() const {
             "once-per-revolution reference)"},
            {"alpha_deg", alpha},
            {"tooth_period_s", periods},
-           {"peak_force_N", {{"fx", fx}, {"fy", fy}, {"fz", fz}, {"resultant", resultant}}},
+           {"tooth_period_s_std", periods_std},
+           {"peak_force_N", peak},
+           {"peak_force_N_std", peak_std},
            {"delta_fy_N", two_edges ? number_or_null(f.delta_fy.mean()) : json(nullptr)},
            {"delta_fy_N_std", two_edges ? number_or_null(f.delta_fy.stddev()) : json(nullptr)},
            {"residual_rms_N", residual},

@@ -5,7 +5,8 @@
 //   samples, duration_s, revolutions (valid), revolutions_measured, revolutions_cutting (the
 //   turns while the tracker heard cutting: what every revolution is measured against),
 //   spindle_rpm (mean of the revolutions' own speeds), spindle_rpm_commanded, tooth_event,
-//   alpha_deg {mean, std}, tooth_period_s [per flute], peak_force_N {fx, fy, fz: per flute},
+//   alpha_deg {mean, std}, tooth_period_s [per flute], peak_force_N {fx, fy, fz, resultant: per
+//   flute} (each with its revolution-to-revolution spread: tooth_period_s_std, peak_force_N_std),
 //   delta_fy_N, residual_rms_N {fx, fy, fz, measured}, alerts [...], dropped_samples,
 //   warnings [...]
 // and more detail (model features, counters) beside them. Every number is finite or null, and

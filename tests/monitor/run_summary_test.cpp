@@ -306,6 +306,36 @@ TEST(RunSummary, DeltaFyComesWithItsSpread) {
   EXPECT_DOUBLE_EQ(j["delta_fy_N_std"].get<double>(), 1.0);
 }
 
+// Each flute's tooth period and peaks come with their spread from revolution to revolution too
+// (the sample standard deviation, as α's and ΔFy's; null for a single revolution).
+TEST(RunSummary, FlutePeriodsAndPeaksComeWithTheirSpread) {
+  MonitorConfig config;
+  RunSummary summary(config);
+  for (int i = 0; i < 3; ++i) {
+    RevolutionRecord r = revolution(i);
+    r.measured.flute_period_s = {1.0e-3 + 2e-6 * i, 1.4e-3 - 2e-6 * i};
+    r.measured.peak_N[0] = {-1.0 - 0.1 * i, 2.0, 0.5};
+    r.measured.peak_N[1] = {-0.5, 1.0 + 0.2 * i, 0.25};
+    r.measured.peak_resultant_N = {3.0 + 0.3 * i, 1.5};
+    summary.add(r);
+  }
+  summary.finish(PipelineStatus{});
+  const nlohmann::json j = summary.to_json();
+  EXPECT_NEAR(j["tooth_period_s"][0].get<double>(), 1.002e-3, 1e-15);
+  EXPECT_NEAR(j["tooth_period_s_std"][0].get<double>(), 2e-6, 1e-12);
+  EXPECT_NEAR(j["tooth_period_s_std"][1].get<double>(), 2e-6, 1e-12);
+  EXPECT_NEAR(j["peak_force_N_std"]["fx"][0].get<double>(), 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(j["peak_force_N_std"]["fx"][1].get<double>(), 0.0);
+  EXPECT_NEAR(j["peak_force_N_std"]["fy"][1].get<double>(), 0.2, 1e-12);
+  EXPECT_NEAR(j["peak_force_N_std"]["resultant"][0].get<double>(), 0.3, 1e-12);
+  EXPECT_NEAR(j["peak_force_N"]["resultant"][0].get<double>(), 3.3, 1e-12);
+
+  RunSummary one(config);
+  one.add(revolution(0));
+  one.finish(PipelineStatus{});
+  EXPECT_TRUE(one.to_json()["tooth_period_s_std"][0].is_null());
+}
+
 // Flute 0 is CE1, the flute with the largest force at the lock. Over a record where another
 // flute holds clearly more (here 1.6 against 0.9 N: the lock's revolutions were unlike the
 // cut), the summary says that α and ΔFy come from another edge; flutes within the 10 % margin

@@ -56,6 +56,23 @@ TEST(SummaryText, AlphaFromOneRevolutionHasNoSpread) {
       << text_many;
 }
 
+// Each flute's period and resultant peak have their spread on the row under them, in their
+// columns; a flute without one (a single revolution) shows a dash.
+TEST(SummaryText, FlutePeriodsAndPeaksHaveTheirSpreadUnderThem) {
+  nlohmann::json j = summary(41, 41);
+  j["tooth_period_s"] = {1.3379e-3, 1.0382e-3};
+  j["tooth_period_s_std"] = {2.1e-6, nullptr};
+  j["peak_force_N"] = {{"resultant", {1.639, 0.942}}};
+  j["peak_force_N_std"] = {{"resultant", {0.004, 0.0031}}};
+  const std::string text = summary_text(j);
+  EXPECT_NE(text.find("  period [ms]         1.3379    1.0382\n"
+                      "    ± rev to rev      0.0021         —\n"
+                      "  peak |Fxy| [N]       1.639     0.942\n"
+                      "    ± rev to rev       0.004     0.003\n"),
+            std::string::npos)
+      << text;
+}
+
 // The identified runout, and where a flute cuts nothing beyond it (the fit on a flute's contact
 // edge), that the figure is a lower bound.
 TEST(SummaryText, TheRunoutSaysWhenItIsALowerBound) {
