@@ -22,17 +22,23 @@ int run_record(const RecordOptions& o) {
     throw std::runtime_error("cannot open LCM at " + o.url);
   }
   LcmRecorder recorder(lcm.getUnderlyingLCM(), o.output, o.channels, o.invert);
+  recorder.set_source_is_a_log(o.url.rfind("file://", 0) == 0);
   install_stop_signals(InterruptedCalls::return_at_once);  // the wait ends with the signal
   spdlog::info("recording {}{} from {} into {} until {}", o.invert ? "every channel but " : "",
                o.channels, o.url, o.output,
-               o.duration_s > 0.0 ? fmt::format("{} s have passed", o.duration_s)
-                                  : std::string("SIGINT or SIGTERM (Ctrl-C)"));
+               o.duration_s > 0.0           ? fmt::format("{} s have passed", o.duration_s)
+               : recorder.source_is_a_log() ? std::string("the log's end, SIGINT or SIGTERM")
+                                            : std::string("SIGINT or SIGTERM (Ctrl-C)"));
   const auto start = std::chrono::steady_clock::now();
   const auto elapsed_s = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  while (!stop_requested() && (o.duration_s <= 0.0 || elapsed_s() < o.duration_s)) {
+  while (!stop_requested() && !recorder.source_ended() &&
+         (o.duration_s <= 0.0 || elapsed_s() < o.duration_s)) {
     recorder.handle(100);
+  }
+  if (recorder.source_ended()) {
+    spdlog::info("{}: read to its end", o.url);
   }
   recorder.finish();  // what arrived before the end and is still queued
   spdlog::info("{} events, {} bytes of messages, in {} over {:.1f} s", recorder.events(),

@@ -100,6 +100,10 @@ bool LcmRecorder::handle(int timeout_ms) {
   const int err = errno;
   flush_if_due();
   throw_if_failed();
+  if (status < 0 && err != EINTR && source_is_log_) {  // read to its end
+    source_ended_ = true;
+    return false;
+  }
   if (status < 0 && err != EINTR) {  // EINTR: a signal, which the caller reads
     throw std::runtime_error(std::string("LCM: cannot receive (") +
                              (err != 0 ? std::strerror(err) : "lcm_handle failed") + ")");

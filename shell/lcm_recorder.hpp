@@ -36,6 +36,12 @@ class LcmRecorder {
   /// handled (false too when a signal interrupted the wait). @throws std::runtime_error "PATH:
   /// cannot write event N (…)" on a failed write, or when LCM cannot receive.
   bool handle(int timeout_ms);
+  /// The source is a log being read (a file:// URL): LCM's failure to receive past its end is
+  /// its end (source_ended()), not an error.
+  void set_source_is_a_log(bool is_log) { source_is_log_ = is_log; }
+  [[nodiscard]] bool source_is_a_log() const { return source_is_log_; }
+  /// A log source has been read to its end (nothing more will arrive).
+  [[nodiscard]] bool source_ended() const { return source_ended_; }
   /// Records everything already received, then flushes and closes the log (a second call does
   /// nothing). @throws std::runtime_error on a failed write or close.
   void finish();
@@ -59,6 +65,8 @@ class LcmRecorder {
   bool invert_;
   lcm_eventlog_t* log_ = nullptr;
   lcm_subscription_t* subscription_ = nullptr;
+  bool source_is_log_ = false;
+  bool source_ended_ = false;
   std::int64_t events_ = 0;
   std::int64_t bytes_ = 0;
   std::map<std::string, std::int64_t> per_channel_;

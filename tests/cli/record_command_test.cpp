@@ -113,6 +113,26 @@ TEST(RecordCommand, PublishSendsARealRecordingDescribedAsForReplay) {
       << empty.output;
 }
 
+// Recording from a log (file://…?speed=0: a log's channels filtered into a new one) ends at the
+// log's end with the counts; it had ended "LCM: cannot receive (lcm_handle failed)", exit 2,
+// without them, the log it wrote being complete.
+TEST(RecordCommand, RecordingFromALogEndsAtItsEnd) {
+  const fs::path dir = test::fresh_temp_dir();
+  const std::string cli = test::millwatch_cli();
+  const std::string demo = (test::source_dir() / "config" / "demo.json").string();
+  const auto published =
+      test::run_command(cli + " publish " + demo + " --duration 0.05 --speed 0 --url 'file://" +
+                        (dir / "source.lcmlog").string() + "?mode=w' 2>&1");
+  ASSERT_EQ(published.exit_code, 0) << published.output;
+  const auto r =
+      test::run_command("timeout 30 " + cli + " record " + (dir / "copy.lcmlog").string() +
+                        " --url 'file://" + (dir / "source.lcmlog").string() + "?speed=0' 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("read to its end"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("MILLWATCH_FORCE_RAW: 17"), std::string::npos) << r.output;
+  EXPECT_EQ(fs::file_size(dir / "copy.lcmlog"), fs::file_size(dir / "source.lcmlog"));
+}
+
 TEST(RecordCommand, KeepsAnExistingLogUnlessForced) {
   const fs::path dir = test::fresh_temp_dir();
   const fs::path log = dir / "kept.lcmlog";
