@@ -166,10 +166,11 @@ void add_publish_command(CLI::App& app) {
       ->check(CLI::Range(1, 2000));
   cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
       ->check(kPositive);
-  // At most 1e10 s (the year 2286): utimes are µs in 64 bits.
+  // At most 4e9 s (the year 2096): the input check takes utimes below 2⁵³ µs (9.007e9 s), and
+  // the recording's own times come on top.
   cmd->add_option("--start-utime", o->start_utime_s,
                   "Add this many seconds to every utime (e.g. seconds since the epoch)")
-      ->check(number_from(0.0, false, 1e10));
+      ->check(number_from(0.0, false, 4e9));
   cmd->callback([o] { run_subcommand([&o] { return run_publish(*o); }); });
 }
 
@@ -243,7 +244,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--start", o->start,
                   "Starting model: 'plain' (no effects, default) or 'configured'");
   cmd->add_option("--band", o->band_hz,
-                  "Upper end of the compared band, Hz (default 0.4·fs, at most 10 kHz)")
+                  "Upper end of the compared band, Hz (default: 0.4·fs or 10 kHz, the lower)")
       ->check(kPositive);
   cmd->add_option("--from-s", o->from_s,
                   "Diagnose from this time on (s from the record's first sample; skip the entry)")

@@ -142,7 +142,7 @@ void validate(const MonitorConfig& c, const std::string& path) {
         join(path, "spindle.window_s"),
         (c.spindle.window_s > 0.0 ? "value " + format_number(window_s) + " s"
                                   : "automatic, " + format_number(window_s) + " s,") +
-            " holds " + format_number(std::round(revolutions * 100.0) / 100.0) +
+            " holds " + format_number(std::floor(revolutions * 100.0) / 100.0) +
             " revolutions at model.process.spindle_rpm " + format_number(tracker.commanded_rpm) +
             ": at least " + format_number(signal::kMinWindowRevolutions) + " needed (" +
             format_number(

@@ -155,7 +155,11 @@ nlohmann::json to_json(const SpindleTrackerConfig& c) {
 TrackerTiming tracker_timing(const SpindleTrackerConfig& c) {
   TrackerTiming t;
   const double rev_s = c.commanded_rpm > 0.0 ? 60.0 / c.commanded_rpm : 0.0;
-  t.window_s = c.window_s > 0.0 ? c.window_s : std::clamp(10.0 * rev_s, 0.02, 0.25);
+  // Automatic: 10 revolutions within 0.02–0.25 s, and never fewer than validate()'s 5 (below
+  // 1200 rpm the quarter second would hold fewer).
+  t.window_s = c.window_s > 0.0
+                   ? c.window_s
+                   : std::max(std::clamp(10.0 * rev_s, 0.02, 0.25), kMinWindowRevolutions * rev_s);
   // Hann windows overlapping by half (the sum of the windows still weighs every sample the
   // same): a quarter-window hop computed twice the estimates, each sharing three quarters of its
   // samples with the last, for twice the CPU. The ramp trend (the last 6 hops) spans ~2.5
@@ -182,9 +186,10 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             std::to_string(f_max) + " Hz");
   }
   if (tracker_timing(c).window_s * c.commanded_rpm / 60.0 < kMinWindowRevolutions) {
-    config::fail(at + "window_s", "value " + config::format_number(tracker_timing(c).window_s) +
-                                      " s must hold at least 5 revolutions at " +
-                                      config::format_number(c.commanded_rpm) + " rpm");
+    config::fail(at + "window_s",
+                 "value " + config::format_number(tracker_timing(c).window_s) +
+                     " s must hold at least " + config::format_number(kMinWindowRevolutions) +
+                     " revolutions at " + config::format_number(c.commanded_rpm) + " rpm");
   }
 }
 

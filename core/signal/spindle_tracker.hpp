@@ -75,10 +75,10 @@ struct SpindleTrackerConfig {
   double lock_phase_rad = 0.8;   ///< ...and in tooth-harmonic phase within this
 };
 
-/// The window and hop a configuration resolves to (automatic values filled in), in seconds.
 /// The fewest revolutions a tracker window may hold (validate()).
 inline constexpr double kMinWindowRevolutions = 5.0;
 
+/// The window and hop a configuration resolves to (automatic values filled in), in seconds.
 struct TrackerTiming {
   double window_s = 0.0;
   double hop_s = 0.0;

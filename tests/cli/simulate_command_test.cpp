@@ -215,7 +215,7 @@ TEST(SimulateCommand, OtherCommandsRefuseNumbersOutsideWhatTheyMean) {
   const std::pair<std::string, const char*> cases[] = {
       {publish + "--start-utime nan", "--start-utime: \"nan\" is not a number"},
       {publish + "--start-utime -1", "--start-utime: -1 is not a non-negative number"},
-      {publish + "--start-utime 2e10", "--start-utime: 2e10 is beyond 1e+10"},
+      {publish + "--start-utime 9e9", "--start-utime: 9e9 is beyond 4e+09"},
       {diagnose + "--band -5", "--band: -5 is not a positive number"},
       {diagnose + "--band nan", "--band: \"nan\" is not a number"},
       {diagnose + "--from-s -1", "--from-s: -1 is not a non-negative number"}};

@@ -99,13 +99,17 @@ TEST(MonitorConfig, CrossFieldErrorsSayWhatTheValueDoesNotSuit) {
         {{"model", {{"process", {{"spindle_rpm", rpm}}}}}, {"spindle", {{"window_s", window_s}}}});
   };
   EXPECT_EQ(at_rpm(5000.0, 0.05),
-            "config.spindle.window_s: value 0.05 s holds 4.17 revolutions at "
+            "config.spindle.window_s: value 0.05 s holds 4.16 revolutions at "
             "model.process.spindle_rpm 5000: at least 5 needed (0.06 s or more)");
   EXPECT_EQ(at_rpm(6000.0, 0.05), "");  // 5 revolutions exactly
-  // The automatic window: ten revolutions, at most a quarter second.
-  EXPECT_EQ(at_rpm(1000.0, 0.0),
-            "config.spindle.window_s: automatic, 0.25 s, holds 4.17 revolutions at "
-            "model.process.spindle_rpm 1000: at least 5 needed (0.3 s or more)");
+  // 4.9999 revolutions are not "5" (rounded down).
+  EXPECT_EQ(at_rpm(5999.9, 0.05),
+            "config.spindle.window_s: value 0.05 s holds 4.99 revolutions at "
+            "model.process.spindle_rpm 5999.9: at least 5 needed (0.0501 s or more)");
+  // The automatic window: ten revolutions within 0.02–0.25 s, and at least 5 (below 1200 rpm
+  // the quarter second held fewer, and the automatic window was refused).
+  EXPECT_EQ(at_rpm(1000.0, 0.0), "");
+  EXPECT_EQ(at_rpm(300.0, 0.0), "");
 
   EXPECT_EQ(error_of({{"sample_rate_hz", 1000.0}}),
             "config.filter.cutoff_hz: value 3300 Hz (the default) must stay below 0.45 x the "
