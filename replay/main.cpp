@@ -145,7 +145,7 @@ void add_publish_command(CLI::App& app) {
   auto o = std::make_shared<PublishOptions>();
   CLI::App* cmd = app.add_subcommand(
       "publish",
-      "Publish raw sample blocks on LCM like a DAQ bridge (from a CSV cut or a scenario)");
+      "Publish raw sample blocks on LCM like a DAQ bridge (from a recording or a scenario)");
   cmd->add_option("input", o->input,
                   "A recording as replay reads it (CSV, DynoWare, text, .mat, LCM log) or a "
                   "scenario .json to simulate")

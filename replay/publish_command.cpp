@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -32,7 +34,21 @@ int run_publish(const PublishOptions& o) {
   std::unique_ptr<sim::CutSimulator> simulator;
   std::unique_ptr<RecordingSource> recording;
   double rate_hz = 0.0;
-  if (input.extension() == ".json") {  // a scenario, simulated on the fly
+  std::string extension = input.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const bool scenario = extension == ".json";
+  // What does not apply to the input is refused rather than left unused.
+  if (scenario && !(o.sidecar.empty() && o.config.empty() && o.columns.empty())) {
+    throw std::runtime_error(input.string() +
+                             ": a scenario describes its cut itself: --sidecar, --config and "
+                             "--columns are for a recording");
+  }
+  if (!scenario && o.duration_s > 0.0) {
+    throw std::runtime_error(input.string() +
+                             ": --duration is for a scenario (a recording is published whole)");
+  }
+  if (scenario) {  // simulated on the fly
     sim::Scenario s;
     try {
       s = sim::scenario_from_json(read_json_file(input));

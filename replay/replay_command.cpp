@@ -180,6 +180,22 @@ int replay_one(const ReplayOptions& o) {
       in_plane.samples() > 0
           ? nlohmann::json{{"rms", *in_plane.rms_N()}, {"max", *in_plane.max_N()}}
           : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
+  // A record with nothing measurable is a failed replay, said before any summary, revolutions
+  // or plots are written (a summary of 0 samples would look like a replay that worked).
+  if (samples_read == 0 && source->bad_records() == 0 && !stop_requested()) {
+    // Not a cut without cutting either: nothing to measure at all (a header alone, a log
+    // without the raw channel).
+    spdlog::error("{}: no samples to replay: {}{}", input.string(), source->what_it_held(),
+                  lcm_log ? " (--channel names the log's raw channel)" : "");
+    return 2;
+  }
+  if (in_plane.samples() == 0 && source->bad_records() > 0) {
+    // Not a cut without cutting: a file this reader could not read (a column map past its
+    // columns, a trailing delimiter on every row).
+    spdlog::error("{}: no sample could be read: all {} {} were bad (the first are named above)",
+                  input.string(), source->bad_records(), source->record_unit());
+    return 2;
+  }
   if (recorder) {
     recorder->commit();
     if (!o.revolutions.empty()) {
@@ -200,19 +216,6 @@ int replay_one(const ReplayOptions& o) {
     std::printf("%s", summary_text(j).c_str());
   }
   std::fflush(stdout);
-  if (samples_read == 0 && source->bad_records() == 0 && !stop_requested()) {
-    // Not a cut without cutting either: nothing to measure at all (a header alone, a log
-    // without the raw channel).
-    spdlog::error("{}: no samples to replay: {}", input.string(), source->what_it_held());
-    return 2;
-  }
-  if (in_plane.samples() == 0 && source->bad_records() > 0) {
-    // Not a cut without cutting: a file this reader could not read (a column map past its
-    // columns, a trailing delimiter on every row).
-    spdlog::error("{}: no sample could be read: all {} {} were bad (the first are named above)",
-                  input.string(), source->bad_records(), source->record_unit());
-    return 2;
-  }
   return 0;
 }
 

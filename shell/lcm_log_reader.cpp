@@ -65,6 +65,8 @@ std::optional<monitor::SampleBlock> LcmLogReader::next() {
       ++it->second;
     } else if (channel_events_.size() < kMaxChannelsTallied) {
       channel_events_.emplace(event_channel_, 1);
+    } else {
+      ++untallied_;
     }
     if (event_channel_ != channel_) {
       continue;

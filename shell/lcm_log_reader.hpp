@@ -55,6 +55,8 @@ class LcmLogReader {
     return channel_events_;
   }
   static constexpr std::size_t kMaxChannelsTallied = 32;
+  /// Events on channels past the kMaxChannelsTallied named.
+  [[nodiscard]] std::int64_t events_untallied() const { return untallied_; }
   /// Sample rate of the first block (0 before it).
   [[nodiscard]] double first_sample_rate_hz() const { return first_rate_hz_; }
 
@@ -87,6 +89,7 @@ class LcmLogReader {
   std::int64_t events_ = 0;
   std::int64_t bad_events_ = 0;
   std::map<std::string, std::int64_t> channel_events_;
+  std::int64_t untallied_ = 0;
   double first_rate_hz_ = 0.0;
 };
 

@@ -170,10 +170,10 @@ class LogSource : public RecordingSource {
     for (const auto& [name, count] : tally) {
       held += (held.empty() ? "" : ", ") + name + " (" + events(count) + ")";
     }
-    if (tally.size() == LcmLogReader::kMaxChannelsTallied) {
-      held += ", ...";
+    if (reader_.events_untallied() > 0) {
+      held += " and " + events(reader_.events_untallied()) + " on further channels";
     }
-    return "no event on channel " + channel_ + " (--channel); the log holds " + held;
+    return "no event on channel " + channel_ + "; the log holds " + held;
   }
 
  private:

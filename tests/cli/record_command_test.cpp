@@ -104,6 +104,24 @@ TEST(RecordCommand, PublishSendsARealRecordingDescribedAsForReplay) {
                                    "with --sidecar or --config)"),
             std::string::npos)
       << no_sidecar.output;
+  // A scenario (any case of .json) takes no description of a recording; a recording no
+  // --duration.
+  fs::copy_file(test::source_dir() / "config" / "demo.json", dir / "SCENARIO.JSON");
+  const auto upper = test::run_command(cli + " publish " + (dir / "SCENARIO.JSON").string() +
+                                       " --duration 0.01 --url memq:// --speed 0 2>&1");
+  EXPECT_EQ(upper.exit_code, 0) << upper.output;
+  const auto described = test::run_command(cli + " publish " + (dir / "SCENARIO.JSON").string() +
+                                           " --config " + config + " --url memq:// 2>&1");
+  EXPECT_EQ(described.exit_code, 2);
+  EXPECT_NE(described.output.find("a scenario describes its cut itself: --sidecar, --config and "
+                                  "--columns are for a recording"),
+            std::string::npos)
+      << described.output;
+  const auto shortened = test::run_command(cli + " publish " + csv.string() + " --config " +
+                                           config + " --duration 0.01 --url memq:// 2>&1");
+  EXPECT_EQ(shortened.exit_code, 2);
+  EXPECT_NE(shortened.output.find("--duration is for a scenario"), std::string::npos)
+      << shortened.output;
   std::ofstream(dir / "header.csv") << "t_s,fx_N,fy_N,fz_N\n";
   const auto empty = test::run_command(cli + " publish " + (dir / "header.csv").string() +
                                        " --config " + config + " --url memq:// --speed 0 2>&1");

@@ -199,6 +199,7 @@ TEST(ReplayCommand, ARecordWithNoSamplesFailsAndSaysWhatItHeld) {
   EXPECT_NE(r.log.find("cut.csv: no samples to replay: no rows after its header"),
             std::string::npos)
       << r.log;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
 }
 
 // A file cut short mid-number reads its last row as it stands ("-8.8" for "-8.858"): that the
@@ -450,10 +451,12 @@ TEST(ReplayCommand, ALogWithoutTheRawChannelFailsAndNamesTheChannelsItHolds) {
       log.string() + " --config " + monitor_config(dir).string() + " --channel FORCE_RAW_TYPO",
       dir / "summary.json");
   EXPECT_EQ(r.exit_code, 2) << r.log;
-  EXPECT_NE(r.log.find("raw.lcmlog: no samples to replay: no event on channel FORCE_RAW_TYPO "
-                       "(--channel); the log holds MILLWATCH_FORCE_RAW (10 events)"),
+  EXPECT_NE(r.log.find("raw.lcmlog: no samples to replay: no event on channel FORCE_RAW_TYPO; "
+                       "the log holds MILLWATCH_FORCE_RAW (10 events) (--channel names the "
+                       "log's raw channel)"),
             std::string::npos)
       << r.log;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));  // no summary of a replay that failed
 }
 
 // Well-framed events whose force_block_t is malformed (a sample count that wraps lcm-gen's size
