@@ -58,17 +58,26 @@ struct UrlOverrides {
 };
 
 daemon::DaemonConfig load(const std::string& path, const UrlOverrides& urls) {
+  // The command line's URLs are its own, not the file's: said without the file's name.
+  for (const auto& [url, option] :
+       {std::pair{&urls.input, "--lcm-url"}, std::pair{&urls.output, "--lcm-output-url"}}) {
+    if (!url->empty()) {
+      try {
+        daemon::check_lcm_url(*url, option);
+      } catch (const config::ConfigError& e) {
+        throw std::runtime_error(e.what());
+      }
+    }
+  }
   try {
     nlohmann::json j = shell::read_json_file(path);
     shell::resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
     daemon::DaemonConfig c = daemon::daemon_config_from_json(j);
     if (!urls.input.empty()) {
-      daemon::check_lcm_url(urls.input, "--lcm-url");
       c.lcm_url = urls.input;
       c.lcm_output_url = urls.input;
     }
     if (!urls.output.empty()) {
-      daemon::check_lcm_url(urls.output, "--lcm-output-url");
       c.lcm_output_url = urls.output;
     }
     return c;

@@ -11,9 +11,11 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "replay/calibrate_command.hpp"
 #include "replay/diagnose_command.hpp"
@@ -279,19 +281,23 @@ int main(int argc, char** argv) {
   millwatch::shell::add_calibrate_command(app);
   millwatch::shell::add_diagnose_command(app);
   // A word that is no command: CLI11 would say only "A subcommand is required".
-  const auto is_command = [&app](const char* word) {
-    try {
-      return app.get_subcommand(word) != nullptr;
-    } catch (const CLI::OptionNotFound&) {
-      return false;
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string commands;
+    bool known = false;
+    const std::function<bool(const CLI::App*)> every = [](const CLI::App*) { return true; };
+    for (const CLI::App* sub : std::as_const(app).get_subcommands(every)) {
+      commands += (commands.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == argv[1];
     }
-  };
-  if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
-    std::fprintf(stderr,
-                 "millwatch: no command \"%s\" (commands: simulate, replay, publish, record, "
-                 "calibrate, diagnose; millwatch COMMAND --help)\n",
-                 argv[1]);
-    return 109;  // CLI11's exit code for an argument it does not expect
+    if (!known) {
+      std::string word;  // control bytes are not written to the terminal
+      for (const char* c = argv[1]; *c != '\0' && word.size() < 40; ++c) {
+        word += static_cast<unsigned char>(*c) < 0x20 ? '?' : *c;
+      }
+      std::fprintf(stderr, "millwatch: no command \"%s\" (commands: %s; millwatch --help)\n",
+                   word.c_str(), commands.c_str());
+      return 109;  // CLI11's exit code for an argument it does not expect
+    }
   }
   try {
     app.parse(argc, argv);

@@ -133,7 +133,7 @@ nlohmann::json sidecar_json(const sim::Scenario& s, const sim::CutSimulator& sim
 void warn_if_replay_refuses(const nlohmann::json& sidecar, const std::filesystem::path& path) {
   try {
     (void)monitor::monitor_config_from_json(monitor::monitor_json_from_sidecar(sidecar));
-  } catch (const config::ConfigError& e) {
+  } catch (const std::exception& e) {  // a ConfigError naming the value, or a sidecar fault
     spdlog::warn(
         "{}: replay will refuse this recording as its sidecar describes it ({}); set "
         "the value in replay's --config",
@@ -220,16 +220,21 @@ int run_simulate(const SimulateOptions& o) {
     truth_path = csv_path;
     truth_path.replace_extension(".truth.json");
   }
-  if (truth_path == csv_path || truth_path == sidecar_path) {
+  // One file by two names (./cut.csv and cut.csv, a hard link): the same file.
+  const auto same_file = [](const std::filesystem::path& a, const std::filesystem::path& b) {
+    std::error_code ec_a, ec_b;
+    if (std::filesystem::equivalent(a, b, ec_a)) {
+      return true;
+    }
+    const auto canonical_a = std::filesystem::weakly_canonical(a, ec_a);
+    const auto canonical_b = std::filesystem::weakly_canonical(b, ec_b);
+    return !ec_a && !ec_b ? canonical_a == canonical_b : a == b;
+  };
+  if (same_file(truth_path, csv_path) || same_file(truth_path, sidecar_path)) {
     spdlog::error("--truth-json {}: the CSV and its sidecar go there", truth_path.string());
     return 2;
   }
   // `simulate cut.json -o cut.csv` would write the sidecar over the scenario it reads.
-  const auto same_file = [](const std::filesystem::path& a, const std::filesystem::path& b) {
-    std::error_code ec;
-    return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec) &&
-           !ec;
-  };
   for (const auto& [output, what] :
        {std::pair{csv_path, "the CSV"}, std::pair{sidecar_path, "its sidecar"},
         std::pair{truth_path, "the truth"}}) {

@@ -39,6 +39,9 @@ const char* parse_row(const char*& p, const char* end, double* v) {
     }
     const bool row_ends = *p == '\n' || (*p == '\r' && p[1] == '\n');
     if (*p != ',' && !row_ends) {  // the cell goes on after its number: "0x10", "1;2"
+      if (*p == '\r') {
+        return "a carriage return inside the row";
+      }
       return i == 0 ? "t_s is not a number" : "a force is not a number";
     }
     if (i < 3) {

@@ -62,7 +62,7 @@ std::string times_real_time(double ratio) {
   if (ratio >= 0.995) {
     return fmt::format("{:.1f}", ratio);
   }
-  return fmt::format("{:.2g}", std::max(ratio, 0.001));
+  return ratio < 0.001 ? std::string("<0.001") : fmt::format("{:.2g}", ratio);
 }
 
 std::string replay_progress_text(double fraction, double sample_time_s, double wall_s,

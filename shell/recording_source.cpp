@@ -97,7 +97,7 @@ class TextSource : public RecordingSource {
     }
     return "line " + std::to_string(reader_->lines()) +
            ", the last, has no end-of-line: if the file was cut short there, its last number may "
-           "be too (the row was read as it stands)";
+           "be too (the row was read as it stands, unless named bad above)";
   }
   [[nodiscard]] double progress() const override {
     const auto at = in_.tellg();

@@ -150,7 +150,7 @@ void apply_map(TextLayout& l, const ColumnMap& map, const std::string& name,
       }
       throw std::runtime_error(name + ":" + std::to_string(header_line) + ": no column \"" +
                                spec.source + "\" for " + ColumnMap::kKeys[q] +
-                               " (columns: " + join(l.channels) + ")");
+                               " (columns: " + excerpt(join(l.channels), 200) + ")");
     }
     for (std::size_t earlier = 0; earlier < q; ++earlier) {
       if (l.column[earlier] == c) {  // by name and by index, or two names of one column
@@ -392,7 +392,7 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
               (q == 1   ? "Fx"
                : q == 2 ? "Fy"
                         : "Fz") +
-              " (channels: " + join(l.channels) + "); name them with --columns");
+              " (channels: " + excerpt(join(l.channels), 200) + "); name them with --columns");
         }
       }
     }

@@ -151,7 +151,7 @@ FeedTrend feed_trend(const std::vector<double>& feed_um, const std::vector<doubl
   t.sentence = format("The residual above the noise varies as f_t^%.2f", t.exponent) +
                (t.has_sigma ? format(" ± %.2f", t.exponent_sigma)
                             : std::string(" (no σ: two cuts are a line through two points; a "
-                                          "third feed gives one)")) +
+                                          "third cut gives one)")) +
                format(" over %.3g–%.3g µm per tooth: ", distinct.front(), distinct.back()) +
                t.name + " (mostly in " + band +
                format("; relative to the force f_t^%.2f) — ", t.relative_exponent) + t.suggests +

@@ -141,7 +141,7 @@ TEST(FeedTrend, ReadsTheExponentOfAnAnalyticSeries) {
   EXPECT_NEAR(t.exponent, -1.0, 1e-12);
   // The sentence people read says the exponent has no σ, and why (it had given f_t^-1.00 bare).
   EXPECT_EQ(t.sentence.rfind("The residual above the noise varies as f_t^-1.00 (no σ: two cuts are "
-                             "a line through two points; a third feed gives one) over 1–4 µm",
+                             "a line through two points; a third cut gives one) over 1–4 µm",
                              0),
             0u)
       << t.sentence;

@@ -146,8 +146,9 @@ TEST(CsvCutReader, MalformedRowsAreReportedByLine) {
 TEST(CsvCutReader, ACellWithTextAfterItsNumberIsNotANumber) {
   const Read r = read(kHeader +
                       "0,1,2,3\r\n0.00002x,1,2,3\n0.00004,0x10,2,3\n0.00006,1;2,3,4\n0.00008,1,2,3 "
-                      "N\n0.0001,1,2\r\n0.00012,5,2,3\r\n");
-  ASSERT_EQ(r.bad.size(), 5u);
+                      "N\n0.0001,1,2\r\n0.00012,5,2,3\r\n0.00014,1,2,3\r\r\n");
+  ASSERT_EQ(r.bad.size(), 6u);
+  EXPECT_EQ(r.bad[5].second, "a carriage return inside the row in \"0.00014,1,2,3\\x0d\"");
   EXPECT_EQ(r.bad[0].second, "t_s is not a number in \"0.00002x,1,2,3\"");
   EXPECT_EQ(r.bad[1].second, "a force is not a number in \"0.00004,0x10,2,3\"");
   EXPECT_EQ(r.bad[2].second, "a force is not a number in \"0.00006,1;2,3,4\"");
