@@ -97,7 +97,7 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
                                          input.string(), feed_um, where));
   }
   loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
-  const double config_rate_hz = loaded.config_rate_hz();
+  const double config_rate_hz = configured_rate_hz(loaded);
 
   std::int64_t bad = 0;
   RecordingOptions ro;

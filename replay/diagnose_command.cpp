@@ -81,7 +81,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   }
   RecordingOptions ro;
   ro.columns = loaded.columns;
-  ro.config_rate_hz = loaded.config_rate_hz();
+  ro.config_rate_hz = configured_rate_hz(loaded);
   std::int64_t bad = 0;
   ro.on_bad = [&](std::int64_t at, const std::string& problem) {
     if (++bad <= 20) {
@@ -93,7 +93,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   take_recording_rate(loaded, *source, input.string());
   // The monitor's low-pass plays no part here (the diagnosis compares its own band): unless
   // configured, it is set where the monitor's checks against the tooth-passing frequency pass.
-  const double rate_hz = loaded.config_rate_hz();
+  const double rate_hz = configured_rate_hz(loaded);
   nlohmann::json& base = loaded.json;
   if (rate_hz > 0.0 && base.is_object() &&
       !(base.contains("filter") && base["filter"].is_object() &&

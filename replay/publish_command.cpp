@@ -65,7 +65,7 @@ int run_publish(const PublishOptions& o) {
         {input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
     RecordingOptions ro;
     ro.columns = loaded.columns;
-    ro.config_rate_hz = loaded.config_rate_hz();
+    ro.config_rate_hz = configured_rate_hz(loaded);
     std::int64_t bad = 0;
     ro.on_bad = [&](std::int64_t where, const std::string& problem) {
       if (++bad <= 20) {

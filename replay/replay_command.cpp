@@ -62,7 +62,7 @@ int replay_one(const ReplayOptions& o) {
   // The configuration: the sidecar's cut under --config's overrides.
   LoadedMonitorConfig loaded =
       load_monitor_config({input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
-  const double config_rate_hz = loaded.config_rate_hz();
+  const double config_rate_hz = configured_rate_hz(loaded);
 
   std::int64_t bad = 0;
   const char* unit = lcm_log ? "events" : format == RecordingFormat::kMat ? "samples" : "lines";

@@ -138,6 +138,14 @@ void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& sou
   }
 }
 
+double configured_rate_hz(const LoadedMonitorConfig& config) {
+  const double rate_hz = config.config_rate_hz();
+  if (config.json.is_object() && config.json.contains("sample_rate_hz") && !(rate_hz > 0.0)) {
+    (void)parse_monitor_config(config);  // names the field and its value
+  }
+  return rate_hz;
+}
+
 monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config) {
   try {
     return monitor::monitor_config_from_json(config.json);

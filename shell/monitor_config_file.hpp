@@ -49,6 +49,11 @@ struct LoadedMonitorConfig {
   [[nodiscard]] double config_rate_hz() const;
 };
 
+/// The rate the configuration states (0: none). @throws std::runtime_error naming the file,
+/// the field and its value when it states one that is no rate ("fifty", 0, null): a text
+/// without a time column would otherwise be said to have "no sample rate".
+double configured_rate_hz(const LoadedMonitorConfig& config);
+
 /// Loads a cut's configuration. `file` is --config already read (read_config_file), so that
 /// several cuts read it once.
 /// @throws std::runtime_error naming the file and the problem (a sidecar that is missing,

@@ -191,11 +191,14 @@ nlohmann::json trend(const FeedTrend& t) {
                       {"law", "excess over the noise floor ~ feed_per_tooth^exponent"}};
   j["exponent"] = t.has_exponent ? nlohmann::json(t.exponent) : nlohmann::json(nullptr);
   j["exponent_sigma"] = t.has_sigma ? nlohmann::json(t.exponent_sigma) : nlohmann::json(nullptr);
+  // The excess's share of the measured force against the feed (the sentence states it too).
+  j["relative_exponent"] =
+      t.has_exponent ? nlohmann::json(t.relative_exponent) : nlohmann::json(nullptr);
   if (!t.has_exponent) {
     j["exponent_absent"] = t.name == "one_feed" ? "fewer than two distinct feeds"
                                                 : "no cut stands above its noise floor";
   } else if (!t.has_sigma) {
-    j["exponent_sigma_absent"] = "two feeds fit a line exactly: sigma needs three or more";
+    j["exponent_sigma_absent"] = "two cuts fit a line exactly: sigma needs three or more";
   }
   return j;
 }

@@ -332,6 +332,13 @@ TEST(DiagnoseCommand, SeveralCutsAreComparedAcrossFeeds) {
   EXPECT_EQ(a["trend"]["name"], "independent_of_feed") << a["trend"]["sentence"];
   EXPECT_EQ(a["trend"]["band"], "spindle_harmonics");
   EXPECT_TRUE(a["trend"]["exponent_sigma"].is_number());
+  // The relative exponent the sentence states is a key of its own (README lists it).
+  ASSERT_TRUE(a["trend"]["relative_exponent"].is_number()) << a["trend"].dump(1);
+  std::array<char, 64> relative{};
+  std::snprintf(relative.data(), relative.size(), "relative to the force f_t^%.2f",
+                a["trend"]["relative_exponent"].get<double>());
+  EXPECT_NE(a["trend"]["sentence"].get<std::string>().find(relative.data()), std::string::npos)
+      << a["trend"]["sentence"];
   EXPECT_TRUE(a["shrinks_in_every_cut"].get<bool>());
   EXPECT_EQ(j["named_effects"], nlohmann::json::array({"runout"}));
   double previous_feed = 0.0;

@@ -373,6 +373,24 @@ TEST(ReplayCommand, ARateTheTimeColumnBeliesGivesWayAndOneThatIsNoRateIsRefused)
     EXPECT_NE(r.exit_code, 0) << bad;
     EXPECT_NE(r.log.find("bad.json: sample_rate_hz: "), std::string::npos) << bad << r.log;
   }
+  // The same for a text without a time column, whose rate only the configuration gives (it had
+  // been "no time column and no sample rate", the bad value unnamed).
+  {
+    std::ofstream out(dir / "forces.txt");
+    out << "Fx Fy Fz\n";
+    for (int i = 0; i < 100; ++i) {
+      out << i << " " << -i << " 0.5\n";
+    }
+  }
+  for (const char* bad : {"\"fifty\"", "0", "null"}) {
+    std::ofstream(dir / "rate.json") << R"({"monitor": {"sample_rate_hz": )" << bad << "}}";
+    const ReplayRun r =
+        replay((dir / "forces.txt").string() + " --columns fx=1,fy=2,fz=3 --config " +
+                   (dir / "rate.json").string(),
+               dir / "text_summary.json");
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_NE(r.log.find("rate.json: sample_rate_hz: "), std::string::npos) << bad << r.log;
+  }
 }
 
 /// The simulated cut's raw blocks in an LCM log, as lcm-logger records them.
