@@ -93,7 +93,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   take_recording_rate(loaded, *source, input.string());
   // The monitor's low-pass plays no part here (the diagnosis compares its own band): unless
   // configured, it is set where the monitor's checks against the tooth-passing frequency pass.
-  const double rate_hz = configured_rate_hz(loaded);
+  const double rate_hz = loaded.config_rate_hz();  // checked above, the recording's now
   nlohmann::json& base = loaded.json;
   if (rate_hz > 0.0 && base.is_object() &&
       !(base.contains("filter") && base["filter"].is_object() &&

@@ -23,6 +23,7 @@
 #include "replay/record_command.hpp"
 #include "replay/replay_command.hpp"
 #include "replay/simulate_command.hpp"
+#include "shell/text_layout.hpp"
 
 namespace millwatch::shell {
 namespace {
@@ -289,13 +290,9 @@ int main(int argc, char** argv) {
       commands += (commands.empty() ? "" : ", ") + sub->get_name();
       known = known || sub->get_name() == argv[1];
     }
-    if (!known) {
-      std::string word;  // control bytes are not written to the terminal
-      for (const char* c = argv[1]; *c != '\0' && word.size() < 40; ++c) {
-        word += static_cast<unsigned char>(*c) < 0x20 ? '?' : *c;
-      }
+    if (!known) {  // quoted as errors quote a line: control bytes as \xNN, not to the terminal
       std::fprintf(stderr, "millwatch: no command \"%s\" (commands: %s; millwatch --help)\n",
-                   word.c_str(), commands.c_str());
+                   millwatch::shell::excerpt(argv[1], 40).c_str(), commands.c_str());
       return 109;  // CLI11's exit code for an argument it does not expect
     }
   }

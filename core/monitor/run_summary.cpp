@@ -280,9 +280,10 @@ nlohmann::json RunSummary::to_json() const {
   derived_.clear();
   const FluteStatistics f = flute_statistics();
   // Each flute's mean, and beside it its spread from revolution to revolution (as α's and ΔFy's).
+  constexpr std::array<const char*, 4> kPeakAxes = {"fx", "fy", "fz", "resultant"};
   json periods = json::array(), periods_std = json::array();
   json peak = json::object(), peak_std = json::object();
-  for (const char* axis : {"fx", "fy", "fz", "resultant"}) {
+  for (const char* axis : kPeakAxes) {
     peak[axis] = json::array();
     peak_std[axis] = json::array();
   }
@@ -292,10 +293,9 @@ nlohmann::json RunSummary::to_json() const {
     periods_std.push_back(number_or_null(f.period[uj].stddev()));
     const std::array<const Running*, 4> of = {&f.peak[uj][0], &f.peak[uj][1], &f.peak[uj][2],
                                               &f.peak_resultant[uj]};
-    const std::array<const char*, 4> axes = {"fx", "fy", "fz", "resultant"};
-    for (std::size_t a = 0; a < axes.size(); ++a) {
-      peak[axes[a]].push_back(number_or_null(of[a]->mean()));
-      peak_std[axes[a]].push_back(number_or_null(of[a]->stddev()));
+    for (std::size_t a = 0; a < kPeakAxes.size(); ++a) {
+      peak[kPeakAxes[a]].push_back(number_or_null(of[a]->mean()));
+      peak_std[kPeakAxes[a]].push_back(number_or_null(of[a]->stddev()));
     }
   }
   const auto& in = status_.input;

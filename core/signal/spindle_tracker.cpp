@@ -185,11 +185,12 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             " Hz is too low for a spindle at up to " +
                                             std::to_string(f_max) + " Hz");
   }
-  if (tracker_timing(c).window_s * c.commanded_rpm / 60.0 < kMinWindowRevolutions) {
+  if (const double window_s = tracker_timing(c).window_s;
+      window_s * c.commanded_rpm / 60.0 < kMinWindowRevolutions) {
     config::fail(at + "window_s",
-                 "value " + config::format_number(tracker_timing(c).window_s) +
-                     " s must hold at least " + config::format_number(kMinWindowRevolutions) +
-                     " revolutions at " + config::format_number(c.commanded_rpm) + " rpm");
+                 "value " + config::format_number(window_s) + " s must hold at least " +
+                     config::format_number(kMinWindowRevolutions) + " revolutions at " +
+                     config::format_number(c.commanded_rpm) + " rpm");
   }
 }
 
