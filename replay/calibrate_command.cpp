@@ -19,6 +19,7 @@
 #include "core/monitor/monitor_config.hpp"
 #include "core/monitor/pipeline.hpp"
 #include "core/monitor/run_summary.hpp"
+#include "shell/bad_records.hpp"
 #include "shell/column_map.hpp"
 #include "shell/json_file.hpp"
 #include "shell/material_preset.hpp"
@@ -99,15 +100,11 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
   const double config_rate_hz = configured_rate_hz(loaded);
 
-  std::int64_t bad = 0;
+  BadRecordLog bad(input.string(), detect_recording_format(input));
   RecordingOptions ro;
   ro.columns = loaded.columns;
   ro.config_rate_hz = config_rate_hz;
-  ro.on_bad = [&](std::int64_t at, const std::string& problem) {
-    if (++bad <= 5) {
-      spdlog::warn("{}:{}: {}; skipped", input.string(), at, problem);
-    }
-  };
+  ro.on_bad = bad.handler();
   std::unique_ptr<RecordingSource> source = open_recording(input, ro);
   take_recording_rate(loaded, *source, input.string());
   monitor::MonitorConfig config = parse_monitor_config(loaded);
@@ -119,7 +116,9 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   log.set_observer(&windows);
   CalibrationSink sink(log);
   monitor::Pipeline pipeline(config, sink);
+  std::int64_t samples = 0;
   while (const std::optional<monitor::SampleBlock> block = source->next(4096)) {
+    samples += static_cast<std::int64_t>(block->fx_N.size());
     pipeline.process(*block);
     if (progress.due()) {
       progress.show(fmt::format("calibrate: {}: {:.0f} %  ({:.1f} s)", where,
@@ -127,8 +126,10 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     }
   }
   pipeline.finish();
-  if (bad > 0) {  // the first five were named above; the total, always
-    spdlog::warn("{}: {} bad {} skipped", input.string(), bad, source->record_unit());
+  bad.finish(*source);
+  if (samples == 0) {
+    throw std::runtime_error(fmt::format("{}: no samples to calibrate on ({}): {}", input.string(),
+                                         where, why_no_samples(*source)));
   }
   if (windows.windows().empty()) {
     throw std::runtime_error(fmt::format(

@@ -16,6 +16,7 @@
 #include "core/diagnose/across_feeds.hpp"
 #include "core/diagnose/diagnosis.hpp"
 #include "core/monitor/monitor_config.hpp"
+#include "shell/bad_records.hpp"
 #include "shell/diagnosis_report.hpp"
 #include "shell/monitor_config_file.hpp"
 #include "shell/output_file.hpp"
@@ -79,15 +80,11 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
     throw std::runtime_error(input.string() + ": no feed per tooth (" + where +
                              "): no sidecar states it; give --feeds-um, one per cut");
   }
+  BadRecordLog bad(input.string(), detect_recording_format(input));
   RecordingOptions ro;
   ro.columns = loaded.columns;
   ro.config_rate_hz = configured_rate_hz(loaded);
-  std::int64_t bad = 0;
-  ro.on_bad = [&](std::int64_t at, const std::string& problem) {
-    if (++bad <= 20) {
-      spdlog::warn("{}: {}: {}; skipped", input.string(), at, problem);
-    }
-  };
+  ro.on_bad = bad.handler();
   auto source = open_recording(input, ro);
   spdlog::info("{}: {}", input.string(), source->description());
   take_recording_rate(loaded, *source, input.string());
@@ -145,19 +142,18 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
       last_t = t;
     }
   }
-  if (rate <= 0.0 || cut.record.force_N[0].empty()) {
-    throw std::runtime_error(
-        input.string() + ": no samples to diagnose" +
-        (o.from_s > 0.0 || o.to_s > 0.0
-             ? fmt::format(" within --from-s/--to-s (the record spans {:.6f} s from its first "
-                           "sample)",
-                           end_t)
-             : std::string()));
+  bad.finish(*source);
+  if (rate <= 0.0) {
+    throw std::runtime_error(input.string() +
+                             ": no samples to diagnose: " + why_no_samples(*source));
+  }
+  if (cut.record.force_N[0].empty()) {
+    throw std::runtime_error(fmt::format(
+        "{}: no samples to diagnose within --from-s/--to-s (the record spans {:.6f} s from its "
+        "first sample)",
+        input.string(), end_t));
   }
   cut.record.sample_rate_hz = rate;
-  if (bad > 0) {
-    spdlog::warn("{}: {} bad {} skipped", input.string(), bad, source->record_unit());
-  }
   cut.start = config.model;
   if (o.start == "plain") {
     cut.start = diagnose::plain_model(cut.start);

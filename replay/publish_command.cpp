@@ -17,6 +17,7 @@
 #include "core/config/json_reader.hpp"
 #include "core/sim/cut_simulator.hpp"
 #include "msgs/lcm_convert.hpp"
+#include "shell/bad_records.hpp"
 #include "shell/json_file.hpp"
 #include "shell/monitor_config_file.hpp"
 #include "shell/recording_source.hpp"
@@ -32,6 +33,7 @@ int run_publish(const PublishOptions& o) {
   }
   const fs::path input = o.input;
   std::unique_ptr<sim::CutSimulator> simulator;
+  std::unique_ptr<BadRecordLog> bad;  // declared first: it outlives the reader
   std::unique_ptr<RecordingSource> recording;
   double rate_hz = 0.0;
   std::string extension = input.extension().string();
@@ -63,15 +65,11 @@ int run_publish(const PublishOptions& o) {
   } else {  // a recording in any format replay reads, described as replay's are
     const LoadedMonitorConfig loaded = load_monitor_config(
         {input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
+    bad = std::make_unique<BadRecordLog>(input.string(), detect_recording_format(input));
     RecordingOptions ro;
     ro.columns = loaded.columns;
     ro.config_rate_hz = configured_rate_hz(loaded);
-    std::int64_t bad = 0;
-    ro.on_bad = [&](std::int64_t where, const std::string& problem) {
-      if (++bad <= 20) {
-        spdlog::warn("{}:{}: {}; skipped", input.string(), where, problem);
-      }
-    };
+    ro.on_bad = bad->handler();
     recording = open_recording(input, ro);
     spdlog::info("{}: {}", input.string(), recording->description());
   }
@@ -112,15 +110,9 @@ int run_publish(const PublishOptions& o) {
     samples += static_cast<std::int64_t>(b.fx_N.size());
   }
   if (recording) {
-    if (const std::string note = recording->end_note(); !note.empty()) {
-      spdlog::warn("{}: {}", input.string(), note);
-    }
+    bad->finish(*recording);
     if (samples == 0) {
-      spdlog::error("{}: no samples to publish: {}", input.string(),
-                    recording->bad_records() > 0
-                        ? "all " + std::to_string(recording->bad_records()) + " " +
-                              recording->record_unit() + " were bad"
-                        : recording->what_it_held());
+      spdlog::error("{}: no samples to publish: {}", input.string(), why_no_samples(*recording));
       return 2;
     }
   }

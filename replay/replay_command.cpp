@@ -30,6 +30,7 @@
 #include "core/monitor/monitor_config.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "replay/stop_signal.hpp"
+#include "shell/bad_records.hpp"
 #include "shell/column_map.hpp"
 #include "shell/cut_table.hpp"
 #include "shell/json_file.hpp"
@@ -64,24 +65,12 @@ int replay_one(const ReplayOptions& o) {
       load_monitor_config({input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
   const double config_rate_hz = configured_rate_hz(loaded);
 
-  std::int64_t bad = 0;
-  const char* unit = lcm_log ? "events" : format == RecordingFormat::kMat ? "samples" : "lines";
+  BadRecordLog bad(input.string(), format);
   RecordingOptions ro;
   ro.columns = loaded.columns;
   ro.config_rate_hz = config_rate_hz;
   ro.lcm_channel = o.raw_channel;
-  ro.on_bad = [&](std::int64_t where, const std::string& problem) {
-    ++bad;
-    if (bad <= 20) {
-      if (format == RecordingFormat::kMat) {
-        spdlog::warn("{}: sample {}: {}; skipped", input.string(), where, problem);
-      } else {
-        spdlog::warn("{}:{}: {}; skipped", input.string(), where, problem);
-      }
-    } else if (bad == 21) {
-      spdlog::warn("{}: more bad {} follow; counted in the summary", input.string(), unit);
-    }
-  };
+  ro.on_bad = bad.handler();
   // Read on a second thread, a few blocks ahead: parsing overlaps the pipeline.
   const auto block_samples = static_cast<std::size_t>(o.block_samples);
   std::unique_ptr<RecordingSource> source = open_recording_read_ahead(input, ro, block_samples);
@@ -163,8 +152,8 @@ int replay_one(const ReplayOptions& o) {
     }
   }
   progress.done();
-  if (const std::string note = source->end_note(); !note.empty() && !stop_requested()) {
-    spdlog::warn("{}: {}", input.string(), note);
+  if (!stop_requested()) {
+    bad.finish(*source);
   }
   run.finish();
   if (stop_requested()) {
@@ -182,18 +171,12 @@ int replay_one(const ReplayOptions& o) {
           : nlohmann::json{{"rms", nullptr}, {"max", nullptr}};
   // A record with nothing measurable is a failed replay, said before any summary, revolutions
   // or plots are written (a summary of 0 samples would look like a replay that worked).
-  if (samples_read == 0 && source->bad_records() == 0 && !stop_requested()) {
-    // Not a cut without cutting either: nothing to measure at all (a header alone, a log
-    // without the raw channel).
-    spdlog::error("{}: no samples to replay: {}{}", input.string(), source->what_it_held(),
-                  lcm_log ? " (--channel names the log's raw channel)" : "");
-    return 2;
-  }
-  if (in_plane.samples() == 0 && source->bad_records() > 0) {
-    // Not a cut without cutting: a file this reader could not read (a column map past its
-    // columns, a trailing delimiter on every row).
-    spdlog::error("{}: no sample could be read: all {} {} were bad (the first are named above)",
-                  input.string(), source->bad_records(), source->record_unit());
+  if (samples_read == 0 && (source->bad_records() > 0 || !stop_requested())) {
+    // Neither a cut without cutting nor an interrupted one: nothing to measure at all (a header
+    // alone, a log without the raw channel, a file this reader could not read a row of).
+    spdlog::error(
+        "{}: no samples to replay: {}{}", input.string(), why_no_samples(*source),
+        lcm_log && source->bad_records() == 0 ? " (--channel names the log's raw channel)" : "");
     return 2;
   }
   if (recorder) {

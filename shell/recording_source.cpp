@@ -187,14 +187,15 @@ class LogSource : public RecordingSource {
 
 }  // namespace
 
-const char* RecordingSource::record_unit() const {
-  switch (format_) {
+const char* record_unit(RecordingFormat format, std::int64_t count) {
+  const bool one = count == 1;
+  switch (format) {
     case RecordingFormat::kLcmLog:
-      return "events";
+      return one ? "event" : "events";
     case RecordingFormat::kMat:
-      return "samples";
+      return one ? "sample" : "samples";
     default:
-      return "lines";
+      return one ? "line" : "lines";
   }
 }
 

@@ -29,6 +29,10 @@ enum class RecordingFormat { kMillwatchCsv, kDynoWare, kDelimited, kMat, kLcmLog
 /// cannot be read.
 RecordingFormat detect_recording_format(const std::filesystem::path& path);
 
+/// What a format's bad records are, for `count` of them: "lines", "events" (LCM log) or
+/// "samples" (.mat); "line", "event", "sample" for one.
+[[nodiscard]] const char* record_unit(RecordingFormat format, std::int64_t count = 0);
+
 struct RecordingOptions {
   ColumnMap columns;            ///< which columns or variables (empty: the format's own)
   double config_rate_hz = 0.0;  ///< the rate the configuration states (0: it does not)
@@ -59,7 +63,7 @@ class RecordingSource {
   /// "DynoWare export (Time, Fx, Fy, Fz; 10000 Hz stated)", for the log.
   [[nodiscard]] const std::string& description() const { return description_; }
   /// What bad_records() counts: "lines", "events" or "samples".
-  [[nodiscard]] const char* record_unit() const;
+  [[nodiscard]] const char* record_unit() const { return shell::record_unit(format_); }
   /// The rate the recording is read at: the one it states, else the configuration's, else what
   /// its time shows (LCM logs: the first block's); a stated or configured rate that its time
   /// column belies (beyond 0.1 %) gives way to the time column's.

@@ -213,6 +213,15 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
   const fs::path other_tool = simulate(dir, "other_tool", 4.0, 0.3, 0.5);
   fs::create_directories(dir / "bare");
   fs::copy_file(cuts_[0], dir / "bare" / "cut3.csv", fs::copy_options::overwrite_existing);
+  // The header of a cut alone, with the cut's sidecar.
+  fs::create_directories(dir / "empty");
+  {
+    std::string header;
+    std::getline(std::ifstream(cuts_[1]), header);
+    std::ofstream(dir / "empty" / "cut4.csv") << header << "\n";
+    fs::copy_file(dir / "cut4.json", dir / "empty" / "cut4.json",
+                  fs::copy_options::overwrite_existing);
+  }
   const Case cases[] = {
       {cuts_[0].string() + " " + (dir / "nothere.csv").string() + config,
        (dir / "nothere.csv").string() + ": recording not found (cut 2 of 2)"},
@@ -230,6 +239,9 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
            cuts_[0].string()},
       {cuts_[0].string() + " --config " + (dir / "none.json").string(),
        (dir / "none.json").string() + ": configuration not found"},
+      {cuts_[0].string() + " " + (dir / "empty" / "cut4.csv").string() + config,
+       (dir / "empty" / "cut4.csv").string() +
+           ": no samples to calibrate on (cut 2 of 2): no rows after its header"},
   };
   for (const auto& c : cases) {
     const auto r = test::run_command(cli + c.args);

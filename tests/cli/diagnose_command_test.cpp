@@ -266,6 +266,26 @@ TEST(DiagnoseCommand, BadInputGivesAClearError) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("nan.csv: the sample"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("is not a finite number"), std::string::npos) << r.output;
+
+  // A record with no sample says why (it had said "no samples to diagnose" alone), and bad rows
+  // are named by line and counted as the replay does.
+  write_without(dir / "header.csv", 1, lines.size(), "");
+  r = test::run_command(cli + (dir / "header.csv").string() + " --config " + f.config.string() +
+                        " --report " + (dir / "r8").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("header.csv: no samples to diagnose: no rows after its header"),
+            std::string::npos)
+      << r.output;
+  write_without(dir / "bad_rows.csv", 1, lines.size(), "0,1,2");
+  r = test::run_command(cli + (dir / "bad_rows.csv").string() + " --config " + f.config.string() +
+                        " --report " + (dir / "r9").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad_rows.csv:2: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bad_rows.csv: 1 bad line skipped"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bad_rows.csv: no samples to diagnose: its one line was bad (named "
+                          "above)"),
+            std::string::npos)
+      << r.output;
 }
 
 // The verdict says why the search stopped: "look outside the catalogue" only when every

@@ -129,6 +129,17 @@ TEST(RecordCommand, PublishSendsARealRecordingDescribedAsForReplay) {
   EXPECT_NE(empty.output.find("header.csv: no samples to publish: no rows after its header"),
             std::string::npos)
       << empty.output;
+  // Bad rows are named and counted, as the replay does (publish had named the first twenty and
+  // never said how many it left out).
+  std::ofstream(dir / "bad_rows.csv") << "t_s,fx_N,fy_N,fz_N\n0,1,2,3\n0.00002,1,x,3\n"
+                                         "0.00004,1,2,3\n0.00006,1,2\n0.00008,1,2,3\n";
+  const auto bad = test::run_command(cli + " publish " + (dir / "bad_rows.csv").string() +
+                                     " --config " + config + " --url memq:// --speed 0 2>&1");
+  EXPECT_EQ(bad.exit_code, 0) << bad.output;
+  EXPECT_NE(bad.output.find("bad_rows.csv:3: "), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("bad_rows.csv:5: "), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("bad_rows.csv: 2 bad lines skipped"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("3 samples on"), std::string::npos) << bad.output;
 }
 
 // Recording from a log (file://…?speed=0: a log's channels filtered into a new one) ends at the

@@ -180,9 +180,14 @@ TEST(ReplayCommand, AFileWithNoReadableRowFails) {
   rewrite_lines(csv, [](int n, const std::string& line) { return n == 1 ? line : line + ","; });
   const ReplayRun r = replay(csv.string(), dir / "summary.json");
   EXPECT_EQ(r.exit_code, 2) << r.log;
-  EXPECT_NE(r.log.find("cut.csv: no sample could be read: all 50000 lines were bad"),
+  EXPECT_NE(r.log.find("cut.csv: more bad lines follow; their number comes at the end"),
             std::string::npos)
       << r.log;
+  EXPECT_NE(r.log.find("cut.csv: 50000 bad lines skipped"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find("cut.csv: no samples to replay: all 50000 lines were bad (named above)"),
+            std::string::npos)
+      << r.log;
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
 }
 
 // A record with nothing to measure in it is a failed replay that says what the file held: a CSV
