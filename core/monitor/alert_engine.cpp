@@ -1301,9 +1301,16 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   if ((trouble && !sensor_.active) || newly_dead) {
     sensor_.active = true;
     dead_channel_said_ = dead_channel_;
-    // The revolution the alert comes at: the last one reported (−1: none yet).
+    // The revolution the alert comes at: the last one reported (−1: none yet); its value the
+    // quantity that raised it (a dead channel's, else the bad samples' if above their limit,
+    // else the gaps').
+    const bool bad_samples = fraction > config_.sensor_bad_fraction;
+    const Raised why =
+        dead_channel_ >= 0 ? Raised{dead_range_ratio_, dead_range_limit_, "sync_range_ratio"}
+        : bad_samples      ? Raised{fraction, config_.sensor_bad_fraction, "bad_sample_fraction"}
+                           : Raised{static_cast<double>(new_gaps), 0.0, "new_gaps"};
     Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
-                    fraction, config_.sensor_bad_fraction, "bad_sample_fraction");
+                    why.value, why.threshold, why.quantity);
     const char* gap_s = new_gaps == 1 ? "" : "s";
     if (dead_channel_ >= 0) {
       write_message(a,
@@ -1312,7 +1319,7 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
                     "gap%s",
                     dead_channel_ == 0 ? "fx" : "fy", dead_channel_ == 0 ? "fy" : "fx",
                     percent(fraction), static_cast<long long>(new_gaps), gap_s);
-    } else if (fraction > config_.sensor_bad_fraction) {
+    } else if (bad_samples) {
       write_message(a,
                     "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
                     "%.3f %%), %lld new gap%s",

@@ -224,8 +224,14 @@ class AlertEngine {
     flush(sink);
   }
   /// An in-plane channel that carries no cutting force while the other does (0 fx, 1 fy; -1:
-  /// none): sensor trouble from the next on_input() on, until it is -1 again.
-  void set_dead_channel(int channel) { dead_channel_ = channel; }
+  /// none): sensor trouble from the next on_input() on, until it is -1 again. `range_ratio`:
+  /// its synchronous range over the other's, and `limit` the ratio below which it is dead (the
+  /// alert's value and threshold).
+  void set_dead_channel(int channel, double range_ratio = 0.0, double limit = 0.0) {
+    dead_channel_ = channel;
+    dead_range_ratio_ = range_ratio;
+    dead_range_limit_ = limit;
+  }
   /// Examines the input counters since the previous call.
   template <typename Sink>
   void on_input(const InputCounters& c, std::int64_t utime_us, Sink&& sink) {
@@ -461,7 +467,9 @@ class AlertEngine {
 
   std::int64_t last_bad_ = 0, last_samples_ = 0, last_gaps_ = 0;
   int dead_channel_ = -1;
-  int dead_channel_said_ = -1;  // the dead channel the active sensor alert names (-1: none)
+  int dead_channel_said_ = -1;
+  double dead_range_ratio_ = 0.0;
+  double dead_range_limit_ = 0.0;  // the dead channel the active sensor alert names (-1: none)
   std::array<Alert, 8> pending_{};
   int pending_count_ = 0;
 };

@@ -676,9 +676,11 @@ const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& ou
     range_N[static_cast<std::size_t>(c)] = *highest - *lowest;
   }
   if (range_N[1] < kFlatChannel * range_N[0]) {
+    flat_range_ratio_ = range_N[1] / range_N[0];
     return kDeadFy;
   }
   if (range_N[0] < kFlatChannel * range_N[1]) {
+    flat_range_ratio_ = range_N[0] / range_N[1];
     return kDeadFx;
   }
   resultant_.average(0, template_average_);
@@ -693,7 +695,10 @@ void Pipeline::start_events() {
   ToothEventTemplate tmpl;
   const char* why = build_template(anchor, tmpl);
   if (why == nullptr || why == kDeadFx || why == kDeadFy) {  // the channels were looked at
-    alerts_.set_dead_channel(why == kDeadFx ? 0 : why == kDeadFy ? 1 : -1);
+    alerts_.set_dead_channel(why == kDeadFx   ? 0
+                             : why == kDeadFy ? 1
+                                              : -1,
+                             flat_range_ratio_, kFlatChannel);
   }
   if (why != nullptr) {
     event(PipelineEventKind::kNoTemplate, input_sample(anchor), 0, e.spindle_rpm, why);

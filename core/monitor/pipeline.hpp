@@ -436,6 +436,9 @@ class Pipeline {
   std::int64_t identifications_superseded_ = 0;
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
+  // A dead in-plane channel's synchronous range over the other's, as build_template() last
+  // found one (the sensor alert's value).
+  double flat_range_ratio_ = 0.0;
   bool pauses_expected_ = false;  // the commanded cut pauses between flutes (the template's test)
   // The alert engine's flute-force state after the last revolution (for kAlertsHeld/Armed).
   bool alerts_holding_ = false;

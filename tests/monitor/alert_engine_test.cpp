@@ -617,6 +617,8 @@ TEST(AlertEngine, SensorTroubleIsRaisedAndClearedWithItsFigures) {
   EXPECT_NE(std::string(alerts[0].message.data()).find("0.400 % of recent samples"),
             std::string::npos)
       << alerts[0].message.data();
+  EXPECT_EQ(alerts[0].quantity, "bad_sample_fraction");  // above its limit: what raised it
+  EXPECT_DOUBLE_EQ(alerts[0].value, 0.004);
   EXPECT_FALSE(alerts[1].active);
 }
 
@@ -627,7 +629,7 @@ TEST(AlertEngine, ADeadChannelIsSensorTroubleNamingIt) {
   InputRun run;
   run.c.gaps = 1;
   run.input(25000, 0);  // raised for the gap
-  run.engine.set_dead_channel(1);
+  run.engine.set_dead_channel(1, 0.004, 0.02);
   run.input(50000, 500000);   // said again, naming fy
   run.input(75000, 1000000);  // nothing new
   run.engine.set_dead_channel(-1);
@@ -636,7 +638,15 @@ TEST(AlertEngine, ADeadChannelIsSensorTroubleNamingIt) {
   ASSERT_EQ(alerts.size(), 3u);
   EXPECT_TRUE(alerts[0].active);
   EXPECT_EQ(std::string(alerts[0].message.data()).find("fy"), std::string::npos);
+  // Each states the quantity that raised it (both had stated the bad samples' share, 0, under
+  // its limit): the gaps, then the dead channel's range against the other's.
+  EXPECT_EQ(alerts[0].quantity, "new_gaps");
+  EXPECT_EQ(alerts[0].value, 1.0);
+  EXPECT_EQ(alerts[0].threshold, 0.0);
   EXPECT_TRUE(alerts[1].active);
+  EXPECT_EQ(alerts[1].quantity, "sync_range_ratio");
+  EXPECT_EQ(alerts[1].value, 0.004);
+  EXPECT_EQ(alerts[1].threshold, 0.02);
   EXPECT_NE(std::string(alerts[1].message.data()).find("fy carries no cutting force while fx does"),
             std::string::npos)
       << alerts[1].message.data();

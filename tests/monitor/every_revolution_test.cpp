@@ -707,10 +707,16 @@ TEST(EveryRevolution, AnInPlaneChannelWithoutCuttingForceIsSaidAndNothingMeasure
     // Live, the operator hears it as sensor trouble, naming the channel.
     bool alerted = false;
     for (const Alert& a : out.alerts) {
-      alerted = alerted ||
-                (a.kind == AlertKind::kSensor && a.active &&
-                 std::string(a.message.data()).find("fy carries no cutting force while fx does") !=
-                     std::string::npos);
+      if (a.kind == AlertKind::kSensor && a.active &&
+          std::string(a.message.data()).find("fy carries no cutting force while fx does") !=
+              std::string::npos) {
+        alerted = true;
+        // Its value is what raised it: fy's synchronous range against fx's, under 2 %.
+        EXPECT_EQ(a.quantity, "sync_range_ratio");
+        EXPECT_GE(a.value, 0.0);
+        EXPECT_LT(a.value, a.threshold);
+        EXPECT_EQ(a.threshold, 0.02);
+      }
     }
     EXPECT_TRUE(alerted) << noisy;
   }

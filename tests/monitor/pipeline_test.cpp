@@ -1168,6 +1168,9 @@ TEST(Pipeline, HealthChecksCoverHalfASecondFromTheStartToTheEnd) {
                        0),
             0u)
       << raised->message.data();
+  EXPECT_EQ(raised->quantity, "new_gaps");  // it had said bad_sample_fraction 0 (limit 0.001)
+  EXPECT_EQ(raised->value, 1.0);
+  EXPECT_EQ(raised->threshold, 0.0);
 }
 
 // A synchronous-average window is named by its last revolution, as identification names it
