@@ -131,24 +131,13 @@ void validate(const MonitorConfig& c, const std::string& path) {
                      format_number(1.5 * tooth_hz) + " Hz at model.process.spindle_rpm " +
                      format_number(c.model.process.spindle_rpm) + ")");
   }
-  // The spindle tracker's window as the pipeline sets it up (signal::validate() says the same
-  // there, without the file and the speed).
+  // The spindle tracker's window as the pipeline sets it up (signal::validate() checks it
+  // there too, naming the tracker's own fields).
   signal::SpindleTrackerConfig tracker = c.spindle;
   tracker.commanded_rpm = c.model.process.spindle_rpm;
-  const double window_s = signal::tracker_timing(tracker).window_s;
-  const double revolutions = window_s * tracker.commanded_rpm / 60.0;
-  if (tracker.commanded_rpm > 0.0 && revolutions < signal::kMinWindowRevolutions) {
-    config::fail(
-        join(path, "spindle.window_s"),
-        (c.spindle.window_s > 0.0 ? "value " + format_number(window_s) + " s"
-                                  : "automatic, " + format_number(window_s) + " s,") +
-            " holds " + format_number(std::floor(revolutions * 100.0) / 100.0) +
-            " revolutions at model.process.spindle_rpm " + format_number(tracker.commanded_rpm) +
-            ": at least " + format_number(signal::kMinWindowRevolutions) + " needed (" +
-            format_number(
-                std::ceil(signal::kMinWindowRevolutions * 60.0 / tracker.commanded_rpm * 1e4) /
-                1e4) +
-            " s or more)");
+  if (const std::string problem = signal::window_problem(tracker, "model.process.spindle_rpm");
+      !problem.empty()) {
+    config::fail(join(path, "spindle.window_s"), problem);
   }
   if (c.model.tool.flutes > kMaxFlutes) {
     config::fail(join(path, "model.tool.flutes"), "at most " + std::to_string(kMaxFlutes));

@@ -185,13 +185,25 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
                                             " Hz is too low for a spindle at up to " +
                                             std::to_string(f_max) + " Hz");
   }
-  if (const double window_s = tracker_timing(c).window_s;
-      window_s * c.commanded_rpm / 60.0 < kMinWindowRevolutions) {
-    config::fail(at + "window_s",
-                 "value " + config::format_number(window_s) + " s must hold at least " +
-                     config::format_number(kMinWindowRevolutions) + " revolutions at " +
-                     config::format_number(c.commanded_rpm) + " rpm");
+  if (const std::string problem = window_problem(c, at + "commanded_rpm"); !problem.empty()) {
+    config::fail(at + "window_s", problem);
   }
+}
+
+std::string window_problem(const SpindleTrackerConfig& c, const std::string& rpm_name) {
+  const double window_s = tracker_timing(c).window_s;
+  const double revolutions = window_s * c.commanded_rpm / 60.0;
+  if (!(c.commanded_rpm > 0.0) || revolutions >= kMinWindowRevolutions) {
+    return {};
+  }
+  using config::format_number;
+  const double needed_s = std::ceil(kMinWindowRevolutions * 60.0 / c.commanded_rpm * 1e4) / 1e4;
+  return (c.window_s > 0.0 ? "value " + format_number(window_s) + " s"
+                           : "automatic, " + format_number(window_s) + " s,") +
+         " holds " + format_number(std::floor(revolutions * 100.0) / 100.0) + " revolutions at " +
+         rpm_name + " " + format_number(c.commanded_rpm) + ": at least " +
+         format_number(kMinWindowRevolutions) + " needed (" + format_number(needed_s) +
+         " s or more)";
 }
 
 SpindleTracker::~SpindleTracker() {

@@ -92,6 +92,13 @@ nlohmann::json to_json(const SpindleTrackerConfig& c);
 /// @throws config::ConfigError naming the field for an inconsistent configuration.
 void validate(const SpindleTrackerConfig& c, const std::string& path);
 
+/// What is wrong with the window `c` resolves to, if it holds fewer than kMinWindowRevolutions
+/// at its commanded speed (> 0), for the user: "value 0.05 s holds 4.16 revolutions at
+/// `rpm_name` 5000: at least 5 needed (0.06 s or more)" (automatic: "automatic, 0.25 s,");
+/// empty if nothing is.
+[[nodiscard]] std::string window_problem(const SpindleTrackerConfig& c,
+                                         const std::string& rpm_name);
+
 struct SpindleEstimate {
   bool valid = false;     ///< locked: a current, consistent speed estimate
   bool cutting = false;   ///< periodic force: the strongest harmonic min_snr_db above the floor
