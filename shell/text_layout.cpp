@@ -468,8 +468,13 @@ bool misplaces_rows(const TextLayout& l, double rate_hz) {
 }
 
 std::string excerpt(std::string_view line, std::size_t max_bytes) {
+  // Cut before a UTF-8 character that would not fit whole (its continuation bytes 10xxxxxx).
+  std::size_t n = std::min(max_bytes, line.size());
+  while (n > 0 && n < line.size() && (static_cast<unsigned char>(line[n]) & 0xC0U) == 0x80U) {
+    --n;
+  }
   std::string out;
-  for (const char c : line.substr(0, max_bytes)) {
+  for (const char c : line.substr(0, n)) {
     const auto byte = static_cast<unsigned char>(c);
     if ((byte < 0x20 && c != '\t') || byte == 0x7f) {
       constexpr std::string_view kHex = "0123456789abcdef";

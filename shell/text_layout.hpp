@@ -69,7 +69,8 @@ void split_fields(std::string_view line, char delimiter, std::vector<std::string
 bool parse_number(std::string_view field, bool decimal_comma, double& value);
 
 /// At most `max_bytes` of a line as a message quotes it: control bytes (a binary file's, an
-/// escape sequence's) as \xNN, so that an error never writes them to the user's terminal.
+/// escape sequence's) as \xNN, so that an error never writes them to the user's terminal; cut
+/// before a UTF-8 character that would not fit whole.
 std::string excerpt(std::string_view line, std::size_t max_bytes);
 
 }  // namespace millwatch::shell

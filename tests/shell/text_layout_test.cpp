@@ -256,6 +256,18 @@ TEST(TextLayout, AnErrorQuotesControlBytesAsEscapes) {
       << e;
   EXPECT_EQ(excerpt("abc,d\x01", 4), "abc,");
   EXPECT_EQ(excerpt("Kraft [N]\tZeit", 80), "Kraft [N]\tZeit");  // tabs and text unchanged
+  // Cut before a character that would not fit whole ("µ" is two bytes, "€" three): half a
+  // character would print as a replacement glyph.
+  EXPECT_EQ(excerpt("F \xc2\xb5N", 3), "F ");
+  EXPECT_EQ(excerpt("F \xc2\xb5N", 4), "F \xc2\xb5");
+  EXPECT_EQ(excerpt("\xe2\x82\xac"
+                    "1",
+                    2),
+            "");
+  EXPECT_EQ(excerpt("\xe2\x82\xac"
+                    "1",
+                    3),
+            "\xe2\x82\xac");
 }
 
 }  // namespace
