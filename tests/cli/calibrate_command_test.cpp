@@ -266,6 +266,43 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
 namespace millwatch {
 namespace {
 
+// The README's calibration example (scripts/calibration_sweep.sh: a simulated 2-flute sweep at
+// 3–8 µm per tooth, calibrated from a configuration with K_tc 30 % low and K_ne 40 % high) gives
+// back the sweep's truth: each coefficient within 2σ and 1 %, the radius difference within
+// 0.01 µm of −2ρ·cos γ, every cut with its 150 revolutions.
+TEST(CalibrationSweepScript, GivesBackTheSweepsTruth) {
+  const fs::path dir = test::fresh_temp_dir() / "sweep";
+  const auto r =
+      test::run_command("(MILLWATCH=" + test::millwatch_cli() + " " +
+                        (test::source_dir() / "scripts" / "calibration_sweep.sh").string() + " " +
+                        dir.string() + " --json 2>/dev/null)");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  ASSERT_TRUE(j["ok"].get<bool>()) << j["message"];
+  const std::map<std::string, double> truth = {{"k_tc_N_per_mm2", 1100.0},
+                                               {"k_nc_N_per_mm2", 450.0},
+                                               {"k_te_N_per_mm", 8.0},
+                                               {"k_ne_N_per_mm", 12.0}};
+  for (const auto& [name, value] : truth) {
+    const auto& c = j["coefficients"][name];
+    EXPECT_NEAR(c["value"].get<double>(), value, 2.0 * c["std"].get<double>()) << name;
+    EXPECT_NEAR(c["value"].get<double>(), value, 0.01 * value) << name;
+  }
+  EXPECT_NEAR(j["runout"]["r_minus_r_ce1_um"][1].get<double>(), -2.0 * 1.2 * std::cos(0.5), 0.01);
+  ASSERT_EQ(j["cuts"].size(), 5U);
+  for (const auto& c : j["cuts"]) {
+    EXPECT_EQ(c["revolutions"].get<int>(), 150) << c.dump();
+  }
+  EXPECT_TRUE(j["warnings"].empty()) << j["warnings"];
+  EXPECT_TRUE(fs::exists(dir / "material.json"));
+}
+
+}  // namespace
+}  // namespace millwatch
+
+namespace millwatch {
+namespace {
+
 // A real cut the model does not describe (PHM 2010 c1_cut158, a worn 3-flute ball-nose, at its
 // 49.8 µm per tooth): the fit leaves 79 % of the force unexplained and puts k_nc at −2350 ±
 // 19 N/mm². The coefficients had gone into the material preset without a word; now the report,
