@@ -191,6 +191,10 @@ CalibrationResult calibrate(const std::vector<CalibrationCut>& cuts,
   if (fit_options.coefficient_floor <= 0.0) {
     fit_options.coefficient_floor = 0.005;
   }
+  // Offline, and once: more starts refined than a window's two, and the minima as good as the
+  // best compared with it (FitOptions::competing_minima).
+  fit_options.refined_starts = std::max(fit_options.refined_starts, kCalibrationRefinedStarts);
+  fit_options.competing_minima = true;
   out.joint = fit_cuts(fit_input, fit_options);
   std::vector<MeanForceCut> means;
   for (std::size_t i = 0; i < cuts.size(); ++i) {
@@ -240,6 +244,14 @@ std::vector<std::string> calibration_warnings(const FitResult& fit,
                   100.0 * std::sqrt(v), 100.0 * v, 100.0 * max_unexplained_variance);
     out.emplace_back(text);
   }
+  if (fit.competing_minima > 0) {
+    std::snprintf(text, sizeof text,
+                  "%d other minim%s of the fit as good within the noise, with other runout and "
+                  "coefficients: the record does not choose between them, and the σ's include "
+                  "their distance from this one",
+                  fit.competing_minima, fit.competing_minima == 1 ? "um" : "a");
+    out.emplace_back(text);
+  }
   for (const Estimate& e : fit.coefficients) {
     const bool tangential_or_normal = e.name.rfind("k_t", 0) == 0 || e.name.rfind("k_n", 0) == 0;
     if (tangential_or_normal && e.determined && e.value + 2.0 * e.sigma < 0.0) {
@@ -271,6 +283,7 @@ nlohmann::json to_json(const CalibrationResult& r) {
   if (j.contains("fit")) {
     j["fit"].erase("last_revolution");
     j["fit"].erase("fit_ms");
+    j["fit"]["competing_minima"] = r.joint.fit.competing_minima;
   }
   // The classic regression beside each coefficient.
   nlohmann::json classic_coefficients = nlohmann::json::object();

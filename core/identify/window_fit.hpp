@@ -96,6 +96,10 @@ struct FitOptions {
   /// sets 0.005 (identify::calibrate); a window fit, watched for changes between windows of one
   /// cut, leaves it at 0.
   double coefficient_floor = 0.0;
+  /// Compare the minima the refined starts reach with the best (FitResult::competing_minima):
+  /// those the data cannot tell from it join the systematic σ. A calibration sets it, with
+  /// more refined starts (identify::calibrate); a window fit, seeded by the last, does not.
+  bool competing_minima = false;
 };
 
 /// A fit ends on a flute's contact edge (FitResult::runout_at_contact_edge) when a step of the
@@ -179,6 +183,11 @@ struct FitResult {
   int effective_samples = 0;               ///< M: real harmonic values compared
   int iterations = 0;
   long evaluations = 0;  ///< model evaluations (each: the force basis at one runout)
+  /// Other minima as good within the noise (FitOptions::competing_minima: ΔRSS within the joint
+  /// 95 % confidence region of all parameters, and apart by more than some parameter's σ):
+  /// the record does not choose between them; their distance from the solution is in the
+  /// systematic σ's.
+  int competing_minima = 0;
   std::string flute_labelling =
       "flute 0 = CE1, the flute with the largest cut (no once-per-revolution reference)";
 };

@@ -304,9 +304,12 @@ namespace millwatch {
 namespace {
 
 // A real cut the model does not describe (PHM 2010 c1_cut158, a worn 3-flute ball-nose, at its
-// 49.8 µm per tooth): the fit leaves 79 % of the force unexplained and puts k_nc at −2350 ±
-// 19 N/mm². The coefficients had gone into the material preset without a word; now the report,
-// the log and the preset itself say why they are not the material's.
+// 49.8 µm per tooth): the fit leaves 78 % of the force unexplained, and its cost has several
+// minima as good within the noise, with k_nc anywhere from about −5600 to −2300 N/mm². The
+// coefficients had gone into the material preset without a word; then, from the one minimum the
+// search reached first, as "k_nc −2350 ± 19" — a σ that a last-bit change of the synchronous
+// average (another minimum reached: −2862) showed to be false. Now the report, the log and the
+// preset say why the coefficients are not the material's, and their σ's span the minima.
 TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   const fs::path csv = test::shared_dir() / "data" / "phm2010" / "c1_cut158_window.csv";
   ASSERT_TRUE(fs::exists(csv)) << csv;
@@ -317,18 +320,20 @@ TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
       (fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json").string() + " -o " +
       preset.string() + " --no-progress 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("warnings:\n    the fit leaves 78.9 % of the measured force "
-                          "unexplained"),
-            std::string::npos)
-      << r.output;
-  EXPECT_NE(r.output.find("    k_nc_N_per_mm2 = -2350 ± 19: a tangential or normal force "
-                          "coefficient below zero"),
+  EXPECT_NE(r.output.find("warnings:\n    the fit leaves 7"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("% of the measured force unexplained"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" of the fit as good within the noise, with other runout and "
+                          "coefficients: the record does not choose between them"),
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("[warning] calibration: the fit leaves"), std::string::npos) << r.output;
   std::ifstream in(preset);
   const nlohmann::json p = nlohmann::json::parse(in);
   ASSERT_EQ(p["warnings"].size(), 2U) << p.dump(1);
+  // The σ's span the minima: k_nc's covers thousands of N/mm², the radii's micrometres.
+  const auto& k_nc = p["coefficients"]["k_nc_N_per_mm2"];
+  EXPECT_GT(k_nc["std"].get<double>(), 1000.0) << k_nc;
+  EXPECT_LT(k_nc["value"].get<double>(), 0.0) << k_nc;
 }
 
 // Under another law than the linear edge ([000]'s power law here) the classic regression's

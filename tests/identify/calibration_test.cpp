@@ -275,7 +275,8 @@ void check_classic(model::Operation op, double radial_depth_mm, int flutes) {
 
 // What makes coefficients unfit for a material preset, on the figures of a real cut the model
 // does not describe (PHM 2010 c1_cut158 at f_t 49.8 µm: 78.9 % of the force's RMS unexplained,
-// k_nc −2350 ± 19 N/mm²): each said once. A negative coefficient within 2σ of zero (k_tc 166 ±
+// k_nc −2350 ± 19 N/mm² as one of its minima stated it before the others were compared): each
+// said once. A negative coefficient within 2σ of zero (k_tc 166 ±
 // 2519) is no evidence of anything; an axial one may be negative; a good fit says nothing.
 TEST(CalibrationWarnings, NameAFitThatDoesNotDescribeTheCutsAndANegativeCoefficient) {
   FitResult f;
@@ -293,6 +294,14 @@ TEST(CalibrationWarnings, NameAFitThatDoesNotDescribeTheCutsAndANegativeCoeffici
   EXPECT_EQ(w[1].rfind("k_nc_N_per_mm2 = -2350 ± 19", 0), 0u) << w[1];
   // 63 % of the variance is within a 70 % allowance; the negative k_nc is still said.
   EXPECT_EQ(calibration_warnings(f, 0.7).size(), 1u);
+  // Minima as good within the noise are said (their spread is in the σ's).
+  f.competing_minima = 6;
+  const std::vector<std::string> m = calibration_warnings(f, 0.7);
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].rfind("6 other minima of the fit as good within the noise", 0), 0u) << m[0];
+  f.competing_minima = 1;
+  EXPECT_EQ(calibration_warnings(f, 0.7)[0].rfind("1 other minimum of the fit", 0), 0u);
+  f.competing_minima = 0;
   f.residual_rms_N = {0.11, 0.066, 0.0};  // 1 %
   f.coefficients = {{"k_tc_N_per_mm2", 2100.0, 15.0}, {"k_nc_N_per_mm2", 900.0, 12.0}};
   EXPECT_TRUE(calibration_warnings(f, 0.2).empty());
