@@ -143,7 +143,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
     }
   }
   bad.finish(*source);
-  if (rate <= 0.0) {
+  if (rate <= 0.0 || (cut.record.force_N[0].empty() && o.from_s <= 0.0 && o.to_s <= 0.0)) {
     throw std::runtime_error(input.string() +
                              ": no samples to diagnose: " + why_no_samples(*source));
   }

@@ -175,7 +175,8 @@ int replay_one(const ReplayOptions& o) {
     // Neither a cut without cutting nor an interrupted one: nothing to measure at all (a header
     // alone, a log without the raw channel, a file this reader could not read a row of).
     spdlog::error(
-        "{}: no samples to replay: {}{}", input.string(), why_no_samples(*source),
+        "{}: no samples to replay{}: {}{}", input.string(),
+        stop_requested() ? " (interrupted)" : "", why_no_samples(*source),
         lcm_log && source->bad_records() == 0 ? " (--channel names the log's raw channel)" : "");
     return 2;
   }

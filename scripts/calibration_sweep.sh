@@ -14,17 +14,24 @@
 # the project's Release build, built first if it is not there).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+if [ -n "${MILLWATCH:-}" ]; then
+  millwatch=$(realpath -e -- "$MILLWATCH" 2>/dev/null) && [ -x "$millwatch" ] || {
+    echo "calibration_sweep.sh: MILLWATCH=$MILLWATCH is no program" >&2
+    exit 2
+  }
+else
+  millwatch=$root/build/release/replay/millwatch
+  if [ ! -x "$millwatch" ]; then
+    cmake -S "$root" -B "$root/build/release" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+    cmake --build "$root/build/release" --target millwatch >&2
+  fi
+fi
 if [ $# -gt 0 ] && [[ $1 != -* ]]; then
   out=$1
   shift
 else
   cd "$root"
   out=build/calibration_sweep
-fi
-millwatch=${MILLWATCH:-$root/build/release/replay/millwatch}
-if [ ! -x "$millwatch" ]; then
-  cmake -S "$root" -B "$root/build/release" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-  cmake --build "$root/build/release" --target millwatch >&2
 fi
 mkdir -p "$out"
 cuts=()

@@ -46,7 +46,7 @@ std::string why_no_samples(const RecordingSource& source) {
   const std::string unit = record_unit(source.format(), bad);
   return (bad == 1 ? "its one " + unit + " was"
                    : "all " + std::to_string(bad) + " " + unit + " were") +
-         " bad (named above)";
+         (bad > BadRecordLog::kNamed ? " bad (the first named above)" : " bad (named above)");
 }
 
 }  // namespace millwatch::shell

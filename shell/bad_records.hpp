@@ -41,8 +41,9 @@ class BadRecordLog {
   std::int64_t count_ = 0;
 };
 
-/// Why `source` (read to its end) gave no sample: "all 12 lines were bad (the first are named
-/// above)", or what it held ("no rows after its header").
+/// Why `source` (read to its end) gave no sample: "all 12 lines were bad (named above)" (beyond
+/// BadRecordLog::kNamed: "(the first named above)"), or what it held ("no rows after its
+/// header").
 [[nodiscard]] std::string why_no_samples(const RecordingSource& source);
 
 }  // namespace millwatch::shell

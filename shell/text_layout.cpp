@@ -468,10 +468,19 @@ bool misplaces_rows(const TextLayout& l, double rate_hz) {
 }
 
 std::string excerpt(std::string_view line, std::size_t max_bytes) {
-  // Cut before a UTF-8 character that would not fit whole (its continuation bytes 10xxxxxx).
+  // Cut before a UTF-8 character that would not fit whole: back over its continuation bytes
+  // (10xxxxxx, at most 3) onto its lead byte (11xxxxxx). Other bytes (a binary file's, Latin-1
+  // text's) are cut where they stand.
   std::size_t n = std::min(max_bytes, line.size());
-  while (n > 0 && n < line.size() && (static_cast<unsigned char>(line[n]) & 0xC0U) == 0x80U) {
-    --n;
+  const auto top_bits = [&](std::size_t i) { return static_cast<unsigned char>(line[i]) & 0xC0U; };
+  if (n < line.size() && top_bits(n) == 0x80U) {
+    std::size_t lead = n;
+    while (lead > 0 && n - lead < 3 && top_bits(lead) == 0x80U) {
+      --lead;
+    }
+    if (top_bits(lead) == 0xC0U) {
+      n = lead;
+    }
   }
   std::string out;
   for (const char c : line.substr(0, n)) {

@@ -246,9 +246,8 @@ std::vector<std::string> calibration_warnings(const FitResult& fit,
   }
   if (fit.competing_minima > 0) {
     std::snprintf(text, sizeof text,
-                  "%d other minim%s of the fit as good within the noise, with other runout and "
-                  "coefficients: the record does not choose between them, and the σ's include "
-                  "their distance from this one",
+                  "%d other minim%s of the fit as good within the noise: the record does not "
+                  "choose between them, and the σ's include their distance from this one",
                   fit.competing_minima, fit.competing_minima == 1 ? "um" : "a");
     out.emplace_back(text);
   }

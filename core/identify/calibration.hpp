@@ -70,7 +70,7 @@ struct CalibrationCut {
 };
 
 /// Starts a calibration refines at least (a window fit: 2), its minima compared
-/// (FitOptions::competing_minima). On PHM 2010's cut 158 five of the eight best starts end in
+/// (FitOptions::competing_minima). On PHM 2010's cut 158 four other starts of the eight end in
 /// distinct minima within the noise of each other.
 inline constexpr int kCalibrationRefinedStarts = 8;
 

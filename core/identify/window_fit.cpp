@@ -60,13 +60,10 @@ struct Setting {
 /// too small to see in the fit but large enough to ruin a derivative taken over 1e-5 µm.
 constexpr double kDifferenceStep = 1e-2;
 
-/// The 95th percentile of χ² with k degrees of freedom (Wilson–Hilferty: within 0.5 % for
-/// k ≥ 3, 3 % at k = 1).
-double chi_square_95(double k) {
-  const double a = 2.0 / (9.0 * k);
-  const double c = 1.0 - a + 1.6448536269514722 * std::sqrt(a);
-  return k * c * c * c;
-}
+/// The 95th percentile of χ² with one degree of freedom: a minimum whose cost exceeds the best's
+/// by less than this many s² lies within the best's 95 % profile interval of some parameter —
+/// the data do not reject it.
+constexpr double kChiSquare1At95 = 3.841458820694124;
 
 /// Levenberg–Marquardt on a few scaled parameters. The Jacobian by forward differences (one
 /// model evaluation a parameter) while far from the optimum, by central differences (two) near
@@ -1272,17 +1269,17 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       sys2 = sys2.cwiseMax(d.cwiseAbs2());  // the largest shift: each variant is one cause
     }
   }
-  // Other minima the data cannot tell from this one: within the joint 95 % confidence region
-  // of all nf parameters (ΔRSS ≤ χ²(nf)·s²). A fit whose model leaves most of the force
-  // unexplained has several (PHM 2010's cut 158: eight starts ended 203–213 against a noise
-  // s² of 1.7, k_nc anywhere from −5600 to −2300 N/mm²); which one the search reaches first
-  // then turns on the last bits of the data, and a σ from one of them alone would state a
-  // precision the record does not hold. Each one's distance from the solution (where it ended:
-  // the final prior, ten times the search's, moves a minimum by a tenth of the runout's σ at
-  // most) is weighed against the σ's once every other cause is in (below).
+  // Other minima the data cannot tell from this one: their cost within the 95 % profile
+  // threshold of one parameter (ΔRSS ≤ χ²₁(0.95)·s²: the data do not reject them). A fit whose
+  // model leaves most of the force unexplained has several (PHM 2010's cut 158: eight starts ended
+  // 203–213 against a noise s² of 1.7, k_nc anywhere from −5600 to −2300 N/mm²); which one the
+  // search reaches first then turns on the last bits of the data, and a σ from one of them alone
+  // would state a precision the record does not hold. Each one's distance from the solution (where
+  // it ended: the final prior, ten times the search's, moves a minimum by a tenth of the runout's σ
+  // at most) is weighed against the σ's once every other cause is in (below).
   std::vector<Eigen::VectorXd> competing;
   if (options.competing_minima) {
-    const double allowed = s2 * chi_square_95(static_cast<double>(nf));
+    const double allowed = s2 * kChiSquare1At95;
     const double here = p.residual(theta).squaredNorm();
     for (const auto& [start_cost, t] : minima) {
       if (!(std::abs(p.residual(t).squaredNorm() - here) <= allowed)) {
@@ -1344,14 +1341,28 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
     }
   }
   // A competing minimum apart from the solution by more than some parameter's σ (statistical and
-  // systematic) is another answer the record allows: its distance joins the systematic σ's.
-  // One within every σ is this minimum reached again.
+  // systematic, every other cause in) is another answer the record allows: its distance joins
+  // the systematic σ's. One within every σ is this minimum reached again; one within every σ of
+  // a minimum counted already is that one again. The σ's they are weighed against are those
+  // before any of them, so that neither the count nor the σ's depend on their order.
+  const Eigen::ArrayXd var = cov.diagonal().array() + sys2.array();
+  std::vector<const Eigen::VectorXd*> counted;
+  Eigen::VectorXd spread2 = Eigen::VectorXd::Zero(sys2.size());
   for (const Eigen::VectorXd& d : competing) {
-    if ((d.cwiseAbs2().array() > cov.diagonal().array() + sys2.array()).any()) {
-      ++out.competing_minima;
-      sys2 = sys2.cwiseMax(d.cwiseAbs2());
+    const auto apart = [&](const Eigen::VectorXd& e) {
+      return ((d - e).cwiseAbs2().array() > var).any();
+    };
+    if (!(d.cwiseAbs2().array() > var).any()) {
+      continue;
+    }
+    spread2 = spread2.cwiseMax(d.cwiseAbs2());
+    if (std::all_of(counted.begin(), counted.end(),
+                    [&](const Eigen::VectorXd* e) { return apart(*e); })) {
+      counted.push_back(&d);
     }
   }
+  out.competing_minima = static_cast<int>(counted.size());
+  sys2 = sys2.cwiseMax(spread2);
 
   // Reported parameters: ρ, γ from (u, v) by the delta method.
   const double u = theta[0], v = theta[1];

@@ -183,8 +183,8 @@ struct FitResult {
   int effective_samples = 0;               ///< M: real harmonic values compared
   int iterations = 0;
   long evaluations = 0;  ///< model evaluations (each: the force basis at one runout)
-  /// Other minima as good within the noise (FitOptions::competing_minima: ΔRSS within the joint
-  /// 95 % confidence region of all parameters, and apart by more than some parameter's σ):
+  /// Other minima as good within the noise (FitOptions::competing_minima: ΔRSS within the 95 %
+  /// profile threshold of one parameter, χ²₁·s², and apart by more than some parameter's σ):
   /// the record does not choose between them; their distance from the solution is in the
   /// systematic σ's.
   int competing_minima = 0;

@@ -1311,6 +1311,7 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
                            : Raised{static_cast<double>(new_gaps), 0.0, "new_gaps"};
     Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
                     why.value, why.threshold, why.quantity);
+    sensor_quantity_ = why.quantity;
     const char* gap_s = new_gaps == 1 ? "" : "s";
     if (dead_channel_ >= 0) {
       write_message(a,
@@ -1335,8 +1336,14 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   } else if (!trouble && sensor_.active && new_samples > 0) {
     sensor_.active = false;
     dead_channel_said_ = -1;
+    // The clear states the quantity the raise did, as it stands now.
+    const Raised now = sensor_quantity_ == "sync_range_ratio"
+                           ? Raised{dead_range_ratio_, dead_range_limit_, "sync_range_ratio"}
+                       : sensor_quantity_ == "new_gaps"
+                           ? Raised{static_cast<double>(new_gaps), 0.0, "new_gaps"}
+                           : Raised{fraction, config_.sensor_bad_fraction, "bad_sample_fraction"};
     write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, last_revolution_, utime_us,
-                       fraction, config_.sensor_bad_fraction, "bad_sample_fraction"),
+                       now.value, now.threshold, now.quantity),
                   "sensor trouble cleared: %.3f %% bad samples, no new gaps", percent(fraction));
   }
 }

@@ -225,8 +225,8 @@ class AlertEngine {
   }
   /// An in-plane channel that carries no cutting force while the other does (0 fx, 1 fy; -1:
   /// none): sensor trouble from the next on_input() on, until it is -1 again. `range_ratio`:
-  /// its synchronous range over the other's, and `limit` the ratio below which it is dead (the
-  /// alert's value and threshold).
+  /// the smaller channel's synchronous range over the other's, and `limit` the ratio below which
+  /// it is dead (the alert's value and threshold, raised and cleared).
   void set_dead_channel(int channel, double range_ratio = 0.0, double limit = 0.0) {
     dead_channel_ = channel;
     dead_range_ratio_ = range_ratio;
@@ -467,9 +467,10 @@ class AlertEngine {
 
   std::int64_t last_bad_ = 0, last_samples_ = 0, last_gaps_ = 0;
   int dead_channel_ = -1;
-  int dead_channel_said_ = -1;
+  int dead_channel_said_ = -1;  // the dead channel the active sensor alert names (-1: none)
   double dead_range_ratio_ = 0.0;
-  double dead_range_limit_ = 0.0;  // the dead channel the active sensor alert names (-1: none)
+  double dead_range_limit_ = 0.0;
+  std::string_view sensor_quantity_;  // what raised the active sensor alert
   std::array<Alert, 8> pending_{};
   int pending_count_ = 0;
 };

@@ -675,12 +675,13 @@ const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& ou
         std::minmax_element(template_average_.begin(), template_average_.end());
     range_N[static_cast<std::size_t>(c)] = *highest - *lowest;
   }
+  // The smaller range over the larger (0 when neither channel moves).
+  const double larger_N = std::max(range_N[0], range_N[1]);
+  flat_range_ratio_ = larger_N > 0.0 ? std::min(range_N[0], range_N[1]) / larger_N : 0.0;
   if (range_N[1] < kFlatChannel * range_N[0]) {
-    flat_range_ratio_ = range_N[1] / range_N[0];
     return kDeadFy;
   }
   if (range_N[0] < kFlatChannel * range_N[1]) {
-    flat_range_ratio_ = range_N[0] / range_N[1];
     return kDeadFx;
   }
   resultant_.average(0, template_average_);

@@ -436,8 +436,8 @@ class Pipeline {
   std::int64_t identifications_superseded_ = 0;
   identify::EstimateWatch estimate_watch_;  // when the alerts stop waiting for estimates
   std::vector<double> template_average_;
-  // A dead in-plane channel's synchronous range over the other's, as build_template() last
-  // found one (the sensor alert's value).
+  // The in-plane channels' smaller synchronous range over the larger, as build_template() last
+  // found them (a dead channel's sensor alert states it, raised and cleared).
   double flat_range_ratio_ = 0.0;
   bool pauses_expected_ = false;  // the commanded cut pauses between flutes (the template's test)
   // The alert engine's flute-force state after the last revolution (for kAlertsHeld/Armed).

@@ -193,7 +193,9 @@ void validate(const SpindleTrackerConfig& c, const std::string& path) {
 std::string window_problem(const SpindleTrackerConfig& c, const std::string& rpm_name) {
   const double window_s = tracker_timing(c).window_s;
   const double revolutions = window_s * c.commanded_rpm / 60.0;
-  if (!(c.commanded_rpm > 0.0) || revolutions >= kMinWindowRevolutions) {
+  // Within rounding of the least: the automatic window below 1200 rpm is exactly that many
+  // revolutions, which window·rpm/60 can give back as 4.999… (at 1003 rpm).
+  if (!(c.commanded_rpm > 0.0) || revolutions >= kMinWindowRevolutions * (1.0 - 1e-12)) {
     return {};
   }
   using config::format_number;

@@ -632,7 +632,7 @@ TEST(AlertEngine, ADeadChannelIsSensorTroubleNamingIt) {
   run.engine.set_dead_channel(1, 0.004, 0.02);
   run.input(50000, 500000);   // said again, naming fy
   run.input(75000, 1000000);  // nothing new
-  run.engine.set_dead_channel(-1);
+  run.engine.set_dead_channel(-1, 0.6, 0.02);
   run.input(100000, 1500000);  // cleared
   const std::vector<Alert>& alerts = run.alerts;
   ASSERT_EQ(alerts.size(), 3u);
@@ -651,6 +651,10 @@ TEST(AlertEngine, ADeadChannelIsSensorTroubleNamingIt) {
             std::string::npos)
       << alerts[1].message.data();
   EXPECT_FALSE(alerts[2].active);
+  // The clear states the quantity the raise did (it was said again for the dead channel), as
+  // it stands now.
+  EXPECT_EQ(alerts[2].quantity, "sync_range_ratio");
+  EXPECT_EQ(alerts[2].value, 0.6);
 }
 
 /// An identified window of a 2-flute cut (commanded 25,000 rpm, f_t as given): the radius

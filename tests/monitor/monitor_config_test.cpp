@@ -110,6 +110,11 @@ TEST(MonitorConfig, CrossFieldErrorsSayWhatTheValueDoesNotSuit) {
   // the quarter second held fewer, and the automatic window was refused).
   EXPECT_EQ(at_rpm(1000.0, 0.0), "");
   EXPECT_EQ(at_rpm(300.0, 0.0), "");
+  // Every speed's automatic window, though 5·60/rpm · rpm/60 may come back as 4.999… (131 whole
+  // speeds below 1200 rpm, 1003 among them, had been refused).
+  for (int rpm = 1; rpm < 1200; ++rpm) {
+    EXPECT_EQ(at_rpm(rpm, 0.0), "") << rpm;
+  }
 
   EXPECT_EQ(error_of({{"sample_rate_hz", 1000.0}}),
             "config.filter.cutoff_hz: value 3300 Hz (the default) must stay below 0.45 x the "

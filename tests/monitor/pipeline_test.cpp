@@ -1133,6 +1133,11 @@ TEST(Pipeline, ASensorAlertNamesTheRevolutionItCameAt) {
     EXPECT_GE(a->revolution, before->revolution - 2) << a->utime_us;
   }
   EXPECT_GT(cleared->revolution, raised->revolution);
+  // Raised for the gap and cleared with no new one: both state the gaps.
+  EXPECT_EQ(raised->quantity, "new_gaps");
+  EXPECT_EQ(raised->value, 1.0);
+  EXPECT_EQ(cleared->quantity, "new_gaps");
+  EXPECT_EQ(cleared->value, 0.0);
 }
 
 // The health checks cover half a second each, the first one too, and the last part of a record

@@ -91,6 +91,16 @@ TEST(BadRecordLog, AFileCutShortIsSaidBeforeTheTotal) {
       << s.lines[0];
 }
 
+TEST(BadRecordLog, TheEndNoteComesBeforeTheTotal) {
+  std::string text = kHeader + rows(0, 5) + "0.0001,1,2\n" + rows(6, 10);
+  text.pop_back();
+  const Said s = read(text);
+  ASSERT_EQ(s.lines.size(), 3u);
+  EXPECT_EQ(s.lines[1].rfind("cut.csv: line 11, the last, has no end-of-line", 0), 0u)
+      << s.lines[1];
+  EXPECT_EQ(s.lines[2], "cut.csv: 1 bad line skipped");
+}
+
 TEST(BadRecordLog, AGoodFileSaysNothing) {
   const Said s = read(kHeader + rows(0, 100));
   EXPECT_EQ(s.samples, 100);
@@ -120,6 +130,12 @@ TEST(WhyNoSamples, SaysWhatTheFileHeldOrThatEveryLineWasBad) {
   EXPECT_EQ(why, "all 2 lines were bad (named above)");
   EXPECT_EQ(read(kHeader + "0,1,2\n", &why).samples, 0);
   EXPECT_EQ(why, "its one line was bad (named above)");
+  std::string many = kHeader;
+  for (int i = 0; i < 21; ++i) {
+    many += std::to_string(i * 2e-5) + ",1,2\n";
+  }
+  EXPECT_EQ(read(many, &why).samples, 0);
+  EXPECT_EQ(why, "all 21 lines were bad (the first named above)");
 }
 
 }  // namespace

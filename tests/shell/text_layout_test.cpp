@@ -268,6 +268,8 @@ TEST(TextLayout, AnErrorQuotesControlBytesAsEscapes) {
                     "1",
                     3),
             "\xe2\x82\xac");
+  // Bytes that are no UTF-8 (a binary file's continuation-like run) are cut where they stand.
+  EXPECT_EQ(excerpt("ab\x80\x81\x82\x83\x84", 4), "ab\x80\x81");
 }
 
 }  // namespace
