@@ -1281,6 +1281,19 @@ void AlertEngine::check_coefficient_wear(const WindowEstimate& e, std::int64_t r
   }
 }
 
+AlertEngine::Raised AlertEngine::sensor_figure(SensorCause cause, double bad_fraction,
+                                               std::int64_t new_gaps) const {
+  switch (cause) {
+    case SensorCause::kDeadChannel:
+      return {dead_range_ratio_, dead_range_limit_, "sync_range_ratio"};
+    case SensorCause::kBadSamples:
+      return {bad_fraction, config_.sensor_bad_fraction, "bad_sample_fraction"};
+    case SensorCause::kGaps:
+      break;
+  }
+  return {static_cast<double>(new_gaps), 0.0, "new_gaps"};
+}
+
 void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
   last_utime_us_ = std::max(last_utime_us_, utime_us);  // a clear says when, revolutions or not
   const std::int64_t bad = c.samples_flagged;
@@ -1304,23 +1317,21 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
     // The revolution the alert comes at: the last one reported (−1: none yet); its value the
     // quantity that raised it (a dead channel's, else the bad samples' if above their limit,
     // else the gaps').
-    const bool bad_samples = fraction > config_.sensor_bad_fraction;
-    const Raised why =
-        dead_channel_ >= 0 ? Raised{dead_range_ratio_, dead_range_limit_, "sync_range_ratio"}
-        : bad_samples      ? Raised{fraction, config_.sensor_bad_fraction, "bad_sample_fraction"}
-                           : Raised{static_cast<double>(new_gaps), 0.0, "new_gaps"};
+    sensor_cause_ = dead_channel_ >= 0                       ? SensorCause::kDeadChannel
+                    : fraction > config_.sensor_bad_fraction ? SensorCause::kBadSamples
+                                                             : SensorCause::kGaps;
+    const Raised why = sensor_figure(sensor_cause_, fraction, new_gaps);
     Alert* a = emit(AlertKind::kSensor, AlertSeverity::kWarning, true, last_revolution_, utime_us,
                     why.value, why.threshold, why.quantity);
-    sensor_quantity_ = why.quantity;
     const char* gap_s = new_gaps == 1 ? "" : "s";
-    if (dead_channel_ >= 0) {
+    if (sensor_cause_ == SensorCause::kDeadChannel) {
       write_message(a,
                     "sensor trouble: %s carries no cutting force while %s does (a dead amplifier "
                     "or cable?); %.3f %% of recent samples saturated or not finite, %lld new "
                     "gap%s",
                     dead_channel_ == 0 ? "fx" : "fy", dead_channel_ == 0 ? "fy" : "fx",
                     percent(fraction), static_cast<long long>(new_gaps), gap_s);
-    } else if (bad_samples) {
+    } else if (sensor_cause_ == SensorCause::kBadSamples) {
       write_message(a,
                     "sensor trouble: %.3f %% of recent samples saturated or not finite (limit "
                     "%.3f %%), %lld new gap%s",
@@ -1337,11 +1348,7 @@ void AlertEngine::examine(const InputCounters& c, std::int64_t utime_us) {
     sensor_.active = false;
     dead_channel_said_ = -1;
     // The clear states the quantity the raise did, as it stands now.
-    const Raised now = sensor_quantity_ == "sync_range_ratio"
-                           ? Raised{dead_range_ratio_, dead_range_limit_, "sync_range_ratio"}
-                       : sensor_quantity_ == "new_gaps"
-                           ? Raised{static_cast<double>(new_gaps), 0.0, "new_gaps"}
-                           : Raised{fraction, config_.sensor_bad_fraction, "bad_sample_fraction"};
+    const Raised now = sensor_figure(sensor_cause_, fraction, new_gaps);
     write_message(emit(AlertKind::kSensor, AlertSeverity::kInfo, false, last_revolution_, utime_us,
                        now.value, now.threshold, now.quantity),
                   "sensor trouble cleared: %.3f %% bad samples, no new gaps", percent(fraction));

@@ -319,6 +319,13 @@ class AlertEngine {
     double threshold = 0.0;
     std::string_view quantity;
   };
+  /// What raises a sensor alert, in the order it is named: a dead in-plane channel, bad
+  /// samples above their limit, gaps.
+  enum class SensorCause { kDeadChannel, kBadSamples, kGaps };
+  /// The sensor alert's value for `cause`, raised or cleared: the quantity, its figure now and
+  /// its limit.
+  [[nodiscard]] Raised sensor_figure(SensorCause cause, double bad_fraction,
+                                     std::int64_t new_gaps) const;
   struct Flutes {
     int count = 0;
     std::array<double, kMaxFlutes> force_N{};
@@ -470,7 +477,7 @@ class AlertEngine {
   int dead_channel_said_ = -1;  // the dead channel the active sensor alert names (-1: none)
   double dead_range_ratio_ = 0.0;
   double dead_range_limit_ = 0.0;
-  std::string_view sensor_quantity_;  // what raised the active sensor alert
+  SensorCause sensor_cause_ = SensorCause::kBadSamples;  // what raised the active sensor alert
   std::array<Alert, 8> pending_{};
   int pending_count_ = 0;
 };

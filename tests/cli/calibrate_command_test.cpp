@@ -23,6 +23,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// The linear-edge coefficients the simulated sweeps cut with, as scenario() below and
+/// scripts/calibration_sweep.sh state them.
+const std::map<std::string, double> kLinearEdgeTruth = {{"k_tc_N_per_mm2", 1100.0},
+                                                        {"k_nc_N_per_mm2", 450.0},
+                                                        {"k_te_N_per_mm", 8.0},
+                                                        {"k_ne_N_per_mm", 12.0}};
+
 fs::path write_file(const fs::path& path, const std::string& text) {
   std::ofstream(path) << text;
   return path;
@@ -114,11 +121,7 @@ TEST_F(CalibrateCommand, WritesAPresetTheReplayAndTheDaemonUse) {
   const nlohmann::json j = nlohmann::json::parse(r.output);
   ASSERT_EQ(j["cuts"].size(), 4U);
   EXPECT_TRUE(j["warnings"].empty()) << j["warnings"].dump();  // a sweep the model describes
-  const std::map<std::string, double> truth = {{"k_tc_N_per_mm2", 1100.0},
-                                               {"k_nc_N_per_mm2", 450.0},
-                                               {"k_te_N_per_mm", 8.0},
-                                               {"k_ne_N_per_mm", 12.0}};
-  for (const auto& [name, value] : truth) {
+  for (const auto& [name, value] : kLinearEdgeTruth) {
     const auto& c = j["coefficients"][name];
     EXPECT_NEAR(c["value"].get<double>(), value, 0.05 * value) << name;
     EXPECT_GT(c["std"].get<double>(), 0.0) << name;
@@ -279,11 +282,7 @@ TEST(CalibrationSweepScript, GivesBackTheSweepsTruth) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   ASSERT_TRUE(j["ok"].get<bool>()) << j["message"];
-  const std::map<std::string, double> truth = {{"k_tc_N_per_mm2", 1100.0},
-                                               {"k_nc_N_per_mm2", 450.0},
-                                               {"k_te_N_per_mm", 8.0},
-                                               {"k_ne_N_per_mm", 12.0}};
-  for (const auto& [name, value] : truth) {
+  for (const auto& [name, value] : kLinearEdgeTruth) {
     const auto& c = j["coefficients"][name];
     EXPECT_NEAR(c["value"].get<double>(), value, 2.0 * c["std"].get<double>()) << name;
     EXPECT_NEAR(c["value"].get<double>(), value, 0.01 * value) << name;
