@@ -309,15 +309,18 @@ namespace {
 // search reached first, as "k_nc −2350 ± 19" — a σ that a last-bit change of the synchronous
 // average (another minimum reached: −2862) showed to be false. Now the report, the log and the
 // preset say why the coefficients are not the material's, and their σ's span the minima.
+// The optimised program (test::optimised_millwatch_cli: 36 s of a core sanitized, 12 optimised):
+// the calibration's search and its minima run sanitized in the simulated sweeps above.
 TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   const fs::path csv = test::shared_dir() / "data" / "phm2010" / "c1_cut158_window.csv";
   ASSERT_TRUE(fs::exists(csv)) << csv;
   const fs::path dir = test::fresh_temp_dir();
   const fs::path preset = dir / "worn.json";
-  const auto r = test::run_command(
-      test::millwatch_cli() + " calibrate " + csv.string() + " --feeds-um 49.8 --config " +
-      (fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json").string() + " -o " +
-      preset.string() + " --no-progress 2>&1");
+  const auto r =
+      test::run_command(test::optimised_millwatch_cli() + " calibrate " + csv.string() +
+                        " --feeds-um 49.8 --config " +
+                        (fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json").string() +
+                        " -o " + preset.string() + " --no-progress 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("warnings:\n    the fit leaves 7"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("% of the measured force unexplained"), std::string::npos) << r.output;

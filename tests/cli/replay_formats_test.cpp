@@ -371,14 +371,17 @@ TEST(ReplayFormats, ProgressLineOnlyOnATerminal) {
   EXPECT_EQ(pipe.output.find("s of recording in"), std::string::npos) << pipe.output;
 }
 
+// The optimised program (test::optimised_millwatch_cli: 42 s of a core sanitized, 11 optimised):
+// the same three windows replay sanitized in tests/cli/phm2010_replay_test.cpp, and a campaign
+// on as many threads as cores in ACampaignReportsAFailedCutAndExitsNonZero below.
 TEST(ReplayFormats, CampaignOfThePhmWindowsShowsTheForcesRisingWithWear) {
   if (!fs::exists(phm_dir() / "c1_cut315_window.csv")) {
     GTEST_SKIP() << "real recordings not found at " << phm_dir();
   }
   const fs::path dir = test::fresh_temp_dir();
   const auto r = test::run_command(without_log(
-      test::millwatch_cli() + " replay " + (phm_dir() / "c1_cut001_window.csv").string() + " " +
-      (phm_dir() / "c1_cut158_window.csv").string() + " " +
+      test::optimised_millwatch_cli() + " replay " + (phm_dir() / "c1_cut001_window.csv").string() +
+      " " + (phm_dir() / "c1_cut158_window.csv").string() + " " +
       (phm_dir() / "c1_cut315_window.csv").string() + " --config " + phm_config() +
       " -j 2 --table " + (dir / "cuts.csv").string() + " --summary " +
       (dir / "summaries").string()));
