@@ -102,7 +102,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   // The record in the model frame, trimmed to [--from-s, --to-s) in seconds from its first
   // sample, along the recording's own clock (an LCM log's is the epoch's). The model is fitted
   // along an unbroken time base: a gap or a sample that is not a number within the stretch
-  // stops the diagnosis, saying where.
+  // stops the diagnosis, saying where, after the bad records read up to there are counted.
   LoadedCut cut;
   cut.input = input.string();
   cut.config_name = loaded.name;
@@ -110,7 +110,12 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
   double last_t = 0.0;
   double end_t = 0.0;  // after the record's last sample
   std::int64_t first_us = 0;
-  while (auto block = source->next(65536)) {
+  std::string stopped;  // why the stretch cannot be diagnosed, if it cannot
+  while (stopped.empty()) {
+    auto block = source->next(65536);
+    if (!block) {
+      break;
+    }
     if (rate <= 0.0) {
       rate = block->sample_rate_hz;
       first_us = block->utime_us;
@@ -123,18 +128,20 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
         continue;
       }
       if (!cut.record.force_N[0].empty() && t - last_t > 1.5 / rate) {
-        throw std::runtime_error(fmt::format(
+        stopped = fmt::format(
             "{}: {} sample(s) missing between {:.6f} s and {:.6f} s from the record's first "
             "sample: the diagnosis needs an unbroken record; choose a stretch without the gap "
             "with --from-s/--to-s",
-            input.string(), std::llround((t - last_t) * rate) - 1, last_t, t));
+            input.string(), std::llround((t - last_t) * rate) - 1, last_t, t);
+        break;
       }
       if (!std::isfinite(block->fx_N[i]) || !std::isfinite(block->fy_N[i]) ||
           !std::isfinite(block->fz_N[i])) {
-        throw std::runtime_error(fmt::format(
+        stopped = fmt::format(
             "{}: the sample {:.6f} s from the record's first is not a finite number: choose a "
             "stretch without it with --from-s/--to-s",
-            input.string(), t));
+            input.string(), t);
+        break;
       }
       const auto f = config.axis_map.to_model({block->fx_N[i], block->fy_N[i], block->fz_N[i]});
       cut.record.force_N[0].push_back(f[0]);
@@ -143,6 +150,9 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
     }
   }
   bad.finish(*source);
+  if (!stopped.empty()) {
+    throw std::runtime_error(stopped);
+  }
   if (rate <= 0.0 || (cut.record.force_N[0].empty() && o.from_s <= 0.0 && o.to_s <= 0.0)) {
     throw std::runtime_error(input.string() +
                              ": no samples to diagnose: " + why_no_samples(*source));

@@ -268,6 +268,18 @@ TEST(DiagnoseCommand, BadInputGivesAClearError) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("nan.csv: the sample"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("is not a finite number"), std::string::npos) << r.output;
+  // A bad row is a sample missing: the row is named, then counted, then the gap it leaves stops
+  // the diagnosis (the count had been lost).
+  write_without(dir / "bad_row.csv", 100, 101, "0,1,2");
+  r = test::run_command(cli + (dir / "bad_row.csv").string() + " --config " + f.config.string() +
+                        " --report " + (dir / "r7b").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  const std::size_t named = r.output.find("bad_row.csv:101: fewer than 4 columns");
+  const std::size_t counted = r.output.find("bad_row.csv: 1 bad line skipped");
+  const std::size_t stopped = r.output.find("bad_row.csv: 1 sample(s) missing between");
+  ASSERT_NE(stopped, std::string::npos) << r.output;
+  EXPECT_LT(named, counted) << r.output;
+  EXPECT_LT(counted, stopped) << r.output;
 
   // A record with no sample says why (it had said "no samples to diagnose" alone), and bad rows
   // are named by line and counted as the replay does.
