@@ -217,8 +217,15 @@ std::string summary_text(const json& j) {
       // Whole: a warning's reason comes last (cut short, it lost it, or split a character).
       s += fmt::format("    {}: {}", w.value("kind", std::string()),
                        w.value("detail", std::string()));
-      if (w.value("occurrences", std::int64_t{1}) > 1) {
-        s += fmt::format(" (×{})", w.value("occurrences", std::int64_t{1}));
+      // Events that count samples say how many (the events are per block or gap: "×2" had read as
+      // two samples where three were replaced); others how often they came.
+      const auto occurrences = w.value("occurrences", std::int64_t{1});
+      const auto counted = w.value("samples", std::int64_t{0});
+      if (counted > 0) {
+        s += fmt::format(" ({} sample{}{})", counted, counted == 1 ? "" : "s",
+                         occurrences > 1 ? fmt::format(" at {} places", occurrences) : "");
+      } else if (occurrences > 1) {
+        s += fmt::format(" (×{})", occurrences);
       }
       s += "\n";
     }

@@ -149,6 +149,24 @@ TEST(SummaryText, PrintsAWarningWhole) {
       << summary_text(j);
 }
 
+// A warning whose events count samples says how many samples, not how many events: three bad
+// samples in two blocks had read "(×2)".
+TEST(SummaryText, AWarningOfSamplesCountsTheSamples) {
+  nlohmann::json j = summary(41, 41);
+  const std::string detail = "NaN, infinite or beyond ±1e6 N: replaced by the channel's last good";
+  j["warnings"] = {
+      {{"kind", "non-finite or implausible samples"},
+       {"detail", detail},
+       {"occurrences", 2},
+       {"samples", 3}},
+      {{"kind", "gap in the samples"}, {"detail", "a"}, {"occurrences", 1}, {"samples", 1}},
+      {{"kind", "no steady tooth-passing signal"}, {"detail", "b"}, {"occurrences", 4}}};
+  const std::string text = summary_text(j);
+  EXPECT_NE(text.find(detail + " (3 samples at 2 places)\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("gap in the samples: a (1 sample)\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("no steady tooth-passing signal: b (×4)\n"), std::string::npos) << text;
+}
+
 // A sensor alert before the first revolution (revolution −1) says so, not "rev -1" or "rev 0".
 TEST(SummaryText, AlertsSayTheirRevolutionOrThatTheyCameBeforeTheFirst) {
   nlohmann::json j = summary(41, 41);
