@@ -309,8 +309,8 @@ nlohmann::json to_json(const CalibrationResult& r) {
                     {"alignment_deg", number(c.fit.alignment_rad.value * kDegPerRad)},
                     {"alignment_std_deg", number(c.fit.alignment_rad.sigma * kDegPerRad)},
                     {"harmonics", c.fit.harmonics},
-                    {"residual_rms_N", numbers(c.fit.residual_rms_N)},
-                    {"measured_rms_N", numbers(c.fit.measured_rms_N)},
+                    {"residual_rms_N", per_axis(c.fit.residual_rms_N, c.fit.compared)},
+                    {"measured_rms_N", per_axis(c.fit.measured_rms_N, c.fit.compared)},
                     {"unexplained_fraction",
                      number(unexplained_fraction(c.fit.residual_rms_N, c.fit.measured_rms_N))}});
   }

@@ -15,6 +15,14 @@ nlohmann::json number(double v) {
 
 }  // namespace
 
+nlohmann::json per_axis(const std::array<double, 3>& values, const std::array<bool, 3>& compared) {
+  nlohmann::json out = nlohmann::json::array();
+  for (std::size_t a = 0; a < 3; ++a) {
+    out.push_back(compared[a] ? number(values[a]) : nlohmann::json(nullptr));
+  }
+  return out;
+}
+
 nlohmann::json to_json(const IdentifiedWindow& w) {
   const FitResult& f = w.fit;
   nlohmann::json fit = {{"ok", f.ok},
@@ -29,10 +37,8 @@ nlohmann::json to_json(const IdentifiedWindow& w) {
     fit["reason"] = f.message;
     return {{"fit", fit}};
   }
-  fit["residual_rms_N"] = {number(f.residual_rms_N[0]), number(f.residual_rms_N[1]),
-                           number(f.residual_rms_N[2])};
-  fit["measured_rms_N"] = {number(f.measured_rms_N[0]), number(f.measured_rms_N[1]),
-                           number(f.measured_rms_N[2])};
+  fit["residual_rms_N"] = per_axis(f.residual_rms_N, f.compared);
+  fit["measured_rms_N"] = per_axis(f.measured_rms_N, f.compared);
   nlohmann::json pairs = nlohmann::json::array();
   for (const auto& [a, b] : f.correlated) {
     pairs.push_back({a, b});

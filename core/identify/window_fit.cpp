@@ -1618,6 +1618,8 @@ JointFitResult WindowFitter::Impl::fit(const std::vector<const MeasuredRevolutio
       }
       q.residual_rms_N[a] = std::sqrt(rr / 2.0);
       q.measured_rms_N[a] = std::sqrt(mm / 2.0);
+      q.compared[a] = true;
+      out.compared[a] = true;
       rr_all[a] += rr / 2.0 / ncut;
       mm_all[a] += mm / 2.0 / ncut;
     }

@@ -179,6 +179,7 @@ struct FitResult {
   std::vector<std::pair<std::string, std::string>> correlated;  ///< |correlation| > 0.9
   std::array<double, 3> residual_rms_N{};  ///< per axis, over the harmonics compared
   std::array<double, 3> measured_rms_N{};  ///< the measurement's, same harmonics
+  std::array<bool, 3> compared{};          ///< the axes compared (the others' RMS are 0)
   int harmonics = 0;                       ///< K
   int effective_samples = 0;               ///< M: real harmonic values compared
   int iterations = 0;
@@ -220,6 +221,7 @@ struct CutFitQuality {
   Estimate alignment_rad;                  ///< this cut's model angle minus tracker angle
   std::array<double, 3> residual_rms_N{};  ///< per axis, over the harmonics compared
   std::array<double, 3> measured_rms_N{};  ///< the measurement's, same harmonics
+  std::array<bool, 3> compared{};          ///< the axes compared (the others' RMS are 0)
   int harmonics = 0;                       ///< K of this cut
   int effective_samples = 0;               ///< real harmonic values compared
 };

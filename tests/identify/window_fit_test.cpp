@@ -231,6 +231,9 @@ TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {
   for (const Case& k : cases) {
     const Outcome o = identify_case(k);
     ASSERT_TRUE(o.fit.ok) << k.name << ": " << o.fit.message;
+    // The in-plane forces compared, not fz (whose RMS, 0, is no measurement).
+    EXPECT_EQ(o.fit.compared, (std::array<bool, 3>{true, true, false})) << k.name;
+    EXPECT_TRUE(to_json(IdentifiedWindow{.fit = o.fit})["fit"]["measured_rms_N"][2].is_null());
     const bool in_rho = o.rho_error_um <= 2.0 * o.fit.rho_um.sigma;
     const bool in_gamma = o.gamma_error_rad <= 2.0 * o.fit.gamma_rad.sigma;
     honest += in_rho && in_gamma ? 1 : 0;
@@ -278,6 +281,15 @@ TEST(WindowFit, IdentifiesRunoutAndCoefficientsFromTheForceAlone) {
     }
   }
   EXPECT_GE(honest, static_cast<int>(std::ceil(0.9 * total)));
+}
+
+// [fx, fy, fz] in the summaries: null for an axis not compared (it had read 0.0, "0 N
+// measured") and for a value that is not finite; the others as they are.
+TEST(FitJson, AnAxisTheFitDidNotCompareIsNullNotZero) {
+  const nlohmann::json j = per_axis({1.5, 2.5, 0.0}, {true, true, false});
+  EXPECT_EQ(j, nlohmann::json::parse("[1.5, 2.5, null]"));
+  const nlohmann::json nan = per_axis({std::nan(""), 2.5, 3.0}, {true, true, true});
+  EXPECT_EQ(nan, nlohmann::json::parse("[null, 2.5, 3.0]"));
 }
 
 // A 0.5 mm cut with the linear edge law and no effect but the runout and the helix lag: `flutes`
