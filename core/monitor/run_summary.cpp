@@ -364,6 +364,13 @@ nlohmann::json RunSummary::to_json() const {
   if (config_.lockstep && revolutions_ > 0 && residual_[0].n == 0) {
     warn("no model residuals",
          "the lockstep model was never aligned with the measured revolutions");
+  } else if (config_.lockstep && flutes_ >= 2 && f.alpha.n > 0 && f.model_alpha.n == 0) {
+    // Its residuals are there, its features not (model.alpha_deg and delta_fy_N null).
+    warn("no model alpha",
+         "the lockstep model's tooth events were found on none of the " +
+             std::to_string(f.alpha.n) +
+             " revolutions measured: its α and ΔFy are absent (its force has no tooth-passing "
+             "feature the measured template finds: check the model's coefficients and cut)");
   }
   if (flutes_ < 2) {
     // With one flute α is 360° and ΔFy 0 by definition [000]: they say nothing of the cut.

@@ -224,6 +224,37 @@ TEST(RunSummary, AOneFluteToolHasNoAlphaOrDeltaFyAndSaysWhy) {
   EXPECT_NEAR(two["delta_fy_N"].get<double>(), 0.1, 1e-12);
 }
 
+// A model in lockstep whose tooth events are never found (a preset with a negative coefficient
+// on a real cut) leaves its α and ΔFy null: the summary says why, as for every null, and says
+// nothing when they are there.
+TEST(RunSummary, SaysWhyTheModelsAlphaIsAbsent) {
+  const auto summary_with = [](bool model_events) {
+    MonitorConfig config;
+    config.lockstep = true;
+    RunSummary summary(config);
+    for (int i = 0; i < 20; ++i) {
+      RevolutionRecord r = revolution(i);
+      r.model_valid = true;  // aligned: residuals computed
+      r.model.valid = model_events;
+      r.model.alpha_deg = 179.0;
+      summary.add(r);
+    }
+    summary.finish(PipelineStatus{});
+    return summary.to_json();
+  };
+  const nlohmann::json without = summary_with(false);
+  EXPECT_TRUE(without["model"]["alpha_deg"].is_null());
+  EXPECT_EQ(test::warning_detail(without["warnings"], "no model alpha")
+                .rfind("the lockstep model's tooth events were found on none of the 20 "
+                       "revolutions measured: its α and ΔFy are absent",
+                       0),
+            0u)
+      << without["warnings"].dump();
+  const nlohmann::json with = summary_with(true);
+  EXPECT_NEAR(with["model"]["alpha_deg"].get<double>(), 179.0, 1e-12);
+  EXPECT_EQ(test::warning_detail(with["warnings"], "no model alpha"), "");
+}
+
 // Revolutions that lost a tooth event count in peaks but not in α: the summary warns once more
 // than a tenth of them did (a 6-flute cut after a speed ramp lost one in five with no warning,
 // the threshold being half), and not for a few.
