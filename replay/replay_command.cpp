@@ -165,6 +165,13 @@ int replay_one(const ReplayOptions& o) {
   j["input_format"] = source->description();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = source->bad_records();
+  if (!loaded.rate_note.empty()) {  // the summary alone says so too
+    j["warnings"].push_back({{"kind", "rate overridden"},
+                             {"occurrences", 1},
+                             {"samples", 0},
+                             {"first_utime", first_utime},
+                             {"detail", loaded.rate_note}});
+  }
   j["record_in_plane_force_N"] =
       in_plane.samples() > 0
           ? nlohmann::json{{"rms", *in_plane.rms_N()}, {"max", *in_plane.max_N()}}

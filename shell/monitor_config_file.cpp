@@ -128,10 +128,11 @@ void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& sou
   }
   if (config_hz > 0.0 && source.rate_stated() &&
       std::fabs(source_hz - config_hz) > 1e-3 * config_hz) {
-    spdlog::warn(
-        "{}: the recording's rate is {:.6g} Hz (stated, or its time column's steps), {} "
-        "says {:.6g} Hz; using the recording's",
-        input, source_hz, config.name, config_hz);
+    config.rate_note = fmt::format(
+        "the recording's rate is {:.6g} Hz (stated, or its time column's steps), {} says "
+        "{:.6g} Hz; using the recording's",
+        source_hz, config.name, config_hz);
+    spdlog::warn("{}: {}", input, config.rate_note);
   }
   if (config_hz <= 0.0 || source.rate_stated()) {
     config.json["sample_rate_hz"] = source_hz;

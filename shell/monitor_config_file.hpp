@@ -45,6 +45,9 @@ struct LoadedMonitorConfig {
   std::string name;               ///< for messages: "SIDECAR + CONFIG", "CONFIG" or "(defaults)"
   std::filesystem::path sidecar;  ///< the sidecar read ("": none)
   std::optional<double> sidecar_feed_per_tooth_um;  ///< the feed the sidecar itself states
+  /// take_recording_rate()'s word when the recording's rate overrode the one configured ("":
+  /// none), for the summary as well as the log.
+  std::string rate_note;
   /// sample_rate_hz in json (0: none).
   [[nodiscard]] double config_rate_hz() const;
 };

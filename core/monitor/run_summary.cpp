@@ -450,6 +450,7 @@ nlohmann::json RunSummary::to_json() const {
                       {"revolutions", f.alpha.n}};
   json out{{"samples", samples},
            {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
+           {"sample_rate_hz", config_.sample_rate_hz},
            {"revolutions", valid_},
            {"revolutions_measured", revolutions_},
            {"revolutions_cutting", std::llround(status_.cutting_revolutions)},

@@ -16,6 +16,7 @@
 
 #include "core/sim/scenario.hpp"
 #include "tests/support/force_log.hpp"
+#include "tests/support/recording.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -369,6 +370,13 @@ TEST(ReplayCommand, ARateTheTimeColumnBeliesGivesWayAndOneThatIsNoRateIsRefused)
   EXPECT_NE(fast.log.find("fast.json says 100000 Hz; using the recording's"), std::string::npos)
       << fast.log;
   EXPECT_EQ(fast.summary["samples"], right.summary["samples"]);
+  EXPECT_EQ(fast.summary["sample_rate_hz"], 50000.0);
+  // The summary says it too: one who keeps only the summary had no trace of the rate set aside.
+  EXPECT_NE(test::warning_detail(fast.summary["warnings"], "rate overridden")
+                .find("fast.json says 100000 Hz; using the recording's"),
+            std::string::npos)
+      << fast.summary["warnings"].dump();
+  EXPECT_EQ(test::warning_detail(right.summary["warnings"], "rate overridden"), "");
   EXPECT_EQ(fast.summary["dropped_samples"], 0);
   EXPECT_EQ(fast.summary["alpha_deg"]["mean"], right.summary["alpha_deg"]["mean"]);
   for (const char* bad : {"\"fifty\"", "0", "null"}) {
