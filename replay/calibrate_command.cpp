@@ -162,8 +162,8 @@ std::string num(const nlohmann::json& v, const char* format) {
 std::string report_text(const nlohmann::json& j, const identify::CalibrationResult& r) {
   std::string s;
   const auto& tool = r.joint.fit.config.tool;
-  s += fmt::format("calibration over {} cuts: one tool ({:g} mm, {} flutes), {} law, {}\n",
-                   r.cuts.size(), tool.diameter_mm, tool.flutes,
+  s += fmt::format("calibration over {} cut{}: one tool ({:g} mm, {} flutes), {} law, {}\n",
+                   r.cuts.size(), r.cuts.size() == 1 ? "" : "s", tool.diameter_mm, tool.flutes,
                    model::to_string(r.joint.fit.config.material.law),
                    r.tared ? "mean force fitted (channels tared)"
                            : "mean force left out (channels not said to be tared: --tared)");
@@ -318,9 +318,10 @@ int run_calibrate(const CalibrateOptions& o) {
         {"date", utc_now()},
         {"config", o.config.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.config)},
         {"tool", model::to_json(r.joint.fit.config)["tool"]}};
-    const std::string name =
-        !o.name.empty() ? o.name
-                        : fmt::format("calibrated on {} cuts ({})", cuts.size(), utc_now());
+    const std::string name = !o.name.empty()
+                                 ? o.name
+                                 : fmt::format("calibrated on {} cut{} ({})", cuts.size(),
+                                               cuts.size() == 1 ? "" : "s", utc_now());
     write_text_file(o.output, identify::material_preset(r, name, provenance).dump(2) + "\n");
   }
   if (o.json) {

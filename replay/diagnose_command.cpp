@@ -219,8 +219,8 @@ void print_steps(const diagnose::Diagnosis& d) {
     std::printf("  %s\n", note.c_str());
   }
   for (const auto& p : d.at_bound) {
-    std::printf("  %s held at its %s bound %g (outside the physical range)\n", p.name.c_str(),
-                p.at_bound.c_str(), p.value);
+    std::printf("  %s held at its %s physical bound %g (the fit wanted a value beyond it)\n",
+                p.name.c_str(), p.at_bound.c_str(), p.value);
   }
 }
 

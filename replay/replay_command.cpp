@@ -194,7 +194,7 @@ int replay_one(const ReplayOptions& o) {
     }
     if (!o.plot.empty()) {
       const auto pngs = write_plots(*recorder, j, o.plot, input.filename().string());
-      spdlog::info("{}: {} plots drawn ({})", o.plot, pngs.size(),
+      spdlog::info("{}: {} plot{} drawn ({})", o.plot, pngs.size(), pngs.size() == 1 ? "" : "s",
                    (fs::path(o.plot) / "plots.txt").string());
     }
   }

@@ -1,5 +1,7 @@
 #include "shell/material_preset.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <stdexcept>
 #include <string>
 
@@ -34,6 +36,17 @@ nlohmann::json read_material_preset(const std::filesystem::path& path) {
     throw std::runtime_error(path.string() +
                              ": not a material preset (no \"material\" object; `millwatch "
                              "calibrate -o` writes one)");
+  }
+  // What calibrate warned of when it wrote the preset (coefficients that are not the
+  // material's, minima the record did not choose between) is said again wherever it is used:
+  // the coefficients themselves carry no mark.
+  if (j.contains("warnings") && j["warnings"].is_array()) {
+    for (const auto& w : j["warnings"]) {
+      if (w.is_string()) {
+        spdlog::warn("{}: material preset written with a warning: {}", path.string(),
+                     w.get<std::string>());
+      }
+    }
   }
   return j["material"];
 }

@@ -51,8 +51,12 @@ void ShellSink::on_event(const monitor::PipelineEvent& e) {
           source_, e.detail, e.value, t_s);
       return;
     case monitor::PipelineEventKind::kModelAligned:
-      spdlog::info("{}: {} ({} in the average, correlation {:.3f}, t = {:.3f} s)", source_,
-                   e.detail, e.count, e.value, t_s);
+      // The revolutions' time, not the event's: a lock measures back to the start of the cut,
+      // so this can read earlier than the lock's line before it.
+      spdlog::info(
+          "{}: {} ({} in the average, correlation {:.3f}; up to the revolution at t = "
+          "{:.3f} s)",
+          source_, e.detail, e.count, e.value, t_s);
       return;
     case monitor::PipelineEventKind::kModelUpdated:
       if (n == 1) {  // then every window: the first says it happens

@@ -2412,14 +2412,20 @@ Diagnosis Diagnoser::run() {
     const auto& first_rms = out.initial.residual_rms_N;
     const bool both_fell = last_rms[0] <= first_rms[0] && last_rms[1] <= first_rms[1];
     const std::string change =
-        both_fell ? format(": adding it brought the residual from %.4f, %.4f N to %.4f, %.4f N",
-                           first_rms[0], first_rms[1], last_rms[0], last_rms[1])
-                  : format(": adding it took the residual from %.4f, %.4f N to %.4f, %.4f N",
-                           first_rms[0], first_rms[1], last_rms[0], last_rms[1]) +
+        both_fell ? format(
+                        ": adding it brought the residual from fx %.4f, fy %.4f N to fx %.4f, "
+                        "fy %.4f N",
+                        first_rms[0], first_rms[1], last_rms[0], last_rms[1])
+                  : format(
+                        ": adding it took the residual from fx %.4f, fy %.4f N to fx %.4f, "
+                        "fy %.4f N",
+                        first_rms[0], first_rms[1], last_rms[0], last_rms[1]) +
                         format(" (fx %+.1f %%, fy %+.1f %%: one axis rose)",
                                100.0 * (last_rms[0] / std::max(first_rms[0], 1e-300) - 1.0),
                                100.0 * (last_rms[1] / std::max(first_rms[1], 1e-300) - 1.0));
-    out.verdict = "The model lacked " + list + change + format(" (%.2f× the noise floor)", ratio) +
+    // The ratio is the axis further from its floor's.
+    out.verdict = "The model lacked " + list + change +
+                  format(" (%.2f× the noise floor on the axis further from it)", ratio) +
                   (at_floor(current) ? "." : "; something else remains (" + unexplained + ").");
     if (out.named_effects.size() > 1) {
       out.verdict.replace(out.verdict.find("adding it"), 9, "adding them");

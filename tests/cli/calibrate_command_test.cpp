@@ -336,6 +336,20 @@ TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   const auto& k_nc = p["coefficients"]["k_nc_N_per_mm2"];
   EXPECT_GT(k_nc["std"].get<double>(), 1000.0) << k_nc;
   EXPECT_LT(k_nc["value"].get<double>(), 0.0) << k_nc;
+  // The preset used says so again: its coefficients carry no mark (a replay with it had lost its
+  // model's α and ΔFy without a word of why).
+  nlohmann::json config = nlohmann::json::parse(
+      std::ifstream(fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json"));
+  config["model"]["material"] = preset.string();
+  std::ofstream(dir / "with_preset.json") << config.dump();
+  const auto replay =
+      test::run_command(test::optimised_millwatch_cli() + " replay " + csv.string() + " --config " +
+                        (dir / "with_preset.json").string() + " --no-identify 2>&1");
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(
+      replay.output.find("worn.json: material preset written with a warning: the fit leaves "),
+      std::string::npos)
+      << replay.output;
 }
 
 // Under another law than the linear edge ([000]'s power law here) the classic regression's
