@@ -161,12 +161,14 @@ void add_publish_command(CLI::App& app) {
   cmd->add_option("--columns", o->columns,
                   "Which columns hold time and forces, as for replay (t=Time,fx=Fx,...)");
   cmd->add_option("--url", o->url, "LCM URL");
-  cmd->add_option("--channel", o->channel, "Channel of the raw blocks");
+  cmd->add_option("--channel", o->channel, "Channel of the raw blocks")->capture_default_str();
   cmd->add_option("--speed", o->speed, "Pace: k times real time, 0 as fast as possible")
-      ->check(kNonNegative);
+      ->check(kNonNegative)
+      ->capture_default_str();
   cmd->add_option("--block", o->block_samples,
                   "Samples per message (at most 2000 keeps it under 64 KiB)")
-      ->check(CLI::Range(1, 2000));
+      ->check(CLI::Range(1, 2000))
+      ->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
       ->check(kPositive);
   // At most 4e9 s (the year 2096): the input check takes utimes below 2⁵³ µs (9.007e9 s), and

@@ -72,8 +72,11 @@ std::string summary_text(const json& j) {
   // (α and the periods) only those with all their tooth events.
   const double measured = has_number(j, "revolutions_measured") ? num(j, "revolutions_measured")
                                                                 : num(j, "revolutions");
-  s += fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting", measured,
-                   num(j, "revolutions_cutting"));
+  const double cutting = num(j, "revolutions_cutting");
+  s += cutting > 0.0 || measured > 0.0
+           ? fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting",
+                         measured, cutting)
+           : std::string("  revolutions   none: no cutting heard");
   if (measured != num(j, "revolutions")) {
     s += fmt::format(" ({:.0f} with all their tooth events)", num(j, "revolutions"));
   }

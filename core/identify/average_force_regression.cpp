@@ -75,8 +75,11 @@ AverageForceRegression average_force_regression(const std::vector<MeanForceCut>&
   AverageForceRegression out;
   out.cuts = static_cast<int>(cuts.size());
   if (cuts.size() < 3) {
+    // A line through fewer than three points has no residual to judge its uncertainty by.
     out.message = "needs at least three cuts (" + std::to_string(cuts.size()) +
-                  " given): two points leave nothing to judge a line's uncertainty by";
+                  " given): a line through " +
+                  (cuts.size() == 2 ? std::string("two points") : std::string("fewer")) +
+                  " leaves nothing to judge its uncertainty by";
     return out;
   }
   const auto [ts, te] = immersion_rad(cuts.front().model);

@@ -30,6 +30,11 @@ TEST(SummaryText, CountsTheRevolutionsMeasuredAsTheJsonDoes) {
   const std::string all = summary_text(summary(41, 41));
   EXPECT_NE(all.find("revolutions   41 measured of ~101 turned while cutting\n"), std::string::npos)
       << all;
+  // A record in which no cutting was heard (PHM c1_cut001): not "0 measured of ~0 turned".
+  nlohmann::json none = summary(0, 0);
+  none["revolutions_cutting"] = 0.0;
+  const std::string idle = summary_text(none);
+  EXPECT_NE(idle.find("revolutions   none: no cutting heard\n"), std::string::npos) << idle;
 }
 
 // α from one revolution has no spread to state (the JSON's std is null): not "± 0.00°".
