@@ -160,18 +160,14 @@ int replay_one(const ReplayOptions& o) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
   run.drain();
+  if (!loaded.rate_note.empty()) {  // the summary alone says so too
+    run.note("rate overridden", loaded.rate_note, first_utime);
+  }
   nlohmann::json j = run.summary();
   j["input"] = input.string();
   j["input_format"] = source->description();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
   j["bad_lines"] = source->bad_records();
-  if (!loaded.rate_note.empty()) {  // the summary alone says so too
-    j["warnings"].push_back({{"kind", "rate overridden"},
-                             {"occurrences", 1},
-                             {"samples", 0},
-                             {"first_utime", first_utime},
-                             {"detail", loaded.rate_note}});
-  }
   j["record_in_plane_force_N"] =
       in_plane.samples() > 0
           ? nlohmann::json{{"rms", *in_plane.rms_N()}, {"max", *in_plane.max_N()}}

@@ -88,6 +88,10 @@ class MonitorRun {
   /// Waits until every queued LCM message is published (nothing to do without LCM).
   void drain();
   [[nodiscard]] nlohmann::json summary() const { return summary_.to_json(); }
+  /// A warning of the shell's for the summary (monitor::RunSummary::note).
+  void note(std::string kind, std::string detail, std::int64_t utime_us) {
+    summary_.note(std::move(kind), std::move(detail), utime_us);
+  }
   /// The LCM output, if the run publishes.
   [[nodiscard]] const messaging::LcmOutput* output() const { return output_.get(); }
   /// Whether the pipeline knows when its next sample is due, so that it would count samples

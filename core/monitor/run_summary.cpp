@@ -430,7 +430,7 @@ nlohmann::json RunSummary::to_json() const {
   }
   json warnings = json::array();
   for (const std::vector<Warning>* list :
-       std::array<const std::vector<Warning>*, 2>{&warnings_, &derived_}) {
+       std::array<const std::vector<Warning>*, 3>{&warnings_, &derived_, &notes_}) {
     for (const auto& w : *list) {
       warnings.push_back({{"kind", w.kind},
                           {"occurrences", w.occurrences},

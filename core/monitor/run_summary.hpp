@@ -46,6 +46,12 @@ class RunSummary {
   /// then says it was off, not that the record was too short for a window.
   void set_identification_off(std::string why) { identification_off_ = std::move(why); }
 
+  /// A warning from outside the pipeline (a shell's: a configured rate the recording set aside),
+  /// stated after the pipeline's own and counted as none of them (it explains no absent value).
+  void note(std::string kind, std::string detail, std::int64_t utime_us) {
+    notes_.push_back({std::move(kind), 1, 0, utime_us, std::move(detail)});
+  }
+
   [[nodiscard]] nlohmann::json to_json() const;
   [[nodiscard]] std::int64_t valid_revolutions() const { return valid_; }
   [[nodiscard]] const MonitorConfig& config() const { return config_; }
@@ -108,6 +114,7 @@ class RunSummary {
   /// Warns when another flute than CE1 holds the larger force over the record.
   void warn_flute_labelling(const FluteStatistics& f) const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
+  std::vector<Warning> notes_;            // note()'s
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted
   std::string identification_off_;
