@@ -1,6 +1,5 @@
 #include "shell/run_plots.hpp"
 
-#include <fftw3.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -8,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/signal/welch_spectrum.hpp"
 #include "shell/gnuplot.hpp"
 
 namespace millwatch::shell {
@@ -40,55 +40,6 @@ const char* kFluteColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
                                "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
 
 }  // namespace
-
-void amplitude_spectrum(const std::vector<double>& x, double rate_hz, std::size_t max_segment,
-                        std::vector<double>& frequency_hz, std::vector<double>& amplitude) {
-  frequency_hz.clear();
-  amplitude.clear();
-  std::size_t n = 64;
-  while (n * 2 <= std::min(x.size(), max_segment)) {
-    n *= 2;
-  }
-  if (x.size() < 64) {
-    return;
-  }
-  double mean = 0.0;
-  for (double v : x) {
-    mean += std::isfinite(v) ? v : 0.0;
-  }
-  mean /= static_cast<double>(x.size());
-  std::vector<double> window(n);
-  double window_sum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    window[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
-                                     static_cast<double>(n));
-    window_sum += window[i];
-  }
-  double* in = fftw_alloc_real(n);
-  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in, out, FFTW_ESTIMATE);
-  std::vector<double> power(n / 2 + 1, 0.0);
-  int segments = 0;
-  for (std::size_t start = 0; start + n <= x.size(); start += n / 2) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const double v = x[start + i];
-      in[i] = (std::isfinite(v) ? v - mean : 0.0) * window[i];
-    }
-    fftw_execute(plan);
-    for (std::size_t k = 0; k <= n / 2; ++k) {
-      power[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
-    }
-    ++segments;
-  }
-  fftw_destroy_plan(plan);
-  fftw_free(in);
-  fftw_free(out);
-  for (std::size_t k = 0; k <= n / 2; ++k) {
-    frequency_hz.push_back(static_cast<double>(k) * rate_hz / static_cast<double>(n));
-    // Peak amplitude of a sinusoid: 2|X|/Σw (the mean of the segments' powers).
-    amplitude.push_back(2.0 * std::sqrt(power[k] / segments) / window_sum);
-  }
-}
 
 std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& summary,
                                   const fs::path& dir, const std::string& title) {
@@ -244,10 +195,11 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
 
   // 5. Spectrum with the tooth-passing harmonics.
   if (rec.raw()[0].size() >= 256 && rec.raw_rate_hz() > 0.0) {
-    std::vector<double> f, ax, ay, az;
-    amplitude_spectrum(rec.raw()[0], rec.raw_rate_hz(), 1 << 15, f, ax);
-    amplitude_spectrum(rec.raw()[1], rec.raw_rate_hz(), 1 << 15, f, ay);
-    amplitude_spectrum(rec.raw()[2], rec.raw_rate_hz(), 1 << 15, f, az);
+    const auto sx = signal::welch_amplitude_spectrum(rec.raw()[0], rec.raw_rate_hz(), 1 << 15);
+    const auto sy = signal::welch_amplitude_spectrum(rec.raw()[1], rec.raw_rate_hz(), 1 << 15);
+    const auto sz = signal::welch_amplitude_spectrum(rec.raw()[2], rec.raw_rate_hz(), 1 << 15);
+    const std::vector<double>& f = sx.frequency_hz;
+    const std::vector<double>&ax = sx.amplitude, &ay = sy.amplitude, &az = sz.amplitude;
     const double spindle_hz = (rpm > 0.0 ? rpm : commanded) / 60.0;
     const double tooth_hz = spindle_hz * flutes;
     const double f_max = std::min(rec.raw_rate_hz() / 2.0,
@@ -258,13 +210,8 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
     }
     write_file(abs / "spectrum.csv", data);
     add_png("spectrum.png");
-    // Welch's segments (Hann, half overlapping): what of the record they cover.
     const std::size_t total = rec.raw()[0].size();
-    const auto segment = static_cast<std::size_t>(
-        f.size() > 1 ? std::llround(rec.raw_rate_hz() / f[1]) : static_cast<long long>(total));
-    const std::size_t segments =
-        segment > 0 && total >= segment ? 1 + (total - segment) / (segment / 2) : 0;
-    const std::size_t covered = segments > 0 ? segment + (segments - 1) * (segment / 2) : 0;
+    const std::size_t segments = sx.segments, segment = sx.segment, covered = sx.covered;
     script += fmt::format(
         "set title {}\nset xlabel 'frequency [Hz]'\nset ylabel 'amplitude [N]'\nset logscale y\n"
         "set format y '10^{{%L}}'\nset xrange [0:{}]\nset key bottom right\n",

@@ -21,12 +21,6 @@
 
 namespace millwatch::shell {
 
-/// The amplitude spectrum (N, peak) of `x` sampled at `rate_hz`: Welch's average of Hann-
-/// windowed segments of up to `max_segment` samples (a power of two), half overlapping, the
-/// mean removed. Returns the frequencies (Hz) and amplitudes; empty below 64 samples.
-void amplitude_spectrum(const std::vector<double>& x, double rate_hz, std::size_t max_segment,
-                        std::vector<double>& frequency_hz, std::vector<double>& amplitude);
-
 /// Writes the data files and the gnuplot script into `dir` and runs gnuplot on it. Returns the
 /// PNG files written. @throws std::runtime_error if gnuplot is missing or fails (its messages
 /// are in DIR/gnuplot.log).

@@ -9,7 +9,8 @@
 // the sample thread plans when the lockstep model meets a new speed or accumulation cycle
 // length, and the identifier's worker thread (core/identify) when it evaluates the model
 // through the measurement's filter (both model::PeriodicResponse) and takes the model's
-// harmonics (signal::RealSpectrum, once per fit and grid). So every fftw_plan_* and
+// harmonics (signal::RealSpectrum, once per fit and grid); the replay's plots take their Welch
+// spectra (welch_spectrum.hpp) while a model build may still run. So every fftw_plan_* and
 // fftw_destroy_plan call in the project holds this lock; fftw_execute never does (the
 // real-time path stays lock-free).
 // (FFTW 3.3.5+'s fftw_make_planner_thread_safe() would need libfftw3_threads; one mutex is

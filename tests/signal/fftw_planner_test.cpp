@@ -11,6 +11,7 @@
 
 #include "core/model/periodic_response.hpp"
 #include "core/signal/spindle_tracker.hpp"
+#include "core/signal/welch_spectrum.hpp"
 
 namespace millwatch::signal {
 namespace {
@@ -43,8 +44,10 @@ double delayed_cosine_error(int n, int s) {
 // tracker and lockstep filter) is built and the old one destroyed in the main thread while the
 // sample thread plans for a new speed or cycle length. Done here at once, many times, with many
 // transform sizes: every transform must stay right (FFTW's planner is not thread-safe; without
-// fftw_planner_mutex() this corrupts the planner's tables).
-TEST(FftwPlanner, PlansMadeAndDestroyedInTwoThreadsAtOnceStayCorrect) {
+// fftw_planner_mutex() this corrupts the planner's tables). The replay's plots take Welch
+// spectra (welch_spectrum.hpp) while the model's builder thread may still plan: they join in
+// (a spectrum planned without the lock had left both threads spinning in FFTW's planner).
+TEST(FftwPlanner, PlansMadeAndDestroyedInThreeThreadsAtOnceStayCorrect) {
   std::atomic<int> bad{0};
   auto trackers = [&] {
     for (int i = 0; i < 400; ++i) {
@@ -64,10 +67,26 @@ TEST(FftwPlanner, PlansMadeAndDestroyedInTwoThreadsAtOnceStayCorrect) {
       }
     }
   };
+  auto spectra = [&] {
+    for (int i = 0; i < 300; ++i) {
+      const std::size_t n = 64U << (i % 8);  // a line of 1.5 at bin 5, a mean of 2
+      std::vector<double> x(n + 17);
+      for (std::size_t k = 0; k < x.size(); ++k) {
+        x[k] =
+            2.0 + 1.5 * std::cos(2.0 * kPi * 5.0 * static_cast<double>(k) / static_cast<double>(n));
+      }
+      const AmplitudeSpectrum s = welch_amplitude_spectrum(x, 1000.0, 1 << 15);
+      if (s.segment != n || std::fabs(s.amplitude[5] - 1.5) > 0.05) {
+        ++bad;
+      }
+    }
+  };
   std::thread a(trackers);
   std::thread b(responses);
+  std::thread c(spectra);
   a.join();
   b.join();
+  c.join();
   EXPECT_EQ(bad.load(), 0);
 }
 
