@@ -204,6 +204,21 @@ bool RevolutionAnalyzer::measure_model(const RevolutionEvents& measured,
                        static_cast<std::size_t>(last - first_ + 1), model_rows_.data());
   const auto row = [&](std::int64_t s) { return model_row(s); };
   const auto detect = [&](std::int64_t s) { return model_row(s)[3]; };
+  // Where the model's force pauses between the flutes, its valleys are the pauses' middles
+  // (find_quiet_middle()); the quiet level is the tooth-event template's, on the resultant.
+  double quiet = -1.0;
+  if (tmpl.kind == ToothEventKind::kValley) {
+    double lowest = detect(first_), highest = lowest;
+    for (std::int64_t s = first_ + 1; s <= last; ++s) {
+      lowest = std::min(lowest, detect(s));
+      highest = std::max(highest, detect(s));
+    }
+    if (highest > lowest) {
+      const double floor = std::sqrt(std::max(0.0, lowest));
+      const double level = floor + kQuietFraction * (std::sqrt(highest) - floor);
+      quiet = level * level;
+    }
+  }
   mm.flutes = flutes;
   mm.sequence = events.sequence;
   mm.valid = true;
@@ -218,7 +233,13 @@ bool RevolutionAnalyzer::measure_model(const RevolutionEvents& measured,
                                    : events.event_sample[uk] + pitch - lead;
       e = find_centroid(detect, first_, last, events.boundary_sample[uk], to);
     } else {
-      e = find_valley(detect, first_, last, events.event_sample[uk], half, fit);
+      if (quiet >= 0.0) {
+        e = find_quiet_middle(detect, first_, last, events.event_sample[uk], half, quiet,
+                              kQuietPitch * pitch);
+      }
+      if (e.status != EventSearch::Status::kFound) {
+        e = find_valley(detect, first_, last, events.event_sample[uk], half, fit);
+      }
     }
     const bool found = e.status == EventSearch::Status::kFound;
     mm.event_sample[uk] = found ? e.position : events.event_sample[uk];

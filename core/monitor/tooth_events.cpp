@@ -8,7 +8,6 @@ namespace millwatch::monitor {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double kQuietFraction = 0.1;  // of the force's span above its lowest level (ringing)
 // Where the cut's geometry leaves a pause between the flutes: a dynamometer's ringing there
 // rebounds to ~15 % of the span (its resonance a little above the 3.3 kHz low-pass).
 constexpr double kPauseQuietFraction = 0.25;
@@ -17,7 +16,6 @@ constexpr double kPauseQuietFraction = 0.25;
 // well below the quiet level that makes a stretch a pause (10 %), so that an arm taken for a
 // valley still says whether the cut pauses there.
 constexpr double kTemplateBasinDepth = 0.05;
-constexpr double kQuietPitch = 0.2;       // a gap this long (fraction of a pitch) is a pause
 constexpr int kStartFit = 32;             // CE1 events kept on the way back to start the filter
 constexpr int kParabolaEvents = 6;        // the fewest a parabola may start it from (on a ramp)
 constexpr double kCurvatureSigmas = 4.0;  // a ramp: curvature beyond this many standard errors

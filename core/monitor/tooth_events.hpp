@@ -62,6 +62,12 @@ ToothEventTemplate find_tooth_event_template(std::span<const double> resultant_a
 /// the engaged arc (model::engaged_arc, with the helix lag) by 20 % of a pitch or more.
 bool pauses_between_flutes(const model::ModelConfig& config);
 
+/// A stretch of the in-plane resultant within this fraction of its span above its lowest level
+/// is quiet (a filter's ringing stays below it)...
+inline constexpr double kQuietFraction = 0.1;
+/// ...and a quiet stretch this long (fraction of a pitch) is a pause between the flutes' cuts.
+inline constexpr double kQuietPitch = 0.2;
+
 /// Outcome of one event search.
 struct EventSearch {
   /// kQuiet: no pulse at all where the flute's should be (it did not cut).
@@ -270,6 +276,53 @@ EventSearch find_centroid(const Signal& detect, std::int64_t oldest, std::int64_
   } else {
     out.status = EventSearch::Status::kNotFound;
   }
+  return out;
+}
+
+/// The middle of a pause in `detect` (callable on absolute sample n ∈ [from, to]): the quiet
+/// stretch — samples at or below `quiet` — that holds the lowest sample within ± half of
+/// `predicted`, its ends placed where `detect` crosses `quiet` (linearly between the samples, so
+/// that the middle moves continuously with the signal). Found when the stretch is at least
+/// `min_run` samples long and ends inside [from, to]; its middle is kept within ± half of
+/// `predicted` (a flute that does not cut leaves a stretch two pitches long).
+/// The lockstep model's valley where its force pauses between the flutes while the measured
+/// valleys do not (noise, a dynamometer's ringing): on a flat stretch a valley fit lands on an
+/// edge or on a ripple of the filter's ringing, which put the model's α of an equal-pitch tool
+/// without runout 8° off its pitch on a real cut (PHM 2010 cut 158).
+template <typename Signal>
+EventSearch find_quiet_middle(const Signal& detect, std::int64_t from, std::int64_t to,
+                              double predicted, std::int64_t half, double quiet, double min_run) {
+  EventSearch out;
+  out.position = predicted;
+  const std::int64_t center = nearest_sample(predicted);
+  const std::int64_t lo = std::max(from, center - half);
+  const std::int64_t hi = std::min(to, center + half);
+  if (hi <= lo) {
+    return out;
+  }
+  const std::int64_t lowest = first_minimum(detect, lo, hi);
+  if (!(detect(lowest) <= quiet)) {
+    return out;
+  }
+  std::int64_t left = lowest, right = lowest;
+  while (left > from && detect(left - 1) <= quiet) {
+    --left;
+  }
+  while (right < to && detect(right + 1) <= quiet) {
+    ++right;
+  }
+  if (left == from || right == to) {
+    return out;  // the stretch goes on beyond the samples: its middle is not known
+  }
+  const double before = detect(left - 1), after = detect(right + 1);
+  const double start = static_cast<double>(left - 1) + (before - quiet) / (before - detect(left));
+  const double end = static_cast<double>(right) + (quiet - detect(right)) / (after - detect(right));
+  if (end - start < min_run) {
+    return out;
+  }
+  const double limit = static_cast<double>(half);
+  out.status = EventSearch::Status::kFound;
+  out.position = std::clamp(0.5 * (start + end), predicted - limit, predicted + limit);
   return out;
 }
 

@@ -1,8 +1,8 @@
 // find_valley, the search behind every tooth event (the measured ring's and the lockstep model's
 // rows): it finds a clean valley anywhere in its window, and reads its signal only within the
-// samples the caller has. The template's choice of event (valleys or pulse centroids) and the
-// commanded geometry's pauses between flutes. The tracker gives up revolutions whose bounds it
-// can only guess.
+// samples the caller has. find_quiet_middle, the model's event where its force pauses. The
+// template's choice of event (valleys or pulse centroids) and the commanded geometry's pauses
+// between flutes. The tracker gives up revolutions whose bounds it can only guess.
 
 #include "core/monitor/tooth_events.hpp"
 
@@ -202,6 +202,51 @@ TEST(ToothEventTemplate, AWBetweenPulsesIsAPauseWhereTheCutPauses) {
   for (int j = 0; j < 3; ++j) {
     const double deg = paused.event_rad[static_cast<std::size_t>(j)] * 180.0 / std::numbers::pi;
     EXPECT_NEAR(std::remainder(deg - 60.0, 120.0), 0.0, 1.0) << j;
+  }
+}
+
+// The lockstep model's valley where its force pauses (find_quiet_middle): between two pulses
+// of straight flanks, heights h1 and h2 and half-width w, the quiet stretch below q ends where
+// each flank crosses q — w·(1 − q/h) from its pulse's centre — and its middle is found to
+// rounding wherever the pulses sit between samples (the ends are interpolated, so that it moves
+// with them), though a ripple below q rides on the stretch. A stretch shorter than asked, one
+// that runs past the samples given and one far from the prediction are no pause's middle.
+TEST(FindQuietMiddle, IsThePausesMiddleToASampleFraction) {
+  const double h1 = 10.0, h2 = 7.0, w = 20.0, q = 3.0, pitch = 96.0;
+  for (int step = 0; step < 40; ++step) {
+    const double c1 = 100.0 + step * 0.137;  // the first pulse's centre
+    const double c2 = c1 + pitch;
+    const auto detect = [&](std::int64_t n) {
+      const auto u = static_cast<double>(n);
+      const double pulses = std::max(0.0, h1 * (1.0 - std::fabs(u - c1) / w)) +
+                            std::max(0.0, h2 * (1.0 - std::fabs(u - c2) / w));
+      // A ripple well inside the pause, below q (a filter's ringing).
+      const bool inside = u > c1 + w + 2.0 && u < c2 - w - 2.0;
+      return pulses + (inside ? 0.4 * q * (1.0 + std::sin(0.9 * u)) : 0.0);
+    };
+    const double start = c1 + w * (1.0 - q / h1), end = c2 - w * (1.0 - q / h2);
+    const double middle = 0.5 * (start + end);
+    const double predicted = 0.5 * (c1 + c2) + 7.0;  // off the middle, within the search
+    const EventSearch e = find_quiet_middle(detect, 0, 400, predicted, 29, q, 0.2 * pitch);
+    ASSERT_EQ(e.status, EventSearch::Status::kFound) << step;
+    EXPECT_NEAR(e.position, middle, 1e-9) << step;
+
+    // Asked for a longer pause than there is (end − start = 69.5 samples).
+    EXPECT_EQ(find_quiet_middle(detect, 0, 400, predicted, 29, q, 0.75 * pitch).status,
+              EventSearch::Status::kNotFound);
+    // The samples given end inside the pause: its middle is not known.
+    EXPECT_EQ(find_quiet_middle(detect, 0, static_cast<std::int64_t>(c2) - 30, predicted, 29, q,
+                                0.2 * pitch)
+                  .status,
+              EventSearch::Status::kNotFound);
+    // Predicted on a pulse: the lowest sample within ± 5 of it is no quiet one.
+    EXPECT_EQ(find_quiet_middle(detect, 0, 400, c2, 5, q, 0.2 * pitch).status,
+              EventSearch::Status::kNotFound);
+    // Predicted at the pause's end with a narrow search: the pause is found, its middle kept
+    // within the search (a flute that does not cut leaves a pause two pitches long).
+    const EventSearch near_end = find_quiet_middle(detect, 0, 400, end - 3.0, 10, q, 0.2 * pitch);
+    ASSERT_EQ(near_end.status, EventSearch::Status::kFound) << step;
+    EXPECT_NEAR(near_end.position, end - 13.0, 1e-9) << step;
   }
 }
 
