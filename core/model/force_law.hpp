@@ -73,6 +73,27 @@ class ForceLaw {
     return {f, a * f, a * a * f};  // F = K·dz·h_mm^a: dF/du = a·F, d²F/du² = a²·F
   }
 
+  /// F_n = slope·h + intercept on a branch of chips h > 0 where the normal force is affine in
+  /// h: the linear-edge law's ([002] eq 18, [001] eqs 18-21 with the area given), but for the
+  /// chips below h_min (`below_h_min`) where [002] eq 17's power law applies. `valid` false
+  /// elsewhere (power law, Kronenberg).
+  struct AffineNormal {
+    bool valid = false;
+    double slope_N_per_um = 0.0;
+    double intercept_N = 0.0;
+  };
+  [[nodiscard]] AffineNormal affine_normal(double dz_mm, double ploughed_area_mm2,
+                                           bool below_h_min) const {
+    const auto& c = material_.linear_edge;
+    if (material_.law != ForceLawKind::kLinearEdge ||
+        (below_h_min && regimes_ && !c.ploughing_area && has_plough_law(c))) {
+      return {};
+    }
+    const double edge_N_per_mm =
+        c.ploughing_area ? c.k_np_N_per_mm3 * ploughed_area_mm2 : c.k_ne_N_per_mm;
+    return {true, c.k_nc_N_per_mm2 * 1e-3 * dz_mm, edge_N_per_mm * dz_mm};
+  }
+
   [[nodiscard]] bool uses_ploughed_area() const {
     return material_.law == ForceLawKind::kLinearEdge && material_.linear_edge.ploughing_area;
   }

@@ -617,6 +617,41 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
       return d;
     }
   }
+  // A normal force affine in h on the bracket's branch (the linear-edge law) makes G a line,
+  // G(h) = (1 + a/k)·h + (b + F_w)/k − h_r, solved at once. Over the whole chip range (no jump
+  // at h_min), where it does not rise through 0 inside: G ≥ 0 at the floor pushes the tool back
+  // (as below, whichever way G goes: the first balance met going in); G < 0 throughout leaves
+  // the rigid chip (a fit's trial coefficients: a normal force falling with the chip, or pulling
+  // the tool in). The iteration below had bisected such lines for 100 exponentials, to the
+  // floor or the rigid chip depending on its start: most of a linear-edge window fit's time on
+  // a real cut (PHM 2010, whose fits try negative K_nc).
+  const ForceLaw::AffineNormal affine = law.affine_normal(dz_mm, area_mm2, hi != h_rigid);
+  if (affine.valid) {
+    const double rise = 1.0 + affine.slope_N_per_um * inv_k;
+    const double offset = (affine.intercept_N + wear_n) * inv_k - h_rigid;
+    const double h = -offset / rise;
+    // (A root below h_min where [002] eq 17's power law holds is not this line's.)
+    const bool line_holds = law.affine_normal(dz_mm, area_mm2, law.ploughing(h)).valid;
+    if (rise > 0.0 && h > lo && h < hi && line_holds) {
+      d.h_um = h;
+      d.log_h_um = std::log(h);
+      d.dh_dhr = std::clamp(1.0 / rise, 0.0, 1.0);
+      return d;
+    }
+    const bool whole_range = lo == floor_um && hi == h_rigid;
+    if (whole_range && law.affine_normal(dz_mm, area_mm2, true).valid) {  // every chip
+      if (rise * floor_um + offset >= 0.0) {
+        d.code = kPushedBack;
+        return d;
+      }
+      if (rise <= 0.0 || h >= h_rigid) {
+        d.h_um = h_rigid;
+        d.log_h_um = std::log(h_rigid);
+        d.dh_dhr = 1.0;
+        return d;
+      }
+    }
+  }
   // G is convex in u (each term is a constant or K·e^{a·u}, a > 0). Halley's step
   // G·G'/(G'² − G·G''/2) is Newton's G/G' shortened below the root and lengthened above it;
   // far above (G·G'' ≥ G'²) it is Newton's. Clamp to the bracket's top (where G ≥ 0) when a step

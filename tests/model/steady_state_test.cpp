@@ -889,7 +889,8 @@ TEST(SteadyState, DynamometerEqualsTheSettledTimeDomainResonance) {
 // balance is solved to rounding (Halley's method in ln h, stopped below a step of 1e-7: ~1e-21
 // left) for the power law, the linear edge law with [002]'s ploughing law below h_min (normal
 // and tangential, or tangential alone) and Kronenberg's, on both regimes' branches; a chip held
-// at h_min by a rise of F_n there has no balance and is left out.
+// at h_min by a rise of F_n there has no balance and is left out. The linear edge law alone
+// makes the balance a line, solved at once.
 TEST(SteadyState, DeflectionTakesTheSmallestRootToRoundingForEachLaw) {
   ModelConfig table2;  // one disc, without accumulation or dynamometer
   table2.effects.helix_lag.enabled = false;
@@ -906,7 +907,9 @@ TEST(SteadyState, DeflectionTakesTheSmallestRootToRoundingForEachLaw) {
   tangential_only.material.linear_edge.a_t_Nmm = 114.7;
   ModelConfig kronenberg = thin;
   kronenberg.material.law = ForceLawKind::kKronenberg;
-  for (const ModelConfig& c : {table2, thin, linear, tangential_only, kronenberg}) {
+  ModelConfig linear_edge = table2;  // [002] eq 18 on both sides of h_min: solved in closed form
+  linear_edge.material.law = ForceLawKind::kLinearEdge;
+  for (const ModelConfig& c : {table2, thin, linear, tangential_only, kronenberg, linear_edge}) {
     SCOPED_TRACE(to_string(c.material.law) + " at " + std::to_string(c.process.feed_per_tooth_um));
     const int steps = 720;
     SteadyStateWorkspace ws;
@@ -948,7 +951,10 @@ TEST(SteadyState, DeflectionTakesTheSmallestRootToRoundingForEachLaw) {
 // 1's diagnosis) — makes the balance G(h) = h + F_n(h)/k − h_r non-convex, with G' < 0: Halley's
 // step left the bracket and ran to u = ln h = −1e293, a hundred underflowing exponentials an
 // element (the diagnosis took 62 s, 24 s now). The step stays in the bracket: the chips are
-// finite, within [0, h_r], and nothing underflows.
+// finite, within [0, h_r], and nothing underflows. With the linear edge law G is a falling
+// line: the first balance met going in — the tool pushed back (no chip) where the edge force
+// alone balances, else none short of the rigid chip, which it then cuts whole (a bisection had
+// ended at the floor or the rigid chip, depending on where it started).
 TEST(SteadyState, DeflectionStaysInItsBracketForAFallingNormalForce) {
   ModelConfig c;
   c.effects.helix_lag.enabled = false;
@@ -956,13 +962,14 @@ TEST(SteadyState, DeflectionStaysInItsBracketForAFallingNormalForce) {
   c.effects.dynamometer.enabled = false;
   c.material.law = ForceLawKind::kLinearEdge;
   c.material.linear_edge.k_nc_N_per_mm2 = -40000.0;  // F_n falls 1.6 N per µm of chip
+  c.material.linear_edge.k_ne_N_per_mm = 2.0;        // balances the chips below 1.6 µm alone
   c.effects.deflection.stiffness_N_per_um = 0.05;
   const int steps = 360;
   SteadyStateWorkspace ws;
   std::feclearexcept(FE_ALL_EXCEPT);
   evaluate_steady_state(c, 25000.0, steps, ws);
   EXPECT_FALSE(std::fetestexcept(FE_UNDERFLOW));
-  int cutting = 0;
+  int cutting = 0, pushed_back = 0, whole = 0;
   for (int j = 0; j < 2; ++j) {
     for (int b = 0; b < steps; ++b) {
       const double hr = ws.rigid_chip_um(j, b);
@@ -971,9 +978,26 @@ TEST(SteadyState, DeflectionStaysInItsBracketForAFallingNormalForce) {
       ASSERT_GE(h, 0.0);
       ASSERT_LE(h, std::max(hr, 0.0) * (1.0 + 1e-12) + 1e-300) << j << " " << b;
       cutting += hr > 0.0 ? 1 : 0;
+      if (hr > 0.0) {
+        const auto& le = c.material.linear_edge;
+        const double a_p = c.process.axial_depth_mm;
+        const auto balance = [&](double x) {
+          return x + (le.k_nc_N_per_mm2 * 1e-3 * x + le.k_ne_N_per_mm) * a_p / 0.05 - hr;
+        };
+        if (h == 0.0) {
+          pushed_back += 1;
+          EXPECT_GE(balance(1e-6 * hr), 0.0) << j << " " << b;
+        } else {
+          whole += 1;
+          EXPECT_EQ(h, hr) << j << " " << b;
+          EXPECT_LT(balance(1e-6 * hr), 0.0) << j << " " << b;
+        }
+      }
     }
   }
   EXPECT_GT(cutting, 100);
+  EXPECT_GT(pushed_back, 0);
+  EXPECT_GT(whole, 0);
 }
 
 // physics-notes: at 10 µm/tooth the rigid chips of the two flutes are 13.0 and 7.0 µm; the
