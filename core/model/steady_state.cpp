@@ -632,21 +632,24 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
     const double h = -offset / rise;
     // (A root below h_min where [002] eq 17's power law holds is not this line's.)
     const bool line_holds = law.affine_normal(dz_mm, area_mm2, law.ploughing(h)).valid;
+    // A line over every chip needs no ln h: the linear-edge force does not take it, and no
+    // iteration will start from it (NaN: none, and nothing can use it unawares).
+    const bool everywhere = law.affine_normal(dz_mm, area_mm2, true).valid;
     if (rise > 0.0 && h > lo && h < hi && line_holds) {
       d.h_um = h;
-      d.log_h_um = std::log(h);
+      d.log_h_um = everywhere ? std::numeric_limits<double>::quiet_NaN() : std::log(h);
       d.dh_dhr = std::clamp(1.0 / rise, 0.0, 1.0);
       return d;
     }
     const bool whole_range = lo == floor_um && hi == h_rigid;
-    if (whole_range && law.affine_normal(dz_mm, area_mm2, true).valid) {  // every chip
+    if (whole_range && everywhere) {
       if (rise * floor_um + offset >= 0.0) {
         d.code = kPushedBack;
         return d;
       }
       if (rise <= 0.0 || h >= h_rigid) {
         d.h_um = h_rigid;
-        d.log_h_um = std::log(h_rigid);
+        d.log_h_um = std::numeric_limits<double>::quiet_NaN();
         d.dh_dhr = 1.0;
         return d;
       }
