@@ -55,7 +55,14 @@ class PathTrackingSax {
     if (not_finite_) {  // number overflow: the value is not a finite double
       message_ = path() + ": value " + token + " is not a finite number";
     } else {
+      // nlohmann's text repeats the position the caller states: "[json.exception.parse_error.101]
+      // parse error at line 1, column 56: syntax error while parsing …" — the part after it.
       message_ = e.what();
+      const std::size_t column = message_.find("column ");
+      const std::size_t colon = message_.find(": ", column == std::string::npos ? 0 : column);
+      if (column != std::string::npos && colon != std::string::npos) {
+        message_.erase(0, colon + 2);
+      }
     }
     return false;
   }

@@ -453,9 +453,13 @@ void Pipeline::finish() {
           "weak or irregular cutting: tooth-passing lines came and went, but no two windows a "
           "window apart agreed on speed and phase");
   } else {
-    event(PipelineEventKind::kNoSteadySignal, at, 0, 0.0,
-          "weak or irregular cutting, or none: the spindle harmonics never stood "
-          "spindle.min_snr_db above the noise");
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "weak or irregular cutting, or none: the spindle harmonics never stood "
+                  "spindle.min_snr_db (%g dB) above the noise",
+                  config_.spindle.min_snr_db);
+    no_signal_detail_ = text;  // the event's detail is a view: kept while the pipeline lives
+    event(PipelineEventKind::kNoSteadySignal, at, 0, 0.0, no_signal_detail_);
   }
 }
 

@@ -24,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -395,6 +396,7 @@ class Pipeline {
   bool line_reported_ = false;
   bool line_ever_reported_ = false;
   std::int64_t alias_windows_ = 0;  // windows the tracker refused as an alias (finish())
+  std::string no_signal_detail_;    // finish()'s kNoSteadySignal detail, with the threshold
   double cutting_revolutions_ = 0.0;
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;

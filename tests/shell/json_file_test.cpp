@@ -39,6 +39,11 @@ TEST(JsonFile, ErrorsNameTheLineColumnAndField) {
       error_of("{\n  \"a\": 1,\n}").rfind("mem.json: JSON syntax error at line 3, column 1: ", 0),
       0u)
       << error_of("{\n  \"a\": 1,\n}");
+  // The position once, and nlohmann's own words without its exception tag.
+  const std::string syntax = error_of("{\n  \"a\": 1,\n}");
+  EXPECT_EQ(syntax.find("column"), syntax.rfind("column")) << syntax;
+  EXPECT_EQ(syntax.find("[json.exception"), std::string::npos) << syntax;
+  EXPECT_NE(syntax.find(": syntax error while parsing object key"), std::string::npos) << syntax;
   const std::string not_finite = error_of(R"({"a": {"b": 1e400}})");
   EXPECT_NE(not_finite.find("mem.json: line 1, column"), std::string::npos) << not_finite;
   EXPECT_NE(not_finite.find("a.b: value 1e400 is not a finite number"), std::string::npos)
