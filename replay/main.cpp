@@ -115,6 +115,9 @@ void add_replay_command(CLI::App& app) {
                   "fx=F(:,1), fs=rate variable)");
   cmd->add_option("--summary", o->summary,
                   "Write the summary JSON to this file (several cuts: a folder, one per cut)");
+  cmd->add_option("--error-file", o->error_file,
+                  "Write why the replay failed to this file (a campaign's own replays)")
+      ->group("");  // not in --help: the campaign passes it
   cmd->add_flag("--json", o->json, "Print the summary JSON instead of the readable summary");
   cmd->add_option("--revolutions", o->revolutions,
                   "Write one row per revolution to this file: CSV, or JSON Lines for .jsonl "

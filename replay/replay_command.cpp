@@ -177,11 +177,10 @@ int replay_one(const ReplayOptions& o) {
   if (samples_read == 0 && (source->bad_records() > 0 || !stop_requested())) {
     // Neither a cut without cutting nor an interrupted one: nothing to measure at all (a header
     // alone, a log without the raw channel, a file this reader could not read a row of).
-    spdlog::error(
+    throw std::runtime_error(fmt::format(
         "{}: no samples to replay{}: {}{}", input.string(),
         stop_requested() ? " (interrupted)" : "", why_no_samples(*source),
-        lcm_log && source->bad_records() == 0 ? " (--channel names the log's raw channel)" : "");
-    return 2;
+        lcm_log && source->bad_records() == 0 ? " (--channel names the log's raw channel)" : ""));
   }
   if (recorder) {
     recorder->commit();
@@ -246,6 +245,7 @@ int replay_many(const ReplayOptions& o) {
   fs::create_directories(scratch);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   std::vector<fs::path> summaries(n);
+  std::vector<fs::path> errors(n);  // why a cut's replay failed, in its own words
   std::vector<int> exit_codes(n, -1);
   std::map<pid_t, std::size_t> running;
   std::size_t next = 0;
@@ -256,8 +256,10 @@ int replay_many(const ReplayOptions& o) {
       const std::size_t k = next++;
       summaries[k] = o.summary.empty() ? scratch / fmt::format("{}.json", k)
                                        : fs::path(o.summary) / (stems[k] + ".json");
+      errors[k] = scratch / fmt::format("{}.error", k);
       std::vector<std::string> args = {
-          self, "replay", o.inputs[k], "--summary", summaries[k].string(), "--no-progress"};
+          self,           "replay",           o.inputs[k],    "--summary", summaries[k].string(),
+          "--error-file", errors[k].string(), "--no-progress"};
       auto pass = [&args](const char* flag, const std::string& value) {
         if (!value.empty()) {
           args.push_back(flag);
@@ -313,6 +315,9 @@ int replay_many(const ReplayOptions& o) {
     if (exit_codes[k] == 0 && fs::exists(summaries[k])) {
       r.summary = read_json_file(summaries[k]);
     }
+    if (std::ifstream why(errors[k]); exit_codes[k] != 0 && why) {
+      std::getline(why, r.error);
+    }
     results.push_back(std::move(r));
   }
   fs::remove_all(scratch);
@@ -322,9 +327,10 @@ int replay_many(const ReplayOptions& o) {
   if (o.json) {
     nlohmann::json all = nlohmann::json::array();
     for (const auto& r : results) {
-      all.push_back(r.summary.is_null()
-                        ? nlohmann::json{{"input", r.file}, {"exit_code", r.exit_code}}
-                        : r.summary);
+      all.push_back(
+          r.summary.is_null()
+              ? nlohmann::json{{"input", r.file}, {"exit_code", r.exit_code}, {"error", r.error}}
+              : r.summary);
     }
     std::printf("%s\n", all.dump(2).c_str());
   } else {
@@ -344,7 +350,16 @@ int run_replay(const ReplayOptions& o) {
   if (o.inputs.size() > 1 || !o.table.empty()) {
     return replay_many(o);
   }
-  return replay_one(o);
+  try {
+    return replay_one(o);
+  } catch (const std::exception& e) {
+    if (!o.error_file.empty()) {
+      std::string why = e.what();
+      std::replace(why.begin(), why.end(), '\n', ' ');  // one line: the campaign's table
+      std::ofstream(o.error_file) << why << "\n";
+    }
+    throw;
+  }
 }
 
 }  // namespace millwatch::shell

@@ -20,6 +20,8 @@ struct ReplayOptions {
   std::string config;
   std::string columns;
   std::string summary;
+  /// Why the replay failed is written here too (a campaign's replays: its table says it).
+  std::string error_file;
   std::string revolutions;
   std::string plot;
   std::string table;

@@ -44,8 +44,10 @@ int flutes_of(const std::vector<CutResult>& cuts) {
 }
 
 std::string status(const CutResult& c) {
-  return c.exit_code == 0 && c.summary.is_object() ? "ok"
-                                                   : fmt::format("failed (exit {})", c.exit_code);
+  if (c.exit_code == 0 && c.summary.is_object()) {
+    return "ok";
+  }
+  return fmt::format("failed (exit {}){}{}", c.exit_code, c.error.empty() ? "" : ": ", c.error);
 }
 
 /// The warnings' kinds, "; "-separated.

@@ -14,6 +14,7 @@ struct CutResult {
   std::string file;
   int exit_code = 0;       ///< of the cut's replay (non-zero: failed, summary null)
   nlohmann::json summary;  ///< the cut's summary JSON (null if it failed)
+  std::string error;       ///< why it failed, as its replay said (empty: not known)
 };
 
 /// The table as CSV (a header and one row per cut; absent values are empty fields).

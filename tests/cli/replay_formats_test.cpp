@@ -471,7 +471,11 @@ TEST(ReplayFormats, ACampaignReportsAFailedCutAndExitsNonZero) {
   const auto rows = lines_of(read_text(dir / "t.csv"));
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_NE(rows[1].find(",ok,"), std::string::npos) << rows[1];
-  EXPECT_NE(rows[2].find(",failed (exit 2),"), std::string::npos) << rows[2];
+  // The table says why, in the replay's own words (it had said "failed (exit 2)" alone, the
+  // reason only in the log).
+  EXPECT_NE(rows[2].find(",\"failed (exit 2): "), std::string::npos) << rows[2];
+  EXPECT_NE(rows[2].find("broken.csv:1: header is \"\"what,is,this\"\""), std::string::npos)
+      << rows[2];
 }
 
 }  // namespace
