@@ -115,7 +115,7 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
   }
 
   // 2. α and ΔFy per revolution; 3. per-flute peaks.
-  if (valid > 0) {
+  if (valid > 0 && flutes > 1) {
     add_png("alpha_delta_fy.png");
     script += fmt::format(
         "set multiplot layout 2,1 title {}\nunset title\n"
@@ -126,6 +126,8 @@ std::vector<fs::path> write_plots(const RunRecorder& rec, const nlohmann::json& 
         "Fy = |Fy peak CE1| - |Fy peak CE2|'\n"
         "unset multiplot\n",
         titled("per revolution"), gnuplot_quoted(rev_csv), gnuplot_quoted(rev_csv));
+  } else if (flutes < 2) {
+    notes += "alpha_delta_fy.png: left out, one flute (α and ΔFy compare two cutting edges)\n";
   } else {
     notes += "alpha_delta_fy.png: left out, no revolution had all its tooth events found\n";
   }

@@ -77,6 +77,9 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
   // As in the summary: periods, α and ΔFy need every tooth event (valid); each flute's peaks
   // only the revolution's bounds, both CE1 events (a flute that did not cut peaks near 0).
   auto valid_or_nan = [&](double v) { return m.valid ? v : nan; };
+  // With one flute α is 360° and ΔFy 0 by definition: absent, as in the summary ("no alpha").
+  const double alpha_deg = flutes > 1 ? valid_or_nan(m.alpha_deg) : nan;
+  const double delta_fy_N = flutes > 1 ? valid_or_nan(m.delta_fy_N) : nan;
   auto bounded_or_nan = [&](double v) { return m.bounded ? v : nan; };
   const double rpm = r.spindle_rpm > 0.0 ? r.spindle_rpm : nan;  // 0: not measured
   if (file_) {
@@ -95,7 +98,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         append_json_number(s, valid_or_nan(m.flute_period_s[static_cast<std::size_t>(j)]));
       }
       s += "],\"alpha_deg\":";
-      append_json_number(s, valid_or_nan(m.alpha_deg));
+      append_json_number(s, alpha_deg);
       const char* axes[] = {"fx", "fy", "fz"};
       s += ",\"peak_N\":{";
       for (std::size_t a = 0; a < 3; ++a) {
@@ -112,7 +115,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         append_json_number(s, bounded_or_nan(m.peak_resultant_N[static_cast<std::size_t>(j)]));
       }
       s += "]},\"delta_fy_N\":";
-      append_json_number(s, valid_or_nan(m.delta_fy_N));
+      append_json_number(s, delta_fy_N);
       s += ",\"residual_rms_N\":";
       if (r.model_valid) {
         s += "{\"fx\":";
@@ -145,7 +148,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         append_number(s, valid_or_nan(m.flute_period_s[static_cast<std::size_t>(j)]));
       }
       s += ",";
-      append_number(s, valid_or_nan(m.alpha_deg));
+      append_number(s, alpha_deg);
       for (int j = 0; j < flutes; ++j) {
         const auto uj = static_cast<std::size_t>(j);
         for (std::size_t a = 0; a < 3; ++a) {
@@ -156,7 +159,7 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
         append_number(s, bounded_or_nan(m.peak_resultant_N[uj]));
       }
       s += ",";
-      append_number(s, valid_or_nan(m.delta_fy_N));
+      append_number(s, delta_fy_N);
       for (std::size_t a = 0; a < 3; ++a) {
         s += ",";
         append_number(s, r.model_valid ? r.residual_rms_N[a] : nan);
@@ -182,8 +185,8 @@ void RunRecorder::on_revolution(const monitor::RevolutionRecord& r) {
       row.spindle_rpm = rpm;
       row.valid = m.valid;
       row.bounded = m.bounded;
-      row.alpha_deg = m.alpha_deg;
-      row.delta_fy_N = m.delta_fy_N;
+      row.alpha_deg = alpha_deg;
+      row.delta_fy_N = delta_fy_N;
       for (int j = 0; j < flutes; ++j) {
         row.peak_resultant_N[static_cast<std::size_t>(j)] =
             m.peak_resultant_N[static_cast<std::size_t>(j)];

@@ -104,6 +104,48 @@ TEST(RunRecorder, PeaksNeedTheBoundsAndAlphaEveryEvent) {
   EXPECT_FALSE(rec.rows()[2].bounded);
 }
 
+// One flute: α is 360° and ΔFy 0 by definition, absent in the rows as in the summary (which
+// warns "no alpha"), in the CSV, the JSON Lines and what the plots keep (they had drawn 360°).
+TEST(RunRecorder, OneFluteHasNoAlphaNorDeltaFy) {
+  for (const char* name : {"revolutions.csv", "revolutions.jsonl"}) {
+    SCOPED_TRACE(name);
+    const fs::path path = test::fresh_temp_dir() / name;
+    RunRecorder rec(1, path, true);
+    monitor::RevolutionRecord r = revolution(0, true, true);
+    r.measured.flutes = 1;
+    r.measured.flute_period_s = {0.0057, 0.0};
+    r.measured.alpha_deg = 360.0;
+    r.measured.delta_fy_N = 0.0;
+    rec.on_revolution(r);
+    rec.commit();
+    std::ifstream in(path);
+    std::string line;
+    if (path.extension() == ".csv") {
+      std::getline(in, line);
+      const std::vector<std::string> header = fields(line);
+      std::getline(in, line);
+      const std::vector<std::string> row = fields(line);
+      ASSERT_EQ(row.size(), header.size()) << line;
+      for (std::size_t i = 0; i < header.size(); ++i) {
+        if (header[i] == "alpha_deg" || header[i] == "delta_fy_N") {
+          EXPECT_EQ(row[i], "") << header[i];
+        }
+        if (header[i] == "period_s_1") {
+          EXPECT_EQ(row[i], "0.0057");
+        }
+      }
+    } else {
+      std::getline(in, line);
+      const auto j = nlohmann::json::parse(line);
+      EXPECT_TRUE(j.at("alpha_deg").is_null()) << line;
+      EXPECT_TRUE(j.at("delta_fy_N").is_null()) << line;
+    }
+    ASSERT_EQ(rec.rows().size(), 1u);
+    EXPECT_TRUE(std::isnan(rec.rows()[0].alpha_deg));
+    EXPECT_TRUE(std::isnan(rec.rows()[0].delta_fy_N));
+  }
+}
+
 // The cutting column follows the pipeline's idle state: off from "cutting stopped", on again
 // from "cutting resumed" or from a new lock (after "lock lost" the pipeline resumes there,
 // without a "cutting resumed" of its own).
