@@ -73,10 +73,17 @@ std::string summary_text(const json& j) {
   const double measured = has_number(j, "revolutions_measured") ? num(j, "revolutions_measured")
                                                                 : num(j, "revolutions");
   const double cutting = num(j, "revolutions_cutting");
+  // No turn heard while cutting: none was, or the record was too short for the tracker to hear
+  // any (its warning says how long it needs).
+  bool too_short = false;
+  for (const auto& w : j.value("warnings", json::array())) {
+    too_short = too_short || w.value("kind", std::string()) == "record too short";
+  }
   s += cutting > 0.0 || measured > 0.0
            ? fmt::format("  revolutions   {:.0f} measured of ~{:.0f} turned while cutting",
                          measured, cutting)
-           : std::string("  revolutions   none: no cutting heard");
+       : too_short ? std::string("  revolutions   none: the record is too short (warnings below)")
+                   : std::string("  revolutions   none: no cutting heard");
   if (measured != num(j, "revolutions")) {
     s += fmt::format(" ({:.0f} with all their tooth events)", num(j, "revolutions"));
   }

@@ -35,6 +35,14 @@ TEST(SummaryText, CountsTheRevolutionsMeasuredAsTheJsonDoes) {
   none["revolutions_cutting"] = 0.0;
   const std::string idle = summary_text(none);
   EXPECT_NE(idle.find("revolutions   none: no cutting heard\n"), std::string::npos) << idle;
+  // Nor where the record was too short for the tracker to hear anything (a force of 52 N RMS
+  // in the line above it had read "no cutting heard").
+  none["warnings"] = nlohmann::json::array(
+      {{{"kind", "record too short"}, {"detail", "0.1000 s of samples, 0.4000 s needed"}}});
+  const std::string short_text = summary_text(none);
+  EXPECT_NE(short_text.find("revolutions   none: the record is too short (warnings below)\n"),
+            std::string::npos)
+      << short_text;
 }
 
 // α from one revolution has no spread to state (the JSON's std is null): not "± 0.00°".
