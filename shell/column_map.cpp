@@ -38,6 +38,7 @@ ColumnSpec parse_spec(const std::string& key, const std::string& text, const std
                                   "\" is not a finite non-zero number");
     }
     source = trim(source.substr(0, star));
+    spec.scaled = true;
   }
   if (source.empty()) {
     throw std::invalid_argument(path + ": " + key + ": no column named");

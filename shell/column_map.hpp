@@ -20,6 +20,7 @@ struct ColumnSpec {
   std::string source;  ///< header name or variable (empty: by index, or not given)
   int index = 0;       ///< 1-based column index (0: by name)
   double scale = 1.0;
+  bool scaled = false;  ///< the map gave the scale ("*k"): a units row's factor does not apply
   [[nodiscard]] bool given() const { return index > 0 || !source.empty(); }
   /// "Fx" or "3", as written in a map.
   [[nodiscard]] std::string describe_source() const;

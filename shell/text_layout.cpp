@@ -152,6 +152,13 @@ void apply_map(TextLayout& l, const ColumnMap& map, const std::string& name,
                                spec.source + "\" for " + ColumnMap::kKeys[q] +
                                " (columns: " + excerpt(join(l.channels), 200) + ")");
     }
+    if (!l.channels.empty() && static_cast<std::size_t>(c) >= l.channels.size()) {
+      // An index past the header: said once here, not as every row being short of columns.
+      throw std::runtime_error(name + ":" + std::to_string(header_line) + ": no column " +
+                               std::to_string(c + 1) + " for " + ColumnMap::kKeys[q] +
+                               " (the header has " + std::to_string(l.channels.size()) + ": " +
+                               excerpt(join(l.channels), 200) + ")");
+    }
     for (std::size_t earlier = 0; earlier < q; ++earlier) {
       if (l.column[earlier] == c) {  // by name and by index, or two names of one column
         throw std::runtime_error(name + ": columns: " + ColumnMap::kKeys[earlier] + " and " +
@@ -433,7 +440,9 @@ TextLayout read_text_layout(std::istream& in, const std::string& name, const Col
         ++l.header_lines;
         for (std::size_t q = 0; q < 4; ++q) {
           const int c = l.column[q];
-          if (c >= 0 && static_cast<std::size_t>(c) < fields.size()) {
+          // A scale the map gave is the whole conversion (t=time_ms*0.001 over a "ms" unit
+          // had been converted twice: a rate of 50 MHz).
+          if (c >= 0 && static_cast<std::size_t>(c) < fields.size() && !map.column[q].scaled) {
             l.scale[q] *= unit_factor(fields[static_cast<std::size_t>(c)], q == 0);
           }
         }

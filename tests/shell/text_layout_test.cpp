@@ -193,6 +193,29 @@ TEST(TextLayout, DelimitedTextByHeaderNamesWithScalesAndTime) {
   EXPECT_EQ(r.utimes_us.front(), 0);
 }
 
+// A units row after the header converts a column the map did not scale; a scale the map gives
+// is the whole conversion (time in ms with t=time_ms*0.001 had been scaled by the row's "ms"
+// too: 50 MHz). A column index past the header is said at the header, once.
+TEST(TextLayout, AUnitsRowConvertsOnlyWhatTheMapDidNotScale) {
+  const std::string text =
+      "time_ms;Fx;Fy;Fz\n"
+      "ms;kN;N;N\n"
+      "0,0;0,001;2;3\n"
+      "0,02;0,004;5;6\n";
+  const Read scaled = read(text, parse_column_map("t=time_ms*0.001,fx=Fx,fy=Fy,fz=Fz"));
+  EXPECT_EQ(scaled.layout.header_lines, 2);
+  EXPECT_NEAR(scaled.layout.sample_rate_hz, 50000.0, 1e-6);
+  ASSERT_EQ(scaled.fx.size(), 2u);
+  EXPECT_NEAR(scaled.fx[1], 4.0, 1e-12);  // kN from the units row
+  const Read by_unit = read(text, parse_column_map("t=time_ms,fx=Fx*1,fy=Fy,fz=Fz"));
+  EXPECT_NEAR(by_unit.layout.sample_rate_hz, 50000.0, 1e-6);  // ms from the units row
+  EXPECT_NEAR(by_unit.fx[1], 0.004, 1e-15);                   // the map's *1 stands
+
+  const std::string wide = error_of("t,a,b,c\n0,1,2,3\n", parse_column_map("fx=9,fy=2,fz=3"));
+  EXPECT_EQ(wide.rfind("mem.csv:1: no column 9 for fx (the header has 4: t, a, b, c)", 0), 0u)
+      << wide;
+}
+
 TEST(TextLayout, NoTimeColumnTakesTheGivenRateAndABadRowIsAGap) {
   // Seven columns, forces first, no time: like the PHM 2010 raw windows.
   std::string text = "force_x_N,force_y_N,force_z_N,vx,vy,vz,ae\n";
