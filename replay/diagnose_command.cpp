@@ -247,6 +247,14 @@ int run_diagnose(const DiagnoseCliOptions& o) {
         "--feeds-um gives {} feed(s) for {} cut(s): one per cut, in the order of the cuts",
         o.feeds_um.size(), o.inputs.size()));
   }
+  // The report is written last: a path that cannot take it must not cost the whole diagnosis.
+  std::error_code report_ec;
+  fs::create_directories(o.report, report_ec);
+  if (report_ec) {
+    const auto& ec = report_ec;
+    throw std::runtime_error("--report " + o.report + ": cannot make the report folder (" +
+                             ec.message() + ")");
+  }
   const ConfigFile file = read_config_file(o.config);
   ProgressLine progress(o.progress);
   if (!several) {

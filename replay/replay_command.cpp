@@ -53,10 +53,20 @@ namespace fs = std::filesystem;
 
 int replay_one(const ReplayOptions& o) {
   const fs::path input = o.inputs.front();
-  // The summary is written last: a folder that is not there must not cost the whole replay.
+  // The outputs are written last: a path that cannot take them must not cost the whole replay.
   if (const fs::path folder = fs::path(o.summary).parent_path();
       !o.summary.empty() && !folder.empty() && !fs::is_directory(folder)) {
     throw std::runtime_error("--summary " + o.summary + ": no folder " + folder.string());
+  }
+  for (const auto& [option, path] :
+       {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions}}) {
+    if (!path->empty() && fs::is_directory(*path)) {
+      throw std::runtime_error(
+          fmt::format("{} {}: a folder; one cut writes a file", option, *path));
+    }
+  }
+  if (!o.plot.empty() && fs::exists(o.plot) && !fs::is_directory(o.plot)) {
+    throw std::runtime_error("--plot " + o.plot + ": a file, not a folder for the plots");
   }
   const RecordingFormat format = detect_recording_format(input);
   const bool lcm_log = format == RecordingFormat::kLcmLog;
@@ -234,9 +244,16 @@ int replay_many(const ReplayOptions& o) {
   const int jobs =
       o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::vector<std::string> stems = shell::unique_stems(o.inputs);
-  for (const std::string* dir : {&o.summary, &o.revolutions, &o.plot}) {
+  for (const auto& [option, dir] :
+       {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions},
+        std::pair{"--plot", &o.plot}}) {
+    std::error_code ec;
     if (!dir->empty()) {
-      fs::create_directories(*dir);
+      fs::create_directories(*dir, ec);
+    }
+    if (ec) {
+      throw std::runtime_error(fmt::format("{} {}: cannot make the folder for the cuts ({})",
+                                           option, *dir, ec.message()));
     }
   }
   // Each cut's summary goes to a scratch folder (or --summary DIR) and is read back.

@@ -218,6 +218,17 @@ TEST(DiagnoseCommand, BadInputGivesAClearError) {
                         " --report " + (dir / "r2").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("spindle_rpm"), std::string::npos) << r.output;
+  // A report path that is a file fails before the diagnosis, not after it (21 s on a PHM
+  // window, minutes on a longer cut, lost).
+  std::ofstream(dir / "afile") << "x";
+  r = test::run_command(cli + f.csv.string() + " --config " + f.config.string() + " --report " +
+                        (dir / "afile").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(
+      r.output.find("--report " + (dir / "afile").string() + ": cannot make the report folder"),
+      std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("millwatch CSV"), std::string::npos) << r.output;  // nothing read
   // Too short a stretch of the record.
   r = test::run_command(cli + f.csv.string() + " --config " + f.config.string() +
                         " --to-s 0.01 --report " + (dir / "r3").string());

@@ -347,6 +347,21 @@ TEST(ReplayCommand, WrongHeaderOrMissingSidecarFailsWithAClearMessage) {
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_NE(missing.output.find(": no folder "), std::string::npos) << missing.output;
   EXPECT_EQ(missing.output.find("spindle locked"), std::string::npos) << missing.output;
+  // Nor a summary that is a folder, nor plots that are a file (the whole replay had run first,
+  // then "cannot rename …partial" or the library's "filesystem error").
+  fs::create_directories(dir / "afolder");
+  std::ofstream(dir / "afile") << "x";
+  for (const auto& [args, said] :
+       {std::pair{" --summary " + (dir / "afolder").string(), ": a folder; one cut writes a file"},
+        std::pair{" --plot " + (dir / "afile").string(), ": a file, not a folder for the plots"},
+        std::pair{" --summary " + (dir / "afile").string() + " " + csv.string(),
+                  ": cannot make the folder for the cuts"}}) {
+    const auto early = test::run_command(test::millwatch_cli() + " replay --no-identify " +
+                                         csv.string() + args + " 2>&1");
+    EXPECT_NE(early.exit_code, 0) << args;
+    EXPECT_NE(early.output.find(said), std::string::npos) << early.output;
+    EXPECT_EQ(early.output.find("spindle locked"), std::string::npos) << early.output;
+  }
 }
 
 // A sidecar whose sample rate the CSV's time column belies (100 kHz said, the times step at
