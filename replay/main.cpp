@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -57,6 +58,25 @@ CLI::Validator number_from(double lowest, bool open,
       },
       open ? "POSITIVE" : "NON-NEGATIVE");
 }
+/// A whole number in [lowest, highest], said plainly: CLI11's Range called "abc" and 1.5 "not in
+/// range" of an integer option.
+CLI::Validator whole_number_in(long long lowest, long long highest) {
+  return CLI::Validator(
+      [lowest, highest](std::string& text) -> std::string {
+        long long v = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (ec != std::errc() || end != text.data() + text.size()) {
+          return "\"" + text + "\" is not a whole number";
+        }
+        if (v < lowest || v > highest) {
+          return highest == std::numeric_limits<long long>::max()
+                     ? fmt::format("{} is below {}", text, lowest)
+                     : fmt::format("{} is not in [{}, {}]", text, lowest, highest);
+        }
+        return {};
+      },
+      fmt::format("INT in [{} - {}]", lowest, highest));
+}
 const CLI::Validator kPositive = number_from(0.0, true);
 const CLI::Validator kNonNegative = number_from(0.0, false);
 
@@ -87,7 +107,8 @@ void add_simulate_command(CLI::App& app) {
       ->required();
   cmd->add_option("--duration", options->duration_s, "Override the recording's duration (s)")
       ->check(kPositive);
-  cmd->add_option("--seed", options->seed, "Override the noise seed")->check(kNonNegative);
+  cmd->add_option("--seed", options->seed, "Override the noise seed")
+      ->check(whole_number_in(0, std::numeric_limits<long long>::max()));
   cmd->add_option("--truth-json", options->truth_json,
                   "Where the truth (per revolution: speed, chip load, runout, wear) goes "
                   "(default: beside the CSV, CUT.truth.json)");
@@ -127,7 +148,7 @@ void add_replay_command(CLI::App& app) {
       "Draw PNG plots with gnuplot into this folder (several cuts: one folder per cut)");
   cmd->add_option("--table", o->table, "Several cuts: write one row per cut to this CSV file");
   cmd->add_option("-j,--jobs", o->jobs, "Several cuts: replay this many at once (0: one per core)")
-      ->check(CLI::Range(0, 256));
+      ->check(whole_number_in(0, 256));
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->add_flag("!--no-identify", o->identify,
                 "No identification of runout and coefficients (the model in lockstep keeps the "
@@ -143,7 +164,7 @@ void add_replay_command(CLI::App& app) {
                 "of causally (= \"filter\": {\"mode\": \"zero_phase\"} in --config)");
   cmd->add_option("--channel", o->raw_channel, "LCM channel of the raw samples in a log");
   cmd->add_option("--block", o->block_samples, "Samples per block (text and .mat files)")
-      ->check(CLI::Range(1, 65536));
+      ->check(whole_number_in(1, 65536));
   cmd->callback([o] { run_subcommand([&o] { return run_replay(*o); }); });
 }
 
@@ -170,7 +191,7 @@ void add_publish_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--block", o->block_samples,
                   "Samples per message (at most 2000 keeps it under 64 KiB)")
-      ->check(CLI::Range(1, 2000))
+      ->check(whole_number_in(1, 2000))
       ->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "Simulated duration (scenario input)")
       ->check(kPositive);
@@ -266,7 +287,7 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("-j,--jobs", o->jobs,
                   "Candidates fitted at once, a thread each (default 0: one per core; the same "
                   "result for any number)")
-      ->check(kNonNegative);
+      ->check(whole_number_in(0, 256));
   cmd->add_flag("!--no-plots", o->plots, "Do not draw the plots");
   cmd->add_flag("!--no-progress", o->progress, "No progress line on a terminal");
   cmd->callback([o]() { run_subcommand([&]() { return run_diagnose(*o); }); });

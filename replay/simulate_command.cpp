@@ -165,10 +165,13 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
     std::printf(" %.3f", f.radius_um);
   }
   std::printf(" um\n");
-  std::printf("  recording       %lld samples at %.0f Hz = %.3f s, %zu revolutions\n",
-              static_cast<long long>(simulator.samples_done()), s.sample_rate_hz,
-              static_cast<double>(simulator.samples_done()) / s.sample_rate_hz,
-              simulator.truth().size() - 1);
+  // The turns the record holds (a 1 ms record at 25,252 rpm: 0.42, where the revolutions the
+  // truth describes had read "1 revolutions").
+  const double duration_s = static_cast<double>(simulator.samples_done()) / s.sample_rate_hz;
+  const double turns = duration_s * sim::actual_rpm(s) / 60.0;
+  std::printf("  recording       %lld samples at %.0f Hz = %.3f s, %.*f revolution%s\n",
+              static_cast<long long>(simulator.samples_done()), s.sample_rate_hz, duration_s,
+              turns < 10.0 ? 2 : 0, turns, turns == 1.0 ? "" : "s");
   std::printf(
       "  force on tool   peak |Fxy| %.3f N; Fx [%.3f, %.3f] Fy [%.3f, %.3f] Fz [%.3f, %.3f] N\n",
       clean.peak_resultant_xy(), clean.min(0), clean.max(0), clean.min(1), clean.max(1),

@@ -32,7 +32,14 @@ TEST(CommandLine, NumbersOutsideWhatTheyMeanAreRefusedBeforeAnythingRuns) {
       {publish + "--start-utime 9e9", "--start-utime: 9e9 is beyond 4e+09"},
       {diagnose + "--band -5", "--band: -5 is not a positive number"},
       {diagnose + "--band nan", "--band: \"nan\" is not a number"},
-      {diagnose + "--from-s -1", "--from-s: -1 is not a non-negative number"}};
+      {diagnose + "--from-s -1", "--from-s: -1 is not a non-negative number"},
+      // Whole numbers: CLI11's range check had called "abc" and 2.5 "not in range 0 to 256".
+      {diagnose + "-j abc", "--jobs: \"abc\" is not a whole number"},
+      {diagnose + "-j 2.5", "--jobs: \"2.5\" is not a whole number"},
+      {diagnose + "-j 300", "--jobs: 300 is not in [0, 256]"},
+      {test::millwatch_cli() + " replay " + scenario + " --block 0",
+       "--block: 0 is not in [1, 65536]"},
+      {test::millwatch_cli() + " simulate " + scenario + " --seed -3", "--seed: -3 is below 0"}};
   for (const auto& [command, said] : cases) {
     const auto r = test::run_command(command + " 2>&1");
     EXPECT_NE(r.exit_code, 0) << command;

@@ -255,6 +255,14 @@ TEST(SimulateCommand, WarnsWhenReplayWouldRefuseTheRecording) {
                         " --duration 0.05 -o " + (dir / "demo.csv").string() + " 2>&1");
   EXPECT_EQ(demo.exit_code, 0) << demo.output;
   EXPECT_EQ(demo.output.find("replay will refuse"), std::string::npos) << demo.output;
+  // 0.05 s at 25,252 rpm holds 21.04 turns: said as such (a 1 ms record had read "1 revolutions"
+  // for 0.42 of one).
+  EXPECT_NE(demo.output.find("= 0.050 s, 21 revolutions\n"), std::string::npos) << demo.output;
+  const auto tiny =
+      test::run_command(test::millwatch_cli() + " simulate " +
+                        (test::source_dir() / "config" / "demo.json").string() +
+                        " --duration 0.001 -o " + (dir / "tiny.csv").string() + " 2>&1");
+  EXPECT_NE(tiny.output.find("= 0.001 s, 0.42 revolutions\n"), std::string::npos) << tiny.output;
 }
 
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
