@@ -220,16 +220,18 @@ std::string report_text(const nlohmann::json& j, const identify::CalibrationResu
     const auto& ro = j["runout"];
     s += fmt::format("\n  runout (one for all cuts, at the tool tip)\n");
     const bool lower_bound = ro.value("rho_is_lower_bound", false);
-    s += fmt::format("    rho                {}{} ± {} um{}\n", lower_bound ? ">= " : "",
+    // The replay's symbols and units, its radii CE1's minus each flute's (summary_text.cpp).
+    s += fmt::format("    rho                {}{} ± {} µm{}\n", lower_bound ? "≥ " : "",
                      num(ro["rho_um"], "{:.3f}"), num(ro["rho_std_um"], "{:.3f}"),
                      lower_bound ? " (at a flute's contact edge: a flute cuts nothing beyond it, "
                                    "a lower bound)"
                                  : "");
-    s += fmt::format("    gamma              {} ± {} deg (from CE1)\n",
+    s += fmt::format("    gamma              {}° ± {}° (from CE1)\n",
                      num(ro["gamma_deg"], "{:.1f}"), num(ro["gamma_std_deg"], "{:.1f}"));
     for (std::size_t f = 1; f < ro["r_minus_r_ce1_um"].size(); ++f) {
-      s += fmt::format("    r_ce{} - r_ce1        {} ± {} um\n", f + 1,
-                       num(ro["r_minus_r_ce1_um"][f], "{:.3f}"),
+      const nlohmann::json& dr = ro["r_minus_r_ce1_um"][f];
+      s += fmt::format("    r_CE1 − r_CE{}      {} ± {} µm\n", f + 1,
+                       num(dr.is_number() ? nlohmann::json(-dr.get<double>()) : dr, "{:.3f}"),
                        num(ro["r_minus_r_ce1_std_um"][f], "{:.3f}"));
     }
     s += fmt::format("  flute labelling: {}\n", ro["flute_labelling"].get<std::string>());

@@ -70,7 +70,8 @@ CLI::Validator whole_number_in(long long lowest, long long highest) {
         }
         if (v < lowest || v > highest) {
           return highest == std::numeric_limits<long long>::max()
-                     ? fmt::format("{} is below {}", text, lowest)
+                     ? (lowest == 0 ? text + " is not a non-negative whole number"
+                                    : fmt::format("{} is below {}", text, lowest))
                      : fmt::format("{} is not in [{}, {}]", text, lowest, highest);
         }
         return {};

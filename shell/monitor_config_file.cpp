@@ -135,6 +135,14 @@ void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& sou
     spdlog::warn("{}: {}", input, config.rate_note);
   }
   if (config_hz <= 0.0 || source.rate_stated()) {
+    // Named as the recording's: the configuration's reader would name the configuration.
+    if (source_hz < monitor::kMinSampleRateHz || source_hz > monitor::kMaxSampleRateHz) {
+      throw std::runtime_error(fmt::format(
+          "{}: the recording's rate is {:.6g} Hz (stated, or its time column's steps): outside "
+          "the {:g} Hz – {:g} MHz the monitor takes (a time column in other units: scale it, "
+          "e.g. --columns t=time_ms*0.001,...)",
+          input, source_hz, monitor::kMinSampleRateHz, monitor::kMaxSampleRateHz / 1e6));
+    }
     config.json["sample_rate_hz"] = source_hz;
   }
 }

@@ -66,6 +66,8 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
 
 /// The recording's rate into the configuration: a rate the recording states beats the
 /// configuration's (a warning when they differ); a rate it assumes fills a gap.
+/// @throws std::runtime_error naming the recording when the rate it gives is outside what the
+///         monitor takes (a time column in other units)
 void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& source,
                          const std::string& input);
 

@@ -30,6 +30,10 @@
 
 namespace millwatch::monitor {
 
+/// The sample rates the monitor takes (MonitorConfig::sample_rate_hz), Hz.
+inline constexpr double kMinSampleRateHz = 1000.0;
+inline constexpr double kMaxSampleRateHz = 2e6;
+
 struct MonitorConfig {
   model::ModelConfig model;
   double sample_rate_hz = 50000.0;

@@ -336,6 +336,14 @@ TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   const auto& k_nc = p["coefficients"]["k_nc_N_per_mm2"];
   EXPECT_GT(k_nc["std"].get<double>(), 1000.0) << k_nc;
   EXPECT_LT(k_nc["value"].get<double>(), 0.0) << k_nc;
+  // The runout in the replay's symbols and units: CE1's radius minus each flute's, µm, °.
+  for (std::size_t f = 1; f < 3; ++f) {
+    const double r_minus = p["runout"]["r_minus_r_ce1_um"][f].get<double>();
+    const std::string line = fmt::format("    r_CE1 − r_CE{}      {:.3f} ± ", f + 1, -r_minus);
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  }
+  EXPECT_NE(r.output.find("° (from CE1)\n"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(" um\n"), std::string::npos) << r.output;
   // The preset used says so again: its coefficients carry no mark (a replay with it had lost its
   // model's α and ΔFy without a word of why).
   nlohmann::json config = nlohmann::json::parse(

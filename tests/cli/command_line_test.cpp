@@ -39,7 +39,8 @@ TEST(CommandLine, NumbersOutsideWhatTheyMeanAreRefusedBeforeAnythingRuns) {
       {diagnose + "-j 300", "--jobs: 300 is not in [0, 256]"},
       {test::millwatch_cli() + " replay " + scenario + " --block 0",
        "--block: 0 is not in [1, 65536]"},
-      {test::millwatch_cli() + " simulate " + scenario + " --seed -3", "--seed: -3 is below 0"}};
+      {test::millwatch_cli() + " simulate " + scenario + " --seed -3",
+       "--seed: -3 is not a non-negative whole number"}};
   for (const auto& [command, said] : cases) {
     const auto r = test::run_command(command + " 2>&1");
     EXPECT_NE(r.exit_code, 0) << command;

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -455,6 +456,40 @@ TEST(ReplayFormats, CampaignOfThePhmWindowsShowsTheForcesRisingWithWear) {
   EXPECT_TRUE(spread["rho_drift_um"].is_null()) << spread.dump();
   EXPECT_EQ(lines_of(r.output).size(), 4u) << r.output;
   EXPECT_NE(r.output.find("no steady tooth-passing signal"), std::string::npos) << r.output;
+}
+
+// A time column in milliseconds, as a semicolon export with decimal commas writes it: read as
+// seconds it gives a 50 Hz rate, refused in the recording's name (the configuration's reader had
+// named the configuration, whose rate was right); scaled by the column map over a units row
+// ("ms"), once — not by the row's factor again (a 50 MHz rate, refused the same way).
+TEST(ReplayFormats, ATimeColumnInOtherUnitsIsTheRecordingsToScale) {
+  const fs::path dir = test::fresh_temp_dir();
+  std::string text = "time_ms;Fx;Fy;Fz\nms;N;N;N\n";
+  for (int i = 0; i < 5000; ++i) {
+    const double t_ms = 0.02 * i;
+    const double f = 10.0 * std::sin(2.0 * std::numbers::pi * 520.0 * t_ms * 1e-3);
+    std::string row = fmt::format("{:.2f};{:.6f};{:.6f};0.0\n", t_ms, f, 0.5 * f);
+    std::replace(row.begin(), row.end(), '.', ',');
+    text += row;
+  }
+  std::ofstream(dir / "export.txt") << text;
+  const std::string base = test::millwatch_cli() + " replay --no-identify " +
+                           (dir / "export.txt").string() + " --config " +
+                           (test::source_dir() / "config" / "phm2010_c1.json").string();
+  const auto unscaled = test::run_command(base + " --columns t=time_ms,fx=Fx,fy=Fy,fz=Fz 2>&1");
+  EXPECT_EQ(unscaled.exit_code, 0) << unscaled.output;  // the units row converts the ms
+  const auto twice =
+      test::run_command(base + " --columns t=time_ms*0.001,fx=Fx,fy=Fy,fz=Fz --summary " +
+                        (dir / "s.json").string() + " 2>&1");
+  ASSERT_EQ(twice.exit_code, 0) << twice.output;
+  EXPECT_EQ(nlohmann::json::parse(read_text(dir / "s.json"))["sample_rate_hz"], 50000.0);
+  const auto wrong = test::run_command(
+      base + " --columns t=time_ms*0.000001,fx=Fx,fy=Fy,fz=Fz 2>&1");  // ns taken for ms
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.output;
+  EXPECT_NE(wrong.output.find("export.txt: the recording's rate is 5e+07 Hz"), std::string::npos)
+      << wrong.output;
+  EXPECT_EQ(wrong.output.find("phm2010_c1.json: sample_rate_hz"), std::string::npos)
+      << wrong.output;
 }
 
 TEST(ReplayFormats, ACampaignReportsAFailedCutAndExitsNonZero) {

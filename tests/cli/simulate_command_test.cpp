@@ -191,7 +191,8 @@ TEST(SimulateCommand, ANumberOptionThatIsNoneSaysSoPlainly) {
   const std::pair<const char*, const char*> cases[] = {
       {"--duration 0", "--duration: 0 is not a positive number"},
       {"--duration abc", "--duration: \"abc\" is not a number"},
-      {"--seed -3", "--seed: -3 is not a non-negative number"}};
+      {"--seed -3", "--seed: -3 is not a non-negative whole number"},
+      {"--seed 1.5", "--seed: \"1.5\" is not a whole number"}};
   for (const auto& [option, said] : cases) {
     const auto r = test::run_command(test::millwatch_cli() + " simulate " + scenario + " " +
                                      option + " -o /tmp/never.csv 2>&1");
