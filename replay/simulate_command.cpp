@@ -165,10 +165,20 @@ void print_summary(const sim::Scenario& s, const sim::CutSimulator& simulator,
     std::printf(" %.3f", f.radius_um);
   }
   std::printf(" um\n");
-  // The turns the record holds (a 1 ms record at 25,252 rpm: 0.42, where the revolutions the
-  // truth describes had read "1 revolutions").
+  // The turns the record holds, each revolution the truth describes counted by the part of it
+  // inside the record (a 1 ms record at 25,252 rpm: 0.42, where "1 revolutions" had been said);
+  // a ramp's or a stop's revolutions by their own lengths.
   const double duration_s = static_cast<double>(simulator.samples_done()) / s.sample_rate_hz;
-  const double turns = duration_s * sim::actual_rpm(s) / 60.0;
+  const auto& truth = simulator.truth();
+  double turns = 0.0;
+  for (std::size_t i = 0; i < truth.size() && truth[i].start_s < duration_s; ++i) {
+    const double end_s = i + 1 < truth.size() ? truth[i + 1].start_s
+                         : truth[i].spindle_rpm > 0.0
+                             ? truth[i].start_s + 60.0 / truth[i].spindle_rpm
+                             : truth[i].start_s;
+    const double length_s = end_s - truth[i].start_s;
+    turns += length_s > 0.0 ? std::min(1.0, (duration_s - truth[i].start_s) / length_s) : 0.0;
+  }
   std::printf("  recording       %lld samples at %.0f Hz = %.3f s, %.*f revolution%s\n",
               static_cast<long long>(simulator.samples_done()), s.sample_rate_hz, duration_s,
               turns < 10.0 ? 2 : 0, turns, turns == 1.0 ? "" : "s");

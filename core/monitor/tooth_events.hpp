@@ -283,8 +283,9 @@ EventSearch find_centroid(const Signal& detect, std::int64_t oldest, std::int64_
 /// stretch — samples at or below `quiet` — that holds the lowest sample within ± half of
 /// `predicted`, its ends placed where `detect` crosses `quiet` (linearly between the samples, so
 /// that the middle moves continuously with the signal). Found when the stretch is at least
-/// `min_run` samples long and ends inside [from, to]; its middle is kept within ± half of
-/// `predicted` (a flute that does not cut leaves a stretch two pitches long).
+/// `min_run` samples long, ends inside [from, to] and has its middle within ± half of
+/// `predicted` (a flute that does not cut leaves a stretch two pitches long, whose middle is no
+/// event on either side of it: not found, as a valley search finds none there).
 /// The lockstep model's valley where its force pauses between the flutes while the measured
 /// valleys do not (noise, a dynamometer's ringing): on a flat stretch a valley fit lands on an
 /// edge or on a ripple of the filter's ringing, which put the model's α of an equal-pitch tool
@@ -317,12 +318,12 @@ EventSearch find_quiet_middle(const Signal& detect, std::int64_t from, std::int6
   const double before = detect(left - 1), after = detect(right + 1);
   const double start = static_cast<double>(left - 1) + (before - quiet) / (before - detect(left));
   const double end = static_cast<double>(right) + (quiet - detect(right)) / (after - detect(right));
-  if (end - start < min_run) {
-    return out;
+  const double middle = 0.5 * (start + end);
+  if (!(end - start >= min_run) || !(std::fabs(middle - predicted) <= static_cast<double>(half))) {
+    return out;  // (a NaN beside the stretch fails here too)
   }
-  const double limit = static_cast<double>(half);
   out.status = EventSearch::Status::kFound;
-  out.position = std::clamp(0.5 * (start + end), predicted - limit, predicted + limit);
+  out.position = middle;
   return out;
 }
 

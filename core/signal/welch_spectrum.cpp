@@ -20,10 +20,14 @@ AmplitudeSpectrum welch_amplitude_spectrum(std::span<const double> x, double rat
     n *= 2;
   }
   double mean = 0.0;
+  std::size_t finite = 0;
   for (const double v : x) {
-    mean += std::isfinite(v) ? v : 0.0;
+    if (std::isfinite(v)) {
+      mean += v;
+      ++finite;
+    }
   }
-  mean /= static_cast<double>(x.size());
+  mean = finite > 0 ? mean / static_cast<double>(finite) : 0.0;
   std::vector<double> window(n);
   double window_sum = 0.0;
   for (std::size_t i = 0; i < n; ++i) {

@@ -264,6 +264,19 @@ TEST(SimulateCommand, WarnsWhenReplayWouldRefuseTheRecording) {
                         (test::source_dir() / "config" / "demo.json").string() +
                         " --duration 0.001 -o " + (dir / "tiny.csv").string() + " 2>&1");
   EXPECT_NE(tiny.output.find("= 0.001 s, 0.42 revolutions\n"), std::string::npos) << tiny.output;
+  // A ramp from 20,000 to 30,000 rpm over the 0.2 s record: 83.3 turns, each at its own speed
+  // (its starting speed alone would have given 67).
+  s = nlohmann::json::parse(std::ifstream(test::source_dir() / "config" / "demo.json"));
+  s["spindle"] = {{"profile", "ramp"},
+                  {"actual_rpm", 20000.0},
+                  {"ramp_end_rpm", 30000.0},
+                  {"ramp_start_s", 0.0},
+                  {"ramp_end_s", 0.2}};
+  write_file(dir / "ramp.json", s.dump());
+  const auto ramp =
+      test::run_command(test::millwatch_cli() + " simulate " + (dir / "ramp.json").string() +
+                        " --duration 0.2 -o " + (dir / "ramp_cut.csv").string() + " 2>&1");
+  EXPECT_NE(ramp.output.find("= 0.200 s, 83 revolutions\n"), std::string::npos) << ramp.output;
 }
 
 TEST(SimulateCommand, UnwritableOutputFailsCleanly) {
