@@ -251,9 +251,8 @@ int run_diagnose(const DiagnoseCliOptions& o) {
   std::error_code report_ec;
   fs::create_directories(o.report, report_ec);
   if (report_ec) {
-    const auto& ec = report_ec;
     throw std::runtime_error("--report " + o.report + ": cannot make the report folder (" +
-                             ec.message() + ")");
+                             report_ec.message() + ")");
   }
   const ConfigFile file = read_config_file(o.config);
   ProgressLine progress(o.progress);

@@ -630,11 +630,11 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
     const double rise = 1.0 + affine.slope_N_per_um * inv_k;
     const double offset = (affine.intercept_N + wear_n) * inv_k - h_rigid;
     const double h = -offset / rise;
-    // (A root below h_min where [002] eq 17's power law holds is not this line's.)
-    const bool line_holds = law.affine_normal(dz_mm, area_mm2, law.ploughing(h)).valid;
     // A line over every chip needs no ln h: the linear-edge force does not take it, and no
     // iteration will start from it (NaN: none, and nothing can use it unawares).
     const bool everywhere = law.affine_normal(dz_mm, area_mm2, true).valid;
+    // (A root below h_min where [002] eq 17's power law holds is not this line's.)
+    const bool line_holds = everywhere || !law.ploughing(h);
     if (rise > 0.0 && h > lo && h < hi && line_holds) {
       d.h_um = h;
       d.log_h_um = everywhere ? std::numeric_limits<double>::quiet_NaN() : std::log(h);

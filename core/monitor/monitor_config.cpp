@@ -23,8 +23,8 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
   (void)r.string("name", "");  // for the reader of the file
   (void)r.string("description", "");
   c.model = model::model_config_from_json(r.raw("model"), join(path, "model"));
-  c.sample_rate_hz =
-      r.number("sample_rate_hz", c.sample_rate_hz, config::closed(kMinSampleRateHz, kMaxSampleRateHz, "Hz"));
+  c.sample_rate_hz = r.number("sample_rate_hz", c.sample_rate_hz,
+                              config::closed(kMinSampleRateHz, kMaxSampleRateHz, "Hz"));
   c.axis_map = signal::axis_map_from_json(r.raw("axis_map"), join(path, "axis_map"));
   {
     const std::vector<double> fallback(c.saturation_N.begin(), c.saturation_N.end());
