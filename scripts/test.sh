@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds and runs the whole test suite: what ships built optimised (Release: the programs and
-# the benchmarks, warning-free) and its install and Debian package checked; every test under
+# Checks the C++ sources' format (clang-format), then builds and runs the whole test suite: what
+# ships built optimised (Release: the programs and the benchmarks, warning-free) and its install
+# and Debian package checked; every test under
 # AddressSanitizer and UndefinedBehaviorSanitizer; then every reader fuzzed for a while
 # (scripts/fuzz.sh, MILLWATCH_FUZZ_SECONDS per target, default 20). Needs the packages of
 # scripts/install-deps.sh.
@@ -13,6 +14,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
+
+echo "== clang-format (.clang-format) on every C++ source"
+# The style is checked, not fixed: a file that would change fails the run, naming the line.
+# The files git tracks (outside a clone: every source under the folders that hold them).
+mkdir -p build
+if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+  git ls-files -z -- '*.cpp' '*.hpp' '*.h' >build/format_files
+else
+  find bench core daemon msgs replay shell tests \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' \) \
+    -print0 >build/format_files
+fi
+xargs -0 clang-format --dry-run -Werror <build/format_files
+echo "clang-format: $(tr -cd '\0' <build/format_files | wc -c) files clean"
 
 echo "== Release build of what ships, its install and Debian package"
 # A build folder of its own (no tests), so that build/release keeps its tests for bench.sh,
