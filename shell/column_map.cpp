@@ -97,17 +97,6 @@ std::string ColumnSpec::describe_source() const {
   return index > 0 ? std::to_string(index) : source;
 }
 
-std::string ColumnSpec::describe() const {
-  std::string s = index > 0 ? "column " + std::to_string(index) : source;
-  if (scale != 1.0) {
-    char text[32];
-    const auto r = std::to_chars(text, text + sizeof text, scale);
-    s += '*';
-    s.append(text, r.ptr);
-  }
-  return s;
-}
-
 bool ColumnMap::empty() const {
   for (const auto& c : column) {
     if (c.given()) {
@@ -130,8 +119,9 @@ std::string ColumnMap::to_string() const {
     s += kKeys[i];
     s += '=';
     s += c.describe_source();
-    // A name with a '*' of its own gets its scale written out, so that it reads back the same.
-    if (c.scale != 1.0 || c.source.find('*') != std::string::npos) {
+    // A scale the map gave is written out, "*1" too (it says a units row's factor does not
+    // apply), and so is a name's with a '*' of its own, so that it reads back the same.
+    if (c.scaled || c.scale != 1.0 || c.source.find('*') != std::string::npos) {
       char text[32];
       const auto r = std::to_chars(text, text + sizeof text, c.scale);
       s += '*';

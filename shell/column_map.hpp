@@ -24,8 +24,6 @@ struct ColumnSpec {
   [[nodiscard]] bool given() const { return index > 0 || !source.empty(); }
   /// "Fx" or "3", as written in a map.
   [[nodiscard]] std::string describe_source() const;
-  /// "Fx", "column 3", with "*1000" when scaled.
-  [[nodiscard]] std::string describe() const;
 };
 
 struct ColumnMap {

@@ -157,7 +157,8 @@ double configured_rate_hz(const LoadedMonitorConfig& config) {
 
 monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config) {
   try {
-    return monitor::monitor_config_from_json(config.json);
+    // "columns" was taken by read_config_file() (the recording's column map).
+    return monitor::monitor_config_from_json(config.json, "", {"columns"});
   } catch (const config::ConfigError& e) {
     throw std::runtime_error(config.name + ": " + e.what());
   }

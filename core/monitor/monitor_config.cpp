@@ -17,7 +17,8 @@ std::string join(const std::string& path, const char* key) {
 
 }  // namespace
 
-MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path) {
+MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path,
+                                       std::initializer_list<std::string_view> caller_keys) {
   ObjectReader r(j, path);
   MonitorConfig c;
   (void)r.string("name", "");  // for the reader of the file
@@ -102,6 +103,9 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     }
   }
   c.alerts = alert_config_from_json(r.raw("alerts"), join(path, "alerts"));
+  for (const std::string_view key : caller_keys) {
+    (void)r.raw(key);  // the caller's: allowed, and listed as allowed
+  }
   r.finish();
   validate(c, path);
   return c;

@@ -18,9 +18,11 @@
 //     "alerts": { AlertConfig } }
 
 #include <array>
+#include <initializer_list>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/model/model_config.hpp"
@@ -76,7 +78,10 @@ struct MonitorConfig {
 };
 
 /// @throws config::ConfigError naming the field, its value and the allowed range.
-MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path = "");
+/// `caller_keys`: top-level keys the caller reads itself (the offline shell's "columns", the
+/// recording's column map), allowed here and named among the allowed keys when one is unknown.
+MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path = "",
+                                       std::initializer_list<std::string_view> caller_keys = {});
 nlohmann::json to_json(const MonitorConfig& c);
 /// Cross-field checks (sample rate against filter and spindle). @throws config::ConfigError.
 void validate(const MonitorConfig& c, const std::string& path = "");

@@ -128,6 +128,18 @@ TEST(ReplayFormats, PhmRawWindowThroughAColumnMapMatchesItsCsv) {
   const nlohmann::json by_index =
       replay(raw + " --config " + (dir / "raw_config.json").string(), dir, "by_index");
   expect_same_results(csv, by_index);
+  // A misspelt "columns" is refused with "columns" among the keys allowed (the shell reads it,
+  // not the monitor's configuration, whose list had left it out).
+  nlohmann::json misspelt = config;
+  misspelt["colums"] = misspelt["columns"];
+  misspelt.erase("columns");
+  std::ofstream(dir / "misspelt.json") << misspelt.dump();
+  const auto typo = test::run_command(test::millwatch_cli() + " replay " +
+                                      (phm_dir() / "c1_cut158_window.csv").string() + " --config " +
+                                      (dir / "misspelt.json").string() + " 2>&1");
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.output.find("colums: unknown key (allowed: "), std::string::npos) << typo.output;
+  EXPECT_NE(typo.output.find(", columns)"), std::string::npos) << typo.output;
   // Without a rate anywhere, the error says where to put it.
   config.erase("sample_rate_hz");
   std::ofstream(dir / "no_rate.json") << config.dump();

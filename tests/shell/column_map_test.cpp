@@ -43,6 +43,16 @@ TEST(ColumnMap, ANameWithAStarWritesItsScale) {
   EXPECT_EQ(parse_column_map(m.to_string()).force(1).source, "F*x");
 }
 
+TEST(ColumnMap, AnExplicitScaleOfOneReadsBackTheSame) {
+  // "*1" says the map's scale is the whole conversion (a units row's factor does not apply):
+  // written back as "fx=Fx", it would have read back unscaled, the units row applying again.
+  const ColumnMap m = parse_column_map("t=time_ms*0.001,fx=Fx*1,fy=Fy,fz=Fz");
+  EXPECT_TRUE(m.force(0).scaled);
+  EXPECT_FALSE(m.force(1).scaled);
+  EXPECT_EQ(m.to_string(), "t=time_ms*0.001,fx=Fx*1,fy=Fy,fz=Fz");
+  EXPECT_TRUE(parse_column_map(m.to_string()).force(0).scaled);
+}
+
 TEST(ColumnMap, MatrixSlicesKeepTheirComma) {
   const ColumnMap m = parse_column_map("fx=F(:,1),fy=F(:,2),fz=F(3,:),fs=rate");
   EXPECT_EQ(m.force(0).source, "F(:,1)");
