@@ -11,6 +11,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -116,6 +117,7 @@ int replay_one(const ReplayOptions& o) {
   const double speed = o.realtime ? 1.0 : o.speed;
   const auto start = std::chrono::steady_clock::now();
   std::int64_t first_utime = 0;
+  std::int64_t last_utime = 0;
   bool have_first = false;
   install_stop_signals();
   ProgressLine progress(o.progress, 2.0, 0.25);
@@ -133,6 +135,9 @@ int replay_one(const ReplayOptions& o) {
       first_utime = block.utime_us;
       have_first = true;
     }
+    // The block's end: where the replay stood when it was stopped.
+    last_utime = block.utime_us +
+                 std::llround(static_cast<double>(block.fx_N.size()) / block.sample_rate_hz * 1e6);
     if (speed > 0.0) {  // pace by the blocks' own time
       const auto due = start + std::chrono::microseconds(static_cast<std::int64_t>(
                                    static_cast<double>(block.utime_us - first_utime) / speed));
@@ -170,6 +175,14 @@ int replay_one(const ReplayOptions& o) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
   run.drain();
+  if (stop_requested()) {  // the summary says so too: a reader of it alone could not tell
+    run.note("interrupted",
+             fmt::format("the replay was stopped by {} after {:.3f} s of the record ({} samples "
+                         "read): this summary covers them alone",
+                         stop_signal() == SIGTERM ? "SIGTERM" : "SIGINT",
+                         static_cast<double>(last_utime - first_utime) * 1e-6, samples_read),
+             last_utime);
+  }
   if (!loaded.rate_note.empty()) {  // the summary alone says so too
     run.note("rate overridden", loaded.rate_note, first_utime);
   }
@@ -212,7 +225,7 @@ int replay_one(const ReplayOptions& o) {
     std::printf("%s", summary_text(j).c_str());
   }
   std::fflush(stdout);
-  return 0;
+  return stop_requested() ? interrupted_exit_status() : 0;
 }
 
 /// Runs `argv` with stdout to /dev/null; returns its pid.
@@ -329,7 +342,9 @@ int replay_many(const ReplayOptions& o) {
     CutResult r;
     r.file = o.inputs[k];
     r.exit_code = exit_codes[k];
-    if (exit_codes[k] == 0 && fs::exists(summaries[k])) {
+    // A cut stopped with the campaign wrote a summary of what it replayed (it says so).
+    if ((exit_codes[k] == 0 || is_interrupted_exit_status(exit_codes[k])) &&
+        fs::exists(summaries[k])) {
       r.summary = read_json_file(summaries[k]);
     }
     if (std::ifstream why(errors[k]); exit_codes[k] != 0 && why) {

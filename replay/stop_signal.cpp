@@ -7,8 +7,8 @@ namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
 
-extern "C" void on_stop_signal(int /*signal*/) {
-  g_stop = 1;
+extern "C" void on_stop_signal(int signal) {
+  g_stop = signal;
 }
 
 }  // namespace
@@ -25,6 +25,18 @@ void install_stop_signals(InterruptedCalls calls) {
 
 bool stop_requested() {
   return g_stop != 0;
+}
+
+int stop_signal() {
+  return g_stop;
+}
+
+int interrupted_exit_status() {
+  return 128 + (g_stop != 0 ? static_cast<int>(g_stop) : SIGINT);
+}
+
+bool is_interrupted_exit_status(int status) {
+  return status == 128 + SIGINT || status == 128 + SIGTERM;
 }
 
 }  // namespace millwatch::shell

@@ -14,5 +14,12 @@ void install_stop_signals(InterruptedCalls calls = InterruptedCalls::restart);
 
 /// Whether SIGINT or SIGTERM has arrived since `install_stop_signals`.
 bool stop_requested();
+/// The last of them to arrive (SIGINT, SIGTERM; 0: none).
+int stop_signal();
+/// The exit status of a command that stopped for it, with its output partial: 128 + the
+/// signal's number, as a shell reports a command the signal ended (130 for SIGINT).
+int interrupted_exit_status();
+/// Whether `status` is such a command's (130 or 143).
+bool is_interrupted_exit_status(int status);
 
 }  // namespace millwatch::shell

@@ -47,6 +47,9 @@ std::string status(const CutResult& c) {
   if (c.exit_code == 0 && c.summary.is_object()) {
     return "ok";
   }
+  if (c.summary.is_object()) {  // stopped by a signal: its summary covers what it replayed
+    return fmt::format("interrupted (exit {}): partial", c.exit_code);
+  }
   return fmt::format("failed (exit {}){}{}", c.exit_code, c.error.empty() ? "" : ": ", c.error);
 }
 

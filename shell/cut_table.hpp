@@ -12,8 +12,8 @@ namespace millwatch::shell {
 
 struct CutResult {
   std::string file;
-  int exit_code = 0;       ///< of the cut's replay (non-zero: failed, summary null)
-  nlohmann::json summary;  ///< the cut's summary JSON (null if it failed)
+  int exit_code = 0;       ///< of the cut's replay (non-zero: failed, summary null; or interrupted)
+  nlohmann::json summary;  ///< the cut's summary JSON (null if it failed; partial if interrupted)
   std::string error;       ///< why it failed, as its replay said (empty: not known)
 };
 

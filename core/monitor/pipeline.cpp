@@ -560,10 +560,20 @@ void Pipeline::on_tracker_update() {
   u.estimate = e;
   u.commanded_rpm = config_.model.process.spindle_rpm;
 
-  // Turns heard while cutting: the whole first window of a cutting stretch, then a hop each.
-  const signal::TrackerTiming t = signal::tracker_timing(tracker_.config());
+  // Turns heard while cutting: the time each cutting window covers that no earlier one did —
+  // the whole first window of a cutting stretch, then a hop each. (A window after a spell
+  // without cutting overlaps the last one counted: a gap bridged with the last value held
+  // leaves such a spell, and counting that window whole had stated more turns than the record
+  // holds.)
   if (e.cutting) {
-    cutting_revolutions_ += (was_cutting_ ? t.hop_s : t.window_s) * e.spindle_hz;
+    // The window's span in measuring samples: its centre is its first sample + w/2.
+    const auto w = static_cast<std::int64_t>(tracker_.window_samples());
+    const auto end =
+        static_cast<double>(stream_start_ + (e.center_sample - w / 2 + w) * decimation_);
+    const auto length = static_cast<double>(w * decimation_);
+    const double added = std::clamp(end - cutting_counted_until_, 0.0, length);
+    cutting_revolutions_ += added / rate_hz_ * e.spindle_hz;
+    cutting_counted_until_ = end;
     if (!e.consistent && !e.valid) {
       ++inconsistent_windows_;
     }

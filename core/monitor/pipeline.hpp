@@ -21,6 +21,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -398,6 +399,9 @@ class Pipeline {
   std::int64_t alias_windows_ = 0;  // windows the tracker refused as an alias (finish())
   std::string no_signal_detail_;    // finish()'s kNoSteadySignal detail, with the threshold
   double cutting_revolutions_ = 0.0;
+  // Where the last cutting window counted in cutting_revolutions_ ended (measuring samples): a
+  // cutting window adds the time it covers past it, at most its own length.
+  double cutting_counted_until_ = -std::numeric_limits<double>::infinity();
   double finished_tail_revolutions_ = 0.0;  // heard after the last window, counted by finish()
   bool was_cutting_ = false;
   double last_rpm_ = 0.0;
