@@ -186,6 +186,9 @@ int replay_one(const ReplayOptions& o) {
   if (!loaded.rate_note.empty()) {  // the summary alone says so too
     run.note("rate overridden", loaded.rate_note, first_utime);
   }
+  if (!loaded.model_note.empty()) {
+    run.note("cut not described", loaded.model_note, first_utime);
+  }
   nlohmann::json j = run.summary();
   j["input"] = input.string();
   j["input_format"] = source->description();

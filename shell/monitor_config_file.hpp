@@ -48,6 +48,9 @@ struct LoadedMonitorConfig {
   /// take_recording_rate()'s word when the recording's rate overrode the one configured ("":
   /// none), for the summary as well as the log.
   std::string rate_note;
+  /// Where neither a sidecar nor the configuration describes the cut (no "model"): that the
+  /// built-in model is assumed, and which ("": the cut is described), for the summary too.
+  std::string model_note;
   /// sample_rate_hz in json (0: none).
   [[nodiscard]] double config_rate_hz() const;
 };

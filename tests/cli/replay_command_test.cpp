@@ -560,6 +560,42 @@ TEST(ReplayCommand, MalformedRawBlocksInALogAreReportedAndSkipped) {
   EXPECT_GT(r.summary["revolutions"].get<int>(), 100);
 }
 
+// A recording nothing describes (no sidecar beside it, a configuration without "model") is
+// replayed with the built-in model, and the summary says so and which: a cut of another tool
+// or speed is then missed with nothing to say why.
+TEST(ReplayCommand, ACutNothingDescribesSaysTheModelAssumed) {
+  const fs::path dir = test::fresh_temp_dir();
+  nlohmann::json s = base_scenario();
+  s["recording"]["duration_s"] = 0.3;
+  const fs::path csv = simulate(dir, "bare", s);
+  const nlohmann::json sidecar =
+      nlohmann::json::parse(std::ifstream(fs::path(csv).replace_extension(".json")));
+  fs::remove(fs::path(csv).replace_extension(".json"));
+  std::ofstream(dir / "rate_only.json")
+      << nlohmann::json{{"sample_rate_hz", sidecar["sample_rate_hz"]}}.dump();
+  const ReplayRun r =
+      replay(csv.string() + " --config " + (dir / "rate_only.json").string(), dir / "s.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  std::string detail;
+  for (const auto& w : r.summary["warnings"]) {
+    if (w["kind"] == "cut not described") {
+      detail = w["detail"].get<std::string>();
+    }
+  }
+  EXPECT_NE(detail.find("no sidecar beside the recording; "), std::string::npos) << detail;
+  EXPECT_NE(detail.find("rate_only.json has no \"model\"): the built-in model is assumed, a 0.4 "
+                        "mm 2-flute tool at 25000 rpm"),
+            std::string::npos)
+      << detail;
+  // With the sidecar, nothing is assumed.
+  std::ofstream(fs::path(csv).replace_extension(".json")) << sidecar.dump();
+  const ReplayRun described = replay(csv.string(), dir / "d.json");
+  ASSERT_EQ(described.exit_code, 0) << described.log;
+  for (const auto& w : described.summary["warnings"]) {
+    EXPECT_NE(w["kind"], "cut not described");
+  }
+}
+
 TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
   const fs::path dir = test::fresh_temp_dir();
   nlohmann::json s = base_scenario();
