@@ -384,6 +384,9 @@ int main(int argc, char** argv) {
   app.add_option("--test-source-ends-after", hooks.source_ends_after_s)->group("");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (!summary_path.empty()) {  // written on exit: a path that cannot take it is said now
+      shell::check_output_file("--summary", summary_path);
+    }
     if (check) {
       const daemon::DaemonConfig c = load(config_path, urls);
       monitor::PipelineSink ignore;

@@ -280,6 +280,9 @@ int run_calibrate(const CalibrateOptions& o) {
                     "in the order of the cuts",
                     o.feeds_um.size(), o.inputs.size()));
   }
+  if (!o.output.empty()) {  // written last: a path that cannot take it must not cost the fit
+    check_output_file("-o", o.output);
+  }
   for (std::size_t i = 0; i < o.inputs.size(); ++i) {  // before any cut is read
     if (!fs::exists(o.inputs[i])) {
       throw std::runtime_error(fmt::format("{}: recording not found (cut {} of {})", o.inputs[i],

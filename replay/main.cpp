@@ -79,6 +79,9 @@ CLI::Validator whole_number_in(long long lowest, long long highest) {
       fmt::format("INT in [{} - {}]", lowest, highest));
 }
 const CLI::Validator kPositive = number_from(0.0, true);
+/// A feed per tooth (um) as a cut's model takes it (model.process.feed_per_tooth_um: (0, 1000]):
+/// checked here, or the model's reader would blame the configuration for the option's value.
+const CLI::Validator kFeedPerTooth = number_from(0.0, true, 1000.0);
 const CLI::Validator kNonNegative = number_from(0.0, false);
 
 template <class Body>
@@ -237,7 +240,8 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--feeds-um", o->feeds_um,
                   "Feed per tooth of each cut (um), in the order of the cuts (default: each "
                   "cut's sidecar)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(kFeedPerTooth);
   cmd->add_option("-o,--output", o->output, "Write the material preset to this JSON file");
   cmd->add_option("--name", o->name, "The preset's material name");
   cmd->add_flag("--tared", o->tared,
@@ -266,7 +270,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--feeds-um", o->feeds_um,
                   "Feed per tooth of each cut (um), in the order of the cuts (default: each "
                   "cut's sidecar)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(kFeedPerTooth);
   cmd->add_option("--report", o->report,
                   "Folder for report.md, report.html, report.json, plots (several cuts: one "
                   "folder per cut inside, and the comparison across feeds)")

@@ -69,6 +69,16 @@ int replay_one(const ReplayOptions& o) {
   if (!o.plot.empty() && fs::exists(o.plot) && !fs::is_directory(o.plot)) {
     throw std::runtime_error("--plot " + o.plot + ": a file, not a folder for the plots");
   }
+  // Then whether they can be written there at all (a folder that cannot be made or written in).
+  for (const auto& [option, path] :
+       {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions}}) {
+    if (!path->empty()) {
+      check_output_file(option, *path);
+    }
+  }
+  if (!o.plot.empty()) {
+    check_output_folder("--plot", o.plot);
+  }
   const RecordingFormat format = detect_recording_format(input);
   const bool lcm_log = format == RecordingFormat::kLcmLog;
   // The configuration: the sidecar's cut under --config's overrides.

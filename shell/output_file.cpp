@@ -1,5 +1,7 @@
 #include "shell/output_file.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <map>
@@ -49,6 +51,49 @@ void OutputFile::commit() {
                              ec.message());
   }
   committed_ = true;
+}
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& option, const std::filesystem::path& path,
+                         const std::string& why) {
+  throw std::runtime_error(option + " " + path.string() + ": " + why);
+}
+
+}  // namespace
+
+void check_output_file(const std::string& option, const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    refuse(option, path, "a folder, not a file");
+  }
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (!fs::is_directory(folder, ec)) {
+    refuse(option, path, "no folder " + folder.string());
+  }
+  // The file goes in as <path>.partial, renamed into place: the folder must take new files.
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    refuse(option, path, "cannot write in " + folder.string() + " (" + std::strerror(errno) + ")");
+  }
+  if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0) {
+    refuse(option, path, std::string("cannot be replaced (") + std::strerror(errno) + ")");
+  }
+}
+
+void check_output_folder(const std::string& option, const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(path, ec) && !fs::is_directory(path, ec)) {
+    refuse(option, path, "a file, not a folder");
+  }
+  fs::create_directories(path, ec);
+  if (ec) {
+    refuse(option, path, "cannot make the folder (" + ec.message() + ")");
+  }
+  if (::access(path.c_str(), W_OK | X_OK) != 0) {
+    refuse(option, path, "cannot write in it (" + std::string(std::strerror(errno)) + ")");
+  }
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {

@@ -32,6 +32,13 @@ class OutputFile {
   bool committed_ = false;
 };
 
+/// Checks, before any work, that an output file can be written at `path` (given with `option`,
+/// e.g. "--summary"): not a folder, its folder there and writable, the file itself writable if
+/// it exists. @throws std::runtime_error naming the option, the path and why.
+void check_output_file(const std::string& option, const std::filesystem::path& path);
+/// The same for an output folder: made now if missing (with its parents), and writable.
+void check_output_folder(const std::string& option, const std::filesystem::path& path);
+
 /// Writes `text` to `path` through an OutputFile. @throws std::runtime_error naming the path.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 

@@ -40,7 +40,19 @@ TEST(CommandLine, NumbersOutsideWhatTheyMeanAreRefusedBeforeAnythingRuns) {
       {test::millwatch_cli() + " replay " + scenario + " --block 0",
        "--block: 0 is not in [1, 65536]"},
       {test::millwatch_cli() + " simulate " + scenario + " --seed -3",
-       "--seed: -3 is not a non-negative whole number"}};
+       "--seed: -3 is not a non-negative whole number"},
+      // A feed the model does not take: the model's reader had blamed the configuration.
+      {test::millwatch_cli() + " calibrate " + scenario + " --feeds-um 1e9",
+       "--feeds-um: 1e9 is beyond 1000"},
+      {diagnose + "--feeds-um abc", "--feeds-um: \"abc\" is not a number"},
+      // Outputs that cannot be written, said before the work (calibrate's fit: seconds to
+      // minutes; it had failed after it, naming no option).
+      {test::millwatch_cli() + " calibrate " + scenario + " -o /proc/no_such_folder/m.json",
+       "-o /proc/no_such_folder/m.json: no folder /proc/no_such_folder"},
+      {test::millwatch_cli() + " replay " + scenario + " --plot /proc/no_such_folder",
+       "--plot /proc/no_such_folder: cannot make the folder"},
+      {test::millwatch_cli() + " replay " + scenario + " --summary /proc/no_such_folder/s.json",
+       "--summary /proc/no_such_folder/s.json: no folder /proc/no_such_folder"}};
   for (const auto& [command, said] : cases) {
     const auto r = test::run_command(command + " 2>&1");
     EXPECT_NE(r.exit_code, 0) << command;

@@ -556,6 +556,15 @@ TEST(Millwatchd, CheckNamesTheBadFieldOfAConfiguration) {
   const auto ok = check(shipped.string());
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("configuration is valid"), std::string::npos);
+  // A summary that cannot be written on exit is said at once, by --check too (it had run the
+  // whole session and failed at its end).
+  const auto no_summary = test::run_command(kDaemon + " --check -c " + shipped.string() +
+                                            " --summary /proc/no_such_folder/s.json 2>&1");
+  EXPECT_EQ(no_summary.exit_code, 2) << no_summary.output;
+  EXPECT_NE(no_summary.output.find(
+                "--summary /proc/no_such_folder/s.json: no folder /proc/no_such_folder"),
+            std::string::npos)
+      << no_summary.output;
 
   const nlohmann::json base = nlohmann::json::parse(std::ifstream(shipped));
   struct Case {
