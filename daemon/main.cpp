@@ -346,6 +346,20 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   run->drain();
   lcm_source.reset();
 
+  if (run->status().input.samples_in == 0) {  // the summary's nulls need their reason
+    const bool lcm = config.source.kind == daemon::SourceConfig::Kind::kLcm;
+    const std::string why =
+        lcm ? fmt::format(
+                  "no samples came: {} message(s) on channel {} from {} (source.channel, "
+                  "lcm.url), none taken: speed, α, peaks and residuals are absent",
+                  source_counters.messages.load(), config.source.channel, config.lcm_url)
+            : fmt::format(
+                  "no samples came: no block was read from {} (source.device): speed, "
+                  "α, peaks and residuals are absent",
+                  config.source.device);
+    spdlog::warn("{}", why);
+    run->note("no samples", why, 0);
+  }
   const nlohmann::json j = run->summary();
   spdlog::info("final summary: {}", j.dump());
   spdlog::info(

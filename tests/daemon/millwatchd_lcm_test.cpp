@@ -542,6 +542,15 @@ TEST(Millwatchd, StopsCleanlyOnSigtermAndSigintWithAFinalSummary) {
     ASSERT_FALSE(j.is_null()) << r.output;
     EXPECT_EQ(j["samples"], 0);
     EXPECT_TRUE(j.contains("alerts"));
+    // Its nulls with their reason (it had said only "no identification").
+    bool said = false;
+    for (const auto& w : j["warnings"]) {
+      said = said ||
+             (w["kind"] == "no samples" &&
+              w["detail"].get<std::string>().find(
+                  "0 message(s) on channel MILLWATCH_FORCE_RAW from memq://") != std::string::npos);
+    }
+    EXPECT_TRUE(said) << j["warnings"];
   }
 }
 
