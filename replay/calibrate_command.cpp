@@ -131,6 +131,20 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     throw std::runtime_error(fmt::format("{}: no samples to calibrate on ({}): {}", input.string(),
                                          where, why_no_samples(*source)));
   }
+  if (windows.windows().empty() && windows.revolutions() == 0) {
+    // Not its length: the monitor measured nothing, and its summary says why (no lock, no
+    // cutting heard, a speed outside the search).
+    summary.finish(pipeline.status());
+    std::string why;
+    for (const auto& w : summary.to_json().value("warnings", nlohmann::json::array())) {
+      if (w.value("kind", std::string()) != "no identification") {
+        why += fmt::format("{} {}: {}", why.empty() ? ":" : ";", w.value("kind", std::string()),
+                           w.value("detail", std::string()));
+      }
+    }
+    throw std::runtime_error(fmt::format("{}: no revolution measured to calibrate on ({}){}",
+                                         input.string(), where, why));
+  }
   if (windows.windows().empty()) {
     throw std::runtime_error(fmt::format(
         "{}: too short to calibrate on ({}): {} revolution(s) measured, one window needs {} "

@@ -311,6 +311,24 @@ namespace {
 // preset say why the coefficients are not the material's, and their σ's span the minima.
 // The optimised program (test::optimised_millwatch_cli: 36 s of a core sanitized, 12 optimised):
 // the calibration's search and its minima run sanitized in the simulated sweeps above.
+// PHM 2010's cut 1 (a new tool, 0.1 s like the others) gives the tracker no steady line: the
+// calibration names that, where it had called the cut "too short ... 0 revolution(s)".
+TEST(CalibrateCommandRealCut, ACutWithoutALockSaysWhyNotThatItIsShort) {
+  const fs::path phm = test::shared_dir() / "data" / "phm2010";
+  ASSERT_TRUE(fs::exists(phm / "c1_cut001_window.csv")) << phm;
+  const auto r = test::run_command(
+      test::optimised_millwatch_cli() + " calibrate " + (phm / "c1_cut001_window.csv").string() +
+      " " + (phm / "c1_cut158_window.csv").string() + " --feeds-um 49.8,49.8 --config " +
+      (fs::path(MILLWATCH_SOURCE_DIR) / "config" / "phm2010_c1.json").string() +
+      " --no-progress 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("c1_cut001_window.csv: no revolution measured to calibrate on (cut 1 "
+                          "of 2): no steady tooth-passing signal: "),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("too short"), std::string::npos) << r.output;
+}
+
 TEST(CalibrateCommandRealCut, SaysWhyItsCoefficientsAreNotTheMaterials) {
   const fs::path csv = test::shared_dir() / "data" / "phm2010" / "c1_cut158_window.csv";
   ASSERT_TRUE(fs::exists(csv)) << csv;
