@@ -30,6 +30,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -116,6 +117,22 @@ struct TestHooks {
   double source_ends_after_s = 0.0;
 };
 
+/// Why LCM may have refused a URL, by its provider.
+std::string lcm_open_hint(const std::string& url) {
+  if (url.rfind("file://", 0) == 0) {
+    return url.find("mode=w") == std::string::npos
+               ? "the log is not there or cannot be read (a log to write: ?mode=w)"
+               : "the log cannot be written there";
+  }
+  if (url.rfind("udpm://", 0) == 0 || url.empty()) {
+    return "udpm:// needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`";
+  }
+  if (url.rfind("tcpq://", 0) == 0) {
+    return "no LCM TCP queue server answers there";
+  }
+  return "LCM refused it";
+}
+
 int run(const std::string& config_path, const UrlOverrides& urls, const std::string& summary_path,
         TestHooks hooks) {
   daemon::ServiceNotifier notifier;
@@ -133,13 +150,23 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   // Two instances: the output one never subscribes, so LCM gives it no receive socket or thread.
   lcm::LCM lcm_out(config.lcm_output_url);
   lcm::LCM lcm_in(config.lcm_url);
-  for (const auto& [lcm, url] :
-       {std::pair{&lcm_in, &config.lcm_url}, std::pair{&lcm_out, &config.lcm_output_url}}) {
+  for (const auto& [lcm, url, key] :
+       {std::tuple{&lcm_in, &config.lcm_url, "lcm.url"},
+        std::tuple{&lcm_out, &config.lcm_output_url, "lcm.output_url"}}) {
     if (!lcm->good()) {
-      throw std::runtime_error(
-          "cannot open LCM at " + *url +
-          " (udpm:// needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`)");
+      throw std::runtime_error("cannot open LCM at " + *url + " (" + key +
+                               "): " + lcm_open_hint(*url));
     }
+  }
+  // A log read (file:// without mode=w) takes no messages: results published there are lost.
+  if (config.lcm_output_url.rfind("file://", 0) == 0 &&
+      config.lcm_output_url.find("mode=w") == std::string::npos &&
+      config.lcm_output_url.find("mode=a") == std::string::npos) {
+    spdlog::warn(
+        "lcm.output_url {} is a log opened for reading: every result published is "
+        "dropped (give --lcm-output-url, e.g. memq:// or udpm://…, or a log with "
+        "?mode=w)",
+        config.lcm_output_url);
   }
 
   // Threads take the name of the thread that creates them: the ones LCM and shell::MonitorRun

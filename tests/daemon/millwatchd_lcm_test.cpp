@@ -713,5 +713,35 @@ TEST(Millwatchd, UdpmWithoutAMulticastRouteFailsAtOnce) {
   EXPECT_NE(r.output.find("multicast route"), std::string::npos) << r.output;
 }
 
+// A file:// source that is not there gets the file provider's reason, not udpm's route hint;
+// a log read as the output (--lcm-url alone) is said to drop every result.
+TEST(Millwatchd, AFileUrlSaysWhatIsWrongWithTheLog) {
+  const fs::path dir = test::fresh_temp_dir();
+  std::ofstream(dir / "d.json") << nlohmann::json{
+      {"monitor",
+       {{"sample_rate_hz", 50000.0}}}}.dump();
+  const auto missing =
+      test::run_command("timeout 20 " + kDaemon + " -c " + (dir / "d.json").string() +
+                        " --lcm-url file://" + (dir / "none.lcmlog").string() + " 2>&1");
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("none.lcmlog (lcm.url): the log is not there or cannot be read"),
+            std::string::npos)
+      << missing.output;
+  EXPECT_EQ(missing.output.find("multicast"), std::string::npos) << missing.output;
+  // A log to read, as input and (unsaid) output: the warning.
+  const auto published = test::run_command(test::millwatch_cli() + " publish " +
+                                           (test::source_dir() / "config" / "demo.json").string() +
+                                           " --duration 0.01 --speed 0 --url 'file://" +
+                                           (dir / "demo.lcmlog").string() + "?mode=w' 2>&1");
+  ASSERT_EQ(published.exit_code, 0) << published.output;
+  const auto read_out =
+      test::run_command("timeout 20 sh -c '" + kDaemon + " -c " + (dir / "d.json").string() +
+                        " --lcm-url \"file://" + (dir / "demo.lcmlog").string() +
+                        "?speed=0\" & pid=$!; sleep 0.5; kill -TERM $pid; wait $pid' 2>&1");
+  EXPECT_NE(read_out.output.find("is a log opened for reading: every result published is dropped"),
+            std::string::npos)
+      << read_out.output;
+}
+
 }  // namespace
 }  // namespace millwatch
