@@ -162,7 +162,8 @@ std::unique_ptr<monitor::Pipeline> MonitorRun::replace_pipeline(
   pipeline_->continue_numbering(carried_.revolutions, old->last_spindle_seq(), carried_utime_us_);
   // A gap across the reload is counted (at the same rate).
   pipeline_->continue_input_after(*old);
-  summary_.reconfigure(pipeline_->config(), carried_.revolutions, carried_utime_us_);
+  summary_.reconfigure(pipeline_->config(), carried_.revolutions, carried_utime_us_,
+                       carried_.input.samples_accepted);
   old->attach_identifier(nullptr);
   std::string off = identification_off(options_.identify, pipeline_->config());
   if (off.empty()) {

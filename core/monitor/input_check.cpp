@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <span>
 
@@ -187,7 +188,15 @@ CheckedBlock InputCheck::check_time(const SampleBlock& block) {
   // Written so that a NaN rate fails too.
   if (!(std::fabs(block.sample_rate_hz - config_.sample_rate_hz) <=
         1e-6 * config_.sample_rate_hz)) {
-    return reject(block, "sample rate differs from the configured one");
+    // Both rates said: after a reload that changed the configured one, every block of the
+    // stream is refused for it, and which of the two is wrong is the user's to see.
+    char text[128];
+    std::snprintf(text, sizeof text,
+                  "sample rate differs from the configured one (the block's %.7g Hz, "
+                  "monitor.sample_rate_hz %.7g Hz)",
+                  block.sample_rate_hz, config_.sample_rate_hz);
+    rate_problem_ = text;
+    return reject(block, rate_problem_);
   }
 
   CheckedBlock out;

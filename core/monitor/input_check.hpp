@@ -79,7 +79,9 @@ struct CheckedBlock {
   std::span<const std::uint8_t> flags;
   std::int64_t nonfinite_samples = 0;  ///< samples flagged kFlagNonFinite in this block
   std::int64_t saturated_samples = 0;  ///< samples flagged kFlagSaturated in this block
-  std::string_view problem;            ///< why a block was rejected or what was wrong (static text)
+  /// Why a block was rejected or what was wrong: static text, or the check's own (valid until
+  /// it takes its next block).
+  std::string_view problem;
 };
 
 class InputCheck {
@@ -145,7 +147,8 @@ class InputCheck {
   std::int64_t start_utime_us_ = 0;  // utime of sample start_sample_
   std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
-  std::int64_t hole_samples_ = 0;         // slot of a block rejected at its expected time
+  std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
+  std::string rate_problem_;  // a block's rate refused, with both rates (CheckedBlock::problem)
   std::int64_t hole_start_utime_us_ = 0;  // where that slot (or a run of them) began
   RejectedSpans rejected_ahead_;          // blocks rejected at or after the time expected
   std::optional<std::int64_t> continued_from_utime_us_;  // continue_after(), until the first block

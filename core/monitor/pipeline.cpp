@@ -256,11 +256,17 @@ Pipeline::Pipeline(const MonitorConfig& config, PipelineSink& sink)
 }
 
 void Pipeline::event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
-                     std::string_view detail, std::int64_t block_seq) {
+                     std::string_view detail, std::int64_t block_seq,
+                     std::optional<std::int64_t> block_utime_us) {
   PipelineEvent e;
   e.kind = kind;
   e.sample = sample;
-  e.utime_us = input_.utime_of(sample);
+  // A rejected block at the time it states, where plausible: the stream's clock has no time for
+  // it before a first block is taken (a reload's pipeline refusing the stream's rate had said
+  // t = 0 for every block), and an out-of-order block's own time is the one to look up.
+  e.utime_us = block_utime_us && std::llabs(*block_utime_us) < (1LL << 53)
+                   ? *block_utime_us
+                   : input_.utime_of(sample);
   e.count = count;
   e.value = value;
   e.detail = detail;
@@ -321,7 +327,8 @@ bool Pipeline::process(const SampleBlock& block) {
   const CheckedBlock timed = input_.check_time(block);
   if (timed.verdict == BlockVerdict::kRejected) {
     event(PipelineEventKind::kBlockRejected, expected_sample,
-          static_cast<std::int64_t>(block.fx_N.size()), 0.0, timed.problem, block.seq);
+          static_cast<std::int64_t>(block.fx_N.size()), 0.0, timed.problem, block.seq,
+          block.utime_us);
     return false;
   }
   // The stream's first block (or the first since a restart) starts it anew.

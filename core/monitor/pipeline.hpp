@@ -343,8 +343,10 @@ class Pipeline {
   bool check_labelling(const RevolutionRecord& r, std::int64_t sample);
   /// Tells the alert engine's flute-force state changes (kAlertsHeld, kAlertsArmed).
   void tell_alert_state(std::int64_t sample, double rpm);
+  /// `block_utime_us`: a rejected block's own time, which the event takes where plausible.
   void event(PipelineEventKind kind, std::int64_t sample, std::int64_t count, double value,
-             std::string_view detail, std::int64_t block_seq = 0);
+             std::string_view detail, std::int64_t block_seq = 0,
+             std::optional<std::int64_t> block_utime_us = std::nullopt);
 
   MonitorConfig config_;
   PipelineSink& sink_;

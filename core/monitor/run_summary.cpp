@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/config/json_reader.hpp"
 #include "core/model/steady_state.hpp"
 
 namespace millwatch::monitor {
@@ -198,7 +199,19 @@ void RunSummary::finish(const PipelineStatus& status) {
 }
 
 void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolution,
-                             std::int64_t utime_us) {
+                             std::int64_t utime_us, std::int64_t samples_before) {
+  if (config.sample_rate_hz != config_.sample_rate_hz) {
+    duration_before_s_ +=
+        static_cast<double>(samples_before - samples_at_rate_change_) / config_.sample_rate_hz;
+    samples_at_rate_change_ = samples_before;
+    notes_.push_back(
+        {"rate changed", 1, 0, utime_us,
+         "monitor.sample_rate_hz " + config::format_number(config_.sample_rate_hz) + " → " +
+             config::format_number(config.sample_rate_hz) + " Hz on a reload at revolution " +
+             std::to_string(revolution) +
+             ": the duration sums each rate's samples at their own rate; a stream still at the "
+             "old rate is refused (blocks rejected)"});
+  }
   const int flutes = config.model.tool.flutes;
   if (flutes != flutes_) {
     kept_ = {};  // one tool's flutes are not another's
@@ -448,54 +461,56 @@ nlohmann::json RunSummary::to_json() const {
   const json alpha = {{"mean", two_edges ? number_or_null(f.alpha.mean()) : json(nullptr)},
                       {"std", two_edges ? number_or_null(f.alpha.stddev()) : json(nullptr)},
                       {"revolutions", f.alpha.n}};
-  json out{{"samples", samples},
-           {"duration_s", static_cast<double>(samples) / config_.sample_rate_hz},
-           {"sample_rate_hz", config_.sample_rate_hz},
-           {"revolutions", valid_},
-           {"revolutions_measured", revolutions_},
-           {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
-           {"spindle_rpm", number_or_null(rpm)},
-           {"spindle_rpm_std", number_or_null(rpm_.stddev())},
-           {"spindle_rpm_source", rpm_source},
-           {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
-           {"tooth_event", std::string(status_.event_kind)},
-           {"flute_labelling",
-            "flute 0 = CE1, the flute whose period holds the largest force (no "
-            "once-per-revolution reference)"},
-           {"alpha_deg", alpha},
-           {"tooth_period_s", periods},
-           {"tooth_period_s_std", periods_std},
-           {"peak_force_N", peak},
-           {"peak_force_N_std", peak_std},
-           {"delta_fy_N", two_edges ? number_or_null(f.delta_fy.mean()) : json(nullptr)},
-           {"delta_fy_N_std", two_edges ? number_or_null(f.delta_fy.stddev()) : json(nullptr)},
-           {"residual_rms_N", residual},
-           {"model",
-            {{"alpha_deg", two_edges ? number_or_null(f.model_alpha.mean()) : json(nullptr)},
-             {"delta_fy_N", two_edges ? number_or_null(f.model_delta_fy.mean()) : json(nullptr)},
-             {"lockstep", config_.lockstep},
-             {"builds", status_.model_builds},
-             {"steady_state", model_steady_state(status_)},
-             // Identified parameters the model in lockstep took, fits it did not take, and
-             // fits accepted that a newer one (or the run's end) overtook before it could.
-             {"identified_parameters_taken", status_.identifications_taken},
-             {"identified_parameters_rejected", status_.identifications_rejected},
-             {"identified_parameters_superseded", status_.identifications_superseded},
-             {"material", config_.model.material.name}}},
-           {"alerts", alerts_},
-           {"dropped_samples", in.samples_dropped},
-           {"warnings", warnings},
-           {"counters",
-            {{"samples_in", in.samples_in},
-             {"samples_flagged", in.samples_flagged},
-             {"nonfinite_samples", in.nonfinite_samples},
-             {"saturated_samples", in.saturated_samples},
-             {"gaps", in.gaps},
-             {"out_of_order_blocks", in.out_of_order_blocks},
-             {"blocks_rejected", in.blocks_rejected},
-             {"idle_revolutions", status_.idle_revolutions},
-             {"alert_held_revolutions", status_.alert_held_revolutions}}},
-           {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
+  json out{
+      {"samples", samples},
+      {"duration_s", duration_before_s_ + static_cast<double>(samples - samples_at_rate_change_) /
+                                              config_.sample_rate_hz},
+      {"sample_rate_hz", config_.sample_rate_hz},
+      {"revolutions", valid_},
+      {"revolutions_measured", revolutions_},
+      {"revolutions_cutting", std::llround(status_.cutting_revolutions)},
+      {"spindle_rpm", number_or_null(rpm)},
+      {"spindle_rpm_std", number_or_null(rpm_.stddev())},
+      {"spindle_rpm_source", rpm_source},
+      {"spindle_rpm_commanded", config_.model.process.spindle_rpm},
+      {"tooth_event", std::string(status_.event_kind)},
+      {"flute_labelling",
+       "flute 0 = CE1, the flute whose period holds the largest force (no "
+       "once-per-revolution reference)"},
+      {"alpha_deg", alpha},
+      {"tooth_period_s", periods},
+      {"tooth_period_s_std", periods_std},
+      {"peak_force_N", peak},
+      {"peak_force_N_std", peak_std},
+      {"delta_fy_N", two_edges ? number_or_null(f.delta_fy.mean()) : json(nullptr)},
+      {"delta_fy_N_std", two_edges ? number_or_null(f.delta_fy.stddev()) : json(nullptr)},
+      {"residual_rms_N", residual},
+      {"model",
+       {{"alpha_deg", two_edges ? number_or_null(f.model_alpha.mean()) : json(nullptr)},
+        {"delta_fy_N", two_edges ? number_or_null(f.model_delta_fy.mean()) : json(nullptr)},
+        {"lockstep", config_.lockstep},
+        {"builds", status_.model_builds},
+        {"steady_state", model_steady_state(status_)},
+        // Identified parameters the model in lockstep took, fits it did not take, and
+        // fits accepted that a newer one (or the run's end) overtook before it could.
+        {"identified_parameters_taken", status_.identifications_taken},
+        {"identified_parameters_rejected", status_.identifications_rejected},
+        {"identified_parameters_superseded", status_.identifications_superseded},
+        {"material", config_.model.material.name}}},
+      {"alerts", alerts_},
+      {"dropped_samples", in.samples_dropped},
+      {"warnings", warnings},
+      {"counters",
+       {{"samples_in", in.samples_in},
+        {"samples_flagged", in.samples_flagged},
+        {"nonfinite_samples", in.nonfinite_samples},
+        {"saturated_samples", in.saturated_samples},
+        {"gaps", in.gaps},
+        {"out_of_order_blocks", in.out_of_order_blocks},
+        {"blocks_rejected", in.blocks_rejected},
+        {"idle_revolutions", status_.idle_revolutions},
+        {"alert_held_revolutions", status_.alert_held_revolutions}}},
+      {"force_frame", "force on the tool; x feed, y cross-feed, z towards the spindle"}};
   for (const char* key : {"runout", "coefficients", "fit"}) {
     out[key] = identification_.is_object() && identification_.contains(key) ? identification_[key]
                                                                             : json(nullptr);

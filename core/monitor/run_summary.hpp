@@ -36,7 +36,10 @@ class RunSummary {
   /// summary states the new cut as commanded; a tool with another number of flutes starts α,
   /// the periods, peaks, ΔFy and residuals afresh (one tool's flutes are not another's), with a
   /// warning saying so.
-  void reconfigure(const MonitorConfig& config, std::int64_t revolution, std::int64_t utime_us);
+  /// `samples_before`: the samples taken before it (the pipelines' replaced), at the old rate —
+  /// the summary's duration sums each rate's samples at their own rate.
+  void reconfigure(const MonitorConfig& config, std::int64_t revolution, std::int64_t utime_us,
+                   std::int64_t samples_before = 0);
   /// The last identified window: {"runout", "coefficients", "fit"} (identify::to_json).
   void set_identification(nlohmann::json identification) {
     identification_ = std::move(identification);
@@ -114,7 +117,10 @@ class RunSummary {
   /// Warns when another flute than CE1 holds the larger force over the record.
   void warn_flute_labelling(const FluteStatistics& f) const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
-  std::vector<Warning> notes_;            // note()'s
+  std::vector<Warning> notes_;
+  // Before the last reload that changed the rate: the samples and their duration at theirs.
+  std::int64_t samples_at_rate_change_ = 0;
+  double duration_before_s_ = 0.0;  // note()'s
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted
   std::string identification_off_;

@@ -196,6 +196,19 @@ TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
   EXPECT_EQ(c.samples_dropped, 6 * 1000);
   EXPECT_EQ(c.samples_accepted, 15 * 1000);
   EXPECT_EQ(c.blocks_rejected, 6);
+  // The summary's duration: 10,000 samples at 50 kHz and 5,000 at 25 kHz, 0.4 s (the total at
+  // the new rate alone had read 0.6 s), and the change said.
+  run.finish();
+  const nlohmann::json j = run.summary();
+  EXPECT_DOUBLE_EQ(j["duration_s"].get<double>(), 0.4) << j["duration_s"];
+  EXPECT_EQ(j["sample_rate_hz"], 25000.0);
+  bool said = false;
+  for (const auto& w : j["warnings"]) {
+    said = said || (w["kind"] == "rate changed" &&
+                    w["detail"].get<std::string>().rfind(
+                        "monitor.sample_rate_hz 50000 → 25000 Hz on a reload", 0) == 0);
+  }
+  EXPECT_TRUE(said) << j["warnings"];
 }
 
 // A reload mid-cut: the run's counts go on from where the replaced pipeline left them — the
