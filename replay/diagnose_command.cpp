@@ -247,6 +247,10 @@ int run_diagnose(const DiagnoseCliOptions& o) {
         "--feeds-um gives {} feed(s) for {} cut(s): one per cut, in the order of the cuts",
         o.feeds_um.size(), o.inputs.size()));
   }
+  if (o.to_s > 0.0 && o.to_s <= o.from_s) {  // an empty stretch, whatever the record
+    throw std::runtime_error(
+        fmt::format("--to-s {:g} is not after --from-s {:g}", o.to_s, o.from_s));
+  }
   // The report is written last: a path that cannot take it must not cost the whole diagnosis.
   std::error_code report_ec;
   fs::create_directories(o.report, report_ec);

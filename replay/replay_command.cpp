@@ -185,6 +185,11 @@ int replay_one(const ReplayOptions& o) {
     spdlog::warn("interrupted: the summary covers the samples replayed so far");
   }
   run.drain();
+  if (const messaging::LcmOutput* out = run.output(); out != nullptr) {
+    spdlog::log(out->dropped() > 0 ? spdlog::level::warn : spdlog::level::info,
+                "--publish {}: {} messages published, {} dropped", o.publish_url, out->published(),
+                out->dropped());
+  }
   if (stop_requested()) {  // the summary says so too: a reader of it alone could not tell
     run.note("interrupted",
              fmt::format("the replay was stopped by {} after {:.3f} s of the record ({} samples "

@@ -33,6 +33,7 @@ TEST(CommandLine, NumbersOutsideWhatTheyMeanAreRefusedBeforeAnythingRuns) {
       {diagnose + "--band -5", "--band: -5 is not a positive number"},
       {diagnose + "--band nan", "--band: \"nan\" is not a number"},
       {diagnose + "--from-s -1", "--from-s: -1 is not a non-negative number"},
+      {diagnose + "--from-s 0.07 --to-s 0.02", "--to-s 0.02 is not after --from-s 0.07"},
       // Whole numbers: CLI11's range check had called "abc" and 2.5 "not in range 0 to 256".
       {diagnose + "-j abc", "--jobs: \"abc\" is not a whole number"},
       {diagnose + "-j 2.5", "--jobs: \"2.5\" is not a whole number"},

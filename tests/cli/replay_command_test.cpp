@@ -596,6 +596,24 @@ TEST(ReplayCommand, ACutNothingDescribesSaysTheModelAssumed) {
   }
 }
 
+// --publish says what it published and dropped (the daemon's log does; the replay had said
+// nothing, a full-speed replay's publisher dropping some unsaid).
+TEST(ReplayCommand, PublishingSaysHowManyMessagesWentOut) {
+  const fs::path dir = test::fresh_temp_dir();
+  nlohmann::json s = base_scenario();
+  s["recording"]["duration_s"] = 0.3;
+  const fs::path csv = simulate(dir, "published", s);
+  const ReplayRun r = replay(csv.string() + " --no-identify --publish 'file://" +
+                                 (dir / "out.lcmlog").string() + "?mode=w'",
+                             dir / "s.json");
+  ASSERT_EQ(r.exit_code, 0) << r.log;
+  const std::size_t at = r.log.find(" messages published, ");
+  ASSERT_NE(at, std::string::npos) << r.log;
+  const std::size_t from = r.log.rfind(' ', at - 1) + 1;
+  EXPECT_GT(std::stol(r.log.substr(from, at - from)), r.summary["revolutions"].get<long>());
+  EXPECT_GT(fs::file_size(dir / "out.lcmlog"), 1000u);
+}
+
 TEST(ReplayCommand, PacesAtRealTimeWhenAsked) {
   const fs::path dir = test::fresh_temp_dir();
   nlohmann::json s = base_scenario();
