@@ -120,7 +120,7 @@ struct TestHooks {
 /// Why LCM may have refused a URL, by its provider.
 std::string lcm_open_hint(const std::string& url) {
   if (url.rfind("file://", 0) == 0) {
-    return url.find("mode=w") == std::string::npos
+    return url.find("mode=w") == std::string::npos && url.find("mode=a") == std::string::npos
                ? "the log is not there or cannot be read (a log to write: ?mode=w)"
                : "the log cannot be written there";
   }
@@ -150,12 +150,12 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   // Two instances: the output one never subscribes, so LCM gives it no receive socket or thread.
   lcm::LCM lcm_out(config.lcm_output_url);
   lcm::LCM lcm_in(config.lcm_url);
-  for (const auto& [lcm, url, key] :
-       {std::tuple{&lcm_in, &config.lcm_url, "lcm.url"},
-        std::tuple{&lcm_out, &config.lcm_output_url, "lcm.output_url"}}) {
+  for (const auto& [lcm, url, key, option] :
+       {std::tuple{&lcm_in, &config.lcm_url, "lcm.url", "--lcm-url"},
+        std::tuple{&lcm_out, &config.lcm_output_url, "lcm.output_url", "--lcm-output-url"}}) {
     if (!lcm->good()) {
-      throw std::runtime_error("cannot open LCM at " + *url + " (" + key +
-                               "): " + lcm_open_hint(*url));
+      throw std::runtime_error("cannot open LCM at " + *url + " (" + key + ", or its option " +
+                               option + "): " + lcm_open_hint(*url));
     }
   }
   // A log read (file:// without mode=w) takes no messages: results published there are lost.

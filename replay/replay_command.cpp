@@ -84,6 +84,9 @@ int replay_one(const ReplayOptions& o) {
   // The configuration: the sidecar's cut under --config's overrides.
   LoadedMonitorConfig loaded =
       load_monitor_config({input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
+  if (!loaded.model_note.empty()) {
+    spdlog::warn("{}: {}", input.string(), loaded.model_note);
+  }
   const double config_rate_hz = configured_rate_hz(loaded);
 
   BadRecordLog bad(input.string(), format);
@@ -134,6 +137,8 @@ int replay_one(const ReplayOptions& o) {
   // The record's in-plane force, in the model's frame and before any filter.
   monitor::InPlaneForce in_plane;
   std::int64_t samples_read = 0;
+  std::int64_t raw_published = 0;  // --publish-raw's blocks, LCM's answer to each
+  std::int64_t raw_failed = 0;
   while (!stop_requested()) {
     const std::optional<monitor::SampleBlock> next = source->next(block_samples);
     if (!next) {
@@ -155,7 +160,7 @@ int replay_one(const ReplayOptions& o) {
     }
     if (o.publish_raw && lcm) {
       const force_block_t raw = messaging::to_message(block);
-      lcm->publish(o.raw_channel, &raw);
+      (lcm->publish(o.raw_channel, &raw) == 0 ? raw_published : raw_failed) += 1;
     }
     if (recorder) {
       recorder->add_samples(block);
@@ -186,9 +191,12 @@ int replay_one(const ReplayOptions& o) {
   }
   run.drain();
   if (const messaging::LcmOutput* out = run.output(); out != nullptr) {
-    spdlog::log(out->dropped() > 0 ? spdlog::level::warn : spdlog::level::info,
-                "--publish {}: {} messages published, {} dropped", o.publish_url, out->published(),
-                out->dropped());
+    spdlog::log(out->dropped() + raw_failed > 0 ? spdlog::level::warn : spdlog::level::info,
+                "--publish {}: {} messages published, {} dropped{}", o.publish_url,
+                out->published(), out->dropped(),
+                o.publish_raw ? fmt::format("; raw blocks on {}: {} published, {} failed",
+                                            o.raw_channel, raw_published, raw_failed)
+                              : std::string());
   }
   if (stop_requested()) {  // the summary says so too: a reader of it alone could not tell
     run.note("interrupted",
@@ -201,7 +209,7 @@ int replay_one(const ReplayOptions& o) {
   if (!loaded.rate_note.empty()) {  // the summary alone says so too
     run.note("rate overridden", loaded.rate_note, first_utime);
   }
-  if (!loaded.model_note.empty()) {
+  if (!loaded.model_note.empty()) {  // said in the log at the start
     run.note("cut not described", loaded.model_note, first_utime);
   }
   nlohmann::json j = run.summary();
@@ -275,6 +283,9 @@ int replay_many(const ReplayOptions& o) {
   const int jobs =
       o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::vector<std::string> stems = shell::unique_stems(o.inputs);
+  if (!o.table.empty()) {  // written last: a path that cannot take it must not cost the campaign
+    check_output_file("--table", o.table);
+  }
   for (const auto& [option, dir] :
        {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions},
         std::pair{"--plot", &o.plot}}) {
@@ -295,6 +306,7 @@ int replay_many(const ReplayOptions& o) {
   std::vector<fs::path> summaries(n);
   std::vector<fs::path> errors(n);  // why a cut's replay failed, in its own words
   std::vector<int> exit_codes(n, -1);
+  std::vector<bool> interrupted(n, false);
   std::map<pid_t, std::size_t> running;
   std::size_t next = 0;
   std::size_t done = 0;
@@ -305,6 +317,10 @@ int replay_many(const ReplayOptions& o) {
       summaries[k] = o.summary.empty() ? scratch / fmt::format("{}.json", k)
                                        : fs::path(o.summary) / (stems[k] + ".json");
       errors[k] = scratch / fmt::format("{}.error", k);
+      // An earlier run's summary there must not pass for this one's (a cut killed before it
+      // writes one).
+      std::error_code stale;
+      fs::remove(summaries[k], stale);
       std::vector<std::string> args = {
           self,           "replay",           o.inputs[k],    "--summary", summaries[k].string(),
           "--error-file", errors[k].string(), "--no-progress"};
@@ -351,9 +367,14 @@ int replay_many(const ReplayOptions& o) {
     const std::size_t k = it->second;
     running.erase(it);
     exit_codes[k] = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    // Stopped with the campaign and exited on its own: its summary covers what it replayed (a
+    // cut the signal killed wrote none).
+    interrupted[k] = WIFEXITED(status) && is_interrupted_exit_status(exit_codes[k]);
     ++done;
     spdlog::info("[{}/{}] {}: {}", done, n, o.inputs[k],
-                 exit_codes[k] == 0 ? "done" : fmt::format("failed (exit {})", exit_codes[k]));
+                 exit_codes[k] == 0 ? "done"
+                 : interrupted[k]   ? fmt::format("interrupted (exit {}): partial", exit_codes[k])
+                                    : fmt::format("failed (exit {})", exit_codes[k]));
   }
   std::vector<CutResult> results;
   for (std::size_t k = 0; k < n; ++k) {
@@ -361,8 +382,7 @@ int replay_many(const ReplayOptions& o) {
     r.file = o.inputs[k];
     r.exit_code = exit_codes[k];
     // A cut stopped with the campaign wrote a summary of what it replayed (it says so).
-    if ((exit_codes[k] == 0 || is_interrupted_exit_status(exit_codes[k])) &&
-        fs::exists(summaries[k])) {
+    if ((exit_codes[k] == 0 || interrupted[k]) && fs::exists(summaries[k])) {
       r.summary = read_json_file(summaries[k]);
     }
     if (std::ifstream why(errors[k]); exit_codes[k] != 0 && why) {

@@ -17,16 +17,21 @@ jobs=$(nproc)
 
 echo "== clang-format (.clang-format) on every C++ source"
 # The style is checked, not fixed: a file that would change fails the run, naming the line.
-# The files git tracks (outside a clone: every source under the folders that hold them).
+# The files git tracks; outside a clone (or untracked in another repository), every source
+# under the folders that hold them.
 mkdir -p build
-if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
-  git ls-files -z -- '*.cpp' '*.hpp' '*.h' >build/format_files
-else
+git ls-files -z -- '*.cpp' '*.hpp' '*.h' >build/format_files 2>/dev/null || true
+if [[ ! -s build/format_files ]]; then
   find bench core daemon msgs replay shell tests \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' \) \
     -print0 >build/format_files
 fi
-xargs -0 clang-format --dry-run -Werror <build/format_files
-echo "clang-format: $(tr -cd '\0' <build/format_files | wc -c) files clean"
+format_count=$(tr -cd '\0' <build/format_files | wc -c)
+if ((format_count == 0)); then
+  echo "clang-format: no C++ sources found to check" >&2
+  exit 1
+fi
+xargs -0 -r clang-format --dry-run -Werror <build/format_files
+echo "clang-format: $format_count files clean"
 
 echo "== Release build of what ships, its install and Debian package"
 # A build folder of its own (no tests), so that build/release keeps its tests for bench.sh,

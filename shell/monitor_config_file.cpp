@@ -93,20 +93,19 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
   }
   out.json = file.monitor;
   if (sidecar.empty()) {
-    // Nothing describes the cut: the built-in model stands in for it. Said (in the summary too):
-    // a cut of another tool or speed is then searched for at the built-in speed and missed.
+    // Nothing describes the cut: the built-in model stands in for it, which the commands that
+    // measure say (model_note): a cut of another tool or speed is then searched for at the
+    // built-in speed and missed. (publish hands the samples on and needs no model.)
     if (!out.json.is_object() || !out.json.contains("model")) {
       const model::ModelConfig assumed;
       const bool log = detect_recording_format(sources.input) == RecordingFormat::kLcmLog;
       out.model_note = fmt::format(
           "nothing describes the cut ({}; {}): the built-in model is assumed, a {:g} mm "
-          "{}-flute tool at {:g} rpm and {:g} um per tooth; give the cut's \"model\" (tool, "
-          "process) in --config (config/*.json) or its sidecar with --sidecar",
+          "{}-flute tool at {:g} rpm; give the cut's \"model\" (tool, process) in --config "
+          "(config/*.json) or its sidecar with --sidecar",
           log ? "an LCM log holds the samples alone" : "no sidecar beside the recording",
           sources.config.empty() ? "no --config" : sources.config + " has no \"model\"",
-          assumed.tool.diameter_mm, assumed.tool.flutes, assumed.process.spindle_rpm,
-          assumed.process.feed_per_tooth_um);
-      spdlog::warn("{}: {}", sources.input.string(), out.model_note);
+          assumed.tool.diameter_mm, assumed.tool.flutes, assumed.process.spindle_rpm);
     }
     return out;
   }

@@ -49,7 +49,8 @@ struct LoadedMonitorConfig {
   /// none), for the summary as well as the log.
   std::string rate_note;
   /// Where neither a sidecar nor the configuration describes the cut (no "model"): that the
-  /// built-in model is assumed, and which ("": the cut is described), for the summary too.
+  /// built-in model is assumed, and which ("": the cut is described), for the commands that
+  /// measure to say (replay: the log and the summary).
   std::string model_note;
   /// sample_rate_hz in json (0: none).
   [[nodiscard]] double config_rate_hz() const;

@@ -76,9 +76,6 @@ void check_output_file(const std::string& option, const std::filesystem::path& p
   if (::access(folder.c_str(), W_OK | X_OK) != 0) {
     refuse(option, path, "cannot write in " + folder.string() + " (" + std::strerror(errno) + ")");
   }
-  if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0) {
-    refuse(option, path, std::string("cannot be replaced (") + std::strerror(errno) + ")");
-  }
 }
 
 void check_output_folder(const std::string& option, const std::filesystem::path& path) {

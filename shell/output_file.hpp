@@ -33,8 +33,9 @@ class OutputFile {
 };
 
 /// Checks, before any work, that an output file can be written at `path` (given with `option`,
-/// e.g. "--summary"): not a folder, its folder there and writable, the file itself writable if
-/// it exists. @throws std::runtime_error naming the option, the path and why.
+/// e.g. "--summary"): not a folder, its folder there and writable (an existing file is
+/// replaced by a rename: it need not be writable itself). @throws std::runtime_error naming the
+/// option, the path and why.
 void check_output_file(const std::string& option, const std::filesystem::path& path);
 /// The same for an output folder: made now if missing (with its parents), and writable.
 void check_output_folder(const std::string& option, const std::filesystem::path& path);

@@ -193,7 +193,7 @@ CheckedBlock InputCheck::check_time(const SampleBlock& block) {
     char text[128];
     std::snprintf(text, sizeof text,
                   "sample rate differs from the configured one (the block's %.7g Hz, "
-                  "monitor.sample_rate_hz %.7g Hz)",
+                  "sample_rate_hz %.7g Hz)",
                   block.sample_rate_hz, config_.sample_rate_hz);
     rate_problem_ = text;
     return reject(block, rate_problem_);

@@ -147,10 +147,10 @@ class InputCheck {
   std::int64_t start_utime_us_ = 0;  // utime of sample start_sample_
   std::int64_t start_sample_ = 0;    // first sample of the stream (since the last restart)
   std::int64_t next_sample_ = 0;
-  std::int64_t hole_samples_ = 0;  // slot of a block rejected at its expected time
-  std::string rate_problem_;  // a block's rate refused, with both rates (CheckedBlock::problem)
+  std::int64_t hole_samples_ = 0;         // slot of a block rejected at its expected time
   std::int64_t hole_start_utime_us_ = 0;  // where that slot (or a run of them) began
-  RejectedSpans rejected_ahead_;          // blocks rejected at or after the time expected
+  std::string rate_problem_;      // a block's rate refused, with both rates (CheckedBlock::problem)
+  RejectedSpans rejected_ahead_;  // blocks rejected at or after the time expected
   std::optional<std::int64_t> continued_from_utime_us_;  // continue_after(), until the first block
   std::array<double, 3> last_good_{};
   // max_block_samples each, left uninitialised (not 1.5 MiB zeroed at construction for the

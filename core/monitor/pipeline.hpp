@@ -160,9 +160,9 @@ struct PipelineStatus {
   /// lock: the revolutions before it name their flutes from another CE1 (0: none).
   std::int64_t flutes_relabelled = 0;
   std::int64_t relabelled_from_revolution = 0;
-  /// Revolutions the spindle turned while the tracker heard cutting (an estimate: its windows'
-  /// durations times their speeds, and the samples since its last window at the last speed) —
-  /// what "every revolution" is measured against.
+  /// Revolutions the spindle turned while the tracker heard cutting (an estimate: the time each
+  /// cutting window covers past the last one counted, times its speed, and the samples since its
+  /// last window at the last speed) — what "every revolution" is measured against.
   double cutting_revolutions = 0.0;
   std::int64_t utime_us = 0;  ///< newest sample
   /// While measuring, the last revolution's speed; else the tracker's (0: none).

@@ -206,7 +206,7 @@ void RunSummary::reconfigure(const MonitorConfig& config, std::int64_t revolutio
     samples_at_rate_change_ = samples_before;
     notes_.push_back(
         {"rate changed", 1, 0, utime_us,
-         "monitor.sample_rate_hz " + config::format_number(config_.sample_rate_hz) + " → " +
+         "sample_rate_hz " + config::format_number(config_.sample_rate_hz) + " → " +
              config::format_number(config.sample_rate_hz) + " Hz on a reload at revolution " +
              std::to_string(revolution) +
              ": the duration sums each rate's samples at their own rate; a stream still at the "

@@ -117,10 +117,10 @@ class RunSummary {
   /// Warns when another flute than CE1 holds the larger force over the record.
   void warn_flute_labelling(const FluteStatistics& f) const;
   mutable std::vector<Warning> derived_;  // warnings to_json() adds for absent values
-  std::vector<Warning> notes_;
+  std::vector<Warning> notes_;            // note()'s
   // Before the last reload that changed the rate: the samples and their duration at theirs.
   std::int64_t samples_at_rate_change_ = 0;
-  double duration_before_s_ = 0.0;  // note()'s
+  double duration_before_s_ = 0.0;
   PipelineStatus status_;
   nlohmann::json identification_;  // null until a window is fitted
   std::string identification_off_;

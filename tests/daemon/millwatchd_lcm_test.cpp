@@ -724,8 +724,10 @@ TEST(Millwatchd, AFileUrlSaysWhatIsWrongWithTheLog) {
       test::run_command("timeout 20 " + kDaemon + " -c " + (dir / "d.json").string() +
                         " --lcm-url file://" + (dir / "none.lcmlog").string() + " 2>&1");
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
-  EXPECT_NE(missing.output.find("none.lcmlog (lcm.url): the log is not there or cannot be read"),
-            std::string::npos)
+  EXPECT_NE(
+      missing.output.find(
+          "none.lcmlog (lcm.url, or its option --lcm-url): the log is not there or cannot be read"),
+      std::string::npos)
       << missing.output;
   EXPECT_EQ(missing.output.find("multicast"), std::string::npos) << missing.output;
   // A log to read, as input and (unsaid) output: the warning.

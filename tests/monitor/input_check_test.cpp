@@ -653,7 +653,7 @@ TEST(InputCheck, MalformedBlocksAreRejectedWithAReason) {
   EXPECT_EQ(c.problem, "channels of unequal length");
   EXPECT_EQ(check.check(ramp(10).view(0, 20000.0)).problem,
             "sample rate differs from the configured one (the block's 20000 Hz, "
-            "monitor.sample_rate_hz 50000 Hz)");
+            "sample_rate_hz 50000 Hz)");
   EXPECT_EQ(check.check(Block{}.view(0)).problem, "empty block");
   EXPECT_EQ(check.counters().blocks_rejected, 3);
 }
@@ -715,13 +715,13 @@ TEST(InputCheck, ANanSampleRateIsRejected) {
   EXPECT_EQ(c.verdict, BlockVerdict::kRejected);
   EXPECT_EQ(c.problem,
             "sample rate differs from the configured one (the block's nan Hz, "
-            "monitor.sample_rate_hz 50000 Hz)");
+            "sample_rate_hz 50000 Hz)");
   // Both rates said (after a reload that changed the configured one, which is wrong is the
   // user's to see).
   const auto other = check.check(ramp(10).view(0, 333300.0));
   EXPECT_EQ(other.problem,
             "sample rate differs from the configured one (the block's 333300 Hz, "
-            "monitor.sample_rate_hz 50000 Hz)");
+            "sample_rate_hz 50000 Hz)");
 }
 
 // After restart() the next block starts a new stream at its own time; sample numbers go on.

@@ -206,7 +206,7 @@ TEST(MonitorRun, AReloadToANewRateCountsTheRejectedBlocksOnce) {
   for (const auto& w : j["warnings"]) {
     said = said || (w["kind"] == "rate changed" &&
                     w["detail"].get<std::string>().rfind(
-                        "monitor.sample_rate_hz 50000 → 25000 Hz on a reload", 0) == 0);
+                        "sample_rate_hz 50000 → 25000 Hz on a reload", 0) == 0);
   }
   EXPECT_TRUE(said) << j["warnings"];
 }
