@@ -117,12 +117,18 @@ struct TestHooks {
   double source_ends_after_s = 0.0;
 };
 
+/// Whether `url` is an LCM log (file://) opened for reading: without mode=w (or a), LCM's file
+/// provider reads it, and takes nothing published there.
+bool log_read(const std::string& url) {
+  return url.rfind("file://", 0) == 0 && url.find("mode=w") == std::string::npos &&
+         url.find("mode=a") == std::string::npos;
+}
+
 /// Why LCM may have refused a URL, by its provider.
 std::string lcm_open_hint(const std::string& url) {
   if (url.rfind("file://", 0) == 0) {
-    return url.find("mode=w") == std::string::npos && url.find("mode=a") == std::string::npos
-               ? "the log is not there or cannot be read (a log to write: ?mode=w)"
-               : "the log cannot be written there";
+    return log_read(url) ? "the log is not there or cannot be read (a log to write: ?mode=w)"
+                         : "the log cannot be written there";
   }
   if (url.rfind("udpm://", 0) == 0 || url.empty()) {
     return "udpm:// needs a multicast route, e.g. `ip route add 239.0.0.0/8 dev lo`";
@@ -159,9 +165,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
     }
   }
   // A log read (file:// without mode=w) takes no messages: results published there are lost.
-  if (config.lcm_output_url.rfind("file://", 0) == 0 &&
-      config.lcm_output_url.find("mode=w") == std::string::npos &&
-      config.lcm_output_url.find("mode=a") == std::string::npos) {
+  if (log_read(config.lcm_output_url)) {
     spdlog::warn(
         "lcm.output_url {} is a log opened for reading: every result published is "
         "dropped (give --lcm-output-url, e.g. memq:// or udpm://…, or a log with "

@@ -55,29 +55,14 @@ namespace fs = std::filesystem;
 int replay_one(const ReplayOptions& o) {
   const fs::path input = o.inputs.front();
   // The outputs are written last: a path that cannot take them must not cost the whole replay.
-  if (const fs::path folder = fs::path(o.summary).parent_path();
-      !o.summary.empty() && !folder.empty() && !fs::is_directory(folder)) {
-    throw std::runtime_error("--summary " + o.summary + ": no folder " + folder.string());
-  }
-  for (const auto& [option, path] :
-       {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions}}) {
-    if (!path->empty() && fs::is_directory(*path)) {
-      throw std::runtime_error(
-          fmt::format("{} {}: a folder; one cut writes a file", option, *path));
-    }
-  }
-  if (!o.plot.empty() && fs::exists(o.plot) && !fs::is_directory(o.plot)) {
-    throw std::runtime_error("--plot " + o.plot + ": a file, not a folder for the plots");
-  }
-  // Then whether they can be written there at all (a folder that cannot be made or written in).
   for (const auto& [option, path] :
        {std::pair{"--summary", &o.summary}, std::pair{"--revolutions", &o.revolutions}}) {
     if (!path->empty()) {
-      check_output_file(option, *path);
+      check_output_file(option, *path, "a folder; one cut writes a file");
     }
   }
   if (!o.plot.empty()) {
-    check_output_folder("--plot", o.plot);
+    check_output_folder("--plot", o.plot, "the plots");
   }
   const RecordingFormat format = detect_recording_format(input);
   const bool lcm_log = format == RecordingFormat::kLcmLog;

@@ -62,11 +62,12 @@ namespace {
 
 }  // namespace
 
-void check_output_file(const std::string& option, const std::filesystem::path& path) {
+void check_output_file(const std::string& option, const std::filesystem::path& path,
+                       const std::string& if_folder) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
-    refuse(option, path, "a folder, not a file");
+    refuse(option, path, if_folder);
   }
   const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
   if (!fs::is_directory(folder, ec)) {
@@ -78,15 +79,17 @@ void check_output_file(const std::string& option, const std::filesystem::path& p
   }
 }
 
-void check_output_folder(const std::string& option, const std::filesystem::path& path) {
+void check_output_folder(const std::string& option, const std::filesystem::path& path,
+                         const std::string& purpose) {
   namespace fs = std::filesystem;
+  const std::string folder = purpose.empty() ? "folder" : "folder for " + purpose;
   std::error_code ec;
   if (fs::exists(path, ec) && !fs::is_directory(path, ec)) {
-    refuse(option, path, "a file, not a folder");
+    refuse(option, path, "a file, not a " + folder);
   }
   fs::create_directories(path, ec);
   if (ec) {
-    refuse(option, path, "cannot make the folder (" + ec.message() + ")");
+    refuse(option, path, "cannot make the " + folder + " (" + ec.message() + ")");
   }
   if (::access(path.c_str(), W_OK | X_OK) != 0) {
     refuse(option, path, "cannot write in it (" + std::string(std::strerror(errno)) + ")");

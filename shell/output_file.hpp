@@ -36,9 +36,14 @@ class OutputFile {
 /// e.g. "--summary"): not a folder, its folder there and writable (an existing file is
 /// replaced by a rename: it need not be writable itself). @throws std::runtime_error naming the
 /// option, the path and why.
-void check_output_file(const std::string& option, const std::filesystem::path& path);
+/// `if_folder`: what to say when it is a folder.
+void check_output_file(const std::string& option, const std::filesystem::path& path,
+                       const std::string& if_folder = "a folder, not a file");
 /// The same for an output folder: made now if missing (with its parents), and writable.
-void check_output_folder(const std::string& option, const std::filesystem::path& path);
+/// `purpose`: what it holds, for the messages ("the plots": "a file, not a folder for the
+/// plots"; "" says only "a folder").
+void check_output_folder(const std::string& option, const std::filesystem::path& path,
+                         const std::string& purpose = "");
 
 /// Writes `text` to `path` through an OutputFile. @throws std::runtime_error naming the path.
 void write_text_file(const std::filesystem::path& path, const std::string& text);

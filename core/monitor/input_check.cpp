@@ -56,10 +56,6 @@ bool all_within(const std::array<std::span<const double>, 3>& v, std::size_t n,
   return ok;
 }
 
-bool plausible_utime(std::int64_t utime_us) {
-  return utime_us >= -kMaxAbsUtime_us && utime_us <= kMaxAbsUtime_us;
-}
-
 }  // namespace
 
 std::int64_t InputCheck::utime_of(std::int64_t sample) const {

@@ -39,6 +39,10 @@ inline constexpr double kPlausibleForce_N = 1e6;
 /// Largest |utime| a block may carry, µs: 2⁵³ µs ≈ 285 years either side of the epoch, where a
 /// utime still converts to and from double exactly. Beyond it a time is corrupt.
 inline constexpr std::int64_t kMaxAbsUtime_us = std::int64_t{1} << 53;
+/// Whether a block's time is within ±kMaxAbsUtime_us (not a corrupt one).
+inline bool plausible_utime(std::int64_t utime_us) {
+  return utime_us >= -kMaxAbsUtime_us && utime_us <= kMaxAbsUtime_us;
+}
 
 struct InputCheckConfig {
   double sample_rate_hz = 50000.0;

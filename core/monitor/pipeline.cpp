@@ -264,9 +264,8 @@ void Pipeline::event(PipelineEventKind kind, std::int64_t sample, std::int64_t c
   // A rejected block at the time it states, where plausible: the stream's clock has no time for
   // it before a first block is taken (a reload's pipeline refusing the stream's rate had said
   // t = 0 for every block), and an out-of-order block's own time is the one to look up.
-  e.utime_us = block_utime_us && std::llabs(*block_utime_us) < (1LL << 53)
-                   ? *block_utime_us
-                   : input_.utime_of(sample);
+  e.utime_us = block_utime_us && plausible_utime(*block_utime_us) ? *block_utime_us
+                                                                  : input_.utime_of(sample);
   e.count = count;
   e.value = value;
   e.detail = detail;
