@@ -891,11 +891,25 @@ struct WindowFitter::Impl {
       // one pitch cover every runout. The basin is narrow (about half a micrometre at a few
       // micrometres of feed), hence rings a fifth of the feed apart.
       const double sector = kTwoPi / std::max(1, p.config().tool.flutes);
-      for (int ring = 1; ring <= 5; ++ring) {
-        const double rho = 0.2 * ring * ft;
+      const auto ring_of = [&](int ring, double rho) {
         for (int g = 0; g < 8; ++g) {
           const double gamma = sector * (g + 0.5 * (ring % 2)) / 8.0;
           consider(rho * std::cos(gamma), rho * std::sin(gamma));
+        }
+      };
+      for (int ring = 1; ring <= 5; ++ring) {
+        ring_of(ring, 0.2 * ring * ft);
+      }
+      // Below the minimum chip, material piles up to h_min before a pass removes it ([002] eqs
+      // 17-18, accumulation): a flute inside the one before it by up to about h_min still meets
+      // the piled-up material, and runs idle only beyond. Rings out to the feed alone never
+      // reach a runout past that edge (the copper preset's: f_t 0.125 µm, h_min 0.9 µm, its
+      // radii 1.755 µm apart, had ended at 0.11 µm with a negative edge coefficient standing in).
+      const double h_min = p.config().effects.min_chip.h_min_um;
+      if (p.config().effects.min_chip.enabled && p.config().effects.accumulation.enabled &&
+          h_min > ft) {
+        for (int ring = 1; ring <= 5; ++ring) {
+          ring_of(ring + 5, ft + 0.2 * ring * h_min);
         }
       }
     } else {
