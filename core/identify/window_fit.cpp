@@ -901,10 +901,10 @@ struct WindowFitter::Impl {
         ring_of(ring, 0.2 * ring * ft);
       }
       // Below the minimum chip, material piles up to h_min before a pass removes it ([002] eqs
-      // 17-18, accumulation): a flute inside the one before it by up to about h_min still meets
-      // the piled-up material, and runs idle only beyond. Rings out to the feed alone never
-      // reach a runout past that edge (the copper preset's: f_t 0.125 µm, h_min 0.9 µm, its
-      // radii 1.755 µm apart, had ended at 0.11 µm with a negative edge coefficient standing in).
+      // 17-18, accumulation): a flute lying several feeds inside the one before it still meets
+      // the piled-up material now and then. Rings out to the feed alone never start there (the
+      // copper preset's cut: f_t 0.125 µm, h_min 0.9 µm, its radii 1.755 µm apart, had ended at
+      // 0.11 µm with negative edge coefficients standing in for the runout).
       const double h_min = p.config().effects.min_chip.h_min_um;
       if (p.config().effects.min_chip.enabled && p.config().effects.accumulation.enabled &&
           h_min > ft) {
