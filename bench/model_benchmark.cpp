@@ -35,6 +35,34 @@ ModelConfig full_model() {
   return c;
 }
 
+/// [001]'s ploughed-area law on the full model: the AlSi10Mg preset's cut (config/presets:
+/// 0.8 mm, 2 flutes, f_t 3 µm, a_p 0.25 mm, h_min 1.5 µm, deflection, 10 discs). The areas are
+/// walked over every pass of the cycle, and with deflection solved again until they settle.
+ModelConfig area_law_model() {
+  ModelConfig c = full_model();
+  c.effects.flank_wear.enabled = false;
+  c.tool.diameter_mm = 0.8;
+  c.process.spindle_rpm = 31831.0;
+  c.process.feed_per_tooth_um = 3.0;
+  c.process.axial_depth_mm = 0.25;
+  c.process.radial_depth_mm = 0.789;
+  c.effects.runout.offset_um = 1.0;
+  c.effects.runout.angle_rad = -1.2;
+  c.effects.min_chip.h_min_um = 1.5;
+  c.effects.deflection.stiffness_N_per_um = 2.0;
+  c.material.law = millwatch::model::ForceLawKind::kLinearEdge;
+  auto& m = c.material.linear_edge;
+  m.k_tc_N_per_mm2 = 1000.0;
+  m.k_nc_N_per_mm2 = 420.0;
+  m.k_ac_N_per_mm2 = 60.0;
+  m.k_te_N_per_mm = m.k_ne_N_per_mm = m.k_ae_N_per_mm = 0.0;
+  m.ploughing_area = true;
+  m.k_tp_N_per_mm3 = 4000.0;
+  m.k_np_N_per_mm3 = 6000.0;
+  m.k_ap_N_per_mm3 = 500.0;
+  return c;
+}
+
 /// The plain model: circular path, one regime, rigid, sharp; helix lag on with 5 discs.
 ModelConfig plain_model() {
   ModelConfig c = millwatch::model::without_effects(ModelConfig{});
@@ -82,6 +110,11 @@ void BM_SteadyStateFull(benchmark::State& state) {
   steady_state(state, full_model());
 }
 BENCHMARK(BM_SteadyStateFull)->Unit(benchmark::kMicrosecond);
+
+void BM_SteadyStateAreaLaw(benchmark::State& state) {
+  steady_state(state, area_law_model());
+}
+BENCHMARK(BM_SteadyStateAreaLaw)->Unit(benchmark::kMicrosecond);
 
 /// The same with the accumulation cycle materialised (what the simulator asks for).
 void BM_SteadyStateFullWithCycle(benchmark::State& state) {

@@ -39,6 +39,9 @@ constexpr unsigned kPloughing = 1u << 8;
 constexpr unsigned kInJump = 1u << 9;
 constexpr unsigned kPushedBack = 1u << 10;
 
+/// Slots gathered together by compute_areas(): a cache line of doubles.
+constexpr std::size_t kAreaTile = 8;
+
 int positive_mod(int a, int m) {
   const int r = a % m;
   return r < 0 ? r + m : r;
@@ -236,7 +239,7 @@ struct SteadyStateWorkspace::Impl {
   std::vector<PassRecord> nt_records;  // the passes of Newton's last run
 
   // ---- ploughed area ([001] eqs 14-17), per (disc, slot, flute, revolution of area_cycle)
-  std::vector<double> area, walk_h;
+  std::vector<double> area, walk_h, walk_area;    // walk_*: one flute's passes in time order
   std::vector<double> area_mean, area_mean_prev;  // per (disc, slot, flute): mean over the cycle
   int area_cycle = 1;
   bool area_coupled = false;  // area used inside the slot solve (with deflection)
@@ -513,6 +516,7 @@ void SteadyStateWorkspace::Impl::size_storage() {
     area_mean.resize(d * s * n);
     area_mean_prev.resize(d * s * n);
     walk_h.reserve(s * cycle_cap);
+    walk_area.reserve(s * cycle_cap);
   }
   for (int a = 0; a < 3; ++a) {
     flute_mean[static_cast<std::size_t>(a)].resize(n * s);
@@ -1084,26 +1088,50 @@ void SteadyStateWorkspace::Impl::compute_areas() {
   const int cyc = result.cycle_revolutions;
   const auto n = static_cast<std::size_t>(flutes);
   const auto ucyc = static_cast<std::size_t>(cyc);
+  const auto usteps = static_cast<std::size_t>(steps);
   area_cycle = cyc;
   area.resize(static_cast<std::size_t>(discs * steps) * n * ucyc);
   const int total = cyc * steps;
   walk_h.resize(static_cast<std::size_t>(total));
+  walk_area.resize(static_cast<std::size_t>(total));
   for (int i = 0; i < discs; ++i) {
     for (int j = 0; j < flutes; ++j) {
       const auto uj = static_cast<std::size_t>(j);
+      // Flute j's passes in time order over the cycle: pass q = m·steps + k is slot
+      // (start_slot + k) mod steps in revolution m, and its record (m − phase) mod period of
+      // that slot's. Gathered (and scattered back below) a tile of slots at a time, revolution by
+      // revolution, each slot's record advancing by one a revolution: no division per pass, and
+      // a cache line of passes per revolution (pass by pass, the divisions were three quarters of
+      // a deflected model's evaluation; slot by slot, a stride of a whole revolution).
       const int start_slot = positive_mod(-land_steps[uj], steps);
-      // Flute j's passes in time order over the cycle: q → (slot, revolution).
-      auto slot_of = [&](int q) { return (start_slot + q % steps) % steps; };
-      auto rev_of = [&](int q) { return q / steps; };
-      for (int q = 0; q < total; ++q) {
-        const int b = slot_of(q);
-        const auto us = static_cast<std::size_t>(i * steps + b);
-        const int p = period[us];
-        const int c = positive_mod(rev_of(q) - phase[us], p);
-        const PassRecord& rec = records[static_cast<std::size_t>(record_offset[us]) +
-                                        static_cast<std::size_t>(c) * n + uj];
-        walk_h[static_cast<std::size_t>(q)] = rec.contact != 0 ? rec.h_rigid_um : 0.0;
-      }
+      const auto tiles = [&](auto&& visit) {
+        std::array<std::size_t, kAreaTile> us{};
+        for (std::size_t k0 = 0; k0 < usteps; k0 += kAreaTile) {
+          const std::size_t width = std::min(kAreaTile, usteps - k0);
+          for (std::size_t kk = 0; kk < width; ++kk) {
+            const auto b = static_cast<std::size_t>(start_slot) + k0 + kk;  // < 2·steps
+            us[kk] = static_cast<std::size_t>(i) * usteps + (b < usteps ? b : b - usteps);
+          }
+          visit(k0, width, us);
+        }
+      };
+      tiles([&](std::size_t k0, std::size_t width, const auto& us) {
+        std::array<int, kAreaTile> c{}, p{};
+        std::array<const PassRecord*, kAreaTile> recs{};
+        for (std::size_t kk = 0; kk < width; ++kk) {
+          p[kk] = period[us[kk]];
+          c[kk] = positive_mod(-phase[us[kk]], p[kk]);
+          recs[kk] = &records[static_cast<std::size_t>(record_offset[us[kk]]) + uj];
+        }
+        for (std::size_t m = 0; m < ucyc; ++m) {
+          double* row = &walk_h[m * usteps + k0];
+          for (std::size_t kk = 0; kk < width; ++kk) {
+            const PassRecord& rec = recs[kk][static_cast<std::size_t>(c[kk]) * n];
+            row[kk] = rec.contact != 0 ? rec.h_rigid_um : 0.0;
+            c[kk] = c[kk] + 1 == p[kk] ? 0 : c[kk] + 1;
+          }
+        }
+      });
       // Start the walk just after a pass without contact.
       int start = 0;
       for (int q = 0; q < total; ++q) {
@@ -1112,18 +1140,17 @@ void SteadyStateWorkspace::Impl::compute_areas() {
           break;
         }
       }
+      const auto pass = [&](int t) {  // the walk's t-th pass (t < total; start ≤ total)
+        const int q = start + t;
+        return static_cast<std::size_t>(q < total ? q : q - total);
+      };
       const double scale_mm2 =
           1e-3 * radius_mm[static_cast<std::size_t>(i * flutes + j)] * d_phi_rad;  // µm·rad → mm²
-      auto store = [&](int q, double value) {
-        const int b = slot_of(q);
-        const auto us = static_cast<std::size_t>(i * steps + b);
-        area[(us * n + uj) * ucyc + static_cast<std::size_t>(rev_of(q))] = value;
-      };
       int t = 0;
       while (t < total) {
-        const int q = (start + t) % total;
-        if (walk_h[static_cast<std::size_t>(q)] <= 0.0) {
-          store(q, 0.0);
+        const std::size_t q = pass(t);
+        if (walk_h[q] <= 0.0) {
+          walk_area[q] = 0.0;
           ++t;
           continue;
         }
@@ -1138,8 +1165,8 @@ void SteadyStateWorkspace::Impl::compute_areas() {
         double largest = 0.0;
         int largest_at = t;
         int run_to = t;
-        while (run_to < total && walk_h[static_cast<std::size_t>((start + run_to) % total)] > 0.0) {
-          const double h = walk_h[static_cast<std::size_t>((start + run_to) % total)];
+        while (run_to < total && walk_h[pass(run_to)] > 0.0) {
+          const double h = walk_h[pass(run_to)];
           const double before = running;
           running += 0.5 * (previous + h) * scale_mm2;
           if (sheared_area < 0.0 && h >= h_min_um) {
@@ -1159,8 +1186,8 @@ void SteadyStateWorkspace::Impl::compute_areas() {
         running = 0.0;
         previous = 0.0;
         for (int u = run_from; u < run_to; ++u) {
-          const int qq = (start + u) % total;
-          const double h = walk_h[static_cast<std::size_t>(qq)];
+          const std::size_t qq = pass(u);
+          const double h = walk_h[qq];
           running += 0.5 * (previous + h) * scale_mm2;
           previous = h;
           double a = running;
@@ -1169,10 +1196,19 @@ void SteadyStateWorkspace::Impl::compute_areas() {
           } else if (u > largest_at) {
             a = std::max(0.0, run_total - running);
           }
-          store(qq, a);
+          walk_area[qq] = a;
         }
         t = run_to;
       }
+      // Each pass's area to its slot and revolution.
+      tiles([&](std::size_t k0, std::size_t width, const auto& us) {
+        for (std::size_t m = 0; m < ucyc; ++m) {
+          const double* row = &walk_area[m * usteps + k0];
+          for (std::size_t kk = 0; kk < width; ++kk) {
+            area[(us[kk] * n + uj) * ucyc + m] = row[kk];
+          }
+        }
+      });
     }
   }
 }
