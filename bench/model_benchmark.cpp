@@ -94,6 +94,7 @@ void steady_state(
   const auto& s = ws.result();
   state.counters["cycle_revs"] = s.cycle_revolutions;
   state.counters["passes"] = static_cast<double>(s.stats.passes);
+  state.counters["sweeps"] = s.stats.area_sweeps;
 }
 
 void BM_SteadyStatePlain(benchmark::State& state) {
