@@ -35,17 +35,22 @@ ModelConfig full_model() {
   return c;
 }
 
-/// [001]'s ploughed-area law on the full model: the AlSi10Mg preset's cut (config/presets:
-/// 0.8 mm, 2 flutes, f_t 3 µm, a_p 0.25 mm, h_min 1.5 µm, deflection, 10 discs). The areas are
-/// walked over every pass of the cycle, and with deflection solved again until they settle.
+/// [001]'s ploughed-area law on the full model: config/presets/alsi10mg_abeni2024.json's model
+/// (0.789 mm, 2 flutes, slot, f_t 3 µm, a_p 0.25 mm, h_min 1.5 µm, deflection, the
+/// dynamometer's resonance, 10 discs). The areas are walked over every pass of the cycle, and
+/// with deflection solved again until they settle (or six times).
 ModelConfig area_law_model() {
   ModelConfig c = full_model();
   c.effects.flank_wear.enabled = false;
-  c.tool.diameter_mm = 0.8;
+  c.effects.dynamometer.natural_hz = {2145.0, 2192.0, 2500.0};
+  c.tool.diameter_mm = 0.789;
+  c.tool.helix_deg = 20.0;
+  c.tool.edge_radius_um = 2.5;
   c.process.spindle_rpm = 31831.0;
   c.process.feed_per_tooth_um = 3.0;
   c.process.axial_depth_mm = 0.25;
   c.process.radial_depth_mm = 0.789;
+  c.process.operation = millwatch::model::Operation::kSlot;
   c.effects.runout.offset_um = 1.0;
   c.effects.runout.angle_rad = -1.2;
   c.effects.min_chip.h_min_um = 1.5;

@@ -106,7 +106,9 @@ struct CalibrationResult {
   JointFitResult joint;
   std::vector<CalibratedCut> cuts;
   AverageForceRegression classic;
-  /// Why the coefficients are not the material's, one sentence each (calibration_warnings()).
+  /// Why the coefficients are not the material's, one sentence each (calibration_warnings()),
+  /// then each cut the joint fit leaves more than max_unexplained_variance of unexplained
+  /// (of several cuts; "cut NAME: …").
   std::vector<std::string> warnings;
 };
 

@@ -900,11 +900,13 @@ struct WindowFitter::Impl {
       for (int ring = 1; ring <= 5; ++ring) {
         ring_of(ring, 0.2 * ring * ft);
       }
-      // Below the minimum chip, material piles up to h_min before a pass removes it ([002] eqs
-      // 17-18, accumulation): a flute lying several feeds inside the one before it still meets
-      // the piled-up material now and then. Rings out to the feed alone never start there (the
-      // copper preset's cut: f_t 0.125 µm, h_min 0.9 µm, its radii 1.755 µm apart, had ended at
-      // 0.11 µm with negative edge coefficients standing in for the runout).
+      // Below the minimum chip, material piles up to h_min before a pass removes it (chip
+      // accumulation, [002] eqs 11-12): a flute lying several feeds inside the one before it
+      // still meets the piled-up material now and then. Rings out to the feed alone never start
+      // there (the copper preset's cut: f_t 0.125 µm, h_min 0.9 µm, its radii 1.755 µm apart,
+      // had ended at 0.11 µm with negative edge coefficients standing in for the runout). These
+      // rings, a fifth of h_min apart, are coarser than the feed's: enough on that cut. In a
+      // calibration, the first cut's f_t and h_min decide.
       const double h_min = p.config().effects.min_chip.h_min_um;
       if (p.config().effects.min_chip.enabled && p.config().effects.accumulation.enabled &&
           h_min > ft) {
