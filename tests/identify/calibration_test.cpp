@@ -67,7 +67,8 @@ monitor::MonitorConfig commanded(const sim::Scenario& s) {
   return c;
 }
 
-CalibrationResult calibrate_sweep(const Sweep& k, bool tared) {
+/// The sweep's cuts as the monitor measured them, each described as commanded.
+std::vector<CalibrationCut> sweep_cuts(const Sweep& k) {
   std::vector<CalibrationCut> cuts;
   std::uint64_t seed = 11;
   for (const double f : k.feeds_um) {
@@ -76,9 +77,13 @@ CalibrationResult calibrate_sweep(const Sweep& k, bool tared) {
     test::MonitoredCut m = test::monitor_cut(s, c);
     cuts.push_back({"f_t " + std::to_string(f), c.model, m.filter, std::move(m.windows)});
   }
+  return cuts;
+}
+
+CalibrationResult calibrate_sweep(const Sweep& k, bool tared) {
   CalibrationOptions o;
   o.tared = tared;
-  return calibrate(cuts, o);
+  return calibrate(sweep_cuts(k), o);
 }
 
 double truth_of(const std::string& name) {
@@ -316,15 +321,8 @@ TEST(CalibrationWarnings, NameAFitThatDoesNotDescribeTheCutsAndANegativeCoeffici
 // the fit its way (negative coefficients, said) and every cut is named, one missed by more than
 // its whole force: that is said too.
 TEST(Calibration, NamesACutTheOtherCutsDoNotDescribe) {
-  const Sweep k{"2-flute slot", 2, 0.4, model::Operation::kSlot, 0.4, {3.0, 4.0, 5.0}, 1.2, 0.5};
-  std::vector<CalibrationCut> cuts;
-  std::uint64_t seed = 11;
-  for (const double f : k.feeds_um) {
-    const sim::Scenario s = scenario(k, f, seed++);
-    const monitor::MonitorConfig c = commanded(s);
-    test::MonitoredCut m = test::monitor_cut(s, c);
-    cuts.push_back({"f_t " + std::to_string(f), c.model, m.filter, std::move(m.windows)});
-  }
+  const std::vector<CalibrationCut> cuts =
+      sweep_cuts({"2-flute slot", 2, 0.4, model::Operation::kSlot, 0.4, {3.0, 4.0, 5.0}, 1.2, 0.5});
   bool whole_said = false;     // the whole fit's "the fit leaves …" warning
   bool negative_said = false;  // a coefficient below zero
   const auto named_cuts = [&](double gain) {
