@@ -76,9 +76,7 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   }
   LoadedMonitorConfig loaded =
       load_monitor_config({input, o.config, "", o.columns, where}, config_file);
-  if (!loaded.model_note.empty()) {
-    spdlog::warn("{}: {}", input.string(), loaded.model_note);
-  }
+  loaded.warn_model_note(input);
   const std::optional<double> sidecar_feed_um = loaded.sidecar_feed_per_tooth_um;
   const fs::path sidecar = loaded.sidecar;
   // The cut's feed per tooth: --feeds-um, else its sidecar; both given must agree.

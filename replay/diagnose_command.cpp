@@ -58,9 +58,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
                              (several ? " (" + where + ")" : ""));
   }
   LoadedMonitorConfig loaded = load_monitor_config({input, o.config, o.sidecar, "", where}, file);
-  if (!loaded.model_note.empty()) {
-    spdlog::warn("{}: {}", input.string(), loaded.model_note);
-  }
+  loaded.warn_model_note(input);
   // The cut's feed per tooth: --feeds-um, else its sidecar, else --config's; both --feeds-um and
   // a sidecar given must agree. Across feeds each cut's own feed is needed.
   if (!o.feeds_um.empty()) {

@@ -69,9 +69,7 @@ int replay_one(const ReplayOptions& o) {
   // The configuration: the sidecar's cut under --config's overrides.
   LoadedMonitorConfig loaded =
       load_monitor_config({input, o.config, o.sidecar, o.columns, ""}, read_config_file(o.config));
-  if (!loaded.model_note.empty()) {
-    spdlog::warn("{}: {}", input.string(), loaded.model_note);
-  }
+  loaded.warn_model_note(input);
   const double config_rate_hz = configured_rate_hz(loaded);
 
   BadRecordLog bad(input.string(), format);

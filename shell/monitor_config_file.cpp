@@ -58,6 +58,12 @@ double LoadedMonitorConfig::config_rate_hz() const {
              : 0.0;
 }
 
+void LoadedMonitorConfig::warn_model_note(const std::filesystem::path& input) const {
+  if (!model_note.empty()) {
+    spdlog::warn("{}: {}", input.string(), model_note);
+  }
+}
+
 LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
                                         const ConfigFile& file) {
   LoadedMonitorConfig out;

@@ -54,6 +54,8 @@ struct LoadedMonitorConfig {
   std::string model_note;
   /// sample_rate_hz in json (0: none).
   [[nodiscard]] double config_rate_hz() const;
+  /// Warns model_note in the log, naming `input`, where there is one.
+  void warn_model_note(const std::filesystem::path& input) const;
 };
 
 /// The rate the configuration states (0: none). @throws std::runtime_error naming the file,
