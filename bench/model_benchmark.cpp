@@ -68,6 +68,51 @@ ModelConfig area_law_model() {
   return c;
 }
 
+/// [002]'s copper slot with chip accumulation: config/presets/copper_li2007.json's model (0.8 mm,
+/// 2 flutes, helix 30°, 96,000 rpm, f_t 0.125 µm, a_p 0.02 mm, runout 1 µm, the minimum chip
+/// 0.9 µm — 7.2 feeds — with accumulation, rigid, 10 discs): each slot is run pass by pass until
+/// the material piled up below h_min repeats, looking back over 32 passes.
+ModelConfig copper_model() {
+  ModelConfig c;
+  c.resolution.steps_per_rev = kSteps;
+  c.tool.diameter_mm = 0.8;
+  c.tool.flutes = 2;
+  c.tool.helix_deg = 30.0;
+  c.tool.edge_radius_um = 2.0;
+  c.process.operation = millwatch::model::Operation::kSlot;
+  c.process.spindle_rpm = 96000.0;
+  c.process.feed_per_tooth_um = 0.125;
+  c.process.axial_depth_mm = 0.02;
+  c.process.radial_depth_mm = 0.8;
+  c.material.law = millwatch::model::ForceLawKind::kLinearEdge;
+  auto& m = c.material.linear_edge;
+  m.k_tc_N_per_mm2 = 1600.0;
+  m.k_nc_N_per_mm2 = 900.0;
+  m.k_ac_N_per_mm2 = 150.0;
+  m.k_te_N_per_mm = 2.0;
+  m.k_ne_N_per_mm = 4.0;
+  m.k_ae_N_per_mm = 0.5;
+  m.a_t_Nmm = 114.7;
+  m.b_t = 0.5;
+  m.a_n_Nmm = 183.3;
+  m.b_n = 0.5;
+  m.a_a_Nmm = 21.3;
+  m.b_a = 0.5;
+  c.effects.runout.enabled = true;
+  c.effects.runout.offset_um = 1.0;
+  c.effects.runout.angle_rad = 0.5;
+  c.effects.trochoidal.enabled = true;
+  c.effects.multi_pass.enabled = true;
+  c.effects.min_chip.enabled = true;
+  c.effects.min_chip.h_min_um = 0.9;
+  c.effects.accumulation.enabled = true;
+  c.effects.deflection.enabled = false;
+  c.effects.helix_lag.enabled = true;
+  c.effects.helix_lag.discs = 10;
+  c.effects.dynamometer.enabled = false;
+  return c;
+}
+
 /// The plain model: circular path, one regime, rigid, sharp; helix lag on with 5 discs.
 ModelConfig plain_model() {
   ModelConfig c = millwatch::model::without_effects(ModelConfig{});
@@ -100,6 +145,7 @@ void steady_state(
   state.counters["cycle_revs"] = s.cycle_revolutions;
   state.counters["passes"] = static_cast<double>(s.stats.passes);
   state.counters["sweeps"] = s.stats.area_sweeps;
+  state.counters["longest_transient"] = s.stats.longest_transient_revolutions;
 }
 
 void BM_SteadyStatePlain(benchmark::State& state) {
@@ -121,6 +167,11 @@ void BM_SteadyStateAreaLaw(benchmark::State& state) {
   steady_state(state, area_law_model());
 }
 BENCHMARK(BM_SteadyStateAreaLaw)->Unit(benchmark::kMicrosecond);
+
+void BM_SteadyStateCopper(benchmark::State& state) {
+  steady_state(state, copper_model());
+}
+BENCHMARK(BM_SteadyStateCopper)->Unit(benchmark::kMicrosecond);
 
 /// The same with the accumulation cycle materialised (what the simulator asks for).
 void BM_SteadyStateFullWithCycle(benchmark::State& state) {

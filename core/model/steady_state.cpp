@@ -1,7 +1,9 @@
 #include "core/model/steady_state.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -231,6 +233,7 @@ struct SteadyStateWorkspace::Impl {
   // ---- slot scratch
   std::vector<double> g;                   // N·P geometric chips of the slot
   std::vector<double> hist;                // deficits of every pass so far (first P: the fresh cut)
+  std::vector<std::uint64_t> no_cut;       // [len]: bit t − 1 set where hist[len − t] is kNoCut
   std::vector<unsigned> codes;             // per pass
   std::vector<double> guess;               // per flute: last cut chip (deflection solve's start)
   std::vector<PassRecord> trajectory;      // per pass of the slot's iteration
@@ -497,6 +500,7 @@ void SteadyStateWorkspace::Impl::size_storage() {
   guess.resize(n);
   if (memory) {
     hist.resize(p + static_cast<std::size_t>(kMaxSlotRevolutions + 1) * n);
+    no_cut.resize(hist.size() + 1);
     trajectory.resize(static_cast<std::size_t>(kMaxSlotRevolutions + 1) * n);
     codes.resize(static_cast<std::size_t>(kMaxSlotRevolutions + 1) * n);
     const auto m = static_cast<std::size_t>(kMaxNewtonDim);
@@ -728,6 +732,49 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
 // ---------------------------------------------------------------------------------------------
 // One pass (the physics of MillingModel::march_step for one element)
 
+namespace {
+
+/// The rigid chip's nearest removal: min over n = 1..passes of g[n − 1] + back(n), a pass that
+/// removed nothing (back(n) = kNoCut) never taken, and its n (the first of equal ones; 0 and
+/// kNoCut when no pass removed anything). Four lanes, each keeping its own first minimum, so
+/// that the comparisons do not wait on one another (with 32 passes looked back, the chain of
+/// one lane was most of a pass's time); ties between lanes go to the smaller n, which is the
+/// one a single sweep keeps: the same result.
+template <class Back>
+std::pair<double, int> nearest_removal(const double* g, int passes, Back& back) {
+  constexpr int kLanes = 4;
+  std::array<double, kLanes> best{kNoCut, kNoCut, kNoCut, kNoCut};
+  std::array<int, kLanes> arg{0, 0, 0, 0};
+  // g + kNoCut is kNoCut, never below a lane's best: a pass that removed nothing is skipped.
+  auto take = [&](std::size_t l, int n) {
+    const double c = g[n - 1] + back(n);
+    if (c < best[l]) {
+      best[l] = c;
+      arg[l] = n;
+    }
+  };
+  int n = 1;
+  for (; n + kLanes - 1 <= passes; n += kLanes) {
+    for (std::size_t l = 0; l < kLanes; ++l) {
+      take(l, n + static_cast<int>(l));
+    }
+  }
+  for (std::size_t l = 0; n <= passes; ++n, ++l) {
+    take(l, n);
+  }
+  double h = best[0];
+  int at = arg[0];
+  for (std::size_t l = 1; l < kLanes; ++l) {
+    if (best[l] < h || (best[l] == h && arg[l] < at)) {
+      h = best[l];
+      at = arg[l];
+    }
+  }
+  return {h, at};
+}
+
+}  // namespace
+
 template <class Back>
 PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, double area_mm2,
                                                 double guess_log_um, Back&& back) const {
@@ -737,19 +784,9 @@ PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, do
   }
   // 1. rigid chip: the nearest previous pass that removed material, plus its deficit.
   const double* gj = &g[static_cast<std::size_t>(flute * passes)];
-  double h_rigid = kNoCut;
-  int arg = 0;
-  for (int n = 1; n <= passes; ++n) {
-    const double d = back(n);
-    if (d == kNoCut) {
-      continue;
-    }
-    const double c = gj[n - 1] + d;
-    if (c < h_rigid) {
-      h_rigid = c;
-      arg = n;
-    }
-  }
+  const auto [h_rigid_found, arg_found] = nearest_removal(gj, passes, back);
+  double h_rigid = h_rigid_found;
+  int arg = arg_found;
   if (h_rigid == kNoCut) {  // no pass in the window removed material: take the oldest
     h_rigid = gj[passes - 1];
     arg = 0;
@@ -880,8 +917,16 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
   std::fill(hist.begin(), hist.begin() + passes, 0.0);
   std::size_t len = static_cast<std::size_t>(passes);
   const auto p_len = static_cast<std::size_t>(passes);
+  // Which of the last P passes removed nothing, as bits: two states whose bits differ are not the
+  // same (kNoCut matches only itself), found without reading them (the last 64 where P > 64).
+  const std::uint64_t window_bits =
+      p_len >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << p_len) - 1;
+  no_cut[len] = 0;
 
   auto same_state = [&](std::size_t a_end, std::size_t b_end) {
+    if (no_cut[a_end] != no_cut[b_end]) {
+      return false;
+    }
     for (std::size_t t = 1; t <= p_len; ++t) {
       const double x = hist[a_end - t];
       const double y = hist[b_end - t];
@@ -959,7 +1004,10 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
       const PassResult pr = run_pass(j, true, area_input(slot, j), guess[uj], [&](int back) {
         return hist[at - static_cast<std::size_t>(back)];
       });
-      hist[len++] = pr.deficit_um;
+      hist[len] = pr.deficit_um;
+      no_cut[len + 1] =
+          ((no_cut[len] << 1) | static_cast<std::uint64_t>(pr.deficit_um == kNoCut)) & window_bits;
+      ++len;
       const std::size_t k = static_cast<std::size_t>(r) * n + static_cast<std::size_t>(q);
       codes[k] = pr.code;
       trajectory[k] = to_record(pr, deflect, law_kind == ForceLawKind::kPowerLaw);
