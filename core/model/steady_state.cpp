@@ -12,6 +12,10 @@
 #include <string>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "core/model/chip_geometry.hpp"
 #include "core/model/dynamometer.hpp"
 #include "core/model/force_law.hpp"
@@ -231,7 +235,8 @@ struct SteadyStateWorkspace::Impl {
   std::vector<PassRecord> records;
 
   // ---- slot scratch
-  std::vector<double> g;                   // N·P geometric chips of the slot
+  std::vector<double> g;                   // N·P geometric chips of the slot, oldest pass first
+  std::vector<double> no_deficits;         // P zeros: the fresh cut's passes
   std::vector<double> hist;                // deficits of every pass so far (first P: the fresh cut)
   std::vector<std::uint64_t> no_cut;       // [len]: bit t − 1 set where hist[len − t] is kNoCut
   std::vector<unsigned> codes;             // per pass
@@ -272,9 +277,9 @@ struct SteadyStateWorkspace::Impl {
   /// @param guess_log_um ln of a chip to start from (+∞: none)
   [[nodiscard]] Deflection solve_deflection(double h_rigid_um, double wear_normal_N,
                                             double area_mm2, double guess_log_um) const;
-  template <class Back>
+  /// @param deficits the last P passes' deficits, the oldest first (pass n back at P − n)
   PassResult run_pass(int flute, bool engaged_slot, double area_mm2, double guess_log_um,
-                      Back&& back) const;
+                      const double* deficits) const;
   void solve_slots();
   void solve_slot(int disc, int b);
   bool newton(int slot, int first, int p, int r, std::size_t len);
@@ -496,6 +501,7 @@ void SteadyStateWorkspace::Impl::size_storage() {
     records.reserve(d * s * n * (memory ? 4 : 1));
   }
   g.resize(n * p);
+  no_deficits.assign(p, 0.0);
   one_revolution.resize(n);
   guess.resize(n);
   if (memory) {
@@ -571,7 +577,7 @@ void SteadyStateWorkspace::Impl::fill_geometric_chips(int disc, int b) {
     const double w = table_frac[ij];
     for (int n = 1; n <= passes; ++n) {
       const double* row = geometry.row(j, n, disc);
-      g[static_cast<std::size_t>(j * passes + n - 1)] = row[k0] + w * (row[k1] - row[k0]);
+      g[static_cast<std::size_t>(j * passes + passes - n)] = row[k0] + w * (row[k1] - row[k0]);
     }
   }
 }
@@ -734,61 +740,61 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
 
 namespace {
 
-/// The rigid chip's nearest removal: min over n = 1..passes of g[n − 1] + back(n), a pass that
-/// removed nothing (back(n) = kNoCut) never taken, and its n (the first of equal ones; 0 and
-/// kNoCut when no pass removed anything). Four lanes, each keeping its own first minimum, so
-/// that the comparisons do not wait on one another (with 32 passes looked back, the chain of
-/// one lane was most of a pass's time); ties between lanes go to the smaller n, which is the
-/// one a single sweep keeps: the same result.
-template <class Back>
-std::pair<double, int> nearest_removal(const double* g, int passes, Back& back) {
-  constexpr int kLanes = 4;
-  std::array<double, kLanes> best{kNoCut, kNoCut, kNoCut, kNoCut};
-  std::array<int, kLanes> arg{0, 0, 0, 0};
-  // g + kNoCut is kNoCut, never below a lane's best: a pass that removed nothing is skipped.
-  auto take = [&](std::size_t l, int n) {
-    const double c = g[n - 1] + back(n);
-    if (c < best[l]) {
-      best[l] = c;
-      arg[l] = n;
-    }
-  };
-  int n = 1;
-  for (; n + kLanes - 1 <= passes; n += kLanes) {
-    for (std::size_t l = 0; l < kLanes; ++l) {
-      take(l, n + static_cast<int>(l));
-    }
+/// The rigid chip's nearest removal. Both arrays run over the last P passes, the oldest first
+/// (index P − n holds pass n back): the minimum over them of g + deficit, a pass that removed
+/// nothing (deficit kNoCut) never taken, and its n (the nearest of equal ones; 0 and kNoCut when
+/// no pass removed anything). The minimum first, in four lanes without a branch over arrays read
+/// forwards (one sweep's chain of compares and its mispredicted branches, backwards, had been
+/// most of a pass's time with 32 passes looked back), then the nearest pass that reaches it:
+/// the same result as one sweep from the nearest pass keeping the first of equal ones.
+std::pair<double, int> nearest_removal(const double* g, const double* deficit, int passes) {
+  // g + kNoCut is kNoCut, never below another: a pass that removed nothing is never the minimum.
+  // The same sums either way, and a minimum is exact in any order.
+  std::array<double, 4> lane{kNoCut, kNoCut, kNoCut, kNoCut};
+  int m = 0;
+#if defined(__SSE2__)
+  __m128d low = _mm_set1_pd(kNoCut);
+  __m128d high = low;
+  for (; m + 3 < passes; m += 4) {
+    low = _mm_min_pd(low, _mm_add_pd(_mm_loadu_pd(g + m), _mm_loadu_pd(deficit + m)));
+    high = _mm_min_pd(high, _mm_add_pd(_mm_loadu_pd(g + m + 2), _mm_loadu_pd(deficit + m + 2)));
   }
-  for (std::size_t l = 0; n <= passes; ++n, ++l) {
-    take(l, n);
-  }
-  double h = best[0];
-  int at = arg[0];
-  for (std::size_t l = 1; l < kLanes; ++l) {
-    if (best[l] < h || (best[l] == h && arg[l] < at)) {
-      h = best[l];
-      at = arg[l];
+  _mm_storeu_pd(&lane[0], low);
+  _mm_storeu_pd(&lane[2], high);
+#endif
+  for (; m + 3 < passes; m += 4) {
+    for (int l = 0; l < 4; ++l) {
+      const auto ul = static_cast<std::size_t>(l);
+      lane[ul] = std::min(lane[ul], g[m + l] + deficit[m + l]);
     }
   }
-  return {h, at};
+  for (; m < passes; ++m) {
+    lane[0] = std::min(lane[0], g[m] + deficit[m]);
+  }
+  const double h = std::min(std::min(lane[0], lane[1]), std::min(lane[2], lane[3]));
+  if (h == kNoCut) {
+    return {kNoCut, 0};
+  }
+  for (m = passes - 1; g[m] + deficit[m] != h; --m) {
+  }
+  return {h, passes - m};
 }
 
 }  // namespace
 
-template <class Back>
 PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, double area_mm2,
-                                                double guess_log_um, Back&& back) const {
+                                                double guess_log_um, const double* deficits) const {
   PassResult r;
   if (!engaged_slot) {
     return r;  // outside the workpiece: its rigid path is the surface (deficit 0)
   }
   // 1. rigid chip: the nearest previous pass that removed material, plus its deficit.
   const double* gj = &g[static_cast<std::size_t>(flute * passes)];
-  const auto [h_rigid_found, arg_found] = nearest_removal(gj, passes, back);
+  const auto [h_rigid_found, arg_found] = nearest_removal(gj, deficits, passes);
   double h_rigid = h_rigid_found;
   int arg = arg_found;
   if (h_rigid == kNoCut) {  // no pass in the window removed material: take the oldest
-    h_rigid = gj[passes - 1];
+    h_rigid = gj[0];
     arg = 0;
   }
   if (h_rigid <= 0.0) {
@@ -904,7 +910,7 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
     for (int q = 0; q < flutes; ++q) {
       const int j = (first + q) % flutes;
       one_revolution[static_cast<std::size_t>(q)] = to_record(
-          run_pass(j, engaged[flute_slot(disc, j, b)] != 0, 0.0, kNoCut, [](int) { return 0.0; }),
+          run_pass(j, engaged[flute_slot(disc, j, b)] != 0, 0.0, kNoCut, no_deficits.data()),
           deflect, law_kind == ForceLawKind::kPowerLaw);
     }
     store_cycle(slot, one_revolution.data(), first, 1);
@@ -1001,9 +1007,7 @@ void SteadyStateWorkspace::Impl::solve_slot(int disc, int b) {
       const int j = (first + q) % flutes;
       const auto uj = static_cast<std::size_t>(j);
       const std::size_t at = len;
-      const PassResult pr = run_pass(j, true, area_input(slot, j), guess[uj], [&](int back) {
-        return hist[at - static_cast<std::size_t>(back)];
-      });
+      const PassResult pr = run_pass(j, true, area_input(slot, j), guess[uj], &hist[at - p_len]);
       hist[len] = pr.deficit_um;
       no_cut[len + 1] =
           ((no_cut[len] << 1) | static_cast<std::uint64_t>(pr.deficit_um == kNoCut)) & window_bits;
@@ -1049,9 +1053,7 @@ bool SteadyStateWorkspace::Impl::newton(int slot, int first, int p, int r, std::
     for (std::size_t q = 0; q < um; ++q) {
       const int j = (first + static_cast<int>(q % n)) % flutes;
       const std::size_t at = p_len + q;
-      const PassResult pr = run_pass(j, true, area_input(slot, j), nt_h[q], [&](int back) {
-        return vals[at - static_cast<std::size_t>(back)];
-      });
+      const PassResult pr = run_pass(j, true, area_input(slot, j), nt_h[q], &vals[at - p_len]);
       if (pr.code != ref[q]) {
         return false;  // the pattern changed: not this cycle
       }
