@@ -74,6 +74,9 @@ daemon::DaemonConfig load(const std::string& path, const UrlOverrides& urls) {
     nlohmann::json j = shell::read_json_file(path);
     shell::resolve_material_presets(j, path);  // "model": {"material": "preset.json"}
     daemon::DaemonConfig c = daemon::daemon_config_from_json(j);
+    if (!c.monitor.filter_cutoff_note.empty()) {
+      spdlog::info("{}: monitor.{}", path, c.monitor.filter_cutoff_note);
+    }
     if (!urls.input.empty()) {
       c.lcm_url = urls.input;
       c.lcm_output_url = urls.input;

@@ -199,6 +199,7 @@ int replay_one(const ReplayOptions& o) {
   j["input"] = input.string();
   j["input_format"] = source->description();
   j["filter"] = config.filter_zero_phase ? "zero_phase" : "causal";
+  j["filter_cutoff_hz"] = config.filter_cutoff_hz;
   j["bad_lines"] = source->bad_records();
   j["record_in_plane_force_N"] =
       in_plane.samples() > 0

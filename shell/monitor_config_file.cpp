@@ -179,7 +179,11 @@ double configured_rate_hz(const LoadedMonitorConfig& config) {
 monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config) {
   try {
     // "columns" was taken by read_config_file() (the recording's column map).
-    return monitor::monitor_config_from_json(config.json, "", {"columns"});
+    monitor::MonitorConfig c = monitor::monitor_config_from_json(config.json, "", {"columns"});
+    if (!c.filter_cutoff_note.empty()) {
+      spdlog::info("{}: {}", config.name, c.filter_cutoff_note);
+    }
+    return c;
   } catch (const config::ConfigError& e) {
     throw std::runtime_error(config.name + ": " + e.what());
   }

@@ -1,5 +1,6 @@
 #include "core/monitor/monitor_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/config/json_reader.hpp"
@@ -13,6 +14,34 @@ using config::ObjectReader;
 
 std::string join(const std::string& path, const char* key) {
   return path.empty() ? std::string(key) : path + "." + key;
+}
+
+}  // namespace
+
+namespace {
+
+/// No cut-off configured: where the default would not suit the cut, the nearest that does
+/// (cutoff_for_cut_hz), and why in filter_cutoff_note.
+void choose_cutoff_for_cut(MonitorConfig& c) {
+  using config::format_number;
+  const double tooth_hz = c.model.process.spindle_rpm / 60.0 * c.model.tool.flutes;
+  const double default_hz = c.filter_cutoff_hz;
+  const double chosen_hz = cutoff_for_cut_hz(default_hz, c.sample_rate_hz, tooth_hz);
+  if (chosen_hz == default_hz) {
+    return;
+  }
+  c.filter_cutoff_hz = chosen_hz;
+  const std::string why =
+      default_hz < 1.5 * tooth_hz
+          ? "not pass 1.5 x the tooth-passing frequency (" + format_number(tooth_hz) +
+                " Hz: model.process.spindle_rpm " + format_number(c.model.process.spindle_rpm) +
+                ", " + std::to_string(c.model.tool.flutes) + " flutes)"
+          : "not stay below 0.45 x the sample rate (" + format_number(c.sample_rate_hz) + " Hz)";
+  const std::string taken =
+      chosen_hz == 4.0 * tooth_hz ? "4 x the tooth-passing frequency" : "0.4 x the sample rate";
+  c.filter_cutoff_note = "filter.cutoff_hz not given: the default " + format_number(default_hz) +
+                         " Hz would " + why + "; taking " + format_number(chosen_hz) + " Hz, " +
+                         taken + " (set filter.cutoff_hz to choose)";
 }
 
 }  // namespace
@@ -107,8 +136,25 @@ MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::strin
     (void)r.raw(key);  // the caller's: allowed, and listed as allowed
   }
   r.finish();
+  const nlohmann::json* filter = j.is_object() && j.contains("filter") ? &j["filter"] : nullptr;
+  if (filter == nullptr || !filter->is_object() || !filter->contains("cutoff_hz")) {
+    choose_cutoff_for_cut(c);
+  }
   validate(c, path);
   return c;
+}
+
+double cutoff_for_cut_hz(double default_hz, double sample_rate_hz, double tooth_hz) {
+  const double low_hz = 1.5 * tooth_hz;
+  const double high_hz = 0.45 * sample_rate_hz;
+  if (default_hz >= low_hz && default_hz < high_hz) {
+    return default_hz;
+  }
+  const double top_hz = 0.4 * sample_rate_hz;
+  if (top_hz < low_hz) {
+    return default_hz;  // no cut-off can serve: validate() says why
+  }
+  return std::clamp(default_hz, std::min(4.0 * tooth_hz, top_hz), top_hz);
 }
 
 void validate(const MonitorConfig& c, const std::string& path) {

@@ -36,6 +36,13 @@ namespace millwatch::monitor {
 inline constexpr double kMinSampleRateHz = 1000.0;
 inline constexpr double kMaxSampleRateHz = 2e6;
 
+/// The cut-off for a cut whose configuration gives none: `default_hz` moved into the band from
+/// four times the tooth-passing frequency (the default's four harmonics at [000]'s speed) to
+/// 0.4× the sample rate, or 0.4× the sample rate where that band is empty but still passes 1.5×
+/// the tooth-passing frequency; `default_hz` itself where even that cannot be (validate() then
+/// says why).
+double cutoff_for_cut_hz(double default_hz, double sample_rate_hz, double tooth_hz);
+
 struct MonitorConfig {
   model::ModelConfig model;
   double sample_rate_hz = 50000.0;
@@ -43,7 +50,14 @@ struct MonitorConfig {
   std::array<double, 3> saturation_N = {std::numeric_limits<double>::infinity(),
                                         std::numeric_limits<double>::infinity(),
                                         std::numeric_limits<double>::infinity()};
-  double filter_cutoff_hz = 3300.0;  ///< [000] Sect. 5
+  /// [000] Sect. 5 (four harmonics of its 833 Hz tooth-passing frequency). Where the
+  /// configuration gives none and this default would not suit the cut (below 1.5× the
+  /// tooth-passing frequency, or not below 0.45× the sample rate), monitor_config_from_json
+  /// takes the nearest that does (cutoff_for_cut_hz) and says so in filter_cutoff_note.
+  double filter_cutoff_hz = 3300.0;
+  /// Why the cut-off is not the default one the configuration left it at ("": it is, or the
+  /// configuration gave it).
+  std::string filter_cutoff_note;
   int filter_order = 4;
   /// Zero-phase (forward-backward) filtering: offline work only, the results come out up to
   /// signal::ZeroPhaseFilter's chunk + margin samples late; no delay to correct, the model is

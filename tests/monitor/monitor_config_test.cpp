@@ -124,5 +124,55 @@ TEST(MonitorConfig, CrossFieldErrorsSayWhatTheValueDoesNotSuit) {
             "(450 Hz)");
 }
 
+// A cut the default cut-off does not suit, with none configured: [002]'s copper slot at 96,000
+// rpm (tooth-passing 3,200 Hz, where 3.3 kHz would pass nothing above the first harmonic), or a
+// slow DAQ. The nearest cut-off that does is taken and said; a configured one is the user's.
+TEST(MonitorConfig, ChoosesACutoffThatSuitsTheCutWhereNoneIsGiven) {
+  const auto cut = [](double rpm, double rate_hz) {
+    return nlohmann::json{{"model", {{"process", {{"spindle_rpm", rpm}}}}},
+                          {"sample_rate_hz", rate_hz}};
+  };
+  // 4 x the tooth-passing frequency, the default's ratio at [000]'s 25,000 rpm.
+  const MonitorConfig fast = monitor_config_from_json(cut(96000.0, 100000.0), "config");
+  EXPECT_EQ(fast.filter_cutoff_hz, 12800.0);
+  EXPECT_EQ(fast.filter_cutoff_note,
+            "filter.cutoff_hz not given: the default 3300 Hz would not pass 1.5 x the "
+            "tooth-passing frequency (3200 Hz: model.process.spindle_rpm 96000, 2 flutes); taking "
+            "12800 Hz, 4 x the tooth-passing frequency (set filter.cutoff_hz to choose)");
+  // A 20 kHz DAQ: 0.4 x its rate, below 4 x but above 1.5 x the tooth-passing frequency.
+  const MonitorConfig slow_daq = monitor_config_from_json(cut(96000.0, 20000.0), "config");
+  EXPECT_EQ(slow_daq.filter_cutoff_hz, 8000.0);
+  EXPECT_NE(slow_daq.filter_cutoff_note.find("taking 8000 Hz, 0.4 x the sample rate"),
+            std::string::npos)
+      << slow_daq.filter_cutoff_note;
+  // A 5 kHz DAQ at 3,000 rpm: the default is above its Nyquist band; 0.4 x the rate.
+  const MonitorConfig low_rate = monitor_config_from_json(cut(3000.0, 5000.0), "config");
+  EXPECT_EQ(low_rate.filter_cutoff_hz, 2000.0);
+  EXPECT_EQ(low_rate.filter_cutoff_note,
+            "filter.cutoff_hz not given: the default 3300 Hz would not stay below 0.45 x the "
+            "sample rate (5000 Hz); taking 2000 Hz, 0.4 x the sample rate (set filter.cutoff_hz "
+            "to choose)");
+  // Where the default suits the cut it stays, unsaid ([000]'s cut; 60,000 rpm, 3,000 Hz ≤ 3.3 kHz).
+  for (const double rpm : {25000.0, 60000.0}) {
+    const MonitorConfig c = monitor_config_from_json(cut(rpm, 50000.0), "config");
+    EXPECT_EQ(c.filter_cutoff_hz, 3300.0) << rpm;
+    EXPECT_EQ(c.filter_cutoff_note, "") << rpm;
+  }
+  // A configured cut-off is never moved: the error names the user's value.
+  nlohmann::json given = cut(96000.0, 100000.0);
+  given["filter"] = {{"cutoff_hz", 4000.0}};
+  EXPECT_EQ(error_of(given),
+            "config.filter.cutoff_hz: value 4000 Hz must pass at least 1.5 x the tooth-passing "
+            "frequency (4800 Hz at model.process.spindle_rpm 96000)");
+  // No cut-off serves (1.5 x 3200 Hz above 0.4 x 10 kHz): the default's error, as before.
+  EXPECT_EQ(error_of(cut(96000.0, 10000.0)),
+            "config.filter.cutoff_hz: value 3300 Hz (the default) must pass at least 1.5 x the "
+            "tooth-passing frequency (4800 Hz at model.process.spindle_rpm 96000)");
+  // Written out, the chosen cut-off is read back as configured: the same, nothing to say.
+  const MonitorConfig again = monitor_config_from_json(to_json(fast), "config");
+  EXPECT_EQ(again.filter_cutoff_hz, 12800.0);
+  EXPECT_EQ(again.filter_cutoff_note, "");
+}
+
 }  // namespace
 }  // namespace millwatch::monitor
