@@ -206,6 +206,8 @@ void AlertEngine::rebaseline() {
   wear_raise_.reset();
   wear_clear_.reset();
   breakage_.streak = 0;
+  imbalance_ = Level{};
+  imbalance_seen_ = 0;
   step_streak_.fill(0);
   change_identify_ = false;
   restart_estimate_baseline();
@@ -276,6 +278,7 @@ void AlertEngine::examine(const RevolutionRecord& r) {
     rebaseline();  // another tool
     clear_after_rebaseline(rev, t, "new baseline");
   }
+  track_imbalance(f);
   if (!follow_estimates()) {
     check_runout(f, rev, t);
   }
@@ -334,6 +337,19 @@ void AlertEngine::check_runout(const Flutes& f, std::int64_t rev, std::int64_t t
                        "flute_imbalance"),
                   "runout cleared: flute imbalance %.2f %% (below %.2f %% for %d revolutions)",
                   percent(f.imbalance), percent(clear_below), persist);
+  }
+}
+
+void AlertEngine::track_imbalance(const Flutes& f) {
+  const double limit = config_.runout_imbalance;
+  imbalance_now_ = f.imbalance;
+  imbalance_seen_ = std::min(imbalance_seen_ + 1, config_.persist_revolutions);
+  const bool toward =
+      imbalance_.active ? f.imbalance < config_.hysteresis * limit : f.imbalance > limit;
+  imbalance_.streak = toward ? imbalance_.streak + 1 : 0;
+  if (imbalance_.streak >= config_.persist_revolutions) {
+    imbalance_.active = !imbalance_.active;
+    imbalance_.streak = 0;
   }
 }
 
@@ -958,9 +974,28 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
   } else {
     std::snprintf(pair, sizeof pair, "(r_CE%d − r_CE%d)/%d", longer + 1, shorter + 1, passes);
   }
+  const double clear_below = config_.hysteresis * limit;
+  const bool high = u - z * sigma_u > limit;
+  const bool low = u + z * sigma_u < clear_below;
+  // Cannot tell: the estimate's band reaches from below the clearing level to above the limit
+  // (one within the hysteresis band holds the alert as it is). The flute forces' level decides,
+  // where revolutions have been measured.
+  const bool undecided = u - z * sigma_u < clear_below && u + z * sigma_u > limit;
+  const bool forces_known = imbalance_seen_ >= config_.persist_revolutions;
+  const double imbalance_limit = config_.runout_imbalance;
   if (!runout_.active) {
-    runout_.streak = u - z * sigma_u > limit ? runout_.streak + 1 : 0;
-    if (runout_.streak >= persist) {
+    runout_.streak = high || (undecided && imbalance_.active) ? runout_.streak + 1 : 0;
+    if (runout_.streak >= persist && !high) {
+      runout_.active = true;
+      runout_.streak = 0;
+      write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t, imbalance_now_,
+                         imbalance_limit, "flute_imbalance"),
+                    "runout: flute forces differ by %.2f %% of their mean (limit %.2f %%, %d "
+                    "revolutions); the estimate cannot tell: %s %.3f ± %.3f µm = %.0f ± %.0f %% "
+                    "of f_t %.3g µm",
+                    percent(imbalance_now_), percent(imbalance_limit), config_.persist_revolutions,
+                    pair, deficit, sigma, percent(u), percent(sigma_u), ft);
+    } else if (runout_.streak >= persist) {
       runout_.active = true;
       runout_.streak = 0;
       write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t, u, limit,
@@ -975,9 +1010,19 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
     }
     return;
   }
-  const double clear_below = config_.hysteresis * limit;
-  runout_.streak = u + z * sigma_u < clear_below ? runout_.streak + 1 : 0;
-  if (runout_.streak >= persist) {
+  runout_.streak =
+      low || (undecided && forces_known && !imbalance_.active) ? runout_.streak + 1 : 0;
+  if (runout_.streak >= persist && !low) {
+    runout_.active = false;
+    runout_.streak = 0;
+    write_message(emit(AlertKind::kRunout, AlertSeverity::kInfo, false, rev, t, imbalance_now_,
+                       imbalance_limit, "flute_imbalance"),
+                  "runout cleared: flute imbalance %.2f %% (below %.2f %% for %d revolutions); "
+                  "the estimate cannot tell: %s %.3f ± %.3f µm = %.0f ± %.0f %% of f_t %.3g µm",
+                  percent(imbalance_now_), percent(config_.hysteresis * imbalance_limit),
+                  config_.persist_revolutions, pair, deficit, sigma, percent(u), percent(sigma_u),
+                  ft);
+  } else if (runout_.streak >= persist) {
     runout_.active = false;
     runout_.streak = 0;
     write_message(emit(AlertKind::kRunout, AlertSeverity::kInfo, false, rev, t, u, limit,

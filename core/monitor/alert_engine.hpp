@@ -48,7 +48,10 @@
 //                 P(Z > 3) = 0.13 % per window there (persistence lowers it; far less below).
 //                 Without estimates: I of a revolution above `runout_imbalance` for
 //                 `persist_revolutions`, cleared below `hysteresis`·limit for as long (no design
-//                 rate).
+//                 rate). A window whose estimate cannot tell (u − z·σ_u below the clearing
+//                 level and u + z·σ_u above the limit: where a flute cuts nothing the force
+//                 bounds a runout beyond the feed poorly, [002]'s copper slot) counts as the
+//                 flute forces' level says, and a raise or clear it makes quotes them.
 //  runout change  Three detectors, one alert (whichever trips first raises it):
 //                 per revolution (large steps, within revolutions): a flute's share s_j beyond
 //                   its baseline median by more than max(z_r·σ_j, `runout_step_min`), σ_j the σ
@@ -360,6 +363,9 @@ class AlertEngine {
   void examine(const identify::IdentifiedWindow& w);
   void examine(const InputCounters& c, std::int64_t utime_us);
   void check_runout(const Flutes& f, std::int64_t rev, std::int64_t t);
+  /// The flute forces' imbalance as a level (check_runout's rule), kept while the estimates
+  /// lead too: what decides runout where they cannot.
+  void track_imbalance(const Flutes& f);
   /// Returns whether a flute is below its breakage limit in this revolution.
   bool check_breakage(const Flutes& f, std::int64_t rev, std::int64_t t);
   void check_runout_step(const Flutes& f, bool collapsing, std::int64_t rev, std::int64_t t);
@@ -408,6 +414,9 @@ class AlertEngine {
   AlertConfig config_;
   double breakage_z_ = 0.0;  // z of the per-revolution breakage bound (per flute count)
   Level runout_, breakage_, sensor_;
+  Level imbalance_;             // the flute forces' runout level, whoever leads runout
+  double imbalance_now_ = 0.0;  // the last revolution's I
+  int imbalance_seen_ = 0;      // revolutions it has seen, up to persist_revolutions
   int breakage_flute_ = 0;
 
   // Baseline: flute forces of its revolutions, [revolution·kMaxFlutes + flute].

@@ -920,6 +920,69 @@ TEST(AlertEngine, EstimatesThatStopComingHandRunoutBackToTheFluteForces) {
   EXPECT_EQ(run.count(AlertKind::kRunout, true), 1);
 }
 
+// An estimate that cannot tell (60 ± 10 % of f_t: u − 3σ below the 40 % clearing level, u + 3σ
+// above the 50 % limit) leaves runout to the flute forces, as where a flute cuts nothing
+// and the force bounds a runout beyond the feed poorly ([002]'s copper slot, 177 % imbalance):
+// raised where they differ by 100 %, quoting them and the estimate; not raised where they agree;
+// cleared once they agree again; a decisive estimate still decides alone.
+TEST(AlertEngine, AnUndecidedEstimateLeavesRunoutToTheFluteForces) {
+  const auto window = [](Feed& run) {
+    run.engine.on_identification(fitted(run.next, -1.8, 0.3, 1100.0, 8.0, 0.01),
+                                 [&](const Alert& a) { run.alerts.push_back(a); });
+  };
+  Feed run({}, 62);
+  run.engine.expect_estimates();
+  run.noisy(100, 2, {1.5, 0.5}, 0.01);
+  window(run);
+  EXPECT_EQ(run.count(AlertKind::kRunout, true), 0);  // two windows in a row raise
+  run.noisy(30, 2, {1.5, 0.5}, 0.01);
+  window(run);
+  ASSERT_EQ(run.count(AlertKind::kRunout, true), 1);
+  const Alert& raised = *run.first(AlertKind::kRunout);
+  EXPECT_EQ(raised.quantity, "flute_imbalance");
+  EXPECT_NEAR(raised.value, 1.0, 0.1);  // (1.5 − 0.5)/1
+  EXPECT_EQ(raised.threshold, AlertConfig{}.runout_imbalance);
+  EXPECT_NE(std::string(raised.message.data())
+                .find("the estimate cannot tell: r_CE1 − r_CE2 1.800 ± 0.300 µm = 60 ± 10 % of f_t "
+                      "3 µm"),
+            std::string::npos)
+      << raised.message.data();
+  // The flutes agree again: the next two undecided windows clear it, quoting the forces.
+  run.noisy(30, 2, {1.0, 1.0}, 0.01);
+  window(run);
+  run.noisy(30, 2, {1.0, 1.0}, 0.01);
+  window(run);
+  ASSERT_EQ(run.count(AlertKind::kRunout, false), 1);
+  EXPECT_EQ(run.first(AlertKind::kRunout, false)->quantity, "flute_imbalance");
+
+  // Flutes that agree throughout: the same estimates raise nothing.
+  Feed even({}, 62);
+  even.engine.expect_estimates();
+  for (int i = 0; i < 6; ++i) {
+    even.noisy(30, 2, {1.0, 1.0}, 0.01);
+    window(even);
+  }
+  EXPECT_EQ(even.count(AlertKind::kRunout, true), 0);
+
+  // A decisive estimate below the limit (30 ± 1 %) outweighs the imbalance (as before), and one
+  // above it (65 ± 1 %) raises on its own figures.
+  Feed decided({}, 62);
+  decided.engine.expect_estimates();
+  for (int i = 0; i < 3; ++i) {
+    decided.noisy(30, 2, {1.5, 0.5}, 0.01);
+    decided.engine.on_identification(fitted(decided.next, -0.9, 0.03, 1100.0, 8.0, 0.01),
+                                     [&](const Alert& a) { decided.alerts.push_back(a); });
+  }
+  EXPECT_EQ(decided.count(AlertKind::kRunout, true), 0);
+  for (int i = 0; i < 2; ++i) {
+    decided.noisy(30, 2, {1.0, 1.0}, 0.01);
+    decided.engine.on_identification(fitted(decided.next, -1.95, 0.03, 1100.0, 8.0, 0.01),
+                                     [&](const Alert& a) { decided.alerts.push_back(a); });
+  }
+  ASSERT_EQ(decided.count(AlertKind::kRunout, true), 1);
+  EXPECT_EQ(decided.first(AlertKind::kRunout)->quantity, "radius_deficit_per_feed");
+}
+
 // Steady state: nothing is allocated per identified window either.
 TEST(AlertEngine, ExaminingAWindowAllocatesNothing) {
   std::vector<identify::IdentifiedWindow> windows;
