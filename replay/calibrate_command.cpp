@@ -98,6 +98,9 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
     throw std::runtime_error(fmt::format("{}: feed per tooth {:g} um ({}): must be > 0",
                                          input.string(), feed_um, where));
   }
+  if (!o.feeds_um.empty()) {
+    take_option_feed(loaded, feed_um, input.string() + " (" + where + ")");
+  }
   loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
   const double config_rate_hz = configured_rate_hz(loaded);
 

@@ -73,7 +73,7 @@ LoadedCut load_cut(const DiagnoseCliOptions& o, const ConfigFile& file, std::siz
           "{}: --feeds-um gives {:g} um per tooth, its sidecar {} says {:g} um", input.string(), f,
           loaded.sidecar.string(), *loaded.sidecar_feed_per_tooth_um));
     }
-    loaded.json["model"]["process"]["feed_per_tooth_um"] = f;
+    take_option_feed(loaded, f, several ? input.string() + " (" + where + ")" : input.string());
   } else if (loaded.sidecar_feed_per_tooth_um) {
     // The cut's own feed wins over --config's (several cuts share one --config).
     loaded.json["model"]["process"]["feed_per_tooth_um"] = *loaded.sidecar_feed_per_tooth_um;

@@ -176,6 +176,21 @@ double configured_rate_hz(const LoadedMonitorConfig& config) {
   return rate_hz;
 }
 
+void take_option_feed(LoadedMonitorConfig& config, double feed_um, const std::string& cut) {
+  config.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
+  const std::string field = "model.process.feed_per_tooth_um";
+  try {
+    (void)model::model_config_from_json(config.json["model"], "model");
+  } catch (const config::ConfigError& e) {
+    if (e.path() == field) {
+      // "model.process.feed_per_tooth_um: value ..." said of the option.
+      throw std::runtime_error("--feeds-um: " + cut + ": " +
+                               std::string(e.what()).substr(field.size() + 2) +
+                               " of the cut's tool");
+    }
+  }
+}
+
 monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config) {
   try {
     // "columns" was taken by read_config_file() (the recording's column map).

@@ -77,6 +77,13 @@ LoadedMonitorConfig load_monitor_config(const MonitorConfigSources& sources,
 void take_recording_rate(LoadedMonitorConfig& config, const RecordingSource& source,
                          const std::string& input);
 
+/// A feed per tooth given on the command line (--feeds-um) into the configuration, checked
+/// against the cut's tool there: a feed the model cannot take is the option's error (the
+/// model's reader would blame the configuration file). `cut` names the cut ("cu.csv (cut 1 of
+/// 2)"). Other problems of the configuration are left to parse_monitor_config().
+/// @throws std::runtime_error "--feeds-um: CUT: ..."
+void take_option_feed(LoadedMonitorConfig& config, double feed_um, const std::string& cut);
+
 /// The monitor configuration. @throws std::runtime_error "NAME: ..." naming the field
 monitor::MonitorConfig parse_monitor_config(const LoadedMonitorConfig& config);
 

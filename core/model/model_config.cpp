@@ -313,15 +313,15 @@ void validate(const ModelConfig& c, const std::string& path) {
   const double radius_um = tool.diameter_mm * 500.0;
   if (c.effects.runout.enabled && c.effects.runout.offset_um >= 0.2 * radius_um) {
     config::fail(join(path, "effects.runout.offset_um"),
-                 "value " + std::to_string(c.effects.runout.offset_um) +
+                 "value " + config::format_number(c.effects.runout.offset_um) +
                      " um must stay below a fifth of the tool radius (" +
-                     std::to_string(0.2 * radius_um) + " um)");
+                     config::format_number(0.2 * radius_um) + " um)");
   }
   if (c.process.feed_per_tooth_um >= 0.5 * radius_um) {
     config::fail(join(path, "process.feed_per_tooth_um"),
-                 "value " + std::to_string(c.process.feed_per_tooth_um) +
+                 "value " + config::format_number(c.process.feed_per_tooth_um) +
                      " um must stay below half the tool radius (" +
-                     std::to_string(0.5 * radius_um) + " um)");
+                     config::format_number(0.5 * radius_um) + " um)");
   }
   if (c.effects.accumulation.enabled && !c.effects.min_chip.enabled) {
     config::fail(join(path, "effects.accumulation.enabled"),

@@ -237,6 +237,11 @@ TEST_F(CalibrateCommand, RefusesBadInputNamingWhatAndWhere) {
        short_cut.string() + ": too short to calibrate on (cut 2 of 2)"},
       {(dir / "bare" / "cut3.csv").string() + config,
        "cut3.csv: no feed per tooth (cut 1 of 1): no sidecar states it; give --feeds-um"},
+      // A feed the tool cannot take: the option's error, where the model's reader had named
+      // the configuration file.
+      {(dir / "bare" / "cut3.csv").string() + config + " --feeds-um 900",
+       "--feeds-um: " + (dir / "bare" / "cut3.csv").string() +
+           " (cut 1 of 1): value 900 um must stay below half the tool radius ("},
       {cuts_[0].string() + " " + other_tool.string() + config,
        std::string("cut ") + other_tool.string() + ": tool.diameter_mm differs from cut " +
            cuts_[0].string()},

@@ -407,6 +407,13 @@ TEST(DiagnoseCommand, SeveralCutsAreComparedAcrossFeeds) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--feeds-um gives 2 feed(s) for 3 cut(s)"), std::string::npos)
       << r.output;
+  // A feed the cut's tool cannot take is the option's error, not the configuration's.
+  r = test::run_command(cli + " --feeds-um 2,1,900 --report " + (dir / "r4").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--feeds-um: " + (dir / "cut_f4.csv").string() +
+                          " (cut 3 of 3): value 900 um must stay below half the tool radius ("),
+            std::string::npos)
+      << r.output;
   r = test::run_command(cli + " --report " + (dir / "r3").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("no feed per tooth (cut 1 of 3)"), std::string::npos) << r.output;
