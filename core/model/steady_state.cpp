@@ -756,8 +756,9 @@ std::pair<double, int> nearest_removal(const double* g, const double* deficit, i
   __m128d low = _mm_set1_pd(kNoCut);
   __m128d high = low;
   for (; m + 3 < passes; m += 4) {
-    low = _mm_min_pd(low, _mm_add_pd(_mm_loadu_pd(g + m), _mm_loadu_pd(deficit + m)));
-    high = _mm_min_pd(high, _mm_add_pd(_mm_loadu_pd(g + m + 2), _mm_loadu_pd(deficit + m + 2)));
+    // minpd(sum, lane): a NaN sum leaves the lane, as the sweep's c < h skipped it.
+    low = _mm_min_pd(_mm_add_pd(_mm_loadu_pd(g + m), _mm_loadu_pd(deficit + m)), low);
+    high = _mm_min_pd(_mm_add_pd(_mm_loadu_pd(g + m + 2), _mm_loadu_pd(deficit + m + 2)), high);
   }
   _mm_storeu_pd(&lane[0], low);
   _mm_storeu_pd(&lane[2], high);
@@ -775,7 +776,7 @@ std::pair<double, int> nearest_removal(const double* g, const double* deficit, i
   if (h == kNoCut) {
     return {kNoCut, 0};
   }
-  for (m = passes - 1; g[m] + deficit[m] != h; --m) {
+  for (m = passes - 1; m > 0 && g[m] + deficit[m] != h; --m) {
   }
   return {h, passes - m};
 }
