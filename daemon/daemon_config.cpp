@@ -154,6 +154,7 @@ DaemonConfig as_reload_of(const DaemonConfig& running, DaemonConfig next) {
   }
   if (comedi) {
     next.monitor.sample_rate_hz = running.monitor.sample_rate_hz;  // the board's scan rate
+    monitor::choose_cutoff_for_cut(next.monitor);                  // one not given suits that rate
   }
   next.source = running.source;
   next.lcm_url = running.lcm_url;

@@ -36,12 +36,17 @@ namespace millwatch::monitor {
 inline constexpr double kMinSampleRateHz = 1000.0;
 inline constexpr double kMaxSampleRateHz = 2e6;
 
-/// The cut-off for a cut whose configuration gives none: `default_hz` moved into the band from
-/// four times the tooth-passing frequency (the default's four harmonics at [000]'s speed) to
-/// 0.4× the sample rate, or 0.4× the sample rate where that band is empty but still passes 1.5×
-/// the tooth-passing frequency; `default_hz` itself where even that cannot be (validate() then
-/// says why).
-double cutoff_for_cut_hz(double default_hz, double sample_rate_hz, double tooth_hz);
+/// The cut-off a zero-phase (forward-backward) filter is designed at so that the pair is still
+/// 3 dB down at `cutoff_hz` (1 + (f_c/f_c')^(2n) = √2): above it, by 1.12× at order 4.
+double zero_phase_design_cutoff_hz(double cutoff_hz, int order);
+
+/// The cut-off for a cut whose configuration gives none, where `default_hz` does not suit it
+/// (below 1.5× the tooth-passing frequency, or not below 0.45× the sample rate): moved into the
+/// band from four times the tooth-passing frequency (the default's four harmonics at [000]'s
+/// speed) up to 0.4× the sample rate — lowered so that a zero-phase design at `order` stays
+/// below 0.45× the rate too —, or the band's top where four times does not fit but 1.5× does;
+/// `default_hz` itself where it suits the cut or nothing can (validate() then says why).
+double cutoff_for_cut_hz(double default_hz, double sample_rate_hz, double tooth_hz, int order);
 
 struct MonitorConfig {
   model::ModelConfig model;
@@ -51,10 +56,13 @@ struct MonitorConfig {
                                         std::numeric_limits<double>::infinity(),
                                         std::numeric_limits<double>::infinity()};
   /// [000] Sect. 5 (four harmonics of its 833 Hz tooth-passing frequency). Where the
-  /// configuration gives none and this default would not suit the cut (below 1.5× the
-  /// tooth-passing frequency, or not below 0.45× the sample rate), monitor_config_from_json
-  /// takes the nearest that does (cutoff_for_cut_hz) and says so in filter_cutoff_note.
+  /// configuration gives none and this default would not suit the cut,
+  /// choose_cutoff_for_cut() takes one that does (cutoff_for_cut_hz) and says so in
+  /// filter_cutoff_note.
   double filter_cutoff_hz = 3300.0;
+  /// Whether the configuration gave the cut-off (false: monitor_config_from_json found none,
+  /// and choose_cutoff_for_cut() may choose it for the cut).
+  bool filter_cutoff_given = true;
   /// Why the cut-off is not the default one the configuration left it at ("": it is, or the
   /// configuration gave it).
   std::string filter_cutoff_note;
@@ -97,6 +105,12 @@ struct MonitorConfig {
 MonitorConfig monitor_config_from_json(const nlohmann::json& j, const std::string& path = "",
                                        std::initializer_list<std::string_view> caller_keys = {});
 nlohmann::json to_json(const MonitorConfig& c);
+
+/// Where the configuration gave no cut-off (filter_cutoff_given false): the default, or where it
+/// does not suit this cut's speed, flutes and sample rate the one cutoff_for_cut_hz() takes,
+/// with filter_cutoff_note saying why. Again after the rate or the speed changed (the daemon
+/// takes a Comedi board's running rate on reload).
+void choose_cutoff_for_cut(MonitorConfig& c);
 /// Cross-field checks (sample rate against filter and spindle). @throws config::ConfigError.
 void validate(const MonitorConfig& c, const std::string& path = "");
 

@@ -79,10 +79,9 @@ signal::ButterworthDesign design(const MonitorConfig& c) {
   // Forward and backward, the response is |H|²: the zero-phase design moves its cut-off up so
   // that the pair is still 3 dB down at the configured cut-off, like the causal filter
   // (1 + (f_c/f_c')^(2n) = √2), and both modes pass the tooth harmonics alike.
-  const double cutoff_hz =
-      c.filter_zero_phase
-          ? c.filter_cutoff_hz * std::pow(std::sqrt(2.0) - 1.0, -1.0 / (2.0 * c.filter_order))
-          : c.filter_cutoff_hz;
+  const double cutoff_hz = c.filter_zero_phase
+                               ? zero_phase_design_cutoff_hz(c.filter_cutoff_hz, c.filter_order)
+                               : c.filter_cutoff_hz;
   return signal::ButterworthDesign::lowpass(c.sample_rate_hz, cutoff_hz, c.filter_order);
 }
 

@@ -283,7 +283,7 @@ TEST(SimulateCommand, WarnsWhenReplayWouldRefuseTheRecording) {
 }
 
 // [002]'s copper preset at 96,000 rpm (tooth-passing 3,200 Hz): the default 3.3 kHz low-pass
-// would pass none of its harmonics. Its recording replays as it is, the cut-off that suits it
+// would pass its first harmonic alone. Its recording replays as it is, the cut-off that suits it
 // said, and the speed measured against the simulator's truth.
 TEST(SimulateCommand, AHighSpeedPresetReplaysWithTheCutoffItNeeds) {
   const fs::path dir = test::fresh_temp_dir();

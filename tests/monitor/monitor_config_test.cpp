@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "core/config/json_reader.hpp"
@@ -142,7 +143,8 @@ TEST(MonitorConfig, ChoosesACutoffThatSuitsTheCutWhereNoneIsGiven) {
   // A 20 kHz DAQ: 0.4 x its rate, below 4 x but above 1.5 x the tooth-passing frequency.
   const MonitorConfig slow_daq = monitor_config_from_json(cut(96000.0, 20000.0), "config");
   EXPECT_EQ(slow_daq.filter_cutoff_hz, 8000.0);
-  EXPECT_NE(slow_daq.filter_cutoff_note.find("taking 8000 Hz, 0.4 x the sample rate"),
+  EXPECT_NE(slow_daq.filter_cutoff_note.find(
+                "taking 8000 Hz, the most the sample rate allows (0.4 x it)"),
             std::string::npos)
       << slow_daq.filter_cutoff_note;
   // A 5 kHz DAQ at 3,000 rpm: the default is above its Nyquist band; 0.4 x the rate.
@@ -150,8 +152,23 @@ TEST(MonitorConfig, ChoosesACutoffThatSuitsTheCutWhereNoneIsGiven) {
   EXPECT_EQ(low_rate.filter_cutoff_hz, 2000.0);
   EXPECT_EQ(low_rate.filter_cutoff_note,
             "filter.cutoff_hz not given: the default 3300 Hz would not stay below 0.45 x the "
-            "sample rate (5000 Hz); taking 2000 Hz, 0.4 x the sample rate (set filter.cutoff_hz "
-            "to choose)");
+            "sample rate (5000 Hz); taking 2000 Hz, the most the sample rate allows (0.4 x it) "
+            "(set filter.cutoff_hz to choose)");
+  // A lower order: its zero-phase design (raised 1.55× at order 1) must stay below 0.45× the
+  // rate too, so the cut-off does not reach 0.4×; both filters are then built.
+  nlohmann::json order_1 = cut(96000.0, 20000.0);
+  order_1["filter"] = {{"order", 1}};
+  const MonitorConfig first_order = monitor_config_from_json(order_1, "config");
+  EXPECT_NEAR(first_order.filter_cutoff_hz,
+              0.449 * 20000.0 / std::sqrt(1.0 / (std::sqrt(2.0) - 1.0)), 1e-9);
+  EXPECT_GT(first_order.filter_cutoff_hz, 1.5 * 3200.0);
+  EXPECT_LT(zero_phase_design_cutoff_hz(first_order.filter_cutoff_hz, 1), 0.45 * 20000.0);
+  // The rate changed after reading (the daemon takes a Comedi board's running rate): chosen
+  // again for it; a configured cut-off is not.
+  MonitorConfig rerun = fast;
+  rerun.sample_rate_hz = 20000.0;
+  choose_cutoff_for_cut(rerun);
+  EXPECT_EQ(rerun.filter_cutoff_hz, 8000.0);
   // Where the default suits the cut it stays, unsaid ([000]'s cut; 60,000 rpm, 3,000 Hz ≤ 3.3 kHz).
   for (const double rpm : {25000.0, 60000.0}) {
     const MonitorConfig c = monitor_config_from_json(cut(rpm, 50000.0), "config");
