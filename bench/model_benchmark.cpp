@@ -71,7 +71,9 @@ ModelConfig area_law_model() {
 /// [002]'s copper slot with chip accumulation: config/presets/copper_li2007.json's model (0.8 mm,
 /// 2 flutes, helix 30°, 96,000 rpm, f_t 0.125 µm, a_p 0.02 mm, runout 1 µm, the minimum chip
 /// 0.9 µm — 7.2 feeds — with accumulation, rigid, 10 discs): each slot is run pass by pass until
-/// the material piled up below h_min repeats, looking back over 32 passes.
+/// the material piled up below h_min repeats, looking back over 32 passes. Evaluated at 25,000 and
+/// 25,001 rpm as the others (steady_state()): the speed reaches only the dynamometer's response,
+/// off here.
 ModelConfig copper_model() {
   ModelConfig c;
   c.resolution.steps_per_rev = kSteps;

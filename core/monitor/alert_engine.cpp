@@ -206,8 +206,8 @@ void AlertEngine::rebaseline() {
   wear_raise_.reset();
   wear_clear_.reset();
   breakage_.streak = 0;
-  imbalance_ = Level{};
-  imbalance_seen_ = 0;
+  imbalance_high_ = false;
+  imbalance_above_run_ = imbalance_below_run_ = 0;
   step_streak_.fill(0);
   change_identify_ = false;
   restart_estimate_baseline();
@@ -342,14 +342,17 @@ void AlertEngine::check_runout(const Flutes& f, std::int64_t rev, std::int64_t t
 
 void AlertEngine::track_imbalance(const Flutes& f) {
   const double limit = config_.runout_imbalance;
-  imbalance_now_ = f.imbalance;
-  imbalance_seen_ = std::min(imbalance_seen_ + 1, config_.persist_revolutions);
-  const bool toward =
-      imbalance_.active ? f.imbalance < config_.hysteresis * limit : f.imbalance > limit;
-  imbalance_.streak = toward ? imbalance_.streak + 1 : 0;
-  if (imbalance_.streak >= config_.persist_revolutions) {
-    imbalance_.active = !imbalance_.active;
-    imbalance_.streak = 0;
+  const int persist = config_.persist_revolutions;
+  imbalance_above_run_ = f.imbalance > limit ? std::min(imbalance_above_run_ + 1, persist) : 0;
+  imbalance_below_run_ =
+      f.imbalance < config_.hysteresis * limit ? std::min(imbalance_below_run_ + 1, persist) : 0;
+  if (imbalance_above_run_ == persist) {
+    imbalance_high_ = true;
+    imbalance_above_ = f.imbalance;
+  }
+  if (imbalance_below_run_ == persist) {
+    imbalance_high_ = false;
+    imbalance_below_ = f.imbalance;
   }
 }
 
@@ -981,20 +984,20 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
   // (one within the hysteresis band holds the alert as it is). The flute forces' level decides,
   // where revolutions have been measured.
   const bool undecided = u - z * sigma_u < clear_below && u + z * sigma_u > limit;
-  const bool forces_known = imbalance_seen_ >= config_.persist_revolutions;
   const double imbalance_limit = config_.runout_imbalance;
   if (!runout_.active) {
-    runout_.streak = high || (undecided && imbalance_.active) ? runout_.streak + 1 : 0;
+    runout_.streak = high || (undecided && imbalance_high_) ? runout_.streak + 1 : 0;
     if (runout_.streak >= persist && !high) {
       runout_.active = true;
       runout_.streak = 0;
-      write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t, imbalance_now_,
-                         imbalance_limit, "flute_imbalance"),
-                    "runout: flute forces differ by %.2f %% of their mean (limit %.2f %%, %d "
+      write_message(emit(AlertKind::kRunout, AlertSeverity::kWarning, true, rev, t,
+                         imbalance_above_, imbalance_limit, "flute_imbalance"),
+                    "runout: flute forces differ by %.2f %% of their mean (above %.2f %% for %d "
                     "revolutions); the estimate cannot tell: %s %.3f ± %.3f µm = %.0f ± %.0f %% "
                     "of f_t %.3g µm",
-                    percent(imbalance_now_), percent(imbalance_limit), config_.persist_revolutions,
-                    pair, deficit, sigma, percent(u), percent(sigma_u), ft);
+                    percent(imbalance_above_), percent(imbalance_limit),
+                    config_.persist_revolutions, pair, deficit, sigma, percent(u), percent(sigma_u),
+                    ft);
     } else if (runout_.streak >= persist) {
       runout_.active = true;
       runout_.streak = 0;
@@ -1010,16 +1013,16 @@ void AlertEngine::check_runout_high(const WindowEstimate& e, std::int64_t rev, s
     }
     return;
   }
-  runout_.streak =
-      low || (undecided && forces_known && !imbalance_.active) ? runout_.streak + 1 : 0;
+  const bool forces_low = imbalance_below_run_ == config_.persist_revolutions;
+  runout_.streak = low || (undecided && forces_low) ? runout_.streak + 1 : 0;
   if (runout_.streak >= persist && !low) {
     runout_.active = false;
     runout_.streak = 0;
-    write_message(emit(AlertKind::kRunout, AlertSeverity::kInfo, false, rev, t, imbalance_now_,
+    write_message(emit(AlertKind::kRunout, AlertSeverity::kInfo, false, rev, t, imbalance_below_,
                        imbalance_limit, "flute_imbalance"),
                   "runout cleared: flute imbalance %.2f %% (below %.2f %% for %d revolutions); "
                   "the estimate cannot tell: %s %.3f ± %.3f µm = %.0f ± %.0f %% of f_t %.3g µm",
-                  percent(imbalance_now_), percent(config_.hysteresis * imbalance_limit),
+                  percent(imbalance_below_), percent(config_.hysteresis * imbalance_limit),
                   config_.persist_revolutions, pair, deficit, sigma, percent(u), percent(sigma_u),
                   ft);
   } else if (runout_.streak >= persist) {

@@ -414,9 +414,12 @@ class AlertEngine {
   AlertConfig config_;
   double breakage_z_ = 0.0;  // z of the per-revolution breakage bound (per flute count)
   Level runout_, breakage_, sensor_;
-  Level imbalance_;             // the flute forces' runout level, whoever leads runout
-  double imbalance_now_ = 0.0;  // the last revolution's I
-  int imbalance_seen_ = 0;      // revolutions it has seen, up to persist_revolutions
+  // The flute forces' runout level, whoever leads runout: raised after persist_revolutions
+  // above the limit, down after as many below hysteresis × the limit (runs saturate there), and
+  // the I of the last revolution that completed either run.
+  bool imbalance_high_ = false;
+  int imbalance_above_run_ = 0, imbalance_below_run_ = 0;
+  double imbalance_above_ = 0.0, imbalance_below_ = 0.0;
   int breakage_flute_ = 0;
 
   // Baseline: flute forces of its revolutions, [revolution·kMaxFlutes + flute].

@@ -947,13 +947,45 @@ TEST(AlertEngine, AnUndecidedEstimateLeavesRunoutToTheFluteForces) {
                       "3 µm"),
             std::string::npos)
       << raised.message.data();
+  // Forces between the clearing level (20 %) and the limit (25 %): they say neither, nothing
+  // clears.
+  for (int i = 0; i < 3; ++i) {
+    run.noisy(30, 2, {1.11, 0.89}, 0.002);  // I = 22 %
+    window(run);
+  }
+  EXPECT_EQ(run.count(AlertKind::kRunout, false), 0);
   // The flutes agree again: the next two undecided windows clear it, quoting the forces.
   run.noisy(30, 2, {1.0, 1.0}, 0.01);
   window(run);
   run.noisy(30, 2, {1.0, 1.0}, 0.01);
   window(run);
   ASSERT_EQ(run.count(AlertKind::kRunout, false), 1);
-  EXPECT_EQ(run.first(AlertKind::kRunout, false)->quantity, "flute_imbalance");
+  const Alert& cleared = *run.first(AlertKind::kRunout, false);
+  EXPECT_EQ(cleared.quantity, "flute_imbalance");
+  EXPECT_LT(cleared.value, 0.2);
+  EXPECT_NE(std::string(cleared.message.data()).find("runout cleared: flute imbalance "),
+            std::string::npos)
+      << cleared.message.data();
+  EXPECT_NE(std::string(cleared.message.data()).find("(below 20.00 % for 10 revolutions)"),
+            std::string::npos)
+      << cleared.message.data();
+
+  // Raised by a decisive estimate (65 ± 1 %) while the forces sit between the clearing level and
+  // the limit (I = 22 %, never raised): undecided windows after it do not clear it, the forces
+  // saying neither.
+  Feed band({}, 62);
+  band.engine.expect_estimates();
+  for (int i = 0; i < 2; ++i) {
+    band.noisy(30, 2, {1.11, 0.89}, 0.002);
+    band.engine.on_identification(fitted(band.next, -1.95, 0.03, 1100.0, 8.0, 0.01),
+                                  [&](const Alert& a) { band.alerts.push_back(a); });
+  }
+  ASSERT_EQ(band.count(AlertKind::kRunout, true), 1);
+  for (int i = 0; i < 4; ++i) {
+    band.noisy(30, 2, {1.11, 0.89}, 0.002);
+    window(band);
+  }
+  EXPECT_EQ(band.count(AlertKind::kRunout, false), 0);
 
   // Flutes that agree throughout: the same estimates raise nothing.
   Feed even({}, 62);
