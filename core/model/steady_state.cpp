@@ -12,20 +12,17 @@
 #include <string>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "core/model/chip_geometry.hpp"
 #include "core/model/dynamometer.hpp"
 #include "core/model/force_law.hpp"
+#include "core/model/nearest_removal.hpp"
 #include "core/model/periodic_response.hpp"
 
 namespace millwatch::model {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kNoCut = std::numeric_limits<double>::infinity();
+constexpr double kNoCut = kNoRemoval;  // a pass that removed nothing
 constexpr int kMaxNewtonDim = 32;
 constexpr int kMaxNewtonIterations = 12;
 constexpr int kMaxAreaSweeps = 6;
@@ -737,51 +734,6 @@ SteadyStateWorkspace::Impl::Deflection SteadyStateWorkspace::Impl::solve_deflect
 
 // ---------------------------------------------------------------------------------------------
 // One pass (the physics of MillingModel::march_step for one element)
-
-namespace {
-
-/// The rigid chip's nearest removal. Both arrays run over the last P passes, the oldest first
-/// (index P − n holds pass n back): the minimum over them of g + deficit, a pass that removed
-/// nothing (deficit kNoCut) never taken, and its n (the nearest of equal ones; 0 and kNoCut when
-/// no pass removed anything). The minimum first, in four lanes without a branch over arrays read
-/// forwards (one sweep's chain of compares and its mispredicted branches, backwards, had been
-/// most of a pass's time with 32 passes looked back), then the nearest pass that reaches it:
-/// the same result as one sweep from the nearest pass keeping the first of equal ones.
-std::pair<double, int> nearest_removal(const double* g, const double* deficit, int passes) {
-  // g + kNoCut is kNoCut, never below another: a pass that removed nothing is never the minimum.
-  // The same sums either way, and a minimum is exact in any order.
-  std::array<double, 4> lane{kNoCut, kNoCut, kNoCut, kNoCut};
-  int m = 0;
-#if defined(__SSE2__)
-  __m128d low = _mm_set1_pd(kNoCut);
-  __m128d high = low;
-  for (; m + 3 < passes; m += 4) {
-    // minpd(sum, lane): a NaN sum leaves the lane, as the sweep's c < h skipped it.
-    low = _mm_min_pd(_mm_add_pd(_mm_loadu_pd(g + m), _mm_loadu_pd(deficit + m)), low);
-    high = _mm_min_pd(_mm_add_pd(_mm_loadu_pd(g + m + 2), _mm_loadu_pd(deficit + m + 2)), high);
-  }
-  _mm_storeu_pd(&lane[0], low);
-  _mm_storeu_pd(&lane[2], high);
-#endif
-  for (; m + 3 < passes; m += 4) {
-    for (int l = 0; l < 4; ++l) {
-      const auto ul = static_cast<std::size_t>(l);
-      lane[ul] = std::min(lane[ul], g[m + l] + deficit[m + l]);
-    }
-  }
-  for (; m < passes; ++m) {
-    lane[0] = std::min(lane[0], g[m] + deficit[m]);
-  }
-  const double h = std::min(std::min(lane[0], lane[1]), std::min(lane[2], lane[3]));
-  if (h == kNoCut) {
-    return {kNoCut, 0};
-  }
-  for (m = passes - 1; m > 0 && g[m] + deficit[m] != h; --m) {
-  }
-  return {h, passes - m};
-}
-
-}  // namespace
 
 PassResult SteadyStateWorkspace::Impl::run_pass(int flute, bool engaged_slot, double area_mm2,
                                                 double guess_log_um, const double* deficits) const {

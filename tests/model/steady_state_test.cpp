@@ -7,12 +7,14 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "core/config/json_reader.hpp"
 #include "core/model/force_law.hpp"
 #include "core/model/milling_model.hpp"
+#include "core/model/nearest_removal.hpp"
 #include "core/model/periodic_response.hpp"
 #include "core/signal/butterworth_lowpass.hpp"
 #include "tests/support/allocation_counter.hpp"
@@ -20,6 +22,56 @@
 
 namespace millwatch::model {
 namespace {
+
+// The rigid chip's nearest removal against its definition, one sweep from the nearest pass back
+// to the oldest keeping the first of equal sums and skipping passes that removed nothing (the
+// evaluator's loop before the lanes): the same sum and pass, bit for bit, for every look-back
+// the evaluator uses (1–9 passes, the copper preset's 32, the most configurable, 64, and 65),
+// with many ties (chips and deficits on a coarse grid), passes that removed nothing, a NaN.
+TEST(NearestRemoval, IsTheOneSweepsMinimumAndItsNearestPass) {
+  std::mt19937_64 rng(2007);
+  std::uniform_int_distribution<int> grid(-4, 12);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int ties = 0, none = 0;
+  for (const int passes : {1, 2, 3, 4, 5, 6, 7, 8, 9, 32, 64, 65}) {
+    std::vector<double> g(static_cast<std::size_t>(passes));
+    std::vector<double> deficit(g.size());
+    for (int trial = 0; trial < 4000; ++trial) {
+      const double removed_share = trial % 4 == 0 ? 0.0 : unit(rng);  // a quarter remove nothing
+      for (std::size_t m = 0; m < g.size(); ++m) {
+        g[m] = 0.25 * grid(rng);
+        deficit[m] = unit(rng) < removed_share ? 0.125 * grid(rng) : kNoRemoval;
+      }
+      if (trial % 97 == 0) {
+        deficit[g.size() / 2] = std::numeric_limits<double>::quiet_NaN();
+      }
+      double h = kNoRemoval;
+      int at = 0;
+      int equal = 0;
+      for (int n = 1; n <= passes; ++n) {
+        const double d = deficit[static_cast<std::size_t>(passes - n)];
+        if (d == kNoRemoval) {
+          continue;
+        }
+        const double c = g[static_cast<std::size_t>(passes - n)] + d;
+        equal += c == h ? 1 : 0;
+        if (c < h) {
+          h = c;
+          at = n;
+          equal = 0;
+        }
+      }
+      ties += equal > 0 ? 1 : 0;
+      none += at == 0 ? 1 : 0;
+      const auto [chip, back] = nearest_removal(g.data(), deficit.data(), passes);
+      ASSERT_EQ(back, at) << passes << " passes, trial " << trial;
+      ASSERT_TRUE(chip == h || (std::isinf(chip) && std::isinf(h))) << chip << " " << h;
+    }
+  }
+  std::printf("%d draws with a tie at the minimum, %d with no removal\n", ties, none);
+  EXPECT_GT(ties, 1000);
+  EXPECT_GT(none, 1000);
+}
 
 constexpr double kPi = std::numbers::pi;
 
