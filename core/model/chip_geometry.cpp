@@ -179,28 +179,20 @@ void ChipGeometry::configure(const PathGeometry& path, std::span<const double> p
   in_window_.resize(static_cast<std::size_t>(steps_));
   newton_iterations_ = 0;
   for (int j = 0; j < flutes_; ++j) {
+    fill_window(pitch_rad, j, trochoidal, window_from_rad, window_to_rad);
     for (int n = 1; n <= passes_; ++n) {
-      fill_rows(path, pitch_rad, disc_angle_rad, j, n, trochoidal, window_from_rad, window_to_rad);
+      fill_rows(path, pitch_rad, disc_angle_rad, j, n);
     }
   }
 }
 
-void ChipGeometry::fill_rows(const PathGeometry& path, std::span<const double> pitch_rad,
-                             std::span<const double> disc_angle_rad, int j, int n, bool trochoidal,
-                             double window_from_rad, double window_to_rad) {
-  const int k_flute = ((j - n) % flutes_ + flutes_) % flutes_;
-  const double back = pitch_back_rad(pitch_rad, j, n);
+void ChipGeometry::fill_window(std::span<const double> pitch_rad, int j, bool trochoidal,
+                               double window_from_rad, double window_to_rad) {
   const double psi_j = pitch_rad[static_cast<std::size_t>(j)];
   const double d_phi = 2.0 * std::numbers::pi / steps_;
   const double two_pi = 2.0 * std::numbers::pi;
   const double window_rad = window_to_rad - window_from_rad;
-  const double cpj = std::cos(psi_j);
-  const double spj = std::sin(psi_j);
-  // What every disc's row shares: where the trochoid is wanted, and the circular chip's feed
-  // term v·Δψ_n·sin θ (the radii are added per disc), sin θ = sin(τ − ψ_j) from the grid's τ.
-  const double feed_um = path.feed_per_rad_um * back;
   for (int k = 0; k < steps_; ++k) {
-    const auto uk = static_cast<std::size_t>(k);
     bool trochoid = false;
     if (trochoidal) {
       const double immersion = k * d_phi - psi_j;
@@ -208,7 +200,23 @@ void ChipGeometry::fill_rows(const PathGeometry& path, std::span<const double> p
           std::fmod(std::fmod(immersion - window_from_rad, two_pi) + two_pi, two_pi);
       trochoid = into_window <= window_rad;
     }
-    in_window_[uk] = trochoid ? 1 : 0;
+    in_window_[static_cast<std::size_t>(k)] = trochoid ? 1 : 0;
+  }
+}
+
+void ChipGeometry::fill_rows(const PathGeometry& path, std::span<const double> pitch_rad,
+                             std::span<const double> disc_angle_rad, int j, int n) {
+  const int k_flute = ((j - n) % flutes_ + flutes_) % flutes_;
+  const double back = pitch_back_rad(pitch_rad, j, n);
+  const double psi_j = pitch_rad[static_cast<std::size_t>(j)];
+  const double cpj = std::cos(psi_j);
+  const double spj = std::sin(psi_j);
+  // What every disc's row shares: the circular chip's feed term v·Δψ_n·sin θ (the radii are
+  // added per disc), sin θ = sin(τ − ψ_j) from the grid's τ; where the trochoid is wanted is
+  // fill_window()'s.
+  const double feed_um = path.feed_per_rad_um * back;
+  for (int k = 0; k < steps_; ++k) {
+    const auto uk = static_cast<std::size_t>(k);
     circular_row_[uk] = feed_um * (sin_grid_[uk] * cpj - cos_grid_[uk] * spj);
   }
   // The earlier flute k sits at ψ_j − back (mod 2π) relative to flute j; the solver works with

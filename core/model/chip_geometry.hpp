@@ -124,9 +124,12 @@ class ChipGeometry {
            static_cast<std::size_t>(((table_of(disc) * flutes_ + flute) * passes_ + pass_back - 1) *
                                     steps_);
   }
+  /// Which grid steps of `flute` take the trochoid (in_window_): the flute's alone, the same for
+  /// every pass back.
+  void fill_window(std::span<const double> pitch_rad, int flute, bool trochoidal,
+                   double window_from_rad, double window_to_rad);
   void fill_rows(const PathGeometry& path, std::span<const double> pitch_rad,
-                 std::span<const double> disc_angle_rad, int flute, int pass_back, bool trochoidal,
-                 double window_from_rad, double window_to_rad);
+                 std::span<const double> disc_angle_rad, int flute, int pass_back);
 
   int flutes_ = 0;
   int passes_ = 0;
