@@ -100,8 +100,9 @@ MonitoredCut monitor_cut(const CalibrateOptions& o, const ConfigFile& config_fil
   }
   if (!o.feeds_um.empty()) {
     take_option_feed(loaded, feed_um, input.string() + " (" + where + ")");
+  } else {
+    loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
   }
-  loaded.json["model"]["process"]["feed_per_tooth_um"] = feed_um;
   const double config_rate_hz = configured_rate_hz(loaded);
 
   BadRecordLog bad(input.string(), detect_recording_format(input));

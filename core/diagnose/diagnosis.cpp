@@ -2518,7 +2518,7 @@ Diagnosis diagnose(const CutRecord& record, const model::ModelConfig& start,
         format("diagnose: the band (%.0f Hz) must lie below Nyquist (%.0f Hz)", band, 0.5 * fs));
   }
   // The speed search reaches 2.5 % above the commanded speed, with the tooth-passing harmonic.
-  const double tooth_hz = start.process.spindle_rpm / 60.0 * start.tool.flutes;
+  const double tooth_hz = model::tooth_passing_hz(start);
   if (band < (1.0 + kSpeedSearchFraction) * tooth_hz) {
     throw std::invalid_argument(format(
         "diagnose: the band (%.0f Hz) must hold the tooth-passing frequency 2.5 %% above the "

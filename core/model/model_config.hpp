@@ -216,6 +216,10 @@ void validate(const ModelConfig& config, const std::string& path = "");
 inline double tool_radius_um(const ModelConfig& c) {
   return c.tool.diameter_mm * 500.0;
 }
+/// The tooth-passing frequency at the commanded speed (Hz).
+inline double tooth_passing_hz(const ModelConfig& c) {
+  return c.process.spindle_rpm / 60.0 * c.tool.flutes;
+}
 /// The immersion angles a flute's tip engages, [from, to] (rad): [000] eq 28 for side milling
 /// (up: [0, φ_s], down: [π − φ_s, π], cos φ_s = (R − a_e)/R); a slot engages [0, π] (its walls
 /// come from the earlier passes themselves). The helix lag (helix_lag_total_rad) extends it.

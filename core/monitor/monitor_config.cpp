@@ -141,7 +141,7 @@ void choose_cutoff_for_cut(MonitorConfig& c) {
     return;
   }
   const double default_hz = MonitorConfig{}.filter_cutoff_hz;
-  const double tooth_hz = c.model.process.spindle_rpm / 60.0 * c.model.tool.flutes;
+  const double tooth_hz = model::tooth_passing_hz(c.model);
   const double chosen_hz =
       cutoff_for_cut_hz(default_hz, c.sample_rate_hz, tooth_hz, c.filter_order);
   c.filter_cutoff_hz = chosen_hz;
@@ -179,7 +179,7 @@ void validate(const MonitorConfig& c, const std::string& path) {
                      " must stay below 0.45 x the sample rate (" +
                      format_number(0.45 * c.sample_rate_hz) + " Hz)");
   }
-  const double tooth_hz = c.model.process.spindle_rpm / 60.0 * c.model.tool.flutes;
+  const double tooth_hz = model::tooth_passing_hz(c.model);
   if (c.filter_cutoff_hz < 1.5 * tooth_hz) {
     config::fail(join(path, "filter.cutoff_hz"),
                  "value " + format_number(c.filter_cutoff_hz) + " Hz" +
