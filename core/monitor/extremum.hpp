@@ -72,16 +72,30 @@ Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_wid
   //   [s0 s2; s2 s4]·[a c] = [y0 y2],  [s2 s4; s4 s6]·[b d] = [y1 y3].
   const FitMoments m = usual_fit_moments(half_width);
   const double s0 = m.s0, s2 = m.s2, s4 = m.s4, s6 = m.s6;
-  double y0 = 0.0, y1 = 0.0, y2 = 0.0, y3 = 0.0;
-  for (int u = -half_width; u <= half_width; ++u) {
-    const double y = signal(center + u);
+  // y_k = Σ u^k·y(u) over the pairs ±u: even k take y(u) + y(−u), odd k y(u) − y(−u). Two
+  // sets of sums (odd and even u) so that the additions do not wait on one another.
+  const double y_centre = signal(center);
+  std::array<double, 4> odd{y_centre, 0.0, 0.0, 0.0}, even{};
+  const auto add_pair = [&](int u, std::array<double, 4>& sums) {
+    const double above = signal(center + u), below = signal(center - u);
+    const double sum = above + below, difference = above - below;
     const double u1 = u;
     const double u2 = u1 * u1;
-    y0 += y;
-    y1 += u1 * y;
-    y2 += u2 * y;
-    y3 += u2 * u1 * y;
+    sums[0] += sum;
+    sums[1] += u1 * difference;
+    sums[2] += u2 * sum;
+    sums[3] += u2 * u1 * difference;
+  };
+  int k = 1;
+  for (; k < half_width; k += 2) {
+    add_pair(k, odd);
+    add_pair(k + 1, even);
   }
+  if (k == half_width) {
+    add_pair(k, odd);
+  }
+  const double y0 = odd[0] + even[0], y1 = odd[1] + even[1];
+  const double y2 = odd[2] + even[2], y3 = odd[3] + even[3];
   const double det_even = m.det_even;
   const double a = (s4 * y0 - s2 * y2) / det_even;
   const double c = (s0 * y2 - s2 * y0) / det_even;
@@ -94,7 +108,7 @@ Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_wid
   }
   Extremum e;
   e.position = static_cast<double>(center);
-  e.value = signal(center);
+  e.value = y_centre;
   // Stationary points: 3d·u² + 2c·u + b = 0; the extreme needs curvature 2c + 6d·u of the
   // right sign.
   double u = 0.0;

@@ -1,8 +1,11 @@
 #include "core/signal/harmonic_floors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
+#include <span>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -55,11 +58,92 @@ std::size_t count_below(const double* v, std::size_t from, std::size_t to, doubl
   return count;
 }
 
-/// Sorts v[0, n) into out[0, n). Short runs (the tracker's: ~10–40 bins) by rank: each value
-/// goes to the number of values before it (smaller, or equal and earlier), counted without a
-/// branch, where a comparison sort mispredicts about every other comparison.
+/// The comparators of Batcher's odd–even merge sort of n (a power of two) values, in order,
+/// from its merges of sorted runs of `first_run` values on (1: the whole sort; n/2: the last
+/// merge alone, of two sorted halves): `out` (if given) receives them; returns their number.
+constexpr std::size_t batcher_comparators(std::size_t n, std::size_t first_run,
+                                          std::array<std::uint8_t, 2>* out) {
+  std::size_t count = 0;
+  for (std::size_t p = first_run; p < n; p += p) {
+    for (std::size_t k = p; k > 0; k /= 2) {
+      for (std::size_t j = k % p; j + k < n; j += 2 * k) {
+        for (std::size_t i = 0; i < k && i < n - j - k; ++i) {
+          if ((i + j) / (2 * p) == (i + j + k) / (2 * p)) {
+            if (out != nullptr) {
+              out[count] = {static_cast<std::uint8_t>(i + j), static_cast<std::uint8_t>(i + j + k)};
+            }
+            ++count;
+          }
+        }
+      }
+    }
+  }
+  return count;
+}
+
+template <std::size_t N, std::size_t FirstRun>
+constexpr auto kBatcher = [] {
+  std::array<std::array<std::uint8_t, 2>, batcher_comparators(N, FirstRun, nullptr)> pairs{};
+  batcher_comparators(N, FirstRun, pairs.data());
+  return pairs;
+}();
+
+/// Applies Batcher's comparators (N, FirstRun) to x: a minimum and a maximum each, unrolled.
+template <std::size_t N, std::size_t FirstRun>
+void apply_network(std::array<double, N>& x) {
+  [&x]<std::size_t... I>(std::index_sequence<I...>) {
+    const auto exchange = [&x](std::size_t a, std::size_t b) {
+      const double low = std::min(x[a], x[b]), high = std::max(x[a], x[b]);
+      x[a] = low;
+      x[b] = high;
+    };
+    (exchange(kBatcher<N, FirstRun>[I][0], kBatcher<N, FirstRun>[I][1]), ...);
+  }
+  (std::make_index_sequence<kBatcher<N, FirstRun>.size()>{});
+}
+
+/// Sorts v[0, n) (n ≤ N, a power of two) into out[0, n) by Batcher's network, padded with +∞:
+/// a minimum and a maximum per comparator, unrolled, the values in registers — no branch to
+/// mispredict and no value waiting on a count.
+template <std::size_t N>
+void sort_by_network(const double* v, std::size_t n, double* out) {
+  std::array<double, N> x;
+  for (std::size_t i = 0; i < N; ++i) {
+    x[i] = i < n ? v[i] : std::numeric_limits<double>::infinity();
+  }
+  apply_network<N, 1>(x);
+  std::copy_n(x.begin(), n, out);
+}
+
+/// Merges sorted a and b (each at most M values, M a power of two) into out by the last merge
+/// of Batcher's network on 2M values, each run padded with +∞ to M.
+template <std::size_t M>
+void merge_by_network(std::span<const double> a, std::span<const double> b, double* out) {
+  std::array<double, 2 * M> x;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < M; ++i) {
+    x[i] = i < a.size() ? a[i] : kInf;
+    x[M + i] = i < b.size() ? b[i] : kInf;
+  }
+  apply_network<2 * M, M>(x);
+  std::copy_n(x.begin(), a.size() + b.size(), out);
+}
+
+/// Sorts v[0, n) into out[0, n). Runs of up to 16 bins (the tracker's at its default window:
+/// ~13) by a sorting network; longer short runs (up to ~40) by rank: each value goes to the
+/// number of values before it (smaller, or equal and earlier), counted without a branch, where
+/// a comparison sort mispredicts about every other comparison. The same values in the same
+/// order either way.
 void sort_run(const double* v, std::size_t n, double* out) {
   constexpr std::size_t kRankSortMax = 48;
+  if (n <= 8) {
+    sort_by_network<8>(v, n, out);
+    return;
+  }
+  if (n <= 16) {
+    sort_by_network<16>(v, n, out);
+    return;
+  }
   if (n > kRankSortMax) {
     std::copy(v, v + n, out);
     std::sort(out, out + n);
@@ -71,10 +155,15 @@ void sort_run(const double* v, std::size_t n, double* out) {
   }
 }
 
-/// Merges sorted a and b into out, a select per value instead of a branch, from both ends at
-/// once: each end's next index waits on its last comparison, and two such chains overlap.
+/// Merges sorted a and b into out: runs of up to 16 values each (the tracker's) by a merging
+/// network; longer ones with a select per value instead of a branch, from both ends at once:
+/// each end's next index waits on its last comparison, and two such chains overlap.
 void merge_runs(std::span<const double> a, std::span<const double> b, double* out) {
   const std::size_t na = a.size(), nb = b.size(), n = na + nb;
+  if (na <= 16 && nb <= 16 && n > 0) {
+    merge_by_network<16>(a, b, out);
+    return;
+  }
   if (na == 0 || nb == 0) {
     std::copy(b.begin(), b.end(), std::copy(a.begin(), a.end(), out));
     return;

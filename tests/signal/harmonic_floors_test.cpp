@@ -51,7 +51,7 @@ TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   HarmonicFloors floors;
-  int whole_runs = 0, checked = 0;
+  int whole_runs = 0, checked = 0, short_runs = 0;
   for (int trial = 0; trial < 300; ++trial) {
     // Spectra of 129 to 2049 bins, 7 to 90 bins between harmonics, lobes of 4 to 9 bins (the
     // tracker's: 2·(padded size)/window + 1), some wider than half the spacing (no floor bins).
@@ -59,6 +59,8 @@ TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
     const double harmonic_bins = 7.0 + 83.0 * uniform(rng);
     const double lobe = 4.0 + 5.0 * uniform(rng);
     const std::vector<double> m = spectrum(rng, bins, harmonic_bins, trial % 3 == 0);
+    // Runs of at most 16 floor bins (sorted and merged by networks) and longer ones.
+    short_runs += harmonic_bins - 2.0 * lobe <= 16.0 ? 1 : 0;
     const std::size_t last_bin = bins - 1 - static_cast<std::size_t>(uniform(rng) * bins / 4);
     floors.resize(bins);
     floors.prepare(m, harmonic_bins, lobe, last_bin);
@@ -101,6 +103,8 @@ TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
   }
   EXPECT_GT(checked, 5000);
   EXPECT_GT(whole_runs, 1000);  // the merged runs' way, not only the gathering one
+  EXPECT_GT(short_runs, 30);
+  EXPECT_LT(short_runs, 270);
 }
 
 }  // namespace
