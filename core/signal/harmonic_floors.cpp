@@ -93,7 +93,8 @@ template <std::size_t N, std::size_t FirstRun>
 void apply_network(std::array<double, N>& x) {
   [&x]<std::size_t... I>(std::index_sequence<I...>) {
     const auto exchange = [&x](std::size_t a, std::size_t b) {
-      const double low = std::min(x[a], x[b]), high = std::max(x[a], x[b]);
+      // On a tie each keeps its own value (a −0 beside a +0 stays one of each).
+      const double low = std::min(x[a], x[b]), high = std::max(x[b], x[a]);
       x[a] = low;
       x[b] = high;
     };

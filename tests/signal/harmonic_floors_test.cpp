@@ -60,7 +60,8 @@ TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
     const double lobe = 4.0 + 5.0 * uniform(rng);
     const std::vector<double> m = spectrum(rng, bins, harmonic_bins, trial % 3 == 0);
     // Runs of at most 16 floor bins (sorted and merged by networks) and longer ones.
-    short_runs += harmonic_bins - 2.0 * lobe <= 16.0 ? 1 : 0;
+    const double run_bins = harmonic_bins - 2.0 * lobe;  // about: floor bins between harmonics
+    short_runs += run_bins > 1.0 && run_bins <= 16.0 ? 1 : 0;
     const std::size_t last_bin = bins - 1 - static_cast<std::size_t>(uniform(rng) * bins / 4);
     floors.resize(bins);
     floors.prepare(m, harmonic_bins, lobe, last_bin);
