@@ -88,19 +88,30 @@ constexpr auto kBatcher = [] {
   return pairs;
 }();
 
-/// Applies Batcher's comparators (N, FirstRun) to x: a minimum and a maximum each, unrolled.
+/// Orders a ≤ b. On a tie each keeps its own value (a −0 beside a +0 stays one of each). Written
+/// as std::min and std::max that way, the two selects share one comparison, which the compiler
+/// turns into a branch (mispredicted half the time); minsd and maxsd need none.
+inline void compare_exchange(double& a, double& b) {
+#if defined(__SSE2__)
+  const __m128d va = _mm_set_sd(a), vb = _mm_set_sd(b);
+  a = _mm_cvtsd_f64(_mm_min_sd(vb, va));  // vb < va ? vb : va
+  b = _mm_cvtsd_f64(_mm_max_sd(va, vb));  // va > vb ? va : vb
+#else
+  const double low = std::min(a, b), high = std::max(b, a);
+  a = low;
+  b = high;
+#endif
+}
+
+/// Applies Batcher's comparators (N, FirstRun) to x, unrolled: `comparators` is
+/// std::make_index_sequence<kBatcher<N, FirstRun>.size()>.
+template <std::size_t N, std::size_t FirstRun, std::size_t... I>
+void apply_network(std::array<double, N>& x, std::index_sequence<I...> /*comparators*/) {
+  (compare_exchange(x[kBatcher<N, FirstRun>[I][0]], x[kBatcher<N, FirstRun>[I][1]]), ...);
+}
 template <std::size_t N, std::size_t FirstRun>
 void apply_network(std::array<double, N>& x) {
-  [&x]<std::size_t... I>(std::index_sequence<I...>) {
-    const auto exchange = [&x](std::size_t a, std::size_t b) {
-      // On a tie each keeps its own value (a −0 beside a +0 stays one of each).
-      const double low = std::min(x[a], x[b]), high = std::max(x[b], x[a]);
-      x[a] = low;
-      x[b] = high;
-    };
-    (exchange(kBatcher<N, FirstRun>[I][0], kBatcher<N, FirstRun>[I][1]), ...);
-  }
-  (std::make_index_sequence<kBatcher<N, FirstRun>.size()>{});
+  apply_network<N, FirstRun>(x, std::make_index_sequence<kBatcher<N, FirstRun>.size()>{});
 }
 
 /// Sorts v[0, n) (n ≤ N, a power of two) into out[0, n) by Batcher's network, padded with +∞:
@@ -214,25 +225,31 @@ void HarmonicFloors::resize(std::size_t bins) {
 void HarmonicFloors::prepare(std::span<const double> magnitude, double harmonic_bins,
                              double lobe_bins, std::size_t last_bin) {
   const double per_bin = 1.0 / harmonic_bins;
+  // Through local pointers and a local count: stores through rank_'s and run_start_'s elements
+  // could alias the member runs_, which the loop would then load and store at every bin.
+  std::size_t* const rank = rank_.data();
+  std::size_t* const run_start = run_start_.data();
+  double* const values = values_.data();
   std::size_t n = 0;
-  runs_ = 0;
-  rank_[0] = 0;
+  std::size_t runs = 0;
+  rank[0] = 0;
   for (std::size_t c = 1; c <= last_bin; ++c) {
-    rank_[c] = n;
+    rank[c] = n;
     const double x = static_cast<double>(c) * per_bin;  // in harmonics
     // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
     const auto whole = static_cast<std::int64_t>(x);
     const double fraction = x - static_cast<double>(whole);
     if (std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe_bins) {
-      while (runs_ <= static_cast<std::size_t>(whole)) {  // runs up to this one start here
-        run_start_[runs_++] = n;
+      while (runs <= static_cast<std::size_t>(whole)) {  // runs up to this one start here
+        run_start[runs++] = n;
       }
-      values_[n++] = magnitude[c];
+      values[n++] = magnitude[c];
     }
   }
-  rank_[last_bin + 1] = n;
-  run_start_[runs_] = n;  // the end, and an empty run after the last
-  run_start_[runs_ + 1] = n;
+  runs_ = runs;
+  rank[last_bin + 1] = n;
+  run_start[runs] = n;  // the end, and an empty run after the last
+  run_start[runs + 1] = n;
   for (std::size_t j = 0; j < runs_; ++j) {
     sort_run(&values_[run_start_[j]], run_start_[j + 1] - run_start_[j], &sorted_[run_start_[j]]);
   }
