@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "core/config/json_reader.hpp"
+#include "core/signal/cpu_features.hpp"
 #include "core/signal/fftw_planner.hpp"
 #include "core/signal/harmonic_floors.hpp"
 #include "core/signal/order_statistic.hpp"
@@ -107,6 +108,25 @@ std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycl
   }
   return {sum_a, sum_b};
 }
+
+/// out[k] = |in[k]| for k < n: the spectrum's magnitudes.
+void magnitudes(const fftw_complex* in, double* out, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) {
+    out[k] = std::sqrt(in[k][0] * in[k][0] + in[k][1] * in[k][1]);
+  }
+}
+
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+/// magnitudes() four at a time where the CPU has AVX (the square roots were a third of the
+/// tracker's update two at a time): the same correctly rounded roots, bit for bit.
+__attribute__((target("avx"))) void magnitudes_avx(const fftw_complex* in, double* out,
+                                                   std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) {
+    out[k] = std::sqrt(in[k][0] * in[k][0] + in[k][1] * in[k][1]);
+  }
+}
+#define MILLWATCH_TRACKER_MAGNITUDES_AVX 1
+#endif
 
 }  // namespace
 
@@ -457,9 +477,15 @@ void SpindleTracker::update() {
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
   // Only the bins the search and the floors can reach (the rest stay 0, never read).
-  for (std::size_t k = 0; k < magnitude_bins_; ++k) {
-    magnitude_[k] = std::sqrt(fft_out_[k][0] * fft_out_[k][0] + fft_out_[k][1] * fft_out_[k][1]);
+#if defined(MILLWATCH_TRACKER_MAGNITUDES_AVX)
+  if (cpu_has_avx()) {
+    magnitudes_avx(fft_out_, magnitude_.data(), magnitude_bins_);
+  } else {
+    magnitudes(fft_out_, magnitude_.data(), magnitude_bins_);
   }
+#else
+  magnitudes(fft_out_, magnitude_.data(), magnitude_bins_);
+#endif
 
   estimate_.line_hz = 0.0;
   estimate_.line_snr_db = 0.0;
