@@ -109,24 +109,34 @@ std::array<std::complex<double>, 2> dtft2(std::span<const double> x, double cycl
   return {sum_a, sum_b};
 }
 
-/// out[k] = |in[k]| for k < n: the spectrum's magnitudes.
-void magnitudes(const fftw_complex* in, double* out, std::size_t n) {
+/// out[k] = |in[k]| for k < n, inlined into each CPU's version of magnitudes() below.
+[[gnu::always_inline]] inline void magnitude_loop(const fftw_complex* in, double* out,
+                                                  std::size_t n) {
   for (std::size_t k = 0; k < n; ++k) {
     out[k] = std::sqrt(in[k][0] * in[k][0] + in[k][1] * in[k][1]);
   }
 }
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
-/// magnitudes() four at a time where the CPU has AVX (the square roots were a third of the
-/// tracker's update two at a time): the same correctly rounded roots, bit for bit.
+/// magnitude_loop() four at a time (the square roots were a third of the tracker's update two
+/// at a time): the same correctly rounded roots, bit for bit.
 __attribute__((target("avx"))) void magnitudes_avx(const fftw_complex* in, double* out,
                                                    std::size_t n) {
-  for (std::size_t k = 0; k < n; ++k) {
-    out[k] = std::sqrt(in[k][0] * in[k][0] + in[k][1] * in[k][1]);
-  }
+  magnitude_loop(in, out, n);
 }
 #define MILLWATCH_TRACKER_MAGNITUDES_AVX 1
 #endif
+
+/// The spectrum's magnitudes out[k] = |in[k]|, k < n: with AVX where the CPU has it.
+void magnitudes(const fftw_complex* in, double* out, std::size_t n) {
+#if defined(MILLWATCH_TRACKER_MAGNITUDES_AVX)
+  if (cpu_has_avx()) {
+    magnitudes_avx(in, out, n);
+    return;
+  }
+#endif
+  magnitude_loop(in, out, n);
+}
 
 }  // namespace
 
@@ -477,15 +487,7 @@ void SpindleTracker::update() {
   std::fill(fft_in_ + window_, fft_in_ + fft_size_, 0.0);
   fftw_execute(plan_);
   // Only the bins the search and the floors can reach (the rest stay 0, never read).
-#if defined(MILLWATCH_TRACKER_MAGNITUDES_AVX)
-  if (cpu_has_avx()) {
-    magnitudes_avx(fft_out_, magnitude_.data(), magnitude_bins_);
-  } else {
-    magnitudes(fft_out_, magnitude_.data(), magnitude_bins_);
-  }
-#else
   magnitudes(fft_out_, magnitude_.data(), magnitude_bins_);
-#endif
 
   estimate_.line_hz = 0.0;
   estimate_.line_snr_db = 0.0;
