@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/monitor/cache_aligned.hpp"
+
 namespace millwatch::monitor {
 
 class SampleRing {
@@ -101,7 +103,8 @@ class SampleRing {
   std::size_t row_shift_ = 0;
   std::size_t capacity_ = 0;
   std::size_t mask_ = 0;
-  std::vector<double> data_;  // [sample slot][channel]
+  CacheAlignedVector<double>
+      data_;  // [sample slot][channel]; a row of 4 or 8 within one cache line
   std::int64_t oldest_ = 0;
   std::int64_t newest_ = -1;
 };

@@ -17,6 +17,7 @@
 #include <numbers>
 #include <vector>
 
+#include "core/monitor/cache_aligned.hpp"
 #include "core/monitor/grid_line.hpp"
 #include "core/signal/cpu_features.hpp"
 
@@ -445,7 +446,7 @@ class SyncAverageOf {
   bool avx_ = false;  // add_line_rows() runs its AVX kernel
   // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled): the
   // channels' weighted sums and the weights, per bin.
-  std::vector<double> sums_;
+  CacheAlignedVector<double> sums_;
   // The window's sums, [bin][channels, weight], summed once after the window changed: averages
   // are read a few times per window (a report, an alignment), each reading every bin of several
   // channels. The slot being filled is not in them, so add() leaves them valid.

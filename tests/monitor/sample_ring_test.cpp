@@ -128,6 +128,15 @@ TEST(ForceRows, FourAtATimeAreTheRowsOneByOne) {
   }
 }
 
+// The pipeline's rows (four channels, 32 bytes) each lie within one cache line, whatever block
+// the allocator hands out: a row straddling two would make each SIMD load or store of it two.
+TEST(SampleRing, RowsStartOnCacheLines) {
+  for (const std::size_t capacity : {16u, 4096u, 65536u}) {
+    const SampleRing ring(4, capacity);
+    EXPECT_EQ(std::bit_cast<std::uintptr_t>(ring.rows().data) % 64, 0u) << capacity;
+  }
+}
+
 // push() continues a stretch; a sample that does not follow the newest starts a new one.
 TEST(SampleRing, ASampleOutOfSequenceStartsANewStretch) {
   SampleRing ring(4, 16);
