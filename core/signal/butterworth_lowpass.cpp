@@ -214,14 +214,24 @@ namespace {
 
 using SectionStates = std::array<std::array<double, 2>, kMaxButterworthSections>;
 
-/// One biquad with numerator g·(1, 2, 1) on four lanes: y = b0·x + z0; z0 = (2·b0·x + z1) − a1·y;
-/// z1 = b0·x − a2·y (process_three_lowpass_sse2's section, operation for operation).
+/// A section's b0, k1, k2, a1, a2 (SectionRecursion) on four lanes.
+struct SectionLanes {
+  __m256d b0, k1, k2, a1, a2;
+};
+
+__attribute__((target("avx"))) SectionLanes section_lanes(const SectionRecursion& c) {
+  return {_mm256_set1_pd(c.b0), _mm256_set1_pd(c.k1), _mm256_set1_pd(c.k2), _mm256_set1_pd(c.a1),
+          _mm256_set1_pd(c.a2)};
+}
+
+/// One section on four lanes (SectionRecursion::step, operation for operation).
 __attribute__((target("avx"), always_inline)) inline __m256d lowpass_section_avx(
-    __m256d x, __m256d b, __m256d a1, __m256d a2, __m256d& z0, __m256d& z1) {
-  const __m256d bx = _mm256_mul_pd(b, x);
-  const __m256d y = _mm256_add_pd(bx, z0);
-  z0 = _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(bx, bx), z1), _mm256_mul_pd(a1, y));
-  z1 = _mm256_sub_pd(bx, _mm256_mul_pd(a2, y));
+    __m256d x, const SectionLanes& c, __m256d& z0, __m256d& z1) {
+  const __m256d y = _mm256_add_pd(_mm256_mul_pd(c.b0, x), z0);
+  const __m256d z0_next =
+      _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(c.k1, x), z1), _mm256_mul_pd(c.a1, z0));
+  z1 = _mm256_sub_pd(_mm256_mul_pd(c.k2, x), _mm256_mul_pd(c.a2, z0));
+  z0 = z0_next;
   return y;
 }
 
@@ -237,15 +247,20 @@ __attribute__((target("avx"), always_inline)) inline __m256d state_lanes(const S
 /// Lanes (fx, fy, fz, fz); states sa, sb, sc of fx, fy, fz. No FMA: target "avx" alone, so GCC
 /// contracts nothing and every lane rounds as step() does.
 __attribute__((target("avx"))) void lowpass_two_sections_avx(
-    const Biquad& p, const Biquad& q, SectionStates& sa, SectionStates& sb, SectionStates& sc,
-    const std::array<const double*, 3>& in, const std::array<double, 3>& sign,
-    const std::array<double*, 3>& out, std::size_t count) {
-  const __m256d pb = _mm256_set1_pd(p.b0), pa1 = _mm256_set1_pd(p.a1), pa2 = _mm256_set1_pd(p.a2);
-  const __m256d qb = _mm256_set1_pd(q.b0), qa1 = _mm256_set1_pd(q.a1), qa2 = _mm256_set1_pd(q.a2);
+    const SectionRecursion& first, const SectionRecursion& second, SectionStates& sa,
+    SectionStates& sb, SectionStates& sc, const std::array<const double*, 3>& in,
+    const std::array<double, 3>& sign, const std::array<double*, 3>& out, std::size_t count) {
+  // The signs as the lanes hold the channels. The input is sign·x, as the axis map writes it;
+  // the first section multiplies it by b0, k1 and k2 alone, and (c·s)·x is c·(s·x) exactly for
+  // s = ±1, so the signs go into those three (a multiply a sample fewer, the same results).
+  const __m256d m = _mm256_set_pd(sign[2], sign[2], sign[1], sign[0]);
+  SectionLanes p = section_lanes(first);
+  p.b0 = _mm256_mul_pd(p.b0, m);
+  p.k1 = _mm256_mul_pd(p.k1, m);
+  p.k2 = _mm256_mul_pd(p.k2, m);
+  const SectionLanes q = section_lanes(second);
   __m256d u0 = state_lanes(sa, sb, sc, 0, 0), u1 = state_lanes(sa, sb, sc, 0, 1);
   __m256d u2 = state_lanes(sa, sb, sc, 1, 0), u3 = state_lanes(sa, sb, sc, 1, 1);
-  // The signs as the lanes hold the channels: the input is sign·x, as the axis map writes it.
-  const __m256d m = _mm256_set_pd(sign[2], sign[2], sign[1], sign[0]);
   const double* ra = in[0];
   const double* rb = in[1];
   const double* rc = in[2];
@@ -254,10 +269,8 @@ __attribute__((target("avx"))) void lowpass_two_sections_avx(
   double* xc = out[2];
   for (std::size_t i = 0; i < count; ++i) {
     const __m128d x_ab = _mm_loadh_pd(_mm_load_sd(ra + i), rb + i);
-    const __m256d x = _mm256_mul_pd(
-        m, _mm256_insertf128_pd(_mm256_castpd128_pd256(x_ab), _mm_load1_pd(rc + i), 1));
-    const __m256d y =
-        lowpass_section_avx(lowpass_section_avx(x, pb, pa1, pa2, u0, u1), qb, qa1, qa2, u2, u3);
+    const __m256d x = _mm256_insertf128_pd(_mm256_castpd128_pd256(x_ab), _mm_load1_pd(rc + i), 1);
+    const __m256d y = lowpass_section_avx(lowpass_section_avx(x, p, u0, u1), q, u2, u3);
     const __m128d y_ab = _mm256_castpd256_pd128(y);
     _mm_storel_pd(xa + i, y_ab);
     _mm_storeh_pd(xb + i, y_ab);
@@ -283,9 +296,8 @@ void LowPassFilter::process_three_lowpass_avx(std::array<LowPassFilter, 3>& filt
                                               const std::array<double, 3>& sign,
                                               const std::array<double*, 3>& out,
                                               std::size_t count) {
-  lowpass_two_sections_avx(filters[0].design_.sos[0], filters[0].design_.sos[1],
-                           filters[0].state_.z, filters[1].state_.z, filters[2].state_.z, in, sign,
-                           out, count);
+  lowpass_two_sections_avx(filters[0].recursion_[0], filters[0].recursion_[1], filters[0].state_.z,
+                           filters[1].state_.z, filters[2].state_.z, in, sign, out, count);
 }
 #endif
 

@@ -21,8 +21,9 @@ using Wide = long double;  // the look-ahead's powers are formed in extended pre
 using WideMatrix = Eigen::Matrix<Wide, 4, 4>;
 using WideVector = Eigen::Matrix<Wide, 4, 1>;
 
-/// One step of the cascade (LowPassFilter::step's operations), in extended precision; a design
-/// with one section gets a pass-through second section, whose delay elements stay zero.
+/// One step of the cascade (transposed direct form II, the state LowPassFilter::step keeps), in
+/// extended precision; a design with one section gets a pass-through second section, whose delay
+/// elements stay zero.
 Wide cascade_step(const ButterworthDesign& d, WideVector& z, Wide x) {
   for (int s = 0; s < 2; ++s) {
     const Biquad c = s < d.sections ? d.sos[static_cast<std::size_t>(s)] : Biquad{};

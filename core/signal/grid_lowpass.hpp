@@ -9,9 +9,8 @@
 // where z holds the delay elements of the cascade's sections (direct form II transposed, the
 // same state LowPassFilter keeps), and A, B, C, D are read off one step of that cascade. The
 // chain of dependent operations is then a multiply and three adds a stride instead of a
-// multiply and three adds a sample and section, which is what bounds LowPassFilter::step (its
-// recursion's latency), for about the work k samples take there (at k = 3, 29 multiplies and 24
-// adds against 18 and 30).
+// multiply and an add a sample, which is what bounds LowPassFilter::step (its recursion's
+// latency), and it computes one sample in k.
 //
 // The values on the grid are the filter's, up to rounding (they are summed in another order:
 // within ~1e-13 of the signal's peak, tests/signal/grid_lowpass_test.cpp), and they do not depend
