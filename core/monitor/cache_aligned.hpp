@@ -17,7 +17,7 @@ struct CacheAligned {
 
   CacheAligned() = default;
   template <typename U>
-  explicit CacheAligned(const CacheAligned<U>& /*other*/) {}
+  CacheAligned(const CacheAligned<U>& /*other*/) {}  // NOLINT(google-explicit-constructor)
 
   T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlignment)); }
   void deallocate(T* p, std::size_t /*n*/) { ::operator delete(p, kAlignment); }

@@ -239,10 +239,10 @@ class LowPassFilter {
  private:
 #if defined(__SSE2__)
   /// process_three_two_sections() with fx and fy side by side in one SSE2 register, fz in
-  /// another (its upper lane a copy), every state and the ten coefficients in registers (the
-  /// scalar version has more values than registers and keeps states in memory, in the
-  /// recursions' way). The same operations in the same order on each lane as step(): the same
-  /// results, bit for bit.
+  /// another (its upper lane a copy), every state in a register (the scalar version keeps
+  /// states in memory, in the recursions' way; here some of the ten coefficients are read from
+  /// memory instead, which waits on nothing). The same operations in the same order on each
+  /// lane as step(): the same results, bit for bit.
   static void process_three_lowpass_sse2(std::array<LowPassFilter, 3>& filters,
                                          const std::array<const double*, 3>& in,
                                          const std::array<double, 3>& sign,
