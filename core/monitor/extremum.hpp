@@ -26,11 +26,16 @@ inline std::int64_t nearest_sample(double position) {
   return whole + (fraction >= 0.5 ? 1 : 0) - (fraction <= -0.5 ? 1 : 0);
 }
 
-/// The centred fit's moments s_k = Σ u^k over u = −h..h and its normal equations' determinants.
+/// The centred fit's moments s_k = Σ u^k over u = −h..h and its normal equations' determinants,
+/// with their reciprocals: a fit multiplies by them (five divisions a fit, each waiting ~13
+/// cycles, were most of its latency after the sums).
 struct FitMoments {
   double s0 = 0.0, s2 = 0.0, s4 = 0.0, s6 = 0.0;
-  double det_even = 0.0;  ///< s0·s4 − s2²
-  double det_odd = 0.0;   ///< s2·s6 − s4²
+  double det_even = 0.0;      ///< s0·s4 − s2²
+  double det_odd = 0.0;       ///< s2·s6 − s4²
+  double per_s2 = 0.0;        ///< 1/s2 (h = 1: the slope's normal equation alone)
+  double per_det_even = 0.0;  ///< 1/det_even
+  double per_det_odd = 0.0;   ///< 1/det_odd (0 for h < 2, where it is 0)
 };
 
 /// The moments in closed form (Faulhaber's sums, doubled): exact while they stay below 2⁵³ (h up
@@ -45,6 +50,9 @@ inline FitMoments fit_moments(int half_width) {
   m.s6 = base * (((3.0 * h + 6.0) * h * h - 3.0) * h + 1.0) / 21.0;
   m.det_even = m.s0 * m.s4 - m.s2 * m.s2;
   m.det_odd = m.s2 * m.s6 - m.s4 * m.s4;
+  m.per_s2 = m.s2 != 0.0 ? 1.0 / m.s2 : 0.0;
+  m.per_det_even = m.det_even != 0.0 ? 1.0 / m.det_even : 0.0;
+  m.per_det_odd = m.det_odd != 0.0 ? 1.0 / m.det_odd : 0.0;
   return m;
 }
 
@@ -96,15 +104,13 @@ Extremum refine_extremum(const Signal& signal, std::int64_t center, int half_wid
   }
   const double y0 = odd[0] + even[0], y1 = odd[1] + even[1];
   const double y2 = odd[2] + even[2], y3 = odd[3] + even[3];
-  const double det_even = m.det_even;
-  const double a = (s4 * y0 - s2 * y2) / det_even;
-  const double c = (s0 * y2 - s2 * y0) / det_even;
-  double b = y1 / s2;
+  const double a = (s4 * y0 - s2 * y2) * m.per_det_even;
+  const double c = (s0 * y2 - s2 * y0) * m.per_det_even;
+  double b = y1 * m.per_s2;
   double d = 0.0;
   if (half_width >= 2) {
-    const double det_odd = m.det_odd;
-    b = (s6 * y1 - s4 * y3) / det_odd;
-    d = (s2 * y3 - s4 * y1) / det_odd;
+    b = (s6 * y1 - s4 * y3) * m.per_det_odd;
+    d = (s2 * y3 - s4 * y1) * m.per_det_odd;
   }
   Extremum e;
   e.position = static_cast<double>(center);
