@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -65,6 +66,16 @@ TEST(NearestSample, IsTheLibrarysRoundingEverywhere) {
   for (const double p : positions) {
     ASSERT_EQ(nearest_sample(p), std::llround(p)) << p;
   }
+}
+
+// A half-width of zero fits nothing (one sample has no curvature): no extreme, and a finite
+// position and value (the sample's), not the 0/0 of an empty normal equation.
+TEST(Extremum, AHalfWidthOfZeroGivesNoFit) {
+  const auto valley = [](std::int64_t n) { return std::pow(static_cast<double>(n) - 10.3, 2); };
+  const Extremum e = refine_extremum(valley, 10, 0, true);
+  EXPECT_FALSE(e.valid);
+  EXPECT_EQ(e.position, 10.0);
+  EXPECT_EQ(e.value, valley(10));
 }
 
 }  // namespace
