@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -225,29 +226,65 @@ void HarmonicFloors::resize(std::size_t bins) {
 void HarmonicFloors::prepare(std::span<const double> magnitude, double harmonic_bins,
                              double lobe_bins, std::size_t last_bin) {
   const double per_bin = 1.0 / harmonic_bins;
-  // Through local pointers and a local count: stores through rank_'s and run_start_'s elements
-  // could alias the member runs_, which the loop would then load and store at every bin.
+  // Bin c is a floor bin of run `whole` (between harmonics whole and whole + 1) when this holds.
+  const auto floor_bin = [per_bin, harmonic_bins, lobe_bins](std::size_t c, std::int64_t& whole) {
+    const double x = static_cast<double>(c) * per_bin;  // in harmonics
+    // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
+    whole = static_cast<std::int64_t>(x);
+    const double fraction = x - static_cast<double>(whole);
+    return std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe_bins;
+  };
+  // Within a run, x grows with c and its fraction (exact) with it, so min(fraction, 1 − fraction)
+  // rises and then falls: a run's floor bins are one stretch of bins, between its harmonics'
+  // lobes, (j·H + L, (j + 1)·H − L). Each stretch's ends are found by testing the bins about
+  // those bounds (a bin or two each), not every bin: the same bins as testing every one.
   std::size_t* const rank = rank_.data();
   std::size_t* const run_start = run_start_.data();
   double* const values = values_.data();
-  std::size_t n = 0;
-  std::size_t runs = 0;
-  rank[0] = 0;
-  for (std::size_t c = 1; c <= last_bin; ++c) {
-    rank[c] = n;
-    const double x = static_cast<double>(c) * per_bin;  // in harmonics
-    // |x − round(x)|, exactly, without a call: the fraction or its complement to 1.
-    const auto whole = static_cast<std::int64_t>(x);
-    const double fraction = x - static_cast<double>(whole);
-    if (std::min(fraction, 1.0 - fraction) * harmonic_bins > lobe_bins) {
-      while (runs <= static_cast<std::size_t>(whole)) {  // runs up to this one start here
-        run_start[runs++] = n;
-      }
+  std::size_t n = 0;     // floor bins so far
+  std::size_t runs = 0;  // runs started
+  std::size_t next = 0;  // the first bin whose rank is not written yet
+  const auto last_run = static_cast<std::int64_t>(static_cast<double>(last_bin) * per_bin);
+  const auto bin_near = [last_bin](double at) {
+    return static_cast<std::size_t>(std::clamp(at, 1.0, static_cast<double>(last_bin)));
+  };
+  for (std::int64_t j = 0; last_bin >= 1 && j <= last_run; ++j) {
+    const auto jd = static_cast<double>(j);
+    std::size_t lo = bin_near(jd * harmonic_bins + lobe_bins - 1.0);
+    std::size_t hi = bin_near((jd + 1.0) * harmonic_bins - lobe_bins + 1.0);
+    std::int64_t whole = 0;
+    const auto in_run = [&](std::size_t c) { return floor_bin(c, whole) && whole == j; };
+    while (lo <= hi && !in_run(lo)) {
+      ++lo;
+    }
+    if (lo > hi) {
+      continue;  // no floor bins between harmonics j and j + 1
+    }
+    while (hi > lo && !in_run(hi)) {
+      --hi;
+    }
+    while (lo > 1 && in_run(lo - 1)) {  // the bounds' guesses are within a bin; never wider
+      --lo;
+    }
+    while (hi < last_bin && in_run(hi + 1)) {
+      ++hi;
+    }
+    while (runs <= static_cast<std::size_t>(j)) {  // runs up to this one start here
+      run_start[runs++] = n;
+    }
+    for (; next <= lo; ++next) {
+      rank[next] = n;
+    }
+    for (std::size_t c = lo; c <= hi; ++c) {
+      rank[c] = n;
       values[n++] = magnitude[c];
     }
+    next = hi + 1;
+  }
+  for (; next <= last_bin + 1; ++next) {
+    rank[next] = n;
   }
   runs_ = runs;
-  rank[last_bin + 1] = n;
   run_start[runs] = n;  // the end, and an empty run after the last
   run_start[runs + 1] = n;
   for (std::size_t j = 0; j < runs_; ++j) {

@@ -47,6 +47,48 @@ std::vector<double> spectrum(std::mt19937_64& rng, std::size_t bins, double harm
   return m;
 }
 
+// The floor bins are found a run at a time from the lobes' bounds (a few bins tested about each),
+// not bin by bin: the same bins as testing every one, where a bin lies exactly on a lobe's edge
+// too (whole spacings and lobes: c = j·H + L), with narrow runs, lobes of half the spacing and
+// more (no floor bins), spacings below a bin's width of lobe, and a last bin anywhere. The
+// definition here is the tracker's own form of it (x = c·(1/H), as prepare() tests a bin).
+TEST(HarmonicFloors, FloorBinsAreThoseOfTheDefinitionAtTheLobesEdges) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  HarmonicFloors floors;
+  const std::size_t bins = 1025;
+  const std::vector<double> m = spectrum(rng, bins, 10.0, false);
+  floors.resize(bins);
+  int cases = 0, floor_bins = 0, on_edges = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const bool whole = trial % 2 == 0;
+    const double harmonic_bins =
+        whole ? static_cast<double>(2 + trial % 60) : 1.5 + 90.0 * uniform(rng);
+    const double lobe = whole ? static_cast<double>(1 + (trial / 2) % 12)
+                              : (trial % 5 == 1 ? 0.5 * harmonic_bins : 0.5 + 12.0 * uniform(rng));
+    const std::size_t last_bin = 1 + static_cast<std::size_t>(uniform(rng) * (bins - 2));
+    floors.prepare(m, harmonic_bins, lobe, last_bin);
+    const double per_bin = 1.0 / harmonic_bins;
+    std::size_t count = 0;
+    for (std::size_t c = 1; c <= last_bin; ++c) {
+      const double x = static_cast<double>(c) * per_bin;
+      const double fraction = x - std::floor(x);
+      const double distance = std::min(fraction, 1.0 - fraction) * harmonic_bins;
+      const bool expected = distance > lobe;
+      ASSERT_EQ(floors.is_floor(c), expected)
+          << "bin " << c << ", spacing " << harmonic_bins << ", lobe " << lobe;
+      count += expected ? 1 : 0;
+      on_edges += distance == lobe ? 1 : 0;
+    }
+    ASSERT_EQ(floors.count(1, last_bin), count);
+    floor_bins += static_cast<int>(count);
+    ++cases;
+  }
+  EXPECT_EQ(cases, 4000);
+  EXPECT_GT(floor_bins, 100000);
+  EXPECT_GT(on_edges, 1000);  // bins exactly a lobe from a harmonic: not floor bins
+}
+
 TEST(HarmonicFloors, MediansAreThoseOfTheFloorBinsInEveryWindow) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
