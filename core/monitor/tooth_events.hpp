@@ -197,7 +197,19 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
   // Then re-centre on the vertex until the window sits on it, so that the result does not
   // depend on the prediction.
   std::int64_t fit_center = std::llabs(best - center) <= fit_half ? center : best;
-  Extremum e = refine_extremum(detect, fit_center, fit_half, true);
+  // The fits on this window and on the windows a sample either side, computed together: none
+  // waits on another, so their chains of divisions and roots overlap, and the re-centring and
+  // the blend below mostly take one of them (the same fits as computed when asked). Inside the
+  // bounds checked above: the fit's window moves by a sample.
+  const std::int64_t near = fit_center;
+  const std::array<Extremum, 3> nearby = {refine_extremum(detect, near - 1, fit_half, true),
+                                          refine_extremum(detect, near, fit_half, true),
+                                          refine_extremum(detect, near + 1, fit_half, true)};
+  const auto fit_at = [&](std::int64_t c) {
+    return std::llabs(c - near) <= 1 ? nearby[static_cast<std::size_t>(c - near + 1)]
+                                     : refine_extremum(detect, c, fit_half, true);
+  };
+  Extremum e = nearby[1];
   const bool retry = !e.valid && std::llabs(best - center) + 1 >= fit_half;
   if (retry) {
     // The vertex lies just beyond the window around the prediction (a sharp valley seen by
@@ -205,7 +217,7 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     // sits inside it: then the valley has no clean vertex (worn edges, real data) and a
     // minimum of the noise is no event.
     fit_center = best;
-    e = refine_extremum(detect, fit_center, fit_half, true);
+    e = fit_at(fit_center);
   }
   for (int i = 0; i < 3 && e.valid && nearest_sample(e.position) != fit_center; ++i) {
     fit_center = nearest_sample(e.position);
@@ -216,7 +228,7 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
       e.valid = false;
       break;
     }
-    e = refine_extremum(detect, fit_center, fit_half, true);
+    e = fit_at(fit_center);
   }
   if (retry && e.valid && std::fabs(e.position - static_cast<double>(best)) > fit_half) {
     e.valid = false;  // the re-centred fit wandered off to another valley (a ringing rebound)
@@ -227,7 +239,7 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
     // so that the located valley moves continuously with the signal.
     const double offset = e.position - static_cast<double>(fit_center);
     const std::int64_t other = fit_center + (offset >= 0.0 ? 1 : -1);
-    const Extremum f = refine_extremum(detect, other, fit_half, true);
+    const Extremum f = fit_at(other);
     const double w = std::min(0.5, std::fabs(offset));
     out.status = EventSearch::Status::kFound;
     out.position = f.valid ? (1.0 - w) * e.position + w * f.position : e.position;
