@@ -176,12 +176,14 @@ EventSearch find_valley(const Signal& detect, std::int64_t oldest, std::int64_t 
   EventSearch out;
   const std::int64_t center = nearest_sample(predicted);
   out.position = predicted;
-  if (center + half + 3 * fit_half > newest) {
+  // Room for the fit to re-centre (and for the fits a sample either side, below).
+  const std::int64_t room = std::max<std::int64_t>(3 * fit_half, fit_half + 1);
+  if (center + half + room > newest) {
     out.status = EventSearch::Status::kWait;
-    out.needed = center + half + 3 * fit_half;  // room for the fit to re-centre
+    out.needed = center + half + room;
     return out;
   }
-  if (center - half - 3 * fit_half < oldest) {
+  if (center - half - room < oldest) {
     out.status = EventSearch::Status::kGone;
     return out;
   }

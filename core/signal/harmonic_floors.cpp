@@ -245,8 +245,11 @@ void HarmonicFloors::prepare(std::span<const double> magnitude, double harmonic_
   std::size_t runs = 0;  // runs started
   std::size_t next = 0;  // the first bin whose rank is not written yet
   const auto last_run = static_cast<std::int64_t>(static_cast<double>(last_bin) * per_bin);
-  const auto bin_near = [last_bin](double at) {
-    return static_cast<std::size_t>(std::clamp(at, 1.0, static_cast<double>(last_bin)));
+  const auto bin_near = [last_bin](double at) -> std::size_t {  // in [1, last_bin]; NaN: 1
+    if (!(at > 1.0)) {
+      return 1;
+    }
+    return at < static_cast<double>(last_bin) ? static_cast<std::size_t>(at) : last_bin;
   };
   for (std::int64_t j = 0; last_bin >= 1 && j <= last_run; ++j) {
     const auto jd = static_cast<double>(j);

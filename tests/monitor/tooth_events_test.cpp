@@ -80,6 +80,39 @@ TEST(FindValley, FindsACleanValleyAnywhereInItsWindow) {
   }
 }
 
+// The same at the narrowest fits, with the valley anywhere, on the window's edges included: a
+// fit of ± 0 samples too, whose search keeps a sample of room more than 3·0 for the fits a
+// sample either side of the window.
+TEST(FindValley, ReadsOnlyTheSamplesItIsGivenAtAnyFitWidth) {
+  const std::int64_t center = 100;
+  for (const int fit : {0, 1, 2, 5}) {
+    for (const std::int64_t half : {1, 5, 12}) {
+      for (std::int64_t bottom = center - half - 2; bottom <= center + half + 2; ++bottom) {
+        // The tightest span the search takes without waiting or giving up, and 3·fit either
+        // side (less, at a fit of 0: the search must wait).
+        const std::int64_t room = std::max<std::int64_t>(3 * fit, fit + 1);
+        for (const std::int64_t given : {room, std::int64_t{3} * fit}) {
+          const std::int64_t oldest = center - half - given, newest = center + half + given;
+          int outside = 0;
+          const auto valley = [&](std::int64_t n) {
+            outside += n < oldest || n > newest ? 1 : 0;
+            const double u = static_cast<double>(n - bottom);
+            return 1.0 + u * u;
+          };
+          const EventSearch e =
+              find_valley(valley, oldest, newest, static_cast<double>(center), half, fit);
+          EXPECT_EQ(outside, 0) << "fit " << fit << ", half " << half << ", bottom " << bottom
+                                << ", " << given << " samples of room";
+          if (given == room) {
+            EXPECT_NE(e.status, EventSearch::Status::kWait);
+            EXPECT_NE(e.status, EventSearch::Status::kGone);
+          }
+        }
+      }
+    }
+  }
+}
+
 // A W: two parabolic arms 16 samples apart, parted by a ridge of 64 (about a sixth of the
 // window's span). Where the arms are about as deep (the right one shallower by 0.04: the
 // ringing of a dynamometer between pulses), the valley found is the arm the prediction lies in
