@@ -26,16 +26,15 @@ inline std::int64_t nearest_sample(double position) {
   return whole + (fraction >= 0.5 ? 1 : 0) - (fraction <= -0.5 ? 1 : 0);
 }
 
-/// The centred fit's moments s_k = Σ u^k over u = −h..h and its normal equations' determinants,
-/// with their reciprocals: a fit multiplies by them (five divisions a fit, each waiting ~13
-/// cycles, were most of its latency after the sums).
+/// The centred fit's moments s_k = Σ u^k over u = −h..h and the reciprocals of its normal
+/// equations' determinants: a fit multiplies by them (its four divisions, each waiting ~13
+/// cycles, were most of its latency after the sums). A reciprocal of 0 stands for a zero
+/// determinant (h < 2 for the odd one, h = 0 for the even one: no fit).
 struct FitMoments {
   double s0 = 0.0, s2 = 0.0, s4 = 0.0, s6 = 0.0;
-  double det_even = 0.0;      ///< s0·s4 − s2²
-  double det_odd = 0.0;       ///< s2·s6 − s4²
   double per_s2 = 0.0;        ///< 1/s2 (h = 1: the slope's normal equation alone)
-  double per_det_even = 0.0;  ///< 1/det_even
-  double per_det_odd = 0.0;   ///< 1/det_odd (0 for h < 2, where it is 0)
+  double per_det_even = 0.0;  ///< 1/(s0·s4 − s2²)
+  double per_det_odd = 0.0;   ///< 1/(s2·s6 − s4²)
 };
 
 /// The moments in closed form (Faulhaber's sums, doubled): exact while they stay below 2⁵³ (h up
@@ -48,11 +47,11 @@ inline FitMoments fit_moments(int half_width) {
   m.s2 = base / 3.0;
   m.s4 = base * (3.0 * h * h + 3.0 * h - 1.0) / 15.0;
   m.s6 = base * (((3.0 * h + 6.0) * h * h - 3.0) * h + 1.0) / 21.0;
-  m.det_even = m.s0 * m.s4 - m.s2 * m.s2;
-  m.det_odd = m.s2 * m.s6 - m.s4 * m.s4;
+  const double det_even = m.s0 * m.s4 - m.s2 * m.s2;
+  const double det_odd = m.s2 * m.s6 - m.s4 * m.s4;
   m.per_s2 = m.s2 != 0.0 ? 1.0 / m.s2 : 0.0;
-  m.per_det_even = m.det_even != 0.0 ? 1.0 / m.det_even : 0.0;
-  m.per_det_odd = m.det_odd != 0.0 ? 1.0 / m.det_odd : 0.0;
+  m.per_det_even = det_even != 0.0 ? 1.0 / det_even : 0.0;
+  m.per_det_odd = det_odd != 0.0 ? 1.0 / det_odd : 0.0;
   return m;
 }
 
