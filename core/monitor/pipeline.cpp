@@ -667,10 +667,17 @@ const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& ou
   }
   sync_.clear();
   resultant_.clear();
-  double previous_turn = std::floor(phase_.angle_at(static_cast<double>(lo)) / kTwoPi);
+  // The window's last turns (more would start a new window: SyncAverageOf's windows tumble).
+  const double first_turn =
+      std::floor(phase_.angle_at(static_cast<double>(hi)) / kTwoPi) - (sync_.window() - 1);
+  double previous_turn =
+      std::max(first_turn, std::floor(phase_.angle_at(static_cast<double>(lo)) / kTwoPi));
   for (std::int64_t s = lo; s <= hi; ++s) {
     const double a = phase_.angle_at(static_cast<double>(s));
     const double turn = std::floor(a / kTwoPi);
+    if (turn < first_turn) {
+      continue;
+    }
     if (turn > previous_turn) {
       sync_.end_revolution();
       resultant_.end_revolution();

@@ -4,6 +4,13 @@
 // between its two neighbouring bins in proportion to its angle, so a grid finer than the
 // samples of one revolution still fills in over several revolutions.
 //
+// The windows follow one another (tumbling): a window fills to W closed revolutions, and the
+// next revolution's first sample starts a new one. The pipeline reads the average when a window
+// is full (its reports, every W revolutions) and while its first window after a lock fills
+// (the model's alignments), never part-way through a later one: a sliding window would give
+// those reads the same revolutions, but would have to keep every revolution's sums apart (31
+// grids of 8 KB, one cleared a revolution, where one grid stays in the L1 cache).
+//
 // SyncAverageOf<C> averages C channels. The pipeline's is SyncAverage (fx, fy, fz); the tooth
 // events' template at a lock also averages the in-plane resultant √(fx² + fy²), in an average
 // of its own on the same grid and window (SyncAverageOf<1>). A bin holds its C sums and their
@@ -42,16 +49,14 @@ class SyncAverageOf {
   SyncAverageOf() = default;
   SyncAverageOf(int bins, int window_revolutions)
       : bins_(bins), bins_per_rad_(bins / (2.0 * std::numbers::pi)), window_(window_revolutions) {
-    // window_ closed revolutions and the one being filled.
-    sums_.assign(static_cast<std::size_t>(window_ + 1) * kRow * static_cast<std::size_t>(bins_),
-                 0.0);
-    totals_.assign(kRow * static_cast<std::size_t>(bins_), 0.0);
+    sums_.assign(kRow * static_cast<std::size_t>(bins_), 0.0);
     avx_ = signal::cpu_has_avx();
   }
 
   /// Adds one sample at spindle angle `angle_rad` (any real; taken modulo 2π) to the current
   /// revolution.
   void add(double angle_rad, const Values& values) {
+    start_window_if_full();
     const double pos = angle_rad * bins_per_rad_;
     const double whole = std::floor(pos);
     int k = static_cast<int>(whole);
@@ -71,6 +76,7 @@ class SyncAverageOf {
   template <typename ValuesOf>
   void add_line(std::size_t count, double first_bin, double bins_per_sample,
                 const ValuesOf& values) {
+    start_window_if_full();
     if (!spindle_line(bins_per_sample)) {  // not a spindle's line: any
       add_any_line(count, first_bin, bins_per_sample, values);
       return;
@@ -123,6 +129,7 @@ class SyncAverageOf {
   void add_line_rows(std::size_t count, double first_bin, double bins_per_sample,
                      const RowsOf& rows) {
     static_assert(Channels == 3, "rows of three channels and one more double");
+    start_window_if_full();
 #if defined(MILLWATCH_SYNC_AVERAGE_AVX)
     if (avx_ && spindle_line(bins_per_sample)) {
       Line line = line_of(first_bin, bins_per_sample, bins_);
@@ -148,31 +155,25 @@ class SyncAverageOf {
   [[nodiscard]] bool avx() const {
     return avx_;
   }
-  /// Closes the current revolution: it joins the window, the oldest leaves it.
+  /// Closes the current revolution: it joins the window. The window's W-th closes it; the next
+  /// revolution starts a new window.
   void end_revolution() {
-    // The closed revolution stays in its slot; the oldest one's slot is reused (cleared).
-    // Totals are summed only when an average is asked for (rarely), keeping this per-revolution
-    // step short.
-    slot_ = (slot_ + 1) % (window_ + 1);
-    const auto begin = sums_.begin() + static_cast<std::ptrdiff_t>(index(slot_, 0));
-    std::fill(begin, begin + static_cast<std::ptrdiff_t>(kRow * static_cast<std::size_t>(bins_)),
-              0.0);
-    filled_ = std::min(filled_ + 1, window_);
-    totals_stale_ = true;
+    start_window_if_full();  // (a revolution without samples after a full window)
+    ++filled_;
+    full_ = filled_ >= window_;
   }
-  /// Average of channel c at bin k over the window (revolutions closed so far).
+  /// Average of channel c at bin k over the window's revolutions. Read after end_revolution():
+  /// the sums hold the samples added since, of a revolution not yet closed.
   [[nodiscard]] double average(int channel, int bin) const {
-    sum_window();
-    const double* t = &totals_[static_cast<std::size_t>(bin) * kRow];
+    const double* t = row(bin);
     return t[kValues] > 0.0 ? t[channel] / t[kValues] : 0.0;
   }
   /// The window's sums at bin k: each channel's weighted sum, then the weight (what average()
   /// divides), as added up.
   [[nodiscard]] std::array<double, static_cast<std::size_t>(Channels) + 1> window_sums(
       int bin) const {
-    sum_window();
     std::array<double, kRow> out{};
-    std::copy_n(&totals_[static_cast<std::size_t>(bin) * kRow], kRow, out.begin());
+    std::copy_n(row(bin), kRow, out.begin());
     return out;
   }
   /// The average of a channel on the whole grid, into `out` (size bins()).
@@ -183,7 +184,7 @@ class SyncAverageOf {
     }
     // Bins no sample has reached yet take their neighbours' mean.
     for (int k = 0; k < bins_; ++k) {
-      if (totals_[static_cast<std::size_t>(k) * kRow + kValues] <= 0.0) {
+      if (row(k)[kValues] <= 0.0) {
         const int prev = (k + bins_ - 1) % bins_;
         const int next = (k + 1) % bins_;
         out[static_cast<std::size_t>(k)] =
@@ -202,9 +203,8 @@ class SyncAverageOf {
   }
   void clear() {
     std::fill(sums_.begin(), sums_.end(), 0.0);
-    slot_ = 0;
     filled_ = 0;
-    totals_stale_ = true;
+    full_ = false;
   }
 
  private:
@@ -234,22 +234,11 @@ class SyncAverageOf {
     }
   }
 
-  /// The window's sums per bin (totals_), from the closed revolutions' slots, when they changed.
-  void sum_window() const {
-    if (!totals_stale_) {
-      return;
+  /// A full window's sums give way to the next revolution's samples: a new window.
+  void start_window_if_full() {
+    if (full_) {
+      clear();
     }
-    const std::size_t size = totals_.size();
-    std::fill(totals_.begin(), totals_.end(), 0.0);
-    for (int s = 0; s <= window_; ++s) {
-      if (s != slot_) {
-        const double* slot = &sums_[index(s, 0)];
-        for (std::size_t i = 0; i < size; ++i) {
-          totals_[i] += slot[i];
-        }
-      }
-    }
-    totals_stale_ = false;
   }
   /// The next sample is in the next bin (k + 1 < bins): the run's sums for bin k are done and
   /// added to it; its sums for k + 1 carry on as the next run's start (`lo`), where they would
@@ -257,7 +246,7 @@ class SyncAverageOf {
   /// 333.3 kHz: 0.97 bins a sample) move on a bin nearly every sample: a store and a load fewer
   /// a sample, and no store-to-load wait between successive samples.
   void carry_run(int k, Row& lo, Row& hi) {
-    double* a = &sums_[index(slot_, k)];
+    double* a = row(k);
     for (std::size_t c = 0; c < kRow; ++c) {
       a[c] += lo[c];
       lo[c] = hi[c];
@@ -269,8 +258,8 @@ class SyncAverageOf {
     if (k < 0) {
       return;
     }
-    double* a = &sums_[index(slot_, k)];
-    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
+    double* a = row(k);
+    double* b = row(k + 1 == bins_ ? 0 : k + 1);
     for (std::size_t c = 0; c < kRow; ++c) {
       a[c] += lo[c];
       b[c] += hi[c];
@@ -296,8 +285,8 @@ class SyncAverageOf {
   }
   /// Adds `r` to bin k and the next one.
   void add_pairs(int k, const PairRows& r) {
-    double* a = &sums_[index(slot_, k)];
-    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
+    double* a = row(k);
+    double* b = row(k + 1 == bins_ ? 0 : k + 1);
     _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), r.lo01));
     _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), r.lo2w));
     _mm_storeu_pd(b, _mm_add_pd(_mm_loadu_pd(b), r.hi01));
@@ -314,7 +303,7 @@ class SyncAverageOf {
       const int k = std::min(static_cast<int>(pos), bins_ - 1);
       if (k != k0) {
         if (k0 >= 0 && k == k0 + 1) {  // carry_run()
-          double* a = &sums_[index(slot_, k0)];
+          double* a = row(k0);
           _mm_storeu_pd(a, _mm_add_pd(_mm_loadu_pd(a), run.lo01));
           _mm_storeu_pd(a + 2, _mm_add_pd(_mm_loadu_pd(a + 2), run.lo2w));
           run = {run.hi01, run.hi2w, zero, zero};
@@ -352,7 +341,7 @@ class SyncAverageOf {
   template <typename RowsOf>
   __attribute__((target("avx"))) void add_sparse_avx(std::size_t count, Line line,
                                                      const RowsOf rows) {
-    double* const sums = &sums_[index(slot_, 0)];
+    double* const sums = row(0);
     const int last = bins_ - 1;
     const __m256d one = _mm256_set1_pd(1.0);
     GridChunk chunk;
@@ -372,7 +361,7 @@ class SyncAverageOf {
   template <typename RowsOf>
   __attribute__((target("avx"))) void add_dense_avx(std::size_t count, Line line,
                                                     const RowsOf rows) {
-    double* const sums = &sums_[index(slot_, 0)];
+    double* const sums = row(0);
     const int last = bins_ - 1;
     const __m256d one = _mm256_set1_pd(1.0);
     const __m256d zero = _mm256_setzero_pd();
@@ -422,8 +411,8 @@ class SyncAverageOf {
       return;
     }
 #endif
-    double* a = &sums_[index(slot_, k)];
-    double* b = &sums_[index(slot_, k + 1 == bins_ ? 0 : k + 1)];
+    double* a = row(k);
+    double* b = row(k + 1 == bins_ ? 0 : k + 1);
     for (std::size_t c = 0; c < kValues; ++c) {
       a[c] += (1.0 - w) * v[c];
       b[c] += w * v[c];
@@ -431,27 +420,22 @@ class SyncAverageOf {
     a[kValues] += 1.0 - w;
     b[kValues] += w;
   }
-  // Layout [slot][bin][channels, weight]: a sample's two bins are two short contiguous runs.
-  [[nodiscard]] std::size_t index(int slot, int bin) const {
-    return (static_cast<std::size_t>(slot) * static_cast<std::size_t>(bins_) +
-            static_cast<std::size_t>(bin)) *
-           kRow;
+  // Layout [bin][channels, weight]: a sample's two bins are two short contiguous runs.
+  [[nodiscard]] double* row(int bin) {
+    return sums_.data() + static_cast<std::size_t>(bin) * kRow;
+  }
+  [[nodiscard]] const double* row(int bin) const {
+    return sums_.data() + static_cast<std::size_t>(bin) * kRow;
   }
 
   int bins_ = 0;
   double bins_per_rad_ = 0.0;
   int window_ = 0;
-  int slot_ = 0;      // ring slot of the revolution being filled
-  int filled_ = 0;    // closed revolutions in the window
-  bool avx_ = false;  // add_line_rows() runs its AVX kernel
-  // Per ring slot (window_ + 1 of them: the closed revolutions and the one being filled): the
-  // channels' weighted sums and the weights, per bin.
+  int filled_ = 0;     // closed revolutions in the window
+  bool full_ = false;  // filled_ reached window_: the next sample starts a new window
+  bool avx_ = false;   // add_line_rows() runs its AVX kernel
+  // The window's sums per bin: the channels' weighted sums and the weights.
   CacheAlignedVector<double> sums_;
-  // The window's sums, [bin][channels, weight], summed once after the window changed: averages
-  // are read a few times per window (a report, an alignment), each reading every bin of several
-  // channels. The slot being filled is not in them, so add() leaves them valid.
-  mutable std::vector<double> totals_;
-  mutable bool totals_stale_ = true;
 };
 
 /// The pipeline's average: fx, fy, fz.

@@ -1197,6 +1197,42 @@ TEST(Pipeline, ASyncAverageIsNamedByItsLastRevolution) {
   }
 }
 
+// A lock's template over more revolutions than the synchronous average's window (its windows
+// follow one another, not slide) is the window's last revolutions: the template's average holds
+// a full window, never the few revolutions past a multiple of it (or none: no template, no
+// lock). Every window reported after holds its W revolutions.
+TEST(Pipeline, ATemplateLongerThanTheWindowTakesItsLastRevolutions) {
+  struct Sink : test::Collector {
+    std::vector<int> held;  // revolutions in each reported average
+    void on_sync_average(const SyncAverage& a, const Lockstep*, std::int64_t,
+                         std::int64_t) override {
+      held.push_back(a.revolutions());
+    }
+  };
+  const sim::Scenario s = cut_at_50khz(true);
+  const Recording r = record(s);
+  Sink usual;
+  Pipeline pu(monitor_for(s), usual);
+  replay(pu, r, 1000);
+  for (const int window : {2, 3, 4, 5, 7}) {
+    MonitorConfig c = monitor_for(s);
+    c.sync_window_revolutions = window;
+    c.template_revolutions = 41;
+    Sink out;
+    Pipeline p(c, out);
+    replay(p, r, 1000);
+    EXPECT_EQ(out.count(PipelineEventKind::kNoTemplate), 0) << window;
+    ASSERT_EQ(out.count(PipelineEventKind::kLockAcquired), 1) << window;
+    EXPECT_GE(out.revolutions.size() + 5, usual.revolutions.size()) << window;
+    ASSERT_GE(out.held.size(), 10u) << window;
+    for (const int held : out.held) {
+      EXPECT_EQ(held, window);
+    }
+    EXPECT_NEAR(out.revolutions.back().alpha_mean_deg, usual.revolutions.back().alpha_mean_deg, 0.3)
+        << window;
+  }
+}
+
 // Every window of revolutions is handed on as it fills, whatever the block size: blocks holding
 // several windows' revolutions (calibrate read 4,096 samples at a time: at 50 kHz and 25,252 rpm,
 // 34 revolutions; at 20 kHz and 31,831 rpm, 108) gave one window per block and left a third of

@@ -1,5 +1,6 @@
 // The revolution-synchronous average against analytic signals: a known function of the angle,
-// sampled at angles that do not fall on the grid, averaged over a rolling window.
+// sampled at angles that do not fall on the grid, averaged over windows of revolutions that
+// follow one another.
 
 #include "core/monitor/sync_average.hpp"
 
@@ -41,8 +42,9 @@ void feed(Average& avg, int revolutions, double samples_per_rev, double scale, d
 }
 
 // The average equals the function at the bins within the linear-interpolation error, for every
-// channel, and is the mean over the window when the level changes.
-TEST(SyncAverage, RecoversAKnownRevolutionAndRollsItsWindow) {
+// channel; once a window is full, the next revolution starts a new one, and the average is then
+// that window's alone, however far it has filled.
+TEST(SyncAverage, RecoversAKnownRevolutionAndStartsAWindowOnceFull) {
   const int bins = 128;
   Average avg(bins, 10);
   double phase = 0.123;
@@ -58,18 +60,26 @@ TEST(SyncAverage, RecoversAKnownRevolutionAndRollsItsWindow) {
   // Samples share their weight between the two nearest bins: the error is of the order of the
   // curvature times (bin width)² — here about 5e-4 of the signal.
   EXPECT_LT(worst, 2e-3);
-  // Five revolutions at twice the level: the window holds 5 old and 5 new (each revolution
-  // weighted by the share of the bin its samples fell on: 1.5 to a few 1e-5).
+  // Five revolutions at twice the level: a new window of five, none of the first ten in it.
+  feed(avg, 5, 517.3, 2.0, phase);
+  EXPECT_EQ(avg.revolutions(), 5);
+  EXPECT_NEAR(avg.average(3, 17), 2.0, 1e-12);
+  // Five more fill it; three at three times the level start the next.
   feed(avg, 5, 517.3, 2.0, phase);
   EXPECT_EQ(avg.revolutions(), 10);
-  EXPECT_NEAR(avg.average(3, 17), 1.5, 2e-4);
-  // Ten more: only new ones.
-  feed(avg, 10, 517.3, 2.0, phase);
-  EXPECT_NEAR(avg.average(3, 17), 2.0, 1e-9);
+  EXPECT_NEAR(avg.average(3, 17), 2.0, 1e-12);
   std::vector<double> out;
   avg.average(0, out);
   ASSERT_EQ(out.size(), static_cast<std::size_t>(bins));
   EXPECT_NEAR(out[40], shape(kTwoPi * 40 / bins, 2.0), 4e-3);
+  feed(avg, 3, 517.3, 3.0, phase);
+  EXPECT_EQ(avg.revolutions(), 3);
+  EXPECT_NEAR(avg.average(3, 17), 3.0, 1e-12);
+  // A revolution without samples after a full window starts one too: an empty window of one.
+  feed(avg, 7, 517.3, 3.0, phase);
+  avg.end_revolution();
+  EXPECT_EQ(avg.revolutions(), 1);
+  EXPECT_EQ(avg.average(3, 17), 0.0);
   avg.clear();
   EXPECT_EQ(avg.revolutions(), 0);
   EXPECT_EQ(avg.average(0, 5), 0.0);
