@@ -949,10 +949,14 @@ void Pipeline::apply_fit(const PendingFit& f) {
     lockstep_.set_alignment(f.alignment_rad);
     aligned_on_template_ = false;
     next_alignment_revolutions_ = 0;
-  } else {
+  } else if (sync_.first_window() || sync_.revolutions() >= sync_.window()) {
     // A lock since: the tracker's angle zero moved. On the average as it is (this lock's
     // template, or its revolutions), the alignments due still to come.
     lockstep_.align(sync_);
+  } else {
+    // Part-way through a later window of this lock (its first was aligned on): on this one
+    // once it is full, not on its first few revolutions.
+    next_alignment_revolutions_ = sync_.window();
   }
   ++identifications_taken_;
   event(PipelineEventKind::kModelUpdated, input_sample(measured_until_), f.window_revolution,

@@ -1,15 +1,16 @@
 #pragma once
-// Revolution-synchronous average: the filtered force of the last W revolutions on a uniform
+// Revolution-synchronous average: the filtered force of a window of W revolutions on a uniform
 // spindle-angle grid (bin k at 2πk/B from the tracker's angle zero). Each sample is shared
 // between its two neighbouring bins in proportion to its angle, so a grid finer than the
 // samples of one revolution still fills in over several revolutions.
 //
 // The windows follow one another (tumbling): a window fills to W closed revolutions, and the
 // next revolution's first sample starts a new one. The pipeline reads the average when a window
-// is full (its reports, every W revolutions) and while its first window after a lock fills
-// (the model's alignments), never part-way through a later one: a sliding window would give
-// those reads the same revolutions, but would have to keep every revolution's sums apart (31
-// grids of 8 KB, one cleared a revolution, where one grid stays in the L1 cache).
+// is full (its reports, every W revolutions) and while the first window since it cleared the
+// average fills (a lock's template, the model's alignments after it: first_window()), never
+// part-way through a later one: a sliding window would give those reads the same revolutions,
+// but would have to keep every revolution's sums apart (31 grids of 8 KB, one cleared a
+// revolution, where one grid stays in the L1 cache).
 //
 // SyncAverageOf<C> averages C channels. The pipeline's is SyncAverage (fx, fy, fz); the tooth
 // events' template at a lock also averages the in-plane resultant √(fx² + fy²), in an average
@@ -162,8 +163,8 @@ class SyncAverageOf {
     ++filled_;
     full_ = filled_ >= window_;
   }
-  /// Average of channel c at bin k over the window's revolutions. Read after end_revolution():
-  /// the sums hold the samples added since, of a revolution not yet closed.
+  /// Average of channel c at bin k over the window's revolutions. Read it after end_revolution():
+  /// samples added after that (a revolution not yet closed) are in the sums too.
   [[nodiscard]] double average(int channel, int bin) const {
     const double* t = row(bin);
     return t[kValues] > 0.0 ? t[channel] / t[kValues] : 0.0;
@@ -201,10 +202,16 @@ class SyncAverageOf {
   [[nodiscard]] int window() const {
     return window_;
   }
+  /// Whether the window is the first since clear() (or construction): it holds every revolution
+  /// closed since, up to a full window.
+  [[nodiscard]] bool first_window() const {
+    return !continued_;
+  }
   void clear() {
     std::fill(sums_.begin(), sums_.end(), 0.0);
     filled_ = 0;
     full_ = false;
+    continued_ = false;
   }
 
  private:
@@ -238,6 +245,7 @@ class SyncAverageOf {
   void start_window_if_full() {
     if (full_) {
       clear();
+      continued_ = true;
     }
   }
   /// The next sample is in the next bin (k + 1 < bins): the run's sums for bin k are done and
@@ -431,9 +439,10 @@ class SyncAverageOf {
   int bins_ = 0;
   double bins_per_rad_ = 0.0;
   int window_ = 0;
-  int filled_ = 0;     // closed revolutions in the window
-  bool full_ = false;  // filled_ reached window_: the next sample starts a new window
-  bool avx_ = false;   // add_line_rows() runs its AVX kernel
+  int filled_ = 0;          // closed revolutions in the window
+  bool full_ = false;       // filled_ reached window_: the next sample starts a new window
+  bool continued_ = false;  // a window has followed a full one since clear()
+  bool avx_ = false;        // add_line_rows() runs its AVX kernel
   // The window's sums per bin: the channels' weighted sums and the weights.
   CacheAlignedVector<double> sums_;
 };
