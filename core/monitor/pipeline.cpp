@@ -754,7 +754,7 @@ void Pipeline::start_events() {
   recent_speeds_.fill({});
   lock_revolution_ = revolution_base_ + revolutions_;
   start_labelling(anchor);
-  stats_.clear_window();
+  stats_.restart();
   alerts_.rebaseline();
   ever_locked_ = true;
   idle_ = false;

@@ -19,7 +19,10 @@ bool RevolutionStats::cutting(const RevolutionMeasurement& m) {
     return false;
   }
   typical_peak_N_ =
-      typical_peak_N_ == 0.0 ? peak : typical_peak_N_ + 0.05 * (peak - typical_peak_N_);
+      typical_peak_N_ == 0.0
+          ? peak
+          : typical_peak_N_ +
+                kPeakGain * (std::min(peak, kMostRise * typical_peak_N_) - typical_peak_N_);
   return true;
 }
 
@@ -56,7 +59,8 @@ void RevolutionStats::add(RevolutionRecord& r) {
   r.delta_fy_mean_N = (sd[0] + sd[1]) / n;
 }
 
-void RevolutionStats::clear_window() {
+void RevolutionStats::restart() {
+  typical_peak_N_ = 0.0;
   count_ = 0;
   next_ = 0;
 }

@@ -16,6 +16,14 @@ class RevolutionStats {
 
   /// A revolution whose largest flute peak is below this fraction of the usual peak did not cut.
   static constexpr double kIdleFraction = 0.2;
+  /// A cutting revolution moves the usual peak by this share of its difference from it,
+  /// counting a peak above kMostRise times the usual one as that: the usual peak rises 5 % a
+  /// revolution at most. One spike (a knock, a chip striking the dynamometer, a sample at the
+  /// amplifier's range: 200 N filtered, against a cut's 2 N) had raised it five-fold, every
+  /// revolution after it had been taken for one that did not cut, and the usual peak, which
+  /// such revolutions do not move, had held there: the rest of the cut lost.
+  static constexpr double kPeakGain = 0.05;
+  static constexpr double kMostRise = 2.0;
 
   /// Whether the revolution cut (true for the first ones, while the usual peak is unknown);
   /// cutting revolutions update the usual peak.
@@ -24,7 +32,9 @@ class RevolutionStats {
   void add(RevolutionRecord& r);
   /// Running level of the revolutions' largest flute peak, N (0: none yet).
   [[nodiscard]] double typical_peak_N() const { return typical_peak_N_; }
-  void clear_window();
+  /// A lock: the window of α and ΔFy, and the usual peak, start again (the spindle tracker
+  /// heard the cut: its first revolution gives the usual peak).
+  void restart();
 
  private:
   double typical_peak_N_ = 0.0;
