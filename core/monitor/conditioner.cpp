@@ -48,7 +48,7 @@ bool Conditioner::filter_checked(std::int64_t first, std::span<const double> fx,
   const std::size_t count = fx.size();
   const std::array<int, 3>& s = axis_map_.source;
   const bool permutation = s[0] != s[1] && s[0] != s[2] && s[1] != s[2];
-  if (!on_grid_ || count == 0 || count > kCheckedBlock || fy.size() != count ||
+  if (zero_phase_on_ || count == 0 || count > kCheckedBlock || fy.size() != count ||
       fz.size() != count || !permutation) {
     return false;
   }
@@ -64,13 +64,24 @@ bool Conditioner::filter_checked(std::int64_t first, std::span<const double> fx,
   // check leaves it fresh, to settle again on what the input check makes of that sample.
   const bool was_fresh = fresh_;
   if (fresh_) {
-    grid_.settle(first, {source[0][0], source[1][0], source[2][0]});
+    if (on_grid_) {
+      grid_.settle(first, {source[0][0], source[1][0], source[2][0]});
+    } else {
+      for (std::size_t a = 0; a < 3; ++a) {
+        lowpass_[a].reset();
+        lowpass_[a].settle(axis_map_.sign[a] * source[a][0]);
+      }
+    }
     fresh_ = false;
   }
-  // One pass over the block: its filtered values do not depend on how it is cut (GridLowPass),
-  // so push_block()'s chunks are handed on from it as they were filtered one by one.
-  if (!grid_.process_checked(source, {checked_[0].data(), checked_[1].data(), checked_[2].data()},
-                             count, source_limit)) {
+  // One pass over the block: its filtered values do not depend on how it is cut (the causal
+  // filters run sample by sample; GridLowPass likewise), so push_block()'s chunks are handed on
+  // from it as they were filtered one by one.
+  const std::array<double*, 3> out = {checked_[0].data(), checked_[1].data(), checked_[2].data()};
+  const bool within = on_grid_ ? grid_.process_checked(source, out, count, source_limit)
+                               : signal::LowPassFilter::process_three_checked(
+                                     lowpass_, source, axis_map_.sign, out, count, source_limit);
+  if (!within) {
     fresh_ = was_fresh;
     return false;
   }

@@ -111,24 +111,31 @@ class Conditioner {
   }
 
   /// push_block() in two steps for a block whose samples the input check has not tested yet
-  /// (InputCheck::check_time): filter_checked() filters it on the grid, testing every sample
-  /// against its input channel's limit (InputCheck::sample_limits) in the filter's own pass —
-  /// at 333.3 kHz a block read from memory costs the check ~10 % of the pipeline's time in a
-  /// pass of its own, nothing here —, and hands nothing on. True: every sample was within;
-  /// hand_on_checked() then hands the block on, as push_block() would have (the same values,
-  /// runs and state, bit for bit). False: a sample was not within, or the block cannot take
-  /// this way (not on a grid, longer than kCheckedBlock, an axis map that is not a
-  /// permutation); the conditioner is as it was, and the caller checks the samples and calls
-  /// push_block().
+  /// (InputCheck::check_time): filter_checked() filters it (on the grid, or every sample),
+  /// testing every sample against its input channel's limit (InputCheck::sample_limits) in the
+  /// filter's own pass — at 333.3 kHz a block read from memory costs the check ~10 % of the
+  /// pipeline's time in a pass of its own, nothing here —, and hands nothing on. True: every
+  /// sample was within; hand_on_checked() then hands the block on, as push_block() would have
+  /// (the same values, runs and state, bit for bit). False: a sample was not within, or the
+  /// block cannot take this way (zero-phase filtering, longer than kCheckedBlock, an axis map
+  /// that is not a permutation); the conditioner is as it was, and the caller checks the
+  /// samples and calls push_block().
   bool filter_checked(std::int64_t first, std::span<const double> fx, std::span<const double> fy,
                       std::span<const double> fz, const std::array<double, 3>& limit);
   template <typename Limit, typename OutRun>
   void hand_on_checked(Limit&& run_limit, OutRun&& out_run) {
-    for_grid_chunks(checked_first_, checked_count_, [&](std::size_t from, std::size_t n) {
+    const auto chunk = [&](std::size_t from, std::size_t n) {
       hand_on(checked_first_ + static_cast<std::int64_t>(from), n,
               {checked_[0].data() + from, checked_[1].data() + from, checked_[2].data() + from},
               run_limit, out_run);
-    });
+    };
+    if (on_grid_) {
+      for_grid_chunks(checked_first_, checked_count_, chunk);
+    } else {  // push_block()'s chunks
+      for (std::size_t from = 0; from < checked_count_; from += kChunk) {
+        chunk(from, std::min(kChunk, checked_count_ - from));
+      }
+    }
     checked_count_ = 0;
   }
   /// The longest block filter_checked() takes.

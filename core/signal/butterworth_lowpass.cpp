@@ -245,11 +245,15 @@ __attribute__((target("avx"), always_inline)) inline __m256d state_lanes(const S
 }
 
 /// Lanes (fx, fy, fz, fz); states sa, sb, sc of fx, fy, fz. No FMA: target "avx" alone, so GCC
-/// contracts nothing and every lane rounds as step() does.
-__attribute__((target("avx"))) void lowpass_two_sections_avx(
+/// contracts nothing and every lane rounds as step() does. kCheck: each sample also tested,
+/// |x| ≤ its channel's limit (`limit`; a NaN is not), beside the recursions; returns whether
+/// every one was (true without kCheck). The states are written either way.
+template <bool kCheck>
+__attribute__((target("avx"))) bool lowpass_two_sections_avx(
     const SectionRecursion& first, const SectionRecursion& second, SectionStates& sa,
     SectionStates& sb, SectionStates& sc, const std::array<const double*, 3>& in,
-    const std::array<double, 3>& sign, const std::array<double*, 3>& out, std::size_t count) {
+    const std::array<double, 3>& sign, const std::array<double*, 3>& out, std::size_t count,
+    const std::array<double, 3>& limit = {}) {
   // The signs as the lanes hold the channels. The input is sign·x, as the axis map writes it;
   // the first section multiplies it by b0, k1 and k2 alone, and (c·s)·x is c·(s·x) exactly for
   // s = ±1, so the signs go into those three (a multiply a sample fewer, the same results).
@@ -267,9 +271,15 @@ __attribute__((target("avx"))) void lowpass_two_sections_avx(
   double* xa = out[0];
   double* xb = out[1];
   double* xc = out[2];
+  const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
+  const __m256d bound = _mm256_set_pd(limit[2], limit[2], limit[1], limit[0]);
+  __m256d within = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
   for (std::size_t i = 0; i < count; ++i) {
     const __m128d x_ab = _mm_loadh_pd(_mm_load_sd(ra + i), rb + i);
     const __m256d x = _mm256_insertf128_pd(_mm256_castpd128_pd256(x_ab), _mm_load1_pd(rc + i), 1);
+    if constexpr (kCheck) {  // |x| ≤ limit, ordered: false for a NaN
+      within = _mm256_and_pd(within, _mm256_cmp_pd(_mm256_and_pd(x, magnitude), bound, _CMP_LE_OQ));
+    }
     const __m256d y = lowpass_section_avx(lowpass_section_avx(x, p, u0, u1), q, u2, u3);
     const __m128d y_ab = _mm256_castpd256_pd128(y);
     _mm_storel_pd(xa + i, y_ab);
@@ -287,6 +297,7 @@ __attribute__((target("avx"))) void lowpass_two_sections_avx(
   sb[1] = {v2[1], v3[1]};
   sc[0] = {v0[2], v1[2]};
   sc[1] = {v2[2], v3[2]};
+  return _mm256_movemask_pd(within) == 0xF;
 }
 
 }  // namespace
@@ -296,9 +307,42 @@ void LowPassFilter::process_three_lowpass_avx(std::array<LowPassFilter, 3>& filt
                                               const std::array<double, 3>& sign,
                                               const std::array<double*, 3>& out,
                                               std::size_t count) {
-  lowpass_two_sections_avx(filters[0].recursion_[0], filters[0].recursion_[1], filters[0].state_.z,
-                           filters[1].state_.z, filters[2].state_.z, in, sign, out, count);
+  lowpass_two_sections_avx<false>(filters[0].recursion_[0], filters[0].recursion_[1],
+                                  filters[0].state_.z, filters[1].state_.z, filters[2].state_.z, in,
+                                  sign, out, count);
 }
 #endif
+
+bool LowPassFilter::process_three_checked(std::array<LowPassFilter, 3>& filters,
+                                          const std::array<const double*, 3>& in,
+                                          const std::array<double, 3>& sign,
+                                          const std::array<double*, 3>& out, std::size_t count,
+                                          const std::array<double, 3>& limit, Kernel kernel) {
+#if defined(__SSE2__)
+  if (filters[0].design_.sections == 2 && kernel != Kernel::kScalar && kernel != Kernel::kSse2 &&
+      cpu_has_avx()) {
+    const std::array<ButterworthState, 3> before = {filters[0].state_, filters[1].state_,
+                                                    filters[2].state_};
+    if (lowpass_two_sections_avx<true>(filters[0].recursion_[0], filters[0].recursion_[1],
+                                       filters[0].state_.z, filters[1].state_.z,
+                                       filters[2].state_.z, in, sign, out, count, limit)) {
+      return true;
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      filters[a].state_ = before[a];
+    }
+    return false;
+  }
+#endif
+  for (std::size_t a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!(std::fabs(in[a][i]) <= limit[a])) {
+        return false;
+      }
+    }
+  }
+  process_three(filters, in, sign, out, count, kernel);
+  return true;
+}
 
 }  // namespace millwatch::signal

@@ -224,10 +224,11 @@ void expect_same(const Output& a, const Output& b, const std::string& what) {
 
 // Blocks whose samples are all within their limits, filtered with their check and handed on
 // by hand_on_checked(), give what push_block() gives, bit for bit: values, runs, tare,
-// envelope; on every grid and from any sample number.
+// envelope; every sample measured (stride 1: blocks longer than push_block()'s chunks), on
+// every grid, and from any sample number.
 TEST(Conditioner, FilterCheckedHandsOnWhatPushBlockDoes) {
   for (const std::int64_t origin : {std::int64_t{0}, std::int64_t{-100001}}) {
-    for (const int stride : {3, 6, signal::kMaxGridStride}) {
+    for (const int stride : {1, 3, 6, signal::kMaxGridStride}) {
       for (const std::size_t run : {1U, 7U, 1000U}) {
         Checked checked{{1e6, 1e6, 1e6}, {}};
         const Output o = in_blocks(stride, run, origin, &checked);
@@ -256,7 +257,7 @@ TEST(Conditioner, FilterCheckedRefusesASampleBeyondItsInputChannelsLimit) {
   for (const Change change :
        {Change{1, 50.0, true}, Change{0, 50.0, false}, Change{2, 1001.0, true},
         Change{2, 999.0, false}, Change{0, nan, true}}) {
-    for (const int stride : {3, 6}) {
+    for (const int stride : {1, 3, 6}) {
       for (const std::size_t at : {std::size_t{0}, std::size_t{160}, std::size_t{kBlock - 1}}) {
         const Tamper tamper = [&](std::int64_t index, std::vector<double>& x,
                                   std::vector<double>& y, std::vector<double>& z) {
@@ -288,18 +289,25 @@ TEST(Conditioner, FilterCheckedRefusesASampleBeyondItsInputChannelsLimit) {
   }
 }
 
-// filter_checked() takes blocks of up to kCheckedBlock samples on a grid: longer ones, and any
-// without a grid, are left to push_block() (refused, the conditioner untouched).
-TEST(Conditioner, FilterCheckedTakesBlocksUpToItsLengthOnAGrid) {
+// filter_checked() takes blocks of up to kCheckedBlock samples, on a grid or not: longer ones,
+// and any under zero-phase filtering, are left to push_block() (refused, the conditioner
+// untouched).
+TEST(Conditioner, FilterCheckedTakesBlocksUpToItsLength) {
   const std::vector<double> quiet(Conditioner::kCheckedBlock + 1, 1.0);
   const std::span<const double> all(quiet), most = all.first(Conditioner::kCheckedBlock);
   const std::array<double, 3> limit = {1e6, 1e6, 1e6};
-  Conditioner on_grid(config(), signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4));
+  const auto design = signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4);
+  Conditioner on_grid(config(), design);
   on_grid.set_stride(3);
   EXPECT_FALSE(on_grid.filter_checked(0, all, all, all, limit));
   EXPECT_TRUE(on_grid.filter_checked(0, most, most, most, limit));
-  Conditioner every(config(), signal::ButterworthDesign::lowpass(kRate_hz, 3300.0, 4));
-  EXPECT_FALSE(every.filter_checked(0, most, most, most, limit));
+  Conditioner every(config(), design);
+  EXPECT_FALSE(every.filter_checked(0, all, all, all, limit));
+  EXPECT_TRUE(every.filter_checked(0, most, most, most, limit));
+  MonitorConfig zero_phase = config();
+  zero_phase.filter_zero_phase = true;
+  Conditioner both_ways(zero_phase, design);
+  EXPECT_FALSE(both_ways.filter_checked(0, most, most, most, limit));
 }
 
 // On a grid, push() is a block of one sample: the grid's samples alone come out, the values of

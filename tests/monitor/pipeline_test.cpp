@@ -959,25 +959,27 @@ TEST(Pipeline, MeasuredRmsIsTheResultantsInNewtons) {
   EXPECT_NEAR(std::sqrt(rms / m), truth, 0.01 * truth);
 }
 
-// Issue 10: at 333.3 kHz a block going on from the last one has its samples checked as the
-// grid's filter reads them (Conditioner::filter_checked), not in a pass of their own before.
-// The two ways give the same run, bit for bit — revolutions, events, counters — on a cut with
-// bad samples of every kind (NaN, infinite, implausible, saturated; at a block's first sample,
-// its last, within it) and a lost block (a gap: the block after it goes the input check's way).
-TEST(Pipeline, SamplesCheckedInTheFilterGiveWhatTheInputCheckGives) {
+// Issue 10: a block going on from the last one has its samples checked as the filter reads them
+// (Conditioner::filter_checked: on the grid at 333.3 kHz, every sample at 50 kHz), not in a
+// pass of their own before. The two ways give the same run, bit for bit — revolutions, events,
+// counters — on a cut with bad samples of every kind (NaN, infinite, implausible, saturated; at
+// a block's first sample, its last, within it) and a lost block (a gap: the block after it goes
+// the input check's way).
+void expect_checked_in_filter_as_apart(double rate_hz) {
   sim::Scenario s = cut_at_50khz(true);
-  s.sample_rate_hz = 333300.0;
+  s.sample_rate_hz = rate_hz;
   s.duration_s = 0.6;
   Recording r = record(s);
+  const auto block = static_cast<std::size_t>(std::lround(rate_hz / 1000.0));  // 1 ms
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   const std::array<std::pair<std::size_t, double>, 6> bad = {
-      std::pair{std::size_t{99 * 333}, nan},       // a block's first sample, fx
-      std::pair{std::size_t{120 * 333 - 1}, inf},  // a block's last, fy below
-      std::pair{std::size_t{150 * 333 + 100}, -2e6},
-      std::pair{std::size_t{180 * 333 + 7}, 1500.0},  // saturated, kept
-      std::pair{std::size_t{181 * 333 + 8}, -1500.0},
-      std::pair{std::size_t{400 * 333 + 200}, nan}};
+      std::pair{99 * block, nan},       // a block's first sample, fx
+      std::pair{120 * block - 1, inf},  // a block's last, fy below
+      std::pair{150 * block + block / 3, -2e6},
+      std::pair{180 * block + 7, 1500.0},  // saturated, kept
+      std::pair{181 * block + 8, -1500.0},
+      std::pair{400 * block + block / 2, nan}};
   for (std::size_t k = 0; k < bad.size(); ++k) {
     std::vector<double>& channel = k % 3 == 0 ? r.fx : k % 3 == 1 ? r.fy : r.fz;
     channel[bad[k].first] = bad[k].second;
@@ -989,8 +991,8 @@ TEST(Pipeline, SamplesCheckedInTheFilterGiveWhatTheInputCheckGives) {
   Pipeline q(c, apart);
   q.check_samples_in_filter(false);
   const auto lose_one = [](std::int64_t seq, SampleBlock&) { return seq != 300; };
-  replay(p, r, 333, lose_one);
-  replay(q, r, 333, lose_one);
+  replay(p, r, block, lose_one);
+  replay(q, r, block, lose_one);
   ASSERT_GT(in_filter.revolutions.size(), 200u);
   ASSERT_EQ(in_filter.revolutions.size(), apart.revolutions.size());
   for (std::size_t i = 0; i < apart.revolutions.size(); ++i) {
@@ -1033,6 +1035,13 @@ TEST(Pipeline, SamplesCheckedInTheFilterGiveWhatTheInputCheckGives) {
   EXPECT_EQ(in_filter.count(PipelineEventKind::kSaturated), 2);
   std::printf("%zu revolutions, %zu events the same either way\n", apart.revolutions.size(),
               apart.events.size());
+}
+
+TEST(Pipeline, SamplesCheckedInTheFilterGiveWhatTheInputCheckGives) {
+  for (const double rate_hz : {333300.0, 50000.0}) {
+    SCOPED_TRACE(rate_hz);
+    expect_checked_in_filter_as_apart(rate_hz);
+  }
 }
 
 // Bad input is counted and reported; the pipeline keeps measuring.

@@ -13,6 +13,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <unsupported/Eigen/FFT>
 #include <utility>
 #include <vector>
@@ -639,6 +640,86 @@ TEST(ButterworthLowPass, ThreeChannelsReadWithTheirSignsAreTheMappedChannelsInPl
   LowPassFilter::process_three(none, {&in[0], &in[1], &in[2]}, sign, {&out[0], &out[1], &out[2]},
                                1);
   EXPECT_EQ(out, (std::array<double, 3>{-1.5, -2.0, -0.25}));
+}
+
+// process_three_checked() on samples within their limits (the largest exactly at its limit)
+// filters as process_three() does, bit for bit, with every kernel and order; a sample beyond its
+// channel's limit (or a NaN), first, in the middle or last of a block, in any channel, is
+// refused and leaves the filters' states as they were — the next block then filters as if the
+// refused one had never come. The lanes' limits are each channel's own (a sample within one
+// channel's limit but beyond another's is refused only in the other).
+TEST(ButterworthLowPass, ThreeChannelsCheckedAreFilteredOrRefusedUntouched) {
+  using Kernel = LowPassFilter::Kernel;
+  std::vector<Kernel> kernels = {Kernel::kAuto, Kernel::kScalar, Kernel::kSse2};
+  if (signal::cpu_has_avx()) {
+    kernels.push_back(Kernel::kAvx);
+  }
+  const std::array<double, 3> sign = {1.0, -1.0, -1.0};
+  const std::array<double, 3> limit = {3.0, 4.0, 5.0};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int order : {3, 4}) {
+    const auto d = ButterworthDesign::lowpass(50000.0, kCutoffHz, order);
+    const std::size_t n = 600;
+    std::array<std::vector<double>, 3> x;
+    for (std::size_t a = 0; a < 3; ++a) {
+      for (std::size_t i = 0; i < n; ++i) {
+        x[a].push_back(limit[a] * std::sin(0.011 * static_cast<double>(i) + a));
+      }
+      x[a][77] = -limit[a];  // at the limit: within
+    }
+    for (const Kernel kernel : kernels) {
+      std::array<LowPassFilter, 3> checked = {LowPassFilter(d), LowPassFilter(d), LowPassFilter(d)};
+      std::array<LowPassFilter, 3> plain = checked;
+      std::array<std::vector<double>, 3> y, z;
+      for (std::size_t a = 0; a < 3; ++a) {
+        y[a].assign(n, 0.0);
+        z[a].assign(n, 0.0);
+      }
+      for (std::size_t i = 0; i < n; i += 150) {
+        const std::array<const double*, 3> in = {x[0].data() + i, x[1].data() + i, x[2].data() + i};
+        // A bad copy of this block first, refused, in one channel at one place.
+        for (const auto& [channel, at, value] :
+             {std::tuple{std::size_t{0}, std::size_t{0}, 3.5},
+              std::tuple{std::size_t{1}, std::size_t{70}, nan},
+              std::tuple{std::size_t{2}, std::size_t{149}, -5.5}}) {
+          std::array<std::vector<double>, 3> bad = {std::vector<double>(in[0], in[0] + 150),
+                                                    std::vector<double>(in[1], in[1] + 150),
+                                                    std::vector<double>(in[2], in[2] + 150)};
+          bad[channel][at] = value;
+          std::array<std::vector<double>, 3> scratch = y;
+          const auto before = checked;
+          EXPECT_FALSE(LowPassFilter::process_three_checked(
+              checked, {bad[0].data(), bad[1].data(), bad[2].data()}, sign,
+              {scratch[0].data(), scratch[1].data(), scratch[2].data()}, 150, limit, kernel));
+          for (std::size_t a = 0; a < 3; ++a) {
+            EXPECT_EQ(checked[a].state().z, before[a].state().z);
+          }
+        }
+        // 3.5 is within the second and third channels' limits.
+        std::array<std::vector<double>, 3> fine = {std::vector<double>(in[0], in[0] + 150),
+                                                   std::vector<double>(in[1], in[1] + 150),
+                                                   std::vector<double>(in[2], in[2] + 150)};
+        fine[1][3] = 3.5;
+        fine[2][4] = -3.5;
+        std::array<LowPassFilter, 3> probe = checked;
+        std::array<std::vector<double>, 3> scratch = y;
+        EXPECT_TRUE(LowPassFilter::process_three_checked(
+            probe, {fine[0].data(), fine[1].data(), fine[2].data()}, sign,
+            {scratch[0].data(), scratch[1].data(), scratch[2].data()}, 150, limit, kernel));
+        ASSERT_TRUE(LowPassFilter::process_three_checked(
+            checked, in, sign, {y[0].data() + i, y[1].data() + i, y[2].data() + i}, 150, limit,
+            kernel));
+        LowPassFilter::process_three(plain, in, sign,
+                                     {z[0].data() + i, z[1].data() + i, z[2].data() + i}, 150,
+                                     Kernel::kScalar);
+      }
+      for (std::size_t a = 0; a < 3; ++a) {
+        EXPECT_EQ(y[a], z[a]) << "order " << order << " kernel " << static_cast<int>(kernel)
+                              << " channel " << a;
+        EXPECT_EQ(checked[a].state().z, plain[a].state().z);
+      }
+    }
+  }
 }
 
 TEST(ButterworthLowPass, SetupAndResetStartFromRest) {
