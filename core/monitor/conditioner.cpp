@@ -48,7 +48,7 @@ bool Conditioner::filter_checked(std::int64_t first, std::span<const double> fx,
   const std::size_t count = fx.size();
   const std::array<int, 3>& s = axis_map_.source;
   const bool permutation = s[0] != s[1] && s[0] != s[2] && s[1] != s[2];
-  if (zero_phase_on_ || count == 0 || count > kCheckedBlock || fy.size() != count ||
+  if (zero_phase_on_ || count == 0 || count > checked_[0].size() || fy.size() != count ||
       fz.size() != count || !permutation) {
     return false;
   }

@@ -15,14 +15,18 @@ bool RevolutionStats::cutting(const RevolutionMeasurement& m) {
   for (int j = 0; j < m.flutes; ++j) {
     peak = std::max(peak, m.peak_resultant_N[static_cast<std::size_t>(j)]);
   }
-  if (typical_peak_N_ > 0.0 && peak < kIdleFraction * typical_peak_N_) {
+  if (seeded_ < kSeedRevolutions) {
+    seed_N_[static_cast<std::size_t>(seeded_++)] = peak;
+    const auto [a, b, c] = seed_N_;
+    typical_peak_N_ = seeded_ == 1   ? a
+                      : seeded_ == 2 ? std::min(a, b)
+                                     : std::max(std::min(a, b), std::min(std::max(a, b), c));
+    return true;
+  }
+  if (peak < kIdleFraction * typical_peak_N_) {
     return false;
   }
-  typical_peak_N_ =
-      typical_peak_N_ == 0.0
-          ? peak
-          : typical_peak_N_ +
-                kPeakGain * (std::min(peak, kMostRise * typical_peak_N_) - typical_peak_N_);
+  typical_peak_N_ += kPeakGain * (std::min(peak, kMostRise * typical_peak_N_) - typical_peak_N_);
   return true;
 }
 
@@ -61,6 +65,7 @@ void RevolutionStats::add(RevolutionRecord& r) {
 
 void RevolutionStats::restart() {
   typical_peak_N_ = 0.0;
+  seeded_ = 0;
   count_ = 0;
   next_ = 0;
 }

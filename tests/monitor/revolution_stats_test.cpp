@@ -33,6 +33,23 @@ TEST(RevolutionStats, ASpikeDoesNotMakeTheCutAfterItIdle) {
   EXPECT_NEAR(stats.typical_peak_N(), 2.0, 0.01);
 }
 
+// A spike in the first revolutions after a lock (the entry revolution the tooth events walked
+// back to, struck by a chip) does not set the usual peak: it starts at the first three's
+// median, and none of the cut after them is idle.
+TEST(RevolutionStats, ASpikeAmongTheFirstRevolutionsDoesNotSetTheUsualPeak) {
+  for (int at = 0; at < RevolutionStats::kSeedRevolutions; ++at) {
+    RevolutionStats stats(30);
+    for (int i = 0; i < RevolutionStats::kSeedRevolutions; ++i) {
+      EXPECT_TRUE(stats.cutting(revolution(i == at ? 200.0 : 2.0 + 0.1 * i)));
+    }
+    EXPECT_LE(stats.typical_peak_N(), 2.2);
+    for (int i = 0; i < 30; ++i) {
+      ASSERT_TRUE(stats.cutting(revolution(2.0))) << at << " " << i;
+    }
+    EXPECT_NEAR(stats.typical_peak_N(), 2.0, 0.2) << at;
+  }
+}
+
 // Revolutions below a fifth of the usual peak did not cut (the tool left the work), and do not
 // move it; a cut three times heavier is followed within a few dozen revolutions.
 TEST(RevolutionStats, AStopIsIdleAndAHeavierCutIsFollowed) {
@@ -65,6 +82,8 @@ TEST(RevolutionStats, ALockLearnsTheUsualPeakAgain) {
   for (int i = 0; i < 10; ++i) {
     EXPECT_TRUE(stats.cutting(revolution(1.0)));
   }
+  // And a stop after it is idle again.
+  EXPECT_FALSE(stats.cutting(revolution(0.1)));
   EXPECT_DOUBLE_EQ(stats.typical_peak_N(), 1.0);
 }
 
