@@ -76,7 +76,8 @@ struct MonitorConfig {
   double search_fraction_of_pitch = 0.3;
   int sync_bins = 256;
   int sync_window_revolutions = 30;
-  int template_revolutions = 10;  ///< revolutions averaged before the valleys are located
+  int template_revolutions = 10;  ///< revolutions averaged before the valleys are located (at
+                                  ///< most sync_window_revolutions: the last ones)
   bool lockstep = true;
   int residual_sectors = 12;
   /// Identification of runout and coefficients on every sync-average window (core/identify).

@@ -653,8 +653,8 @@ void Pipeline::note_line_outside_search(const signal::SpindleEstimate& e, std::i
 
 const char* Pipeline::build_template(std::int64_t anchor, ToothEventTemplate& out) {
   // The revolution-synchronous average, on the tracker's angle, over the two windows that
-  // agreed on the lock (or template_revolutions around the lock's window centre, if more), and
-  // the tooth events on it.
+  // agreed on the lock (or template_revolutions around the lock's window centre, if more; at
+  // most the synchronous average's window, the last turns), and the tooth events on it.
   const double window = static_cast<double>(tracker_.window_samples() * decimation_);
   const double half =
       std::max(0.5 * config_.template_revolutions * phase_.samples_per_revolution(), 0.5 * window);

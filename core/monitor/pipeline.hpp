@@ -251,9 +251,9 @@ class Pipeline {
   /// Whether the model revolution is measured once per model and alignment and placed on each
   /// turn (the default), or measured anew on every turn (the tests compare the two).
   void keep_model_revolution(bool keep) { analyzer_.keep_model_revolution(keep); }
-  /// Whether a block on the measuring grid has its samples checked in the filter's pass (the
-  /// default; Conditioner::filter_checked) or in the input check's own pass before it (the
-  /// tests compare the two).
+  /// Whether a block going on from the last has its samples checked in the filter's pass (the
+  /// default; Conditioner::filter_checked, on a measuring grid or every sample) or in the input
+  /// check's own pass before it (the tests compare the two).
   void check_samples_in_filter(bool in_filter) { check_in_filter_ = in_filter; }
   [[nodiscard]] const signal::ButterworthDesign& filter() const { return filter_; }
   /// The tooth-event template of the current (or last) lock.
@@ -417,7 +417,9 @@ class Pipeline {
   // The lock's alignment is on its template average, in the tracker's angle; the revolutions
   // place their samples by their tooth events (on_revolution()). Until the model is aligned on
   // a revolution so placed, it states no residuals; then it is aligned again as the average
-  // doubles, up to a full window (next_alignment_revolutions_: 0, none due). A first alignment
+  // doubles, up to a full window (next_alignment_revolutions_: 0, none due). A fit from before a
+  // lock, taken part-way through a later window, is aligned when that window is full (the
+  // synchronous average's windows follow one another: apply_fit()). A first alignment
   // more than a quarter pitch from the template's is refused: the average starts again (up to
   // kFirstAlignmentRestarts times in the lock's first window; first_alignment_restarts_) or,
   // after that, grows until the next alignment due (align_on_revolutions()).

@@ -23,6 +23,10 @@ bool RevolutionStats::cutting(const RevolutionMeasurement& m) {
                                      : std::max(std::min(a, b), std::min(std::max(a, b), c));
     return true;
   }
+  if (typical_peak_N_ == 0.0) {  // the first revolutions at 0 N: no usual peak yet
+    typical_peak_N_ = peak;
+    return true;
+  }
   if (peak < kIdleFraction * typical_peak_N_) {
     return false;
   }

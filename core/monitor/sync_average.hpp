@@ -164,7 +164,8 @@ class SyncAverageOf {
     full_ = filled_ >= window_;
   }
   /// Average of channel c at bin k over the window's revolutions. Read it after end_revolution():
-  /// samples added after that (a revolution not yet closed) are in the sums too.
+  /// a sample added after that belongs to a revolution not yet closed, and is in the sums too
+  /// (after a full window, the first such sample starts the next window's sums).
   [[nodiscard]] double average(int channel, int bin) const {
     const double* t = row(bin);
     return t[kValues] > 0.0 ? t[channel] / t[kValues] : 0.0;

@@ -236,10 +236,10 @@ class LowPassFilter {
   /// process_three() testing every sample as it reads it: |in[a][i]| ≤ limit[a] (a NaN is not:
   /// the monitor's input check). True: every sample within, the block filtered as
   /// process_three() filters it, bit for bit. False: a sample was not; the filters' states are
-  /// as they were (`out` holds anything). Where the CPU has AVX, for two sections (the
-  /// monitor's order 4), the test is in the AVX kernel's own pass, off its recursions' chain
-  /// (the block's first read from memory, which a pass of its own would wait on); elsewhere it
-  /// is a pass before the filter.
+  /// as they were (`out` holds anything: filtering in place, the input is lost). Where the CPU has
+  /// AVX, for two sections (the monitor's order 4), the test is in the AVX kernel's own pass, off
+  /// its recursions' chain (the block's first read from memory, which a pass of its own would wait
+  /// on); elsewhere it is a pass before the filter.
   static bool process_three_checked(std::array<LowPassFilter, 3>& filters,
                                     const std::array<const double*, 3>& in,
                                     const std::array<double, 3>& sign,

@@ -70,7 +70,8 @@ TEST(RevolutionStats, AStopIsIdleAndAHeavierCutIsFollowed) {
 }
 
 // A lock starts the usual peak again: after a heavy cut, a light one (below a fifth of it) is
-// taken as cutting from its lock on, and so is the window of α and ΔFy.
+// taken as cutting from its lock on; a stop after it is idle again. A usual peak of zero (two
+// of the first three revolutions at 0 N) is no usual peak: the next revolution gives it.
 TEST(RevolutionStats, ALockLearnsTheUsualPeakAgain) {
   RevolutionStats stats(30);
   for (int i = 0; i < 20; ++i) {
@@ -82,9 +83,17 @@ TEST(RevolutionStats, ALockLearnsTheUsualPeakAgain) {
   for (int i = 0; i < 10; ++i) {
     EXPECT_TRUE(stats.cutting(revolution(1.0)));
   }
+  EXPECT_DOUBLE_EQ(stats.typical_peak_N(), 1.0);
   // And a stop after it is idle again.
   EXPECT_FALSE(stats.cutting(revolution(0.1)));
-  EXPECT_DOUBLE_EQ(stats.typical_peak_N(), 1.0);
+  stats.restart();
+  for (const double peak : {0.0, 0.0, 1.0}) {
+    EXPECT_TRUE(stats.cutting(revolution(peak)));
+  }
+  EXPECT_EQ(stats.typical_peak_N(), 0.0);
+  EXPECT_TRUE(stats.cutting(revolution(2.0)));
+  EXPECT_EQ(stats.typical_peak_N(), 2.0);
+  EXPECT_FALSE(stats.cutting(revolution(0.1)));
 }
 
 }  // namespace

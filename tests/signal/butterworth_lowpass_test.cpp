@@ -643,7 +643,8 @@ TEST(ButterworthLowPass, ThreeChannelsReadWithTheirSignsAreTheMappedChannelsInPl
 }
 
 // process_three_checked() on samples within their limits (the largest exactly at its limit)
-// filters as process_three() does, bit for bit, with every kernel and order; a sample beyond its
+// filters as process_three() does, bit for bit, with every kernel, for orders 3 (the sections
+// one by one) and 4 (the two-section kernels); a sample beyond its
 // channel's limit (or a NaN), first, in the middle or last of a block, in any channel, is
 // refused and leaves the filters' states as they were — the next block then filters as if the
 // refused one had never come. The lanes' limits are each channel's own (a sample within one
