@@ -67,10 +67,7 @@ bool Conditioner::filter_checked(std::int64_t first, std::span<const double> fx,
     if (on_grid_) {
       grid_.settle(first, {source[0][0], source[1][0], source[2][0]});
     } else {
-      for (std::size_t a = 0; a < 3; ++a) {
-        lowpass_[a].reset();
-        lowpass_[a].settle(axis_map_.sign[a] * source[a][0]);
-      }
+      settle_lowpass(axis_map_.to_model({fx[0], fy[0], fz[0]}));
     }
     fresh_ = false;
   }

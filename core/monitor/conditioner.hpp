@@ -92,13 +92,9 @@ class Conditioner {
       push_block_on_grid(first, source, count, run_limit, out_run);
       return;
     }
-    for (std::size_t from = 0; from < count; from += kChunk) {
-      const std::size_t n = std::min(kChunk, count - from);
+    for_chunks(first, count, [&](std::size_t from, std::size_t n) {
       if (fresh_) {
-        for (std::size_t a = 0; a < 3; ++a) {
-          lowpass_[a].reset();
-          lowpass_[a].settle(axis_map_.sign[a] * source[a][from]);
-        }
+        settle_lowpass(axis_map_.to_model({fx[from], fy[from], fz[from]}));
         fresh_ = false;
       }
       // The axis map's signs are applied as the filters read the samples (no pass of their own).
@@ -107,7 +103,7 @@ class Conditioner {
           {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, n);
       hand_on(first + static_cast<std::int64_t>(from), n,
               {chunk_[0].data(), chunk_[1].data(), chunk_[2].data()}, run_limit, out_run);
-    }
+    });
   }
 
   /// push_block() in two steps for a block whose samples the input check has not tested yet
@@ -124,18 +120,11 @@ class Conditioner {
                       std::span<const double> fz, const std::array<double, 3>& limit);
   template <typename Limit, typename OutRun>
   void hand_on_checked(Limit&& run_limit, OutRun&& out_run) {
-    const auto chunk = [&](std::size_t from, std::size_t n) {
+    for_chunks(checked_first_, checked_count_, [&](std::size_t from, std::size_t n) {
       hand_on(checked_first_ + static_cast<std::int64_t>(from), n,
               {checked_[0].data() + from, checked_[1].data() + from, checked_[2].data() + from},
               run_limit, out_run);
-    };
-    if (on_grid_) {
-      for_grid_chunks(checked_first_, checked_count_, chunk);
-    } else {  // push_block()'s chunks
-      for (std::size_t from = 0; from < checked_count_; from += kChunk) {
-        chunk(from, std::min(kChunk, checked_count_ - from));
-      }
-    }
+    });
     checked_count_ = 0;
   }
   /// The longest block filter_checked() takes.
@@ -182,23 +171,29 @@ class Conditioner {
       return;
     }
     if (fresh_) {
-      for (std::size_t a = 0; a < 3; ++a) {
-        lowpass_[a].reset();
-        lowpass_[a].settle(f[a]);
-      }
+      settle_lowpass(f);
       fresh_ = false;
     }
     emit(n, lowpass_[0].step(f[0]), lowpass_[1].step(f[1]), lowpass_[2].step(f[2]), out);
   }
 
-  /// Calls chunk(from, n) for the chunks of `count` samples from sample `first` on a grid: at
-  /// most kChunk samples, ending on the grid, so that the filter's strides do not straddle them.
+  /// A fresh stretch: the causal filters from rest, settled on a sample in the model frame.
+  void settle_lowpass(const std::array<double, 3>& model) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      lowpass_[a].reset();
+      lowpass_[a].settle(model[a]);
+    }
+  }
+
+  /// Calls chunk(from, n) for the chunks of `count` samples from sample `first`: at most kChunk
+  /// samples, on a grid ending on it, so that the filter's strides do not straddle them.
   template <typename Chunk>
-  void for_grid_chunks(std::int64_t first, std::size_t count, Chunk&& chunk) const {
+  void for_chunks(std::int64_t first, std::size_t count, Chunk&& chunk) const {
+    const std::int64_t step = on_grid_ ? stride_ : 1;
     for (std::size_t from = 0, n = 0; from < count; from += n) {
       const std::int64_t at_chunk = first + static_cast<std::int64_t>(from);
       const std::int64_t past = at_chunk + static_cast<std::int64_t>(kChunk);
-      const std::int64_t end = past - ((past % stride_) + stride_) % stride_;  // the floor
+      const std::int64_t end = past - ((past % step) + step) % step;  // the floor
       n = std::min(count - from, static_cast<std::size_t>(end - at_chunk));
       chunk(from, n);
     }
@@ -207,7 +202,7 @@ class Conditioner {
   template <typename Limit, typename OutRun>
   void push_block_on_grid(std::int64_t first, const std::array<const double*, 3>& source,
                           std::size_t count, Limit& run_limit, OutRun& out_run) {
-    for_grid_chunks(first, count, [&](std::size_t from, std::size_t n) {
+    for_chunks(first, count, [&](std::size_t from, std::size_t n) {
       const std::int64_t at_chunk = first + static_cast<std::int64_t>(from);
       if (fresh_) {
         grid_.settle(at_chunk, {source[0][from], source[1][from], source[2][from]});

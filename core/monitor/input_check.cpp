@@ -7,6 +7,8 @@
 #include <limits>
 #include <span>
 
+#include "core/signal/sample_limit.hpp"
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -50,7 +52,7 @@ bool all_within(const std::array<std::span<const double>, 3>& v, std::size_t n,
 #endif
   for (; i < n; ++i) {
     for (std::size_t a = 0; a < 3; ++a) {
-      ok = ok && std::fabs(v[a][i]) <= limit[a];
+      ok = ok && signal::within_limit(v[a][i], limit[a]);
     }
   }
   return ok;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/signal/sample_limit.hpp"
+
 #if defined(__SSE2__)
 #include <immintrin.h>
 #endif
@@ -336,7 +338,7 @@ bool LowPassFilter::process_three_checked(std::array<LowPassFilter, 3>& filters,
 #endif
   for (std::size_t a = 0; a < 3; ++a) {
     for (std::size_t i = 0; i < count; ++i) {
-      if (!(std::fabs(in[a][i]) <= limit[a])) {
+      if (!within_limit(in[a][i], limit[a])) {
         return false;
       }
     }

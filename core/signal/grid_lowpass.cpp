@@ -11,6 +11,7 @@
 #endif
 
 #include "core/signal/cpu_features.hpp"
+#include "core/signal/sample_limit.hpp"
 
 namespace millwatch::signal {
 namespace {
@@ -106,11 +107,6 @@ using Strides = bool (*)(const LookAhead&, int, const std::array<double, 3>&, st
                          const std::array<const double*, 3>&, const std::array<double*, 3>&,
                          std::size_t, const std::array<double, 3>&);
 
-/// Whether |x| ≤ limit (false for a NaN): InputCheck's test of a sample.
-inline bool within(double x, double limit) {
-  return std::fabs(x) <= limit;
-}
-
 /// Whole strides from a grid sample: the output at each stride's first sample, the state
 /// advanced past it; the three channels in step (three independent chains). kStride as
 /// strides_avx's.
@@ -132,7 +128,7 @@ bool strides_scalar(const LookAhead& l, int stride, const std::array<double, 3>&
       grid_advance(c, k, sign[a], zs[a], [xs](int j) { return xs[j]; });
       if constexpr (kCheck) {
         for (int j = 0; j < k; ++j) {
-          ok = ok && within(xs[j], limit[a]);
+          ok = ok && within_limit(xs[j], limit[a]);
         }
       }
     }
@@ -361,7 +357,7 @@ bool GridLowPass::run(const std::array<const double*, 3>& in, const std::array<d
     const auto p = static_cast<std::size_t>(pending_count_++);
     for (std::size_t a = 0; a < 3; ++a) {
       pending_[a][p] = in[a][i];
-      ok = ok && (limit == nullptr || within(in[a][i], (*limit)[a]));
+      ok = ok && (limit == nullptr || within_limit(in[a][i], (*limit)[a]));
     }
   };
   std::size_t i = 0;
