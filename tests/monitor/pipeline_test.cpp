@@ -875,6 +875,104 @@ TEST(Pipeline, FitsWaitingForOrInTheBuilderAtARelabellingAreNotTaken) {
   EXPECT_GE(status.identifications_superseded, 2);
 }
 
+// A fit of a window from before a lock, done late (live: the worker behind the cut) and taken
+// part-way through a later window of the new lock: its alignment was measured in the old
+// lock's angle zero, so the model takes the parameters and is aligned again when that window is
+// full — on a whole window of this lock's revolutions, not on the few since it started — and
+// the residuals stay at the cut's level throughout.
+TEST(Pipeline, AFitFromBeforeALockTakenLateIsAlignedWhenTheWindowIsFull) {
+  sim::Scenario s = cut_at_50khz(true);
+  s.duration_s = 1.2;
+  s.spindle.profile = sim::SpindleProfileKind::kStopStart;
+  s.spindle.stop_s = 0.4;  // the second lock at ~0.73 s
+  s.spindle.stop_ramp_s = 0.05;
+  s.spindle.stop_hold_s = 0.2;
+  MonitorConfig c = monitor_for(s);
+  c.model.resolution.steps_per_rev = 720;
+  Collector out;
+  Pipeline p(c, out);
+  // The worker is held after its first fit until the replay is 0.80 s into the cut (~40
+  // revolutions into the second lock, in its second window), and the replay there until the
+  // worker's next fit is done: that fit, of the oldest window waiting (one of the first lock's:
+  // at most two wait, and the second lock's first window is not fitted), is taken there.
+  std::atomic<int> fitted = 0;
+  std::atomic<bool> held = false;
+  const auto wait_for = [](const std::function<bool()>& done) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (!done() && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  };
+  const signal::ButterworthDesign filter = p.filter();
+  identify::Identifier identifier(
+      c.model, [filter](double hz) { return filter.response(hz); }, identify::FitOptions{},
+      [&](const identify::IdentifiedWindow&) {
+        if (++fitted == 1) {
+          wait_for([&] { return held.load(); });
+        }
+      },
+      identify::HandOver::kWhenReady);
+  p.attach_identifier(&identifier);
+  constexpr std::size_t kBlock = 200;
+  const auto hold_at =
+      static_cast<std::int64_t>(0.80 * s.sample_rate_hz) / static_cast<std::int64_t>(kBlock);
+  replay(p, record(s), kBlock, [&](std::int64_t seq, SampleBlock&) {
+    if (seq == hold_at) {
+      held = true;
+      wait_for([&] { return fitted >= 2; });
+    }
+    return true;
+  });
+  p.attach_identifier(nullptr);
+  identifier.finish();
+  ASSERT_GE(fitted, 2);
+  const std::int64_t second_lock_from = first_revolution_after(out, 500000);  // after the feed hold
+  ASSERT_GT(second_lock_from, 0);
+  const auto revolution_at = [&](std::int64_t utime_us) {
+    return first_revolution_after(out, utime_us);
+  };
+  int driven = 0;
+  for (auto e = out.events.begin(); e != out.events.end(); ++e) {
+    if (e->kind != PipelineEventKind::kModelUpdated || e->count >= second_lock_from) {
+      continue;  // (a fit of this lock's windows comes with its own alignment)
+    }
+    const std::int64_t taken = revolution_at(e->utime_us);
+    ASSERT_GE(taken, 0);
+    const std::int64_t into_lock = taken - second_lock_from;
+    if (into_lock < c.sync_window_revolutions) {
+      continue;  // in the lock's first window: aligned at once on it
+    }
+    ++driven;
+    const auto aligned = std::find_if(e + 1, out.events.end(), [](const PipelineEvent& a) {
+      return a.kind == PipelineEventKind::kModelAligned;
+    });
+    ASSERT_NE(aligned, out.events.end()) << "never aligned after the fit of window " << e->count;
+    EXPECT_EQ(aligned->count, c.sync_window_revolutions) << "aligned on a part of the window";
+    const std::int64_t after = revolution_at(aligned->utime_us) - taken;
+    EXPECT_GE(after, 0);
+    EXPECT_LE(after, c.sync_window_revolutions - into_lock % c.sync_window_revolutions + 1);
+  }
+  EXPECT_GE(driven, 1);
+  // The residuals through it: those of the second lock's first full window, after its model was
+  // aligned, set the level (noise: 0.02 N a sample).
+  std::vector<double> level, later;
+  for (const RevolutionRecord& r : out.revolutions) {
+    if (!r.model_valid || r.revolution < second_lock_from + c.sync_window_revolutions) {
+      continue;
+    }
+    (r.revolution < second_lock_from + 2 * c.sync_window_revolutions ? level : later)
+        .push_back(std::max(r.residual_rms_N[0], r.residual_rms_N[1]));
+  }
+  ASSERT_GE(level.size(), 25U);
+  ASSERT_GE(later.size(), 80U);
+  std::nth_element(level.begin(), level.begin() + static_cast<std::ptrdiff_t>(level.size() / 2),
+                   level.end());
+  const double median = level[level.size() / 2];
+  for (const double x : later) {
+    EXPECT_LT(x, 3.0 * median);
+  }
+}
+
 // A relabelling whose lock never comes (the cut stops at once) is over when the cut comes back:
 // the lock then is the tracker's own, its labelling checked afresh, and the status names no
 // revolution a relabelling's lock started.
@@ -1347,6 +1445,44 @@ TEST(Pipeline, StopStartLosesAndRegainsTheLockAndReZeroesTheDrift) {
     }
   }
   EXPECT_GT(compared, 20);
+}
+
+TEST(Pipeline, NoRevolutionIsReportedAfterTheToolLeavesTheWorkNearTheLock) {
+  // A lock's first revolutions all count as cutting (RevolutionStats' seed of the usual peak).
+  // A feed hold at the lock or a few revolutions after it must not make air revolutions
+  // cutting ones: the lock measures back to the start of the cut, so its first revolutions are
+  // the cut's, and none is reported once the tool has left the work.
+  sim::Scenario s = cut_at_50khz(true);
+  s.duration_s = 0.4;
+  Collector plain;
+  {
+    Pipeline p(monitor_for(s), plain);
+    replay(p, record(s), 1000);
+  }
+  const auto lock = std::find_if(plain.events.begin(), plain.events.end(), [](const auto& e) {
+    return e.kind == PipelineEventKind::kLockAcquired;
+  });
+  ASSERT_NE(lock, plain.events.end());
+  const double lock_s = 1e-6 * static_cast<double>(lock->utime_us);
+  const double turn_s = 60.0 / 25252.0;
+  for (int k = 0; k <= 6; ++k) {  // the feed held k revolutions after the lock
+    sim::Scenario c = s;
+    c.spindle.profile = sim::SpindleProfileKind::kStopStart;
+    c.spindle.stop_s = lock_s + k * turn_s;
+    c.spindle.stop_ramp_s = 0.1;  // the spindle runs down in air for 40 revolutions
+    c.spindle.stop_hold_s = 1.0;
+    Collector out;
+    Pipeline p(monitor_for(c), out);
+    replay(p, record(c), 1000);
+    int cut = 0;
+    for (const auto& r : out.revolutions) {
+      EXPECT_LT(1e-6 * static_cast<double>(r.utime_us), c.spindle.stop_s)
+          << "a revolution starting after the feed hold at " << c.spindle.stop_s << " s";
+      ++cut;
+    }
+    // The cut's revolutions before the hold are measured (a few of its first may be lost).
+    EXPECT_GE(cut, k == 0 ? 0 : static_cast<int>(c.spindle.stop_s / turn_s) - 3) << k;
+  }
 }
 
 void steady_state_allocates_nothing(const sim::Scenario& s);
