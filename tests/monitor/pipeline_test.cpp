@@ -884,17 +884,18 @@ TEST(Pipeline, AFitFromBeforeALockTakenLateIsAlignedWhenTheWindowIsFull) {
   sim::Scenario s = cut_at_50khz(true);
   s.duration_s = 1.2;
   s.spindle.profile = sim::SpindleProfileKind::kStopStart;
-  s.spindle.stop_s = 0.4;  // the second lock at ~0.73 s
+  s.spindle.stop_s = 0.4;  // the second lock at ~0.70 s (revolution ~169)
   s.spindle.stop_ramp_s = 0.05;
   s.spindle.stop_hold_s = 0.2;
   MonitorConfig c = monitor_for(s);
   c.model.resolution.steps_per_rev = 720;
   Collector out;
   Pipeline p(c, out);
-  // The worker is held after its first fit until the replay is 0.80 s into the cut (~40
-  // revolutions into the second lock, in its second window), and the replay there until the
-  // worker's next fit is done: that fit, of the oldest window waiting (one of the first lock's:
-  // at most two wait, and the second lock's first window is not fitted), is taken there.
+  // The replay waits 0.3 s into the cut (the first lock) for the worker's first fit, and the
+  // worker, after it, until the replay is 0.8 s into the cut (~40 revolutions into the second
+  // lock, in its second window); the replay waits there for the worker's next fit. That one is
+  // of the oldest window waiting: at most two wait (the older dropped), the first lock's last
+  // and the second lock's first, so it is the first lock's, and it is taken there.
   std::atomic<int> fitted = 0;
   std::atomic<bool> held = false;
   const auto wait_for = [](const std::function<bool()>& done) {
@@ -902,6 +903,7 @@ TEST(Pipeline, AFitFromBeforeALockTakenLateIsAlignedWhenTheWindowIsFull) {
     while (!done() && std::chrono::steady_clock::now() < until) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
+    return done();
   };
   const signal::ButterworthDesign filter = p.filter();
   identify::Identifier identifier(
@@ -914,62 +916,80 @@ TEST(Pipeline, AFitFromBeforeALockTakenLateIsAlignedWhenTheWindowIsFull) {
       identify::HandOver::kWhenReady);
   p.attach_identifier(&identifier);
   constexpr std::size_t kBlock = 200;
-  const auto hold_at =
-      static_cast<std::int64_t>(0.80 * s.sample_rate_hz) / static_cast<std::int64_t>(kBlock);
+  const auto block_at = [&](double t_s) {
+    return static_cast<std::int64_t>(t_s * s.sample_rate_hz) / static_cast<std::int64_t>(kBlock);
+  };
+  bool first_in_time = false, second_in_time = false;
   replay(p, record(s), kBlock, [&](std::int64_t seq, SampleBlock&) {
-    if (seq == hold_at) {
+    if (seq == block_at(0.3)) {
+      first_in_time = wait_for([&] { return fitted >= 1; });
+    } else if (seq == block_at(0.8)) {
       held = true;
-      wait_for([&] { return fitted >= 2; });
+      second_in_time = wait_for([&] { return fitted >= 2; });
     }
     return true;
   });
   p.attach_identifier(nullptr);
   identifier.finish();
-  ASSERT_GE(fitted, 2);
-  const std::int64_t second_lock_from = first_revolution_after(out, 500000);  // after the feed hold
+  ASSERT_TRUE(first_in_time && second_in_time);
+  const auto stop_us = static_cast<std::int64_t>(1e6 * s.spindle.stop_s);
+  const auto stopped_us =
+      static_cast<std::int64_t>(1e6 * (s.spindle.stop_s + s.spindle.stop_ramp_s));
+  const std::int64_t second_lock_from = first_revolution_after(out, stopped_us);
   ASSERT_GT(second_lock_from, 0);
   const auto revolution_at = [&](std::int64_t utime_us) {
-    return first_revolution_after(out, utime_us);
+    return first_revolution_after(out, utime_us);  // (both shifted alike: differences hold)
   };
+  const auto is = [](PipelineEventKind kind) {
+    return [kind](const PipelineEvent& e) { return e.kind == kind; };
+  };
+  // Events in the order they came: the second lock, its first full window's alignment.
+  const auto events_end = out.events.end();
+  const auto second_lock = std::find_if(
+      std::find_if(out.events.begin(), events_end, is(PipelineEventKind::kLockAcquired)) + 1,
+      events_end, is(PipelineEventKind::kLockAcquired));
+  ASSERT_NE(second_lock, events_end);
+  const auto first_full = std::find_if(second_lock, events_end, [&](const PipelineEvent& e) {
+    return e.kind == PipelineEventKind::kModelAligned && e.count == c.sync_window_revolutions;
+  });
+  ASSERT_NE(first_full, events_end);
   int driven = 0;
-  for (auto e = out.events.begin(); e != out.events.end(); ++e) {
+  std::int64_t taken_us = 0;
+  for (auto e = first_full; e != events_end; ++e) {
     if (e->kind != PipelineEventKind::kModelUpdated || e->count >= second_lock_from) {
       continue;  // (a fit of this lock's windows comes with its own alignment)
     }
-    const std::int64_t taken = revolution_at(e->utime_us);
-    ASSERT_GE(taken, 0);
-    const std::int64_t into_lock = taken - second_lock_from;
-    if (into_lock < c.sync_window_revolutions) {
-      continue;  // in the lock's first window: aligned at once on it
-    }
     ++driven;
-    const auto aligned = std::find_if(e + 1, out.events.end(), [](const PipelineEvent& a) {
-      return a.kind == PipelineEventKind::kModelAligned;
-    });
-    ASSERT_NE(aligned, out.events.end()) << "never aligned after the fit of window " << e->count;
+    taken_us = e->utime_us;
+    const auto aligned = std::find_if(e + 1, events_end, is(PipelineEventKind::kModelAligned));
+    ASSERT_NE(aligned, events_end) << "never aligned after the fit of window " << e->count;
     EXPECT_EQ(aligned->count, c.sync_window_revolutions) << "aligned on a part of the window";
-    const std::int64_t after = revolution_at(aligned->utime_us) - taken;
-    EXPECT_GE(after, 0);
-    EXPECT_LE(after, c.sync_window_revolutions - into_lock % c.sync_window_revolutions + 1);
+    const std::int64_t later = revolution_at(aligned->utime_us) - revolution_at(e->utime_us);
+    EXPECT_GE(later, 0);
+    EXPECT_LE(later, c.sync_window_revolutions);
   }
-  EXPECT_GE(driven, 1);
-  // The residuals through it: those of the second lock's first full window, after its model was
-  // aligned, set the level (noise: 0.02 N a sample).
-  std::vector<double> level, later;
+  ASSERT_GE(driven, 1);
+  // The residuals after it, against the first lock's once its model was aligned on a full
+  // window (the same cut; noise 0.02 N a sample).
+  std::vector<double> level, after;
   for (const RevolutionRecord& r : out.revolutions) {
-    if (!r.model_valid || r.revolution < second_lock_from + c.sync_window_revolutions) {
+    if (!r.model_valid) {
       continue;
     }
-    (r.revolution < second_lock_from + 2 * c.sync_window_revolutions ? level : later)
-        .push_back(std::max(r.residual_rms_N[0], r.residual_rms_N[1]));
+    const double worst_N = std::max(r.residual_rms_N[0], r.residual_rms_N[1]);
+    if (r.revolution >= c.sync_window_revolutions && r.utime_us < stop_us) {
+      level.push_back(worst_N);
+    } else if (r.utime_us > taken_us) {
+      after.push_back(worst_N);
+    }
   }
-  ASSERT_GE(level.size(), 25U);
-  ASSERT_GE(later.size(), 80U);
+  ASSERT_GE(level.size(), 100U);
+  ASSERT_GE(after.size(), 80U);
   std::nth_element(level.begin(), level.begin() + static_cast<std::ptrdiff_t>(level.size() / 2),
                    level.end());
-  const double median = level[level.size() / 2];
-  for (const double x : later) {
-    EXPECT_LT(x, 3.0 * median);
+  const double median_N = level[level.size() / 2];
+  for (const double x : after) {
+    EXPECT_LT(x, 3.0 * median_N);
   }
 }
 
@@ -1447,41 +1467,53 @@ TEST(Pipeline, StopStartLosesAndRegainsTheLockAndReZeroesTheDrift) {
   EXPECT_GT(compared, 20);
 }
 
+// A lock's first revolutions all count as cutting (RevolutionStats' seed of the usual peak). A
+// feed hold just before the lock is decided or a few revolutions after it must not make air
+// revolutions cutting ones: the lock measures back to the start of the cut, so its first
+// revolutions are the cut's; those after the hold are heard and found not cutting.
 TEST(Pipeline, NoRevolutionIsReportedAfterTheToolLeavesTheWorkNearTheLock) {
-  // A lock's first revolutions all count as cutting (RevolutionStats' seed of the usual peak).
-  // A feed hold at the lock or a few revolutions after it must not make air revolutions
-  // cutting ones: the lock measures back to the start of the cut, so its first revolutions are
-  // the cut's, and none is reported once the tool has left the work.
   sim::Scenario s = cut_at_50khz(true);
   s.duration_s = 0.4;
+  // When the lock is decided: the end of the block in which its event came (its time is the
+  // centre of the tracker window it was measured in, about half a window earlier).
+  constexpr std::size_t kBlock = 100;  // 2 ms
   Collector plain;
+  std::int64_t decided_block = -1;
   {
     Pipeline p(monitor_for(s), plain);
-    replay(p, record(s), 1000);
+    replay(p, record(s), kBlock, [&](std::int64_t seq, SampleBlock&) {
+      const bool locked = std::any_of(plain.events.begin(), plain.events.end(), [](const auto& e) {
+        return e.kind == PipelineEventKind::kLockAcquired;
+      });
+      if (locked && decided_block < 0) {
+        decided_block = seq - 1;
+      }
+      return true;
+    });
   }
-  const auto lock = std::find_if(plain.events.begin(), plain.events.end(), [](const auto& e) {
-    return e.kind == PipelineEventKind::kLockAcquired;
-  });
-  ASSERT_NE(lock, plain.events.end());
-  const double lock_s = 1e-6 * static_cast<double>(lock->utime_us);
-  const double turn_s = 60.0 / 25252.0;
-  for (int k = 0; k <= 6; ++k) {  // the feed held k revolutions after the lock
+  ASSERT_GT(decided_block, 0);
+  const double decided_s =
+      static_cast<double>((decided_block + 1) * static_cast<std::int64_t>(kBlock)) /
+      s.sample_rate_hz;
+  const double turn_s = 60.0 / s.spindle.actual_rpm;
+  for (int k = -3; k <= 6; ++k) {  // the feed held k revolutions after the lock is decided
     sim::Scenario c = s;
     c.spindle.profile = sim::SpindleProfileKind::kStopStart;
-    c.spindle.stop_s = lock_s + k * turn_s;
-    c.spindle.stop_ramp_s = 0.1;  // the spindle runs down in air for 40 revolutions
+    c.spindle.stop_s = decided_s + k * turn_s;
+    c.spindle.stop_ramp_s = 0.1;  // the spindle runs down in air for 21 revolutions
     c.spindle.stop_hold_s = 1.0;
     Collector out;
     Pipeline p(monitor_for(c), out);
     replay(p, record(c), 1000);
-    int cut = 0;
     for (const auto& r : out.revolutions) {
       EXPECT_LT(1e-6 * static_cast<double>(r.utime_us), c.spindle.stop_s)
           << "a revolution starting after the feed hold at " << c.spindle.stop_s << " s";
-      ++cut;
     }
-    // The cut's revolutions before the hold are measured (a few of its first may be lost).
-    EXPECT_GE(cut, k == 0 ? 0 : static_cast<int>(c.spindle.stop_s / turn_s) - 3) << k;
+    // Locked, every revolution before the hold measured (from the cut's start, at t = 0; the
+    // last may be cut short), and those after it heard and found not cutting.
+    EXPECT_EQ(out.count(PipelineEventKind::kLockAcquired), 1) << k;
+    EXPECT_GE(static_cast<double>(out.revolutions.size()), c.spindle.stop_s / turn_s - 2.0) << k;
+    EXPECT_EQ(out.count(PipelineEventKind::kCuttingStopped), 1) << k;
   }
 }
 
