@@ -7,5 +7,9 @@ namespace millwatch::signal {
 
 /// Whether this CPU (and its operating system: the YMM registers are saved) runs AVX code.
 [[nodiscard]] bool cpu_has_avx();
+/// Whether it runs AVX2 and FMA3 code (and AVX: the YMM registers are saved).
+[[nodiscard]] bool cpu_has_fma();
+/// Whether it runs AVX-512F and AVX-512VL code (the OS saving the ZMM registers), with FMA.
+[[nodiscard]] bool cpu_has_avx512vl();
 
 }  // namespace millwatch::signal
