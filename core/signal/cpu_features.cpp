@@ -26,7 +26,8 @@ bool cpu_has_avx512vl() {
 #if defined(__x86_64__) || defined(__i386__)
   // libgcc counts AVX-512 only where the OS saves the ZMM and mask registers (XGETBV).
   static const bool has_avx512vl = cpu_has_fma() && __builtin_cpu_supports("avx512f") != 0 &&
-                                   __builtin_cpu_supports("avx512vl") != 0;
+                                   __builtin_cpu_supports("avx512vl") != 0 &&
+                                   __builtin_cpu_supports("avx512dq") != 0;
   return has_avx512vl;
 #else
   return false;

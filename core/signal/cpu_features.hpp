@@ -9,7 +9,7 @@ namespace millwatch::signal {
 [[nodiscard]] bool cpu_has_avx();
 /// Whether it runs AVX2 and FMA3 code (and AVX: the YMM registers are saved).
 [[nodiscard]] bool cpu_has_fma();
-/// Whether it runs AVX-512F and AVX-512VL code (the OS saving the ZMM registers), with FMA.
+/// Whether it runs AVX-512F, VL and DQ code (the OS saving the ZMM registers), with FMA.
 [[nodiscard]] bool cpu_has_avx512vl();
 
 }  // namespace millwatch::signal

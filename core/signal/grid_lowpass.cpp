@@ -116,7 +116,8 @@ inline void grid_advance(const LookAhead& l, int stride, double sign, State& z, 
   z[3] = ((p[3][0] * z0 + p[3][1] * z1) + (p[3][2] * z2 + p[3][3] * z3)) + u[3];
 }
 
-/// A kernel: `strides` whole strides from a grid sample (strides_scalar, strides_avx). A
+/// A kernel: `strides` whole strides from a grid sample (strides_scalar; strides_avx, strides_fma,
+/// strides_avx512). A
 /// checking one (kCheck) also tests every input it reads against `limit` (its channel's) and
 /// returns whether all were within (|x| ≤ limit; a NaN is not); an unchecking one returns true.
 using Strides = bool (*)(const LookAhead&, int, const std::array<double, 3>&, std::array<State, 3>&,
@@ -125,7 +126,7 @@ using Strides = bool (*)(const LookAhead&, int, const std::array<double, 3>&, st
 
 /// Whole strides from a grid sample: the output at each stride's first sample, the state
 /// advanced past it; the three channels in step (three independent chains). kStride as
-/// strides_avx's.
+/// strides_avx's; kFused: in multiply-adds (GridLowPass::fused()).
 template <bool kCheck, int kStride, bool kFused>
 bool strides_scalar(const LookAhead& l, int stride, const std::array<double, 3>& sign,
                     std::array<State, 3>& z, const std::array<const double*, 3>& in,
@@ -242,9 +243,9 @@ __attribute__((target("avx"), always_inline)) inline void store_states(__m256d z
   }
 }
 
-/// strides_scalar() with the three channels as lanes (fx, fy, fz, fz) of one AVX register: the
-/// same operations in the same order on each lane (no FMA: target "avx" alone), so the same
-/// results bit for bit.
+/// strides_scalar<…, false>() with the three channels as lanes (fx, fy, fz, fz) of one AVX
+/// register: the same operations in the same order on each lane (no FMA: target "avx" alone),
+/// so the same results bit for bit.
 /// kStride: the stride, known when compiled (its inputs' loop unrolled), or 0: `stride`.
 /// kCheck: every input's |x| is compared with its channel's limit as it is read (two more
 /// operations an input beside the recursion, whose latency bounds the kernel): the check of a
@@ -359,10 +360,11 @@ __attribute__((target("avx,avx2,fma"))) bool strides_fma(
   return strides_fused<kCheck, kStride>(l, stride, sign, z, in, out, strides, limit);
 }
 
-/// The same code with 32 vector registers: the constants stay in registers (with 16, a third
-/// of them were read from the stack every stride), 1.15x the samples a second alone.
+/// The same code with AVX-512VL's 32 vector registers: fewer of its ~30 constants are read from
+/// the stack every stride (11 still are). GCC emits AVX-512DQ forms too (vextractf64x2), so
+/// cpu_has_avx512vl() asks for DQ as well.
 template <bool kCheck, int kStride>
-__attribute__((target("avx,avx2,fma,avx512f,avx512vl"))) bool strides_avx512(
+__attribute__((target("avx,avx2,fma,avx512f,avx512vl,avx512dq"))) bool strides_avx512(
     const LookAhead& l, int stride, const std::array<double, 3>& sign, std::array<State, 3>& z,
     const std::array<const double*, 3>& in, const std::array<double*, 3>& out, std::size_t strides,
     const std::array<double, 3>& limit) {

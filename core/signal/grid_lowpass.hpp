@@ -17,12 +17,13 @@
 // on how the stream is cut into blocks, bit for bit: the state always advances by whole strides
 // from a grid sample, the inputs of a stride that a block leaves unfinished wait for the next
 // block. Where the CPU has FMA (AVX2 and FMA3) it computes in multiply-adds (31 operations a
-// stride of 3 instead of 53; with AVX-512VL's 32 registers its constants stay in them): 1.3x
-// the samples a second alone, 1.07-1.11x the 333.3 kHz pipeline's; other CPUs, or
-// Arithmetic::kPlain, in multiplies and adds. Either way the vector kernels (three channels side
-// by side in one register, each compiled for its instruction set and run only where the CPU has
-// it) do the same operations in the same order as the scalar one: the same results, bit for
-// bit; the two arithmetics differ by rounding.
+// stride of 3 instead of 53; with AVX-512's 32 registers, fewer constants read from the stack):
+// the checked kernel 1.2-1.4x the samples a second alone, the 333.3 kHz pipeline 1.06-1.11x
+// (bench/HISTORY.md, the seventy-seventh stop); other CPUs, or Arithmetic::kPlain, in multiplies
+// and adds. Either way the vector kernels (three channels side by side in one register, each
+// compiled for its instruction set and run only where the CPU has it) do the same operations in
+// the same order as the scalar one: the same results, bit for bit. The two arithmetics differ
+// by rounding (~1e-13 of the peak): a replay on a CPU with FMA and on one without agree to that.
 //
 // Designs with at most two sections (orders 1–4; the monitor's is order 4) and strides up to
 // kMaxGridStride; supports() says which. Set up once; settle() and process() allocate nothing.
@@ -39,9 +40,9 @@ inline constexpr int kMaxGridStride = 16;
 
 class GridLowPass {
  public:
-  /// The fastest kernel this CPU runs (AVX where it has it; AVX-512VL's registers where it
-  /// has them), the scalar one, or the fastest without AVX-512 (for the tests): the same
-  /// results.
+  /// The fastest kernel this CPU runs in the arithmetic chosen (AVX where it has it; in
+  /// multiply-adds, AVX-512's registers where it has them), the scalar one, or the fastest
+  /// without AVX-512 (for the tests): the same results.
   enum class Kernel { kAuto, kScalar, kNoAvx512 };
   /// The arithmetic: multiply-adds where the CPU has FMA (kAuto), or multiplies and adds
   /// (kPlain, the one arithmetic before; the tests run both).
