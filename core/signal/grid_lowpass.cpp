@@ -117,9 +117,9 @@ inline void grid_advance(const LookAhead& l, int stride, double sign, State& z, 
 }
 
 /// A kernel: `strides` whole strides from a grid sample (strides_scalar; strides_avx, strides_fma,
-/// strides_avx512). A
-/// checking one (kCheck) also tests every input it reads against `limit` (its channel's) and
-/// returns whether all were within (|x| ≤ limit; a NaN is not); an unchecking one returns true.
+/// strides_avx512). A checking one (kCheck) also tests every input it reads against `limit` (its
+/// channel's) and returns whether all were within (|x| ≤ limit; a NaN is not); an unchecking one
+/// returns true.
 using Strides = bool (*)(const LookAhead&, int, const std::array<double, 3>&, std::array<State, 3>&,
                          const std::array<const double*, 3>&, const std::array<double*, 3>&,
                          std::size_t, const std::array<double, 3>&);
