@@ -1,6 +1,7 @@
 #include "core/signal/grid_lowpass.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -38,9 +39,42 @@ Wide cascade_step(const ButterworthDesign& d, WideVector& z, Wide x) {
   return x;
 }
 
+/// The K of the sections' modal basis (GridLowPass::State): A = [A₁ 0; M A₂] (section 2 driven
+/// by section 1), and w = z₂ + K·z₁ evolves by A₂ alone when A₂·K − K·A₁ = M, a Sylvester
+/// equation, solved as the 4×4 system (I ⊗ A₂ − A₁ᵀ ⊗ I)·vec(K) = vec(M). It has one solution
+/// when the sections share no pole (a Butterworth design's sections never do); K = 0 when
+/// section 2 does not follow section 1 (M = 0: a design of one section).
+Eigen::Matrix<Wide, 2, 2> modal_coupling(const WideMatrix& a) {
+  const Eigen::Matrix<Wide, 2, 2> a1 = a.topLeftCorner<2, 2>();
+  const Eigen::Matrix<Wide, 2, 2> a2 = a.bottomRightCorner<2, 2>();
+  const Eigen::Matrix<Wide, 2, 2> m = a.bottomLeftCorner<2, 2>();
+  if (m.isZero(0.0L)) {
+    return Eigen::Matrix<Wide, 2, 2>::Zero();
+  }
+  WideMatrix system = WideMatrix::Zero();
+  const auto at = [](int i, int j) { return i + 2 * j; };  // vec(): column after column
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      for (int l = 0; l < 2; ++l) {
+        system(at(i, j), at(l, j)) += a2(i, l);  // (A₂·K)(i, j)
+        system(at(i, j), at(i, l)) -= a1(l, j);  // (K·A₁)(i, j)
+      }
+    }
+  }
+  const WideVector vec_m(m(0, 0), m(1, 0), m(0, 1), m(1, 1));
+  const Eigen::FullPivLU<WideMatrix> lu(system);
+  if (!lu.isInvertible()) {
+    throw std::invalid_argument("GridLowPass: the design's two sections share a pole");
+  }
+  const WideVector k = lu.solve(vec_m);
+  Eigen::Matrix<Wide, 2, 2> out;
+  out << k(0), k(2), k(1), k(3);
+  return out;
+}
+
 /// A, B, C, D read off the cascade's step (it is linear: a unit state or a unit input at a
-/// time), then A^k and A^(k−1−j)·B.
-LookAhead look_ahead(const ButterworthDesign& d, int stride) {
+/// time), taken to the modal basis w = T·z (T = [I 0; K I]), then A^k and A^(k−1−j)·B there.
+LookAhead look_ahead(const ButterworthDesign& d, int stride, Eigen::Matrix<Wide, 2, 2>& coupling) {
   WideMatrix a;
   WideVector c;
   for (int m = 0; m < 4; ++m) {
@@ -50,6 +84,22 @@ LookAhead look_ahead(const ButterworthDesign& d, int stride) {
   }
   WideVector b = WideVector::Zero();
   const Wide direct = cascade_step(d, b, 1.0L);
+  coupling = modal_coupling(a);
+  WideMatrix t = WideMatrix::Identity();
+  WideMatrix t_inverse = WideMatrix::Identity();
+  t.bottomLeftCorner<2, 2>() = coupling;
+  t_inverse.bottomLeftCorner<2, 2>() = -coupling;
+  a = t * a * t_inverse;
+  b = t * b;
+  const Eigen::Matrix<Wide, 1, 4> c_modal = c.transpose() * t_inverse;
+  c = c_modal.transpose();
+  // The sections apart: A's coupling block is zero up to the extended precision's rounding.
+  a.bottomLeftCorner<2, 2>().setZero();
+  // y = b0₂·y₁ + z₂[0]: C reads section 2's first delay element with weight 1 and not its second,
+  // exactly (the kernels add it without a multiply).
+  if (c(2) != 1.0L || c(3) != 0.0L) {
+    throw std::logic_error("GridLowPass: the cascade's output is not its last section's z0");
+  }
   LookAhead l;
   WideMatrix power = WideMatrix::Identity();
   // Column j of the input gain is A^(k−1−j)·B: the last input's is B, each earlier one A times
@@ -72,21 +122,19 @@ LookAhead look_ahead(const ButterworthDesign& d, int stride) {
   return l;
 }
 
-/// y(g) = C·z(g) + D·x(g), with ds = D·sign. kFused: in multiply-adds (GridLowPass::fused()),
-/// in the order the vector kernel does them.
+/// y(g) = C·z(g) + D·x(g), with ds = D·sign; C = (c0, c1, 1, 0) (look_ahead() checks the 1 and
+/// the 0). kFused: in multiply-adds (GridLowPass::fused()), in the order the vector kernel does
+/// them.
 template <bool kFused>
 inline double grid_output(const LookAhead& l, const State& z, double ds, double x) {
   if constexpr (kFused) {
-    return std::fma(l.output[0], z[0],
-                    std::fma(l.output[1], z[1],
-                             std::fma(l.output[2], z[2], std::fma(l.output[3], z[3], ds * x))));
+    return std::fma(l.output[0], z[0], std::fma(l.output[1], z[1], z[2] + ds * x));
   }
-  return (l.output[0] * z[0] + l.output[1] * z[1]) +
-         ((l.output[2] * z[2] + l.output[3] * z[3]) + ds * x);
+  return (l.output[0] * z[0] + l.output[1] * z[1]) + (z[2] + ds * x);
 }
 
-/// z ← A^k·z + Σ_j A^(k−1−j)·B·sign·x_j (section 1's rows have no section 2 terms: A^k is block
-/// lower triangular). `x(j)` is the j-th input of the stride.
+/// z ← A^k·z + Σ_j A^(k−1−j)·B·sign·x_j, A^k block diagonal (the modal basis: each section's
+/// delay elements advance on their own). `x(j)` is the j-th input of the stride.
 template <bool kFused, typename Input>
 inline void grid_advance(const LookAhead& l, int stride, double sign, State& z, Input&& x) {
   State u{};
@@ -103,17 +151,17 @@ inline void grid_advance(const LookAhead& l, int stride, double sign, State& z, 
   const auto& p = l.power;
   const double z0 = z[0], z1 = z[1], z2 = z[2], z3 = z[3];
   if constexpr (kFused) {
-    // The state's chain two multiply-adds and an add deep (the plain one: a multiply, three adds).
+    // The state's chain two multiply-adds deep (the plain one: a multiply and two adds).
     z[0] = std::fma(p[0][0], z0, std::fma(p[0][1], z1, u[0]));
     z[1] = std::fma(p[1][0], z0, std::fma(p[1][1], z1, u[1]));
-    z[2] = std::fma(p[2][0], z0, std::fma(p[2][1], z1, u[2])) + std::fma(p[2][2], z2, p[2][3] * z3);
-    z[3] = std::fma(p[3][0], z0, std::fma(p[3][1], z1, u[3])) + std::fma(p[3][2], z2, p[3][3] * z3);
+    z[2] = std::fma(p[2][2], z2, std::fma(p[2][3], z3, u[2]));
+    z[3] = std::fma(p[3][2], z2, std::fma(p[3][3], z3, u[3]));
     return;
   }
   z[0] = (p[0][0] * z0 + p[0][1] * z1) + u[0];
   z[1] = (p[1][0] * z0 + p[1][1] * z1) + u[1];
-  z[2] = ((p[2][0] * z0 + p[2][1] * z1) + (p[2][2] * z2 + p[2][3] * z3)) + u[2];
-  z[3] = ((p[3][0] * z0 + p[3][1] * z1) + (p[3][2] * z2 + p[3][3] * z3)) + u[3];
+  z[2] = (p[2][2] * z2 + p[2][3] * z3) + u[2];
+  z[3] = (p[3][2] * z2 + p[3][3] * z3) + u[3];
 }
 
 /// A kernel: `strides` whole strides from a grid sample (strides_scalar; strides_avx, strides_fma,
@@ -176,12 +224,12 @@ __attribute__((target("avx"), always_inline)) inline __m256d lanes_beyond(__m256
   return _mm256_or_pd(beyond, _mm256_cmp_pd(_mm256_and_pd(x, magnitude), limit, _CMP_NLE_UQ));
 }
 
-/// The vector kernels' constants, as lanes: the input gains times the signs, A^k, C, D times the
-/// signs, the limits.
+/// The vector kernels' constants, as lanes: the input gains times the signs, A^k's two blocks,
+/// C's first two (its others are 1 and 0), D times the signs, the limits.
 struct LaneConstants {
   __m256d g[kMaxGridStride][4];
-  __m256d p00, p01, p10, p11, p20, p21, p22, p23, p30, p31, p32, p33;
-  __m256d c0, c1, c2, c3, ds, lim;
+  __m256d p00, p01, p10, p11, p22, p23, p32, p33;
+  __m256d c0, c1, ds, lim;
 };
 
 __attribute__((target("avx"), always_inline)) inline void lane_constants(
@@ -197,12 +245,9 @@ __attribute__((target("avx"), always_inline)) inline void lane_constants(
   const auto& p = l.power;
   k.p00 = _mm256_set1_pd(p[0][0]), k.p01 = _mm256_set1_pd(p[0][1]);
   k.p10 = _mm256_set1_pd(p[1][0]), k.p11 = _mm256_set1_pd(p[1][1]);
-  k.p20 = _mm256_set1_pd(p[2][0]), k.p21 = _mm256_set1_pd(p[2][1]);
   k.p22 = _mm256_set1_pd(p[2][2]), k.p23 = _mm256_set1_pd(p[2][3]);
-  k.p30 = _mm256_set1_pd(p[3][0]), k.p31 = _mm256_set1_pd(p[3][1]);
   k.p32 = _mm256_set1_pd(p[3][2]), k.p33 = _mm256_set1_pd(p[3][3]);
   k.c0 = _mm256_set1_pd(l.output[0]), k.c1 = _mm256_set1_pd(l.output[1]);
-  k.c2 = _mm256_set1_pd(l.output[2]), k.c3 = _mm256_set1_pd(l.output[3]);
   k.ds = _mm256_mul_pd(_mm256_set1_pd(l.direct), m);
   k.lim = _mm256_set_pd(limit[2], limit[2], limit[1], limit[0]);
 }
@@ -218,6 +263,20 @@ __attribute__((target("avx"), always_inline)) inline __m256d read_lanes(
     beyond = lanes_beyond(beyond, x, c.lim);
   }
   return x;
+}
+
+/// Asks for the three channels' samples 128 on from i (1 KiB, 16 cache lines; past the block's
+/// end too: a prefetch never faults). The kernel reads each block first, from memory the source
+/// has just written (on another core) or the hardware's prefetcher lost track of while the
+/// pipeline's other stages ran: the 333.3 kHz pipeline about +10 % (bench/HISTORY.md, the
+/// seventy-ninth stop); the kernel alone (BM_LowPassOnGrid, its input read again and again)
+/// no faster.
+__attribute__((target("avx"), always_inline)) inline void prefetch_lanes(
+    const std::array<const double*, 3>& in, std::size_t i) {
+  constexpr std::size_t kAhead = 128;
+  for (const double* channel : in) {
+    _mm_prefetch(reinterpret_cast<const char*>(channel + i + kAhead), _MM_HINT_T0);
+  }
 }
 
 /// The three channels' outputs (lanes 0–2 of y) to their arrays at `at`.
@@ -266,11 +325,10 @@ __attribute__((target("avx"))) bool strides_avx(
   const auto k = static_cast<std::size_t>(stride);
   for (std::size_t s = 0; s < strides; ++s) {
     const std::size_t at = s * k;
+    prefetch_lanes(in, at);
     const __m256d x0 = read_lanes<kCheck>(in, at, c, beyond);
-    const __m256d y =
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.c0, z0), _mm256_mul_pd(c.c1, z1)),
-                      _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.c2, z2), _mm256_mul_pd(c.c3, z3)),
-                                    _mm256_mul_pd(c.ds, x0)));
+    const __m256d y = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.c0, z0), _mm256_mul_pd(c.c1, z1)),
+                                    _mm256_add_pd(z2, _mm256_mul_pd(c.ds, x0)));
     __m256d u0 = _mm256_mul_pd(c.g[0][0], x0), u1 = _mm256_mul_pd(c.g[0][1], x0);
     __m256d u2 = _mm256_mul_pd(c.g[0][2], x0), u3 = _mm256_mul_pd(c.g[0][3], x0);
     for (std::size_t j = 1; j < k; ++j) {
@@ -284,14 +342,10 @@ __attribute__((target("avx"))) bool strides_avx(
         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p00, z0), _mm256_mul_pd(c.p01, z1)), u0);
     const __m256d n1 =
         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p10, z0), _mm256_mul_pd(c.p11, z1)), u1);
-    const __m256d n2 = _mm256_add_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p20, z0), _mm256_mul_pd(c.p21, z1)),
-                      _mm256_add_pd(_mm256_mul_pd(c.p22, z2), _mm256_mul_pd(c.p23, z3))),
-        u2);
-    const __m256d n3 = _mm256_add_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p30, z0), _mm256_mul_pd(c.p31, z1)),
-                      _mm256_add_pd(_mm256_mul_pd(c.p32, z2), _mm256_mul_pd(c.p33, z3))),
-        u3);
+    const __m256d n2 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p22, z2), _mm256_mul_pd(c.p23, z3)), u2);
+    const __m256d n3 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(c.p32, z2), _mm256_mul_pd(c.p33, z3)), u3);
     z0 = n0;
     z1 = n1;
     z2 = n2;
@@ -303,7 +357,7 @@ __attribute__((target("avx"))) bool strides_avx(
 }
 
 /// strides_avx() in multiply-adds, the operations and their order strides_scalar<…, true>'s (so
-/// the same results bit for bit): 31 operations a stride of 3 instead of 53. Compiled into
+/// the same results bit for bit): 24 operations a stride of 3 instead of 42. Compiled into
 /// strides_fma() and strides_avx512() for the CPUs that have FMA, and AVX-512VL's 32 registers.
 template <bool kCheck, int kStride>
 __attribute__((target("avx,avx2,fma"), always_inline)) inline bool strides_fused(
@@ -321,12 +375,10 @@ __attribute__((target("avx,avx2,fma"), always_inline)) inline bool strides_fused
   const auto k = static_cast<std::size_t>(stride);
   for (std::size_t s = 0; s < strides; ++s) {
     const std::size_t at = s * k;
+    prefetch_lanes(in, at);
     const __m256d x0 = read_lanes<kCheck>(in, at, c, beyond);
     const __m256d y = _mm256_fmadd_pd(
-        c.c0, z0,
-        _mm256_fmadd_pd(
-            c.c1, z1,
-            _mm256_fmadd_pd(c.c2, z2, _mm256_fmadd_pd(c.c3, z3, _mm256_mul_pd(c.ds, x0)))));
+        c.c0, z0, _mm256_fmadd_pd(c.c1, z1, _mm256_add_pd(z2, _mm256_mul_pd(c.ds, x0))));
     __m256d u0 = _mm256_mul_pd(c.g[0][0], x0), u1 = _mm256_mul_pd(c.g[0][1], x0);
     __m256d u2 = _mm256_mul_pd(c.g[0][2], x0), u3 = _mm256_mul_pd(c.g[0][3], x0);
     for (std::size_t j = 1; j < k; ++j) {
@@ -338,10 +390,8 @@ __attribute__((target("avx,avx2,fma"), always_inline)) inline bool strides_fused
     }
     const __m256d n0 = _mm256_fmadd_pd(c.p00, z0, _mm256_fmadd_pd(c.p01, z1, u0));
     const __m256d n1 = _mm256_fmadd_pd(c.p10, z0, _mm256_fmadd_pd(c.p11, z1, u1));
-    const __m256d n2 = _mm256_add_pd(_mm256_fmadd_pd(c.p20, z0, _mm256_fmadd_pd(c.p21, z1, u2)),
-                                     _mm256_fmadd_pd(c.p22, z2, _mm256_mul_pd(c.p23, z3)));
-    const __m256d n3 = _mm256_add_pd(_mm256_fmadd_pd(c.p30, z0, _mm256_fmadd_pd(c.p31, z1, u3)),
-                                     _mm256_fmadd_pd(c.p32, z2, _mm256_mul_pd(c.p33, z3)));
+    const __m256d n2 = _mm256_fmadd_pd(c.p22, z2, _mm256_fmadd_pd(c.p23, z3, u2));
+    const __m256d n3 = _mm256_fmadd_pd(c.p32, z2, _mm256_fmadd_pd(c.p33, z3, u3));
     z0 = n0;
     z1 = n1;
     z2 = n2;
@@ -454,7 +504,14 @@ GridLowPass::GridLowPass(const ButterworthDesign& design, int stride,
                                 " is not supported (1–2 sections, stride 1–" +
                                 std::to_string(kMaxGridStride) + ")");
   }
-  look_ = look_ahead(design, stride);
+  Eigen::Matrix<Wide, 2, 2> k;
+  look_ = look_ahead(design, stride, k);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      coupling_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+          static_cast<double>(k(i, j));
+    }
+  }
 }
 
 void GridLowPass::settle(std::int64_t n, const std::array<double, 3>& raw) {
@@ -467,8 +524,11 @@ void GridLowPass::settle(std::int64_t n, const std::array<double, 3>& raw) {
     LowPassFilter f(design_);
     f.settle(sign_[a] * raw[a]);
     const auto& s = f.state().z;
-    z_[a] = {s[0][0], s[0][1], design_.sections > 1 ? s[1][0] : 0.0,
-             design_.sections > 1 ? s[1][1] : 0.0};
+    const double z20 = design_.sections > 1 ? s[1][0] : 0.0;
+    const double z21 = design_.sections > 1 ? s[1][1] : 0.0;
+    // In the modal basis: section 2's w = z₂ + K·z₁.
+    z_[a] = {s[0][0], s[0][1], z20 + (coupling_[0][0] * s[0][0] + coupling_[0][1] * s[0][1]),
+             z21 + (coupling_[1][0] * s[0][0] + coupling_[1][1] * s[0][1])};
   }
 }
 

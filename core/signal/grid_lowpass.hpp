@@ -7,23 +7,27 @@
 //   z(g + k) = A^k·z(g) + Σ_{j<k} A^(k−1−j)·B·x(g + j),   y(g) = C·z(g) + D·x(g),
 //
 // where z holds the delay elements of the cascade's sections (direct form II transposed, the
-// same state LowPassFilter keeps), and A, B, C, D are read off one step of that cascade. The
-// chain of dependent operations is then a multiply and three adds a stride instead of a
-// multiply and an add a sample, which is what bounds LowPassFilter::step (its recursion's
-// latency), and it computes one sample in k.
+// state LowPassFilter keeps) in the sections' modal basis, and A, B, C, D are read off one step
+// of that cascade. Section 2 follows section 1, so in LowPassFilter's basis A^k is block lower
+// triangular (12 multiplies a stride); section 2's delay elements taken as w = z₂ + K·z₁, with K
+// solving the Sylvester equation A₂·K − K·A₁ = M (M: section 1's drive of section 2), evolve by
+// A₂ alone, and A^k is block diagonal: 8 multiplies, and C reads w's first element with weight
+// 1 (an add). The chain of dependent operations is then two multiply-adds a stride (without FMA
+// a multiply and two adds) instead of a multiply and an add a sample, which is what bounds
+// LowPassFilter::step (its recursion's latency), and it computes one sample in k.
 //
 // The values on the grid are the filter's, up to rounding (they are summed in another order:
 // within ~1e-13 of the signal's peak, tests/signal/grid_lowpass_test.cpp), and they do not depend
 // on how the stream is cut into blocks, bit for bit: the state always advances by whole strides
 // from a grid sample, the inputs of a stride that a block leaves unfinished wait for the next
-// block. Where the CPU has FMA (AVX2 and FMA3) it computes in multiply-adds (31 operations a
-// stride of 3 instead of 53; with AVX-512's 32 registers, fewer constants read from the stack):
-// the checked kernel 1.2-1.4x the samples a second alone, the 333.3 kHz pipeline 1.06-1.11x
-// (bench/HISTORY.md, the seventy-seventh stop); other CPUs, or Arithmetic::kPlain, in multiplies
-// and adds. Either way the vector kernels (three channels side by side in one register, each
-// compiled for its instruction set and run only where the CPU has it) do the same operations in
-// the same order as the scalar one: the same results, bit for bit. The two arithmetics differ
-// by rounding (~1e-13 of the peak): a replay on a CPU with FMA and on one without agree to that.
+// block. Where the CPU has FMA (AVX2 and FMA3) it computes in multiply-adds (24 operations a
+// stride of 3, 23 of them multiplies, instead of 42 without FMA; with AVX-512's 32
+// registers, fewer constants read from the stack); other CPUs, or Arithmetic::kPlain, in
+// multiplies and adds (bench/HISTORY.md, the seventy-seventh and seventy-ninth stops). Either way
+// the vector kernels (three channels side by side in one register, each compiled for its
+// instruction set and run only where the CPU has it) do the same operations in the same order as
+// the scalar one: the same results, bit for bit. The two arithmetics differ by rounding (~1e-13 of
+// the peak): a replay on a CPU with FMA and on one without agree to that.
 //
 // Designs with at most two sections (orders 1–4; the monitor's is order 4) and strides up to
 // kMaxGridStride; supports() says which. Set up once; settle() and process() allocate nothing.
@@ -48,7 +52,8 @@ class GridLowPass {
   /// (kPlain, the one arithmetic before; the tests run both).
   enum class Arithmetic { kAuto, kPlain };
 
-  /// Four delay elements: section 1's z0, z1, then section 2's.
+  /// Four delay elements: section 1's z0, z1, then section 2's in the modal basis,
+  /// w = z₂ + K·z₁ (the file comment).
   using State = std::array<double, 4>;
 
   GridLowPass() = default;
@@ -104,6 +109,7 @@ class GridLowPass {
   int stride_ = 1;
   std::array<double, 3> sign_{1.0, 1.0, 1.0};
   bool fused_ = false;
+  std::array<std::array<double, 2>, 2> coupling_{};  // K of the modal basis (State)
   std::array<State, 3> z_{};  // per channel, at the grid sample of pending_'s first input
   std::array<std::array<double, kMaxGridStride>, 3> pending_{};  // raw inputs of a part-stride
   int pending_count_ = 0;
