@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -275,7 +276,9 @@ __attribute__((target("avx"), always_inline)) inline void prefetch_lanes(
     const std::array<const double*, 3>& in, std::size_t i) {
   constexpr std::size_t kAhead = 128;
   for (const double* channel : in) {
-    _mm_prefetch(reinterpret_cast<const char*>(channel + i + kAhead), _MM_HINT_T0);
+    // The address as an integer: a pointer past the array's end may not even be formed.
+    const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(channel) + (i + kAhead) * 8;
+    _mm_prefetch(reinterpret_cast<const char*>(at), _MM_HINT_T0);
   }
 }
 
