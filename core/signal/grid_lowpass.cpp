@@ -75,7 +75,7 @@ Eigen::Matrix<Wide, 2, 2> modal_coupling(const WideMatrix& a) {
 
 /// A, B, C, D read off the cascade's step (it is linear: a unit state or a unit input at a
 /// time), taken to the modal basis w = T·z (T = [I 0; K I]), then A^k and A^(k−1−j)·B there.
-LookAhead look_ahead(const ButterworthDesign& d, int stride, Eigen::Matrix<Wide, 2, 2>& coupling) {
+LookAhead look_ahead(const ButterworthDesign& d, int stride) {
   WideMatrix a;
   WideVector c;
   for (int m = 0; m < 4; ++m) {
@@ -85,7 +85,7 @@ LookAhead look_ahead(const ButterworthDesign& d, int stride, Eigen::Matrix<Wide,
   }
   WideVector b = WideVector::Zero();
   const Wide direct = cascade_step(d, b, 1.0L);
-  coupling = modal_coupling(a);
+  const Eigen::Matrix<Wide, 2, 2> coupling = modal_coupling(a);
   WideMatrix t = WideMatrix::Identity();
   WideMatrix t_inverse = WideMatrix::Identity();
   t.bottomLeftCorner<2, 2>() = coupling;
@@ -120,6 +120,12 @@ LookAhead look_ahead(const ButterworthDesign& d, int stride, Eigen::Matrix<Wide,
     l.output[ui] = static_cast<double>(c(i));
   }
   l.direct = static_cast<double>(direct);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      l.coupling[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+          static_cast<double>(coupling(i, j));
+    }
+  }
   return l;
 }
 
@@ -277,7 +283,8 @@ __attribute__((target("avx"), always_inline)) inline void prefetch_lanes(
   constexpr std::size_t kAhead = 128;
   for (const double* channel : in) {
     // The address as an integer: a pointer past the array's end may not even be formed.
-    const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(channel) + (i + kAhead) * 8;
+    const std::uintptr_t at =
+        reinterpret_cast<std::uintptr_t>(channel) + (i + kAhead) * sizeof(double);
     _mm_prefetch(reinterpret_cast<const char*>(at), _MM_HINT_T0);
   }
 }
@@ -507,14 +514,7 @@ GridLowPass::GridLowPass(const ButterworthDesign& design, int stride,
                                 " is not supported (1–2 sections, stride 1–" +
                                 std::to_string(kMaxGridStride) + ")");
   }
-  Eigen::Matrix<Wide, 2, 2> k;
-  look_ = look_ahead(design, stride, k);
-  for (int i = 0; i < 2; ++i) {
-    for (int j = 0; j < 2; ++j) {
-      coupling_[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
-          static_cast<double>(k(i, j));
-    }
-  }
+  look_ = look_ahead(design, stride);
 }
 
 void GridLowPass::settle(std::int64_t n, const std::array<double, 3>& raw) {
@@ -530,8 +530,9 @@ void GridLowPass::settle(std::int64_t n, const std::array<double, 3>& raw) {
     const double z20 = design_.sections > 1 ? s[1][0] : 0.0;
     const double z21 = design_.sections > 1 ? s[1][1] : 0.0;
     // In the modal basis: section 2's w = z₂ + K·z₁.
-    z_[a] = {s[0][0], s[0][1], z20 + (coupling_[0][0] * s[0][0] + coupling_[0][1] * s[0][1]),
-             z21 + (coupling_[1][0] * s[0][0] + coupling_[1][1] * s[0][1])};
+    const auto& k = look_.coupling;
+    z_[a] = {s[0][0], s[0][1], z20 + (k[0][0] * s[0][0] + k[0][1] * s[0][1]),
+             z21 + (k[1][0] * s[0][0] + k[1][1] * s[0][1])};
   }
 }
 

@@ -90,12 +90,14 @@ class GridLowPass {
                                      const std::array<double, 3>& limit,
                                      Kernel kernel = Kernel::kAuto);
 
-  /// Look-ahead coefficients (row-major A^k; column j of the input gain A^(k−1−j)·B; C; D).
+  /// Look-ahead coefficients (row-major A^k; column j of the input gain A^(k−1−j)·B; C; D),
+  /// in the modal basis, and that basis's K (State).
   struct LookAhead {
     std::array<std::array<double, 4>, 4> power{};
     std::array<State, kMaxGridStride> input{};
     State output{};
     double direct = 0.0;
+    std::array<std::array<double, 2>, 2> coupling{};
   };
 
  private:
@@ -109,7 +111,6 @@ class GridLowPass {
   int stride_ = 1;
   std::array<double, 3> sign_{1.0, 1.0, 1.0};
   bool fused_ = false;
-  std::array<std::array<double, 2>, 2> coupling_{};  // K of the modal basis (State)
   std::array<State, 3> z_{};  // per channel, at the grid sample of pending_'s first input
   std::array<std::array<double, kMaxGridStride>, 3> pending_{};  // raw inputs of a part-stride
   int pending_count_ = 0;
