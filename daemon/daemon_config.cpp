@@ -19,6 +19,9 @@ SourceConfig read_source(ObjectReader r, std::array<double, 3>& saturation_N) {
   s.block_samples = r.integer("block_samples", s.block_samples, 16, kSlot);
   s.max_block_samples = r.integer("max_block_samples", s.max_block_samples, 1, kSlot);
   s.wake_period_s = r.number("wake_period_s", s.wake_period_s, config::closed(0.0, 0.1, "s"));
+  s.receive = r.choice("receive", "batched", {"batched", "lcm"}) == "lcm"
+                  ? SourceConfig::Receive::kLcm
+                  : SourceConfig::Receive::kBatched;
   const nlohmann::json& channels = r.raw("channels");
   if (s.kind == SourceConfig::Kind::kComedi) {
     if (!channels.is_array() || channels.size() != 3) {
@@ -118,6 +121,7 @@ std::string fields_needing_restart(const DaemonConfig& running, const DaemonConf
   note(a.block_samples != b.block_samples, "source.block_samples");
   note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
   note(a.wake_period_s != b.wake_period_s, "source.wake_period_s");
+  note(a.receive != b.receive, "source.receive");
   // A Comedi board scans at the rate it was started with; an LCM source's blocks carry theirs.
   note(a.kind == SourceConfig::Kind::kComedi &&
            running.monitor.sample_rate_hz != next.monitor.sample_rate_hz,

@@ -2,7 +2,7 @@
 // The daemon's configuration file (JSON), validated at load:
 //   { "monitor": { MonitorConfig },
 //     "source": { "kind": "lcm", "channel": "MILLWATCH_FORCE_RAW", "max_block_samples": 4096,
-//                 "wake_period_s": 0.005 }
+//                 "wake_period_s": 0.005, "receive": "batched" }
 //            or { "kind": "comedi", "device": "/dev/comedi0", "subdevice": -1,
 //                 "block_samples": 1000, "channels": [DaqChannelScaling x3] (fx, fy, fz) },
 //     "lcm": { "url": "udpm://239.255.76.67:7667?ttl=0",
@@ -34,6 +34,11 @@ struct SourceConfig {
   /// alone); a block waits about this long (plus the timer's slack) for its round. 0: woken for
   /// every block. [0, 0.1] s. (A Comedi source's reader wakes the sample thread per block.)
   double wake_period_s = 0.005;
+  /// LCM source on a udpm:// URL: kBatched reads the group in the sample thread, a round's
+  /// datagrams in one system call (daemon/udpm_receiver.hpp); kLcm takes them from LCM's receive
+  /// thread, woken for each (and reassembling messages sent in fragments, which kBatched drops
+  /// and counts). Other URLs, or a channel that is a regular expression, always use LCM's.
+  enum class Receive { kBatched, kLcm } receive = Receive::kBatched;
   std::array<signal::DaqChannelScaling, 3> channels{};  ///< fx, fy, fz
 };
 

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cctype>
 #include <stdexcept>
 
 #include "msgs/force_block_check.hpp"
@@ -11,29 +12,99 @@ namespace millwatch::daemon {
 
 LcmSource::LcmSource(lcm::LCM& lcm, const std::string& channel, std::int64_t max_block_samples,
                      BlockQueue& queue, SourceCounters& counters)
-    : lcm_(lcm),
+    : lcm_(&lcm),
       channel_(channel),
       max_block_samples_(
           std::min(max_block_samples, static_cast<std::int64_t>(BlockSlot::kMaxSamples))),
       queue_(queue),
       counters_(counters) {
   subscription_ =
-      lcm_subscribe(lcm_.getUnderlyingLCM(), channel_.c_str(), &LcmSource::receive, this);
+      lcm_subscribe(lcm_->getUnderlyingLCM(), channel_.c_str(), &LcmSource::receive, this);
   if (subscription_ == nullptr) {
     throw std::runtime_error("cannot subscribe to the LCM channel " + channel_);
   }
   lcm_subscription_set_queue_capacity(subscription_, 1000);
 }
 
+LcmSource::LcmSource(const UdpmEndpoint& endpoint, const std::string& channel,
+                     std::int64_t max_block_samples, BlockQueue& queue, SourceCounters& counters)
+    : udpm_(std::make_unique<UdpmReceiver>(endpoint)),
+      channel_(channel),
+      max_block_samples_(
+          std::min(max_block_samples, static_cast<std::int64_t>(BlockSlot::kMaxSamples))),
+      queue_(queue),
+      counters_(counters) {}
+
 LcmSource::~LcmSource() {
-  lcm_unsubscribe(lcm_.getUnderlyingLCM(), subscription_);
+  if (subscription_ != nullptr) {
+    lcm_unsubscribe(lcm_->getUnderlyingLCM(), subscription_);
+  }
+}
+
+bool LcmSource::is_plain_channel(std::string_view channel) {
+  return !channel.empty() && std::all_of(channel.begin(), channel.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '/' ||
+           c == ':';
+  });
+}
+
+bool LcmSource::take_waiting() {
+  if (udpm_ == nullptr) {
+    return lcm_->handleTimeout(0) > 0;
+  }
+  for (;;) {
+    if (datagrams_taken_ == datagrams_read_) {
+      datagrams_read_ = udpm_->read_waiting();
+      datagrams_taken_ = 0;
+      if (datagrams_read_ == 0) {
+        return false;
+      }
+    }
+    if (on_datagram(messaging::parse_lcm_datagram(udpm_->datagram(datagrams_taken_++)))) {
+      return true;
+    }
+  }
+}
+
+void LcmSource::wait(std::chrono::milliseconds timeout) {
+  if (udpm_ == nullptr) {
+    lcm_->handleTimeout(static_cast<int>(timeout.count()));
+  } else if (datagrams_taken_ < datagrams_read_ || udpm_->wait(timeout)) {
+    take_waiting();
+  }
+}
+
+bool LcmSource::on_datagram(const messaging::LcmDatagram& d) {
+  using Kind = messaging::LcmDatagram::Kind;
+  // Other channels on the group, the later fragments of a long message and what is not LCM's
+  // are not this source's: LCM's receive drops them too.
+  if (d.kind == Kind::kNotLcm || d.channel != channel_) {
+    return false;
+  }
+  if (d.kind == Kind::kShort) {
+    on_message(d.payload.data(), d.payload.size());
+    return true;
+  }
+  // Fragment 0 of a message over 64 KiB: no force_block_t of 2,000 samples or fewer.
+  const std::int64_t number = ++counters_.messages;
+  const auto n = ++counters_.undecodable;
+  if (n <= 10) {
+    spdlog::warn(
+        "{}: message {} of {} bytes came in {} fragments (over 64 KiB: a force_block_t holds "
+        "at most 2,000 samples); the batched receive takes whole datagrams: dropped "
+        "(source.receive \"lcm\" reassembles fragments)",
+        channel_, number, d.message_bytes, d.fragments);
+  } else if (n == 11) {
+    spdlog::warn("{}: more messages that do not decode follow; counted in the status", channel_);
+  }
+  return true;
 }
 
 void LcmSource::receive(const lcm_recv_buf_t* rbuf, const char* /*channel*/, void* self) {
-  static_cast<LcmSource*>(self)->on_message(*rbuf);
+  static_cast<LcmSource*>(self)->on_message(rbuf->data, rbuf->data_size);
 }
 
-void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
+void LcmSource::on_message(const void* data, std::size_t size_bytes) {
   const std::string& channel = channel_;
   const std::int64_t number = ++counters_.messages;
   // Decoded straight into the queue's free slot (no message object in between); a message that
@@ -41,10 +112,10 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
   BlockSlot* slot = queue_.claim();
   messaging::ForceBlockHeader header;
   const messaging::ForceBlockCheck c =
-      slot != nullptr ? messaging::decode_force_block_into(
-                            rbuf.data, rbuf.data_size, max_block_samples_, header, slot->fx.data(),
-                            slot->fy.data(), slot->fz.data())
-                      : messaging::check_force_block(rbuf.data, rbuf.data_size, max_block_samples_);
+      slot != nullptr
+          ? messaging::decode_force_block_into(data, size_bytes, max_block_samples_, header,
+                                               slot->fx.data(), slot->fy.data(), slot->fz.data())
+          : messaging::check_force_block(data, size_bytes, max_block_samples_);
   if (c.problem == messaging::ForceBlockProblem::kTooManySamples) {
     // A whole block, only longer than we take: its samples are lost.
     const auto n = ++counters_.oversized;
@@ -62,7 +133,7 @@ void LcmSource::on_message(const lcm_recv_buf_t& rbuf) {
     if (n <= 10) {
       spdlog::warn(
           "{}: message {} of {} bytes does not decode as millwatch.force_block_t ({}); dropped",
-          channel, number, rbuf.data_size, c.describe());
+          channel, number, size_bytes, c.describe());
     } else if (n == 11) {
       spdlog::warn("{}: more messages that do not decode follow; counted in the status", channel);
     }

@@ -1,10 +1,12 @@
 // millwatchd — the live monitor beside the machine.
 //
 // Threads: the sample thread runs the pipeline on the blocks of a bounded queue, in place, and
-// never publishes. An LCM source's blocks are dispatched in the sample thread itself: asleep on
-// LCM's notification pipe (LCM's own receive thread reads the socket), it decodes a block into the
-// queue's free slot and runs the pipeline on it — a thread between the two (it was) cost a second
-// wake-up per block, 2–2.5 % of a core at 1,000 blocks a second. It takes the blocks in rounds
+// never publishes. An LCM source's blocks are dispatched in the sample thread itself: on a udpm://
+// URL it reads the group's socket itself, a round's datagrams in one call (source.receive
+// "batched", daemon/udpm_receiver.hpp); otherwise asleep on LCM's notification pipe (LCM's own
+// receive thread reads the socket). It decodes a block into the queue's free slot and runs the
+// pipeline on it — a thread between the two (it was) cost a second wake-up per block, 2–2.5 % of
+// a core at 1,000 blocks a second. It takes the blocks in rounds
 // about source.wake_period_s apart (5 ms): woken for every block, it spent more on the wake-ups
 // into cold caches than on the blocks. A Comedi source's reader thread
 // fills the queue, and the sample thread sleeps on the queue. The publisher thread
@@ -29,6 +31,7 @@
 #include <csignal>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <tuple>
 #include <utility>
@@ -210,9 +213,31 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   std::unique_ptr<daemon::LcmSource> lcm_source;
   std::unique_ptr<daemon::ComediSource> comedi_source;
   if (config.source.kind == daemon::SourceConfig::Kind::kLcm) {
-    name_next_threads("mw-lcm-receive");  // LCM's receive thread, started by the subscription
-    lcm_source = std::make_unique<daemon::LcmSource>(
-        lcm_in, config.source.channel, config.source.max_block_samples, queue, source_counters);
+    const std::optional<daemon::UdpmEndpoint> udpm = daemon::parse_udpm_url(config.lcm_url);
+    const bool plain = daemon::LcmSource::is_plain_channel(config.source.channel);
+    if (udpm && plain && config.source.receive == daemon::SourceConfig::Receive::kBatched) {
+      lcm_source = std::make_unique<daemon::LcmSource>(
+          *udpm, config.source.channel, config.source.max_block_samples, queue, source_counters);
+      spdlog::info(
+          "source: the udpm group read in rounds by the sample thread (source.receive), its "
+          "buffer {} bytes",
+          lcm_source->receive_buffer_bytes());
+      // The kernel doubles what it is asked for, within net.core.rmem_max (as LCM warns).
+      if (lcm_source->receive_buffer_bytes() < udpm->recv_buf_size_bytes) {
+        spdlog::warn(
+            "the udpm receive buffer is {} bytes, less than the URL's recv_buf_size {}: raise "
+            "net.core.rmem_max, or a burst may overflow it (lost blocks show as gaps)",
+            lcm_source->receive_buffer_bytes(), udpm->recv_buf_size_bytes);
+      }
+    } else {
+      if (udpm && !plain && config.source.receive == daemon::SourceConfig::Receive::kBatched) {
+        spdlog::info("source.channel {} is a regular expression: LCM's receive thread takes it",
+                     config.source.channel);
+      }
+      name_next_threads("mw-lcm-receive");  // LCM's receive thread, started by the subscription
+      lcm_source = std::make_unique<daemon::LcmSource>(
+          lcm_in, config.source.channel, config.source.max_block_samples, queue, source_counters);
+    }
   } else {
     name_next_threads("mw-comedi");
     comedi_source = std::make_unique<daemon::ComediSource>(
@@ -303,7 +328,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
       }
       if (stop.load()) {
         // The queue is drained; so is LCM's (what came before the stop).
-        if (lcm_source && lcm_in.handleTimeout(0) > 0) {
+        if (lcm_source && lcm_source->take_waiting()) {
           continue;
         }
         break;
@@ -320,7 +345,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
       // Asleep until the source has a block; woken at least every 20 ms (LCM: 20 ms after a
       // round's wake period) for the status, the watchdog, a reload and the stop.
       if (lcm_source) {
-        if (lcm_in.handleTimeout(0) > 0) {
+        if (lcm_source->take_waiting()) {
           continue;  // the next block had come already: decoded into the queue by LcmSource
         }
         // None waiting after a round of blocks: the next ones gather for a wake period and come
@@ -328,7 +353,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
         if (std::exchange(took_blocks, false)) {
           std::this_thread::sleep_for(wake_period);
         }
-        lcm_in.handleTimeout(20);
+        lcm_source->wait(std::chrono::milliseconds(20));
       } else {
         queue.wait(std::chrono::milliseconds(20));
       }

@@ -11,13 +11,15 @@
 # processed.
 #
 #   scripts/daemon_load.sh [--seconds 30] [--warmup 8] [--block 333] [--build build/release]
-#                          [--same-url] [--wake-period S] [--cpu N]
+#                          [--same-url] [--wake-period S] [--cpu N] [--receive batched|lcm]
 #
 # --wake-period S sets source.wake_period_s (default: millwatchd's, 5 ms): the sample thread
 # takes the blocks in rounds S apart, each block waiting up to S for its round.
 # --cpu N runs millwatchd pinned to CPU N (taskset -c N; a service: CPUAffinity=N), all its
 # threads on one core: on a VM, a wake-up across cores costs an inter-processor interrupt and the
 # threads' caches are not shared, so the unpinned figure moves with where the scheduler puts them.
+# --receive sets source.receive (default: millwatchd's, batched): "lcm" takes the blocks from
+# LCM's receive thread, woken for each datagram, instead of the sample thread's rounds.
 # --same-url publishes the results on the input URL (what millwatchd did before lcm.output_url):
 # its LCM receive thread then also reads the daemon's own outputs. Prints a human summary on
 # stderr and one JSON line on stdout. Builds nothing: build millwatchd and daemon_feeder first.
@@ -31,6 +33,7 @@ build=build/release
 same_url=0
 wake_period=
 cpu=
+receive=
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
@@ -46,6 +49,7 @@ while [ $# -gt 0 ]; do
     --build) build=$2; shift 2 ;;
     --same-url) same_url=1; shift ;;
     --wake-period) wake_period=$2; shift 2 ;;
+    --receive) receive=$2; shift 2 ;;
     --cpu)
       cpu=$2
       shift 2
@@ -69,6 +73,7 @@ if [ "${MW_DAEMON_LOAD_IN_NS:-}" != 1 ]; then
   [ "$same_url" = 1 ] && args+=(--same-url)
   [ -n "$wake_period" ] && args+=(--wake-period "$wake_period")
   [ -n "$cpu" ] && args+=(--cpu "$cpu")
+  [ -n "$receive" ] && args+=(--receive "$receive")
   exec unshare -n env MW_DAEMON_LOAD_IN_NS=1 "$0" "${args[@]}"
 fi
 
@@ -84,8 +89,13 @@ cache=$build/bench/daemon_load_cut.bin  # the simulated cut, kept between runs
 mkdir -p "$(dirname "$cache")"
 
 # BM_DaemonLoadRealTime's configuration: the default monitor at 333.3 kHz, 25,250 rpm.
+source_fields=()
+[ -n "$wake_period" ] && source_fields+=("\"wake_period_s\": $wake_period")
+[ -n "$receive" ] && source_fields+=("\"receive\": \"$receive\"")
 source_section=
-[ -n "$wake_period" ] && source_section="\"source\": {\"wake_period_s\": $wake_period},"
+if [ ${#source_fields[@]} -gt 0 ]; then
+  source_section="\"source\": {$(IFS=,; echo "${source_fields[*]}")},"
+fi
 cat >"$work/d.json" <<EOF
 {"monitor": {"sample_rate_hz": 333300.0, "model": {"process": {"spindle_rpm": 25250.0}}},
  $source_section
@@ -130,12 +140,14 @@ sleep 0.5
 kill -TERM "$pid"
 wait "$pid" || { cat "$work/daemon.log" >&2; exit 3; }
 
-python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" "$wake_period" "$cpu" <<'EOF'
+python3 - "$work" "$seconds" "$same_url" "$(getconf CLK_TCK)" "$block" "$wake_period" "$cpu" \
+  "$receive" <<'EOF'
 import json, sys
 work, seconds, same_url, hz = sys.argv[1], float(sys.argv[2]), sys.argv[3] == "1", int(sys.argv[4])
 block = int(sys.argv[5])
 wake_period_s = float(sys.argv[6]) if sys.argv[6] else None  # None: millwatchd's default
 cpu = int(sys.argv[7]) if sys.argv[7] else None  # None: not pinned
+receive = sys.argv[8] or "batched"  # millwatchd's default
 def read(name):
     process, threads = 0, {}
     for line in open(f"{work}/{name}"):
@@ -156,7 +168,7 @@ for tid, (comm, ns) in sorted(t1.items()):
 fit = summary.get("fit", {})
 result = {
     "bench": "daemon_load", "sample_rate_hz": 333300.0, "seconds": seconds,
-    "block_samples": block, "wake_period_s": wake_period_s, "cpu": cpu,
+    "block_samples": block, "wake_period_s": wake_period_s, "cpu": cpu, "receive": receive,
     "outputs_on_input_url": same_url,
     "process_percent_of_a_core": round(100 * (p1 - p0) / hz / seconds, 2),
     "threads_percent_of_a_core": threads,
@@ -167,6 +179,7 @@ result = {
 }
 wake = f", wake period {wake_period_s * 1e3:g} ms" if wake_period_s is not None else ""
 wake += f", pinned to CPU {cpu}" if cpu is not None else ""
+wake += f", source.receive {receive}"
 print(f"millwatchd at 333.3 kHz in {block}-sample blocks, {seconds:g} s measured{wake}"
       f" ({'outputs on the input URL' if same_url else 'outputs on their own URL'}):"
       f" process {result['process_percent_of_a_core']:.2f} % of a core", file=sys.stderr)

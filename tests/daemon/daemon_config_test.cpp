@@ -1,5 +1,6 @@
 // The daemon's configuration names every channel it publishes on: two spindles' daemons on one
-// network keep their results apart, the identified force coefficients included.
+// network keep their results apart, the identified force coefficients included. A reload names
+// and keeps what takes a restart; source.receive is read and checked.
 
 #include "daemon/daemon_config.hpp"
 
@@ -80,6 +81,28 @@ TEST(DaemonConfig, AReloadKeepsWhatTakesARestartAndNamesIt) {
   EXPECT_EQ(kept.source.device, running.source.device);
   EXPECT_EQ(kept.lcm_output_url, running.lcm_output_url);
   EXPECT_EQ(kept.channels.alert, running.channels.alert);
+}
+
+// How an LCM source reads a udpm group: batched by default, LCM's receive thread when asked; a
+// value of neither is an error naming the field. The socket is opened once: a restart.
+TEST(DaemonConfig, TheReceiveIsBatchedUnlessLcmsIsAskedFor) {
+  EXPECT_EQ(daemon_config_from_json(nlohmann::json::object()).source.receive,
+            SourceConfig::Receive::kBatched);
+  EXPECT_EQ(daemon_config_from_json({{"source", {{"receive", "lcm"}}}}).source.receive,
+            SourceConfig::Receive::kLcm);
+  std::string error;
+  try {
+    daemon_config_from_json({{"source", {{"receive", "thread"}}}});
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  EXPECT_NE(error.find("source.receive"), std::string::npos) << error;
+  EXPECT_NE(error.find("thread"), std::string::npos) << error;
+  DaemonConfig running;
+  DaemonConfig next = running;
+  next.source.receive = SourceConfig::Receive::kLcm;
+  EXPECT_EQ(fields_needing_restart(running, next), "source.receive");
+  EXPECT_EQ(as_reload_of(running, next).source.receive, SourceConfig::Receive::kBatched);
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // libFuzzer: one raw-sample datagram as millwatchd receives it. The bytes go over in-process LCM
 // (memq://) to the daemon's LcmSource, which checks and decodes them into the block queue's slot
 // (the values lcm-gen's decode gives, to the bit); a queued block then goes through InputCheck.
-// Also the check itself: a message it passes decodes to exactly its declared count.
+// Also the check itself: a message it passes decodes to exactly its declared count; and the same
+// bytes as a udpm datagram (msgs/lcm_datagram.hpp, millwatchd's batched receive): what it reads
+// lies within them.
 
 #include <bit>
 #include <cstdint>
@@ -11,6 +13,7 @@
 #include "daemon/lcm_source.hpp"
 #include "fuzz_support.hpp"
 #include "msgs/force_block_check.hpp"
+#include "msgs/lcm_datagram.hpp"
 
 using namespace millwatch;
 
@@ -35,6 +38,12 @@ struct Daemon {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const messaging::LcmDatagram datagram = messaging::parse_lcm_datagram({data, size});
+  if (datagram.kind != messaging::LcmDatagram::Kind::kNotLcm) {
+    MW_FUZZ_CHECK(datagram.payload.data() >= data &&
+                  datagram.payload.data() + datagram.payload.size() <= data + size);
+    MW_FUZZ_CHECK(datagram.channel.size() <= messaging::kLcmMaxChannelBytes);
+  }
   const messaging::ForceBlockCheck c = messaging::check_force_block(data, size, kMax);
   force_block_t m;
   const messaging::ForceBlockCheck decoded = messaging::decode_force_block(data, size, kMax, m);
