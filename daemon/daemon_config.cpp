@@ -121,7 +121,7 @@ std::string fields_needing_restart(const DaemonConfig& running, const DaemonConf
   note(a.block_samples != b.block_samples, "source.block_samples");
   note(a.max_block_samples != b.max_block_samples, "source.max_block_samples");
   note(a.wake_period_s != b.wake_period_s, "source.wake_period_s");
-  note(a.receive != b.receive, "source.receive");
+  note(a.receive != b.receive && b.kind == SourceConfig::Kind::kLcm, "source.receive");
   // A Comedi board scans at the rate it was started with; an LCM source's blocks carry theirs.
   note(a.kind == SourceConfig::Kind::kComedi &&
            running.monitor.sample_rate_hz != next.monitor.sample_rate_hz,

@@ -85,15 +85,30 @@ bool LcmSource::on_datagram(const messaging::LcmDatagram& d) {
     on_message(d.payload.data(), d.payload.size());
     return true;
   }
-  // Fragment 0 of a message over 64 KiB: no force_block_t of 2,000 samples or fewer.
+  // Fragment 0 of a message over 64 KiB. Its start tells whether it is a force_block_t (of
+  // more than 2,726 samples) and how many samples it held: those are lost, as a block over
+  // max_block_samples is; anything else is garbage.
   const std::int64_t number = ++counters_.messages;
+  const messaging::ForceBlockCheck c =
+      d.payload.size() >= messaging::kForceBlockHeaderBytes
+          ? messaging::check_force_block(d.payload.data(), d.message_bytes, max_block_samples_)
+          : messaging::ForceBlockCheck{.problem = messaging::ForceBlockProblem::kShorterThanHeader};
+  if (c.ok() || c.problem == messaging::ForceBlockProblem::kTooManySamples) {
+    const auto n = ++counters_.oversized;
+    counters_.dropped(c.num_samples);
+    if (n <= 10) {
+      spdlog::warn(
+          "{}: message {}: block of {} samples ({} bytes) came in {} fragments, over 64 KiB; the "
+          "batched receive takes whole datagrams (a force_block_t holds at most 2,000 samples): "
+          "dropped (source.receive \"lcm\" reassembles fragments)",
+          channel_, number, c.num_samples, d.message_bytes, d.fragments);
+    }
+    return true;
+  }
   const auto n = ++counters_.undecodable;
   if (n <= 10) {
-    spdlog::warn(
-        "{}: message {} of {} bytes came in {} fragments (over 64 KiB: a force_block_t holds "
-        "at most 2,000 samples); the batched receive takes whole datagrams: dropped "
-        "(source.receive \"lcm\" reassembles fragments)",
-        channel_, number, d.message_bytes, d.fragments);
+    spdlog::warn("{}: message {} of {} bytes came in {} fragments and is no force_block_t; dropped",
+                 channel_, number, d.message_bytes, d.fragments);
   } else if (n == 11) {
     spdlog::warn("{}: more messages that do not decode follow; counted in the status", channel_);
   }

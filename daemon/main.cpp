@@ -145,6 +145,43 @@ std::string lcm_open_hint(const std::string& url) {
   return "LCM refused it";
 }
 
+/// The LCM source: on a udpm:// URL read by the sample thread in rounds (source.receive
+/// "batched"), else through LCM's receive thread (whose name it takes from this thread's).
+std::unique_ptr<daemon::LcmSource> open_lcm_source(const daemon::DaemonConfig& config,
+                                                   lcm::LCM& lcm_in, daemon::BlockQueue& queue,
+                                                   daemon::SourceCounters& counters) {
+  const std::optional<daemon::UdpmEndpoint> udpm = daemon::parse_udpm_url(config.lcm_url);
+  const bool batched = config.source.receive == daemon::SourceConfig::Receive::kBatched;
+  const bool plain = daemon::LcmSource::is_plain_channel(config.source.channel);
+  if (!udpm || !batched || !plain) {
+    if (udpm && batched) {
+      spdlog::info("source.channel {} is a regular expression: LCM's receive thread takes it",
+                   config.source.channel);
+    }
+    pthread_setname_np(pthread_self(), "mw-lcm-receive");  // started by the subscription
+    return std::make_unique<daemon::LcmSource>(lcm_in, config.source.channel,
+                                               config.source.max_block_samples, queue, counters);
+  }
+  auto source = std::make_unique<daemon::LcmSource>(
+      *udpm, config.source.channel, config.source.max_block_samples, queue, counters);
+  const int asked = udpm->recv_buf_size_bytes > 0 ? udpm->recv_buf_size_bytes
+                                                  : daemon::UdpmReceiver::kDefaultBufferBytes;
+  const int got = source->receive_buffer_bytes();
+  spdlog::info(
+      "source: the udpm group read in rounds by the sample thread (source.receive), its buffer "
+      "{} bytes",
+      got);
+  // The kernel doubles what it is asked for, within net.core.rmem_max (LCM warns alike).
+  if (got < asked) {
+    spdlog::warn(
+        "the udpm receive buffer is {} bytes, less than the {} asked (the URL's recv_buf_size, "
+        "or millwatchd's default): raise net.core.rmem_max, or blocks that come while the "
+        "sample thread is busy may be lost (counted as gaps)",
+        got, asked);
+  }
+  return source;
+}
+
 int run(const std::string& config_path, const UrlOverrides& urls, const std::string& summary_path,
         TestHooks hooks) {
   daemon::ServiceNotifier notifier;
@@ -213,31 +250,7 @@ int run(const std::string& config_path, const UrlOverrides& urls, const std::str
   std::unique_ptr<daemon::LcmSource> lcm_source;
   std::unique_ptr<daemon::ComediSource> comedi_source;
   if (config.source.kind == daemon::SourceConfig::Kind::kLcm) {
-    const std::optional<daemon::UdpmEndpoint> udpm = daemon::parse_udpm_url(config.lcm_url);
-    const bool plain = daemon::LcmSource::is_plain_channel(config.source.channel);
-    if (udpm && plain && config.source.receive == daemon::SourceConfig::Receive::kBatched) {
-      lcm_source = std::make_unique<daemon::LcmSource>(
-          *udpm, config.source.channel, config.source.max_block_samples, queue, source_counters);
-      spdlog::info(
-          "source: the udpm group read in rounds by the sample thread (source.receive), its "
-          "buffer {} bytes",
-          lcm_source->receive_buffer_bytes());
-      // The kernel doubles what it is asked for, within net.core.rmem_max (as LCM warns).
-      if (lcm_source->receive_buffer_bytes() < udpm->recv_buf_size_bytes) {
-        spdlog::warn(
-            "the udpm receive buffer is {} bytes, less than the URL's recv_buf_size {}: raise "
-            "net.core.rmem_max, or a burst may overflow it (lost blocks show as gaps)",
-            lcm_source->receive_buffer_bytes(), udpm->recv_buf_size_bytes);
-      }
-    } else {
-      if (udpm && !plain && config.source.receive == daemon::SourceConfig::Receive::kBatched) {
-        spdlog::info("source.channel {} is a regular expression: LCM's receive thread takes it",
-                     config.source.channel);
-      }
-      name_next_threads("mw-lcm-receive");  // LCM's receive thread, started by the subscription
-      lcm_source = std::make_unique<daemon::LcmSource>(
-          lcm_in, config.source.channel, config.source.max_block_samples, queue, source_counters);
-    }
+    lcm_source = open_lcm_source(config, lcm_in, queue, source_counters);
   } else {
     name_next_threads("mw-comedi");
     comedi_source = std::make_unique<daemon::ComediSource>(

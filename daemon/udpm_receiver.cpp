@@ -2,11 +2,13 @@
 
 #include <arpa/inet.h>
 #include <poll.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <charconv>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 namespace millwatch::daemon {
@@ -16,15 +18,20 @@ std::runtime_error system_error(const std::string& what) {
   return std::runtime_error(what + ": " + std::strerror(errno));
 }
 
-template <class T>
-bool read_number(std::string_view text, T& out) {
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
-  return ec == std::errc() && end == text.data() + text.size();
+/// A number as LCM reads it (strtol, base 0: decimal, 0x hex or 0 octal): its leading digits;
+/// false when there are none.
+bool read_like_lcm(const std::string& text, long& out) {
+  char* end = nullptr;
+  errno = 0;
+  out = std::strtol(text.c_str(), &end, 0);
+  return end != text.c_str() && errno == 0;
 }
 
 }  // namespace
 
 std::optional<UdpmEndpoint> parse_udpm_url(std::string_view url) {
+  // As lcm_udpm.c's parse_mc_addr_and_port and its options: the group by inet_aton, the port
+  // and recv_buf_size by strtol, so that both read a URL alike.
   constexpr std::string_view kScheme = "udpm://";
   if (!url.starts_with(kScheme)) {
     return std::nullopt;
@@ -33,26 +40,31 @@ std::optional<UdpmEndpoint> parse_udpm_url(std::string_view url) {
   const std::size_t query = url.find('?');
   std::string_view network = url.substr(0, query);
   std::string_view options = query == std::string_view::npos ? "" : url.substr(query + 1);
+  if (network.empty()) {
+    network = "239.255.76.67:7667";
+  }
   UdpmEndpoint e;
-  std::string group = "239.255.76.67";
-  if (!network.empty()) {
-    const std::size_t colon = network.find(':');
-    group = std::string(network.substr(0, colon));
-    if (colon != std::string_view::npos && !read_number(network.substr(colon + 1), e.port)) {
+  const std::size_t colon = network.find(':');
+  if (inet_aton(std::string(network.substr(0, colon)).c_str(), &e.group) == 0) {
+    return std::nullopt;
+  }
+  long port = 0;
+  if (colon != std::string_view::npos) {
+    if (!read_like_lcm(std::string(network.substr(colon + 1)), port) || port < 0 || port > 65535) {
       return std::nullopt;
     }
-  }
-  if (inet_pton(AF_INET, group.c_str(), &e.group) != 1) {
-    return std::nullopt;
+    e.port = static_cast<std::uint16_t>(port);
   }
   while (!options.empty()) {
     const std::size_t amp = options.find('&');
     const std::string_view option = options.substr(0, amp);
     options = amp == std::string_view::npos ? "" : options.substr(amp + 1);
     constexpr std::string_view kBuffer = "recv_buf_size=";
+    long bytes = 0;
     if (option.starts_with(kBuffer) &&
-        !read_number(option.substr(kBuffer.size()), e.recv_buf_size_bytes)) {
-      return std::nullopt;
+        read_like_lcm(std::string(option.substr(kBuffer.size())), bytes) && bytes > 0 &&
+        bytes <= std::numeric_limits<int>::max()) {
+      e.recv_buf_size_bytes = static_cast<int>(bytes);  // LCM warns of a bad one and asks none
     }
   }
   return e;
@@ -72,9 +84,9 @@ UdpmReceiver::UdpmReceiver(const UdpmEndpoint& endpoint) : buffers_(kBatch * kSl
   if (::setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) < 0) {
     throw fail("cannot set SO_REUSEADDR");
   }
-  if (endpoint.recv_buf_size_bytes > 0 &&
-      ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &endpoint.recv_buf_size_bytes,
-                   sizeof endpoint.recv_buf_size_bytes) < 0) {
+  const int buffer_bytes =
+      endpoint.recv_buf_size_bytes > 0 ? endpoint.recv_buf_size_bytes : kDefaultBufferBytes;
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &buffer_bytes, sizeof buffer_bytes) < 0) {
     throw fail("cannot set the receive buffer (recv_buf_size)");
   }
   sockaddr_in address{};
@@ -107,8 +119,15 @@ std::size_t UdpmReceiver::read_waiting() {
     if (n >= 0) {
       return static_cast<std::size_t>(n);
     }
+    if (errno == EAGAIN || errno == EWOULDBLOCK) {
+      return 0;  // none waiting
+    }
     if (errno != EINTR) {
-      return 0;  // EAGAIN: none waiting (nothing else is expected of a bound UDP socket)
+      // Not expected of a bound UDP socket (ENOMEM): said, and the round ends as if empty.
+      if (++errors_ <= 10) {
+        spdlog::warn("reading the udpm group: {}", std::strerror(errno));
+      }
+      return 0;
     }
   }
 }

@@ -1,12 +1,16 @@
 #pragma once
-// The raw blocks' udpm:// group read by millwatchd's sample thread itself, a round's datagrams in
-// one recvmmsg: LCM 1.3.1's udpm provider always reads in a receive thread of its own, woken for
-// every datagram and waking the reader through a pipe — at 1,000 blocks a second, ~2.9 % of a
-// core pinned beside the pipeline (bench/HISTORY.md, the eighty-first stop). The socket is set up
-// as LCM's (lcm_udpm.c): bound to the group and port with SO_REUSEADDR, so that LCM's own
-// programs (lcm-logger, lcm-spy) on the same group keep receiving, the group joined on any
-// interface, its buffer sized by the URL's recv_buf_size. Datagrams are read as they are:
-// msgs/lcm_datagram.hpp tells their channel and payload.
+// The raw blocks' udpm:// group read by millwatchd's sample thread itself, a round's datagrams
+// (up to kBatch) in one recvmmsg: LCM 1.3.1's udpm provider always reads in a receive thread of
+// its own, woken for every datagram and waking the reader through a pipe — at 1,000 blocks a
+// second 1.1–4.9 % of a core beside the pipeline, pinned to one core (bench/HISTORY.md, the
+// eighty-first stop). The socket is set up as LCM's provider sets up its own (lcm_udpm.c):
+// SO_REUSEADDR, so that LCM's programs on the same group and port (lcm-logger, lcm-spy) keep
+// receiving; bound to the group's address, as LCM ≥ 1.4 binds it (1.3.1 binds any address and
+// also hears other groups sent to the port); the group joined on any interface. Its kernel
+// buffer is the URL's recv_buf_size, or kDefaultBufferBytes: no receive thread drains the
+// socket into a queue any more, so the buffer alone holds what comes while the sample thread
+// is busy (the kernel caps it at net.core.rmem_max; millwatchd logs what it got). Datagrams are
+// read as they are: msgs/lcm_datagram.hpp tells their channel and payload.
 
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -31,14 +35,18 @@ struct UdpmEndpoint {
   int recv_buf_size_bytes = 0;  ///< 0: the kernel's default
 };
 
-/// The endpoint of a udpm:// URL; nullopt for another provider. A udpm URL whose group, port or
-/// recv_buf_size does not read gives nullopt too (LCM itself then refuses it at start).
+/// The endpoint of a udpm:// URL, read as LCM reads it; nullopt for another provider, or a group
+/// or port LCM refuses too (it then fails at start). A recv_buf_size that does not read is left
+/// out, as LCM leaves it out (with a warning of its own).
 [[nodiscard]] std::optional<UdpmEndpoint> parse_udpm_url(std::string_view url);
 
 class UdpmReceiver {
  public:
   /// Datagrams read in one call: a 5 ms round at 1,000 blocks a second is 5.
   static constexpr std::size_t kBatch = 16;
+  /// The kernel buffer asked for when the URL asks none: 4 MiB, about half a second of
+  /// 333.3 kHz blocks (LCM's default is the kernel's, ~208 KiB: some 20 ms of them).
+  static constexpr int kDefaultBufferBytes = 4 << 20;
 
   /// Opens, binds and joins. @throws std::runtime_error naming the step and the system's error
   explicit UdpmReceiver(const UdpmEndpoint& endpoint);
@@ -59,6 +67,7 @@ class UdpmReceiver {
   static constexpr std::size_t kSlotBytes = 65536;  // more than a UDP payload can be
 
   int fd_ = -1;
+  int errors_ = 0;                     // reads that failed otherwise than empty
   std::vector<std::uint8_t> buffers_;  // kBatch slots of kSlotBytes
   std::array<iovec, kBatch> iov_{};
   std::array<mmsghdr, kBatch> headers_{};

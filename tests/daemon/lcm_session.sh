@@ -6,8 +6,9 @@
 #   live       two recorders record while millwatchd monitors cut.csv, published by
 #              `millwatch publish` in 250-sample blocks: the raw channel → live.lcmlog, every other
 #              channel → outputs.lcmlog; daemon.json (summary), daemon.log
-#   logplayer  lcm-logplayer plays live.lcmlog's raw channel into a fresh millwatchd, stopped
-#              with SIGINT → played.json, played.log
+#   logplayer  lcm-logplayer plays live.lcmlog's raw channel into a fresh millwatchd on
+#              monitor_lcm_receive.json (LCM's receive thread), stopped with SIGINT → played.json,
+#              played.log
 #   split      millwatchd takes its raw blocks on one URL and publishes on another
 #              (--lcm-output-url); a logger on each records what it hears while cut.lcmlog's raw
 #              channel is played → in.lcmlog, out.lcmlog, split.json, split.log
@@ -119,7 +120,7 @@ case "$mode" in
     stop_logger "$raw_logger"
     ;;
   logplayer)
-    start_daemon monitor.json played.json played.log
+    start_daemon monitor_lcm_receive.json played.json played.log
     play live.lcmlog
     stop_daemon INT
     ;;

@@ -355,12 +355,20 @@ TEST_F(MillwatchdSession, LiveRunIsRecordedDecodedAndReplayedToTheSameResults) {
     }
   }
 
-  // lcm-logplayer feeds the recorded raw log into a fresh daemon, stopped by SIGINT this time:
-  // the same results again.
+  // The live daemon read the group itself, in rounds (source.receive's default).
+  const std::string rounds = "the udpm group read in rounds by the sample thread";
+  EXPECT_NE(test::read_text(dir_ / "daemon.log").find(rounds), std::string::npos);
+
+  // lcm-logplayer feeds the recorded raw log into a fresh daemon taking its blocks from LCM's
+  // receive thread (source.receive "lcm"), stopped by SIGINT this time: the same results again.
+  nlohmann::json lcm_receive = read_json(dir_ / "monitor.json");
+  lcm_receive["source"]["receive"] = "lcm";
+  std::ofstream(dir_ / "monitor_lcm_receive.json") << lcm_receive.dump(2);
   const auto played = session("logplayer", dir_);
   ASSERT_EQ(played.exit_code, 0) << played.output << test::read_text(dir_ / "played.log");
   EXPECT_NE(played.output.find("daemon exit 0"), std::string::npos) << played.output;
   EXPECT_NE(test::read_text(dir_ / "played.log").find("SIGINT: stopping"), std::string::npos);
+  EXPECT_EQ(test::read_text(dir_ / "played.log").find(rounds), std::string::npos);
   const nlohmann::json again = read_json(dir_ / "played.json");
   ASSERT_FALSE(again.is_null()) << test::read_text(dir_ / "played.log");
   EXPECT_EQ(again["samples"], 50000);

@@ -1,16 +1,19 @@
 // millwatchd's batched udpm receive (daemon/udpm_receiver.hpp, LcmSource on a udpm:// URL): the
 // datagrams LCM's own publish sends — the independent sender here — are read in rounds by the
 // caller's thread: every block in order and to the bit, a burst larger than one read, other
-// channels passed over, garbage and a message LCM had to fragment dropped and counted; a round's
-// wait ends when a block comes. The URL's group, port and buffer are read as LCM reads them.
+// channels passed over (one whose name begins with the source's, one's fragments), garbage
+// counted, a block LCM had to fragment dropped with its samples counted; the URL's buffer
+// applied; a round's wait ends when a block comes. The URL is read as LCM reads it.
 // The tests that send run alone in a private network namespace (unshare -n; skipped, saying
 // why, where that is not permitted), so that no packet leaves the machine.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
@@ -84,9 +87,15 @@ TEST(UdpmUrl, ReadsGroupPortAndBufferAsLcmDoes) {
   for (const char* other : {"memq://", "file:///tmp/a.lcmlog", "tcpq://127.0.0.1:7700"}) {
     EXPECT_FALSE(parse_udpm_url(other).has_value()) << other;
   }
-  for (const char* bad :
-       {"udpm://239.255.76:7667", "udpm://239.255.76.67:76x7", "udpm://239.255.76.67:70000",
-        "udpm://239.255.76.67:7667?recv_buf_size=a"}) {
+  // Numbers as LCM's strtol reads them, the group as its inet_aton does.
+  EXPECT_EQ(parse_udpm_url("udpm://239.255.76.67:0x1df3")->port, 7667);
+  EXPECT_EQ(parse_udpm_url("udpm://239.255.76.67:7667?recv_buf_size=0x400000")->recv_buf_size_bytes,
+            4194304);
+  EXPECT_EQ(ntohl(parse_udpm_url("udpm://239.255.76:7667")->group.s_addr), 0xefff004cu);
+  // A recv_buf_size LCM cannot read it leaves out (and warns of); a group or port it refuses.
+  EXPECT_EQ(parse_udpm_url("udpm://239.255.76.67:7667?recv_buf_size=a")->recv_buf_size_bytes, 0);
+  for (const char* bad : {"udpm://239.255.76.300:7667", "udpm://cell-3:7667",
+                          "udpm://239.255.76.67:70000", "udpm://239.255.76.67:x"}) {
     EXPECT_FALSE(parse_udpm_url(bad).has_value()) << bad;
   }
 }
@@ -114,6 +123,10 @@ TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
   LcmSource source(*endpoint, "RAW", 4096, *queue, counters);
   ASSERT_TRUE(source.batched());
   EXPECT_FALSE(source.take_waiting());  // nothing sent yet
+  // The URL's buffer (the kernel doubles it, within net.core.rmem_max).
+  long rmem_max = 0;
+  std::ifstream("/proc/sys/net/core/rmem_max") >> rmem_max;
+  EXPECT_GE(source.receive_buffer_bytes(), std::min<long>(4194304, rmem_max));
 
   // 20 blocks (more than one read's 16), the last of force_block_t's most samples, with an
   // other channel's, garbage and a block LCM must fragment among them.
@@ -122,6 +135,8 @@ TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
     publish(sender, "RAW", encoded(seq, seq == kBlocks ? 2000 : 333));
     if (seq == 5) {
       publish(sender, "OTHER", encoded(500, 333));
+      publish(sender, "RAW2", encoded(501, 333));    // a name it begins
+      publish(sender, "OTHER", encoded(502, 3000));  // fragments of another channel
     } else if (seq == 10) {
       publish(sender, "RAW", {1, 2, 3});
     } else if (seq == 15) {
@@ -154,8 +169,9 @@ TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
   }
   EXPECT_EQ(seqs, in_order);
   EXPECT_EQ(counters.messages.load(), kBlocks + 2);  // the garbage and the fragmented block
-  EXPECT_EQ(counters.undecodable.load(), 2);
-  EXPECT_EQ(counters.oversized.load(), 0);
+  EXPECT_EQ(counters.undecodable.load(), 1);
+  EXPECT_EQ(counters.oversized.load(), 1);  // its 3,000 samples lost, as a block too long
+  EXPECT_EQ(counters.samples_dropped.load(), 3000);
   EXPECT_EQ(counters.queue_full.load(), 0);
 }
 
