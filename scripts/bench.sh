@@ -154,10 +154,14 @@ r = runs[len(runs) // 2]
 def share(run, prefix):  # the CPU share of a run's threads named prefix*
     return sum(v for k, v in run["threads_percent_of_a_core"].items() if k.startswith(prefix))
 others = ", ".join(f"{x['process_percent_of_a_core']:.1f} %" for x in runs if x is not r)
+# The blocks read by the sample thread in its rounds (source.receive "batched", the default), or
+# by LCM's receive thread.
+receive = (" (it reads the blocks itself)" if r.get("receive", "batched") == "batched" else
+           f", LCM's receive thread {share(r, 'mw-lcm-receive'):.1f} %")
 print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['seconds']:g} s, median of"
       f" {len(runs)}): the process {r['process_percent_of_a_core']:.1f} % of a core between fits"
-      f" (the other runs {others}): the sample thread {share(r, 'mw-sample'):.1f} %, LCM's receive"
-      f" thread {share(r, 'mw-lcm-receive'):.1f} %, the publisher {share(r, 'mw-publish'):.1f} %,"
+      f" (the other runs {others}): the sample thread {share(r, 'mw-sample'):.1f} %{receive},"
+      f" the publisher {share(r, 'mw-publish'):.1f} %,"
       f" identification {share(r, 'mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
       f" {r['windows_skipped_for_budget']} skipped for the budget); identification's budget adds"
       f" about 0.5 % on average (cpu_budget 0.005); target < 5 % with it; {r['dropped_samples']}"
