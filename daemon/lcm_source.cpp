@@ -56,6 +56,7 @@ bool LcmSource::take_waiting() {
     if (datagrams_taken_ == datagrams_read_) {
       datagrams_read_ = udpm_->read_waiting();
       datagrams_taken_ = 0;
+      say_kernel_drops();
       if (datagrams_read_ == 0) {
         return false;
       }
@@ -64,6 +65,23 @@ bool LcmSource::take_waiting() {
       return true;
     }
   }
+}
+
+void LcmSource::say_kernel_drops() {
+  const std::uint64_t dropped = udpm_->dropped_datagrams();
+  if (dropped == kernel_drops_said_) {
+    return;
+  }
+  // The blocks among them are gaps in the stream, counted as such by the pipeline; this says
+  // why (the first ten times, then the total at most every 10,000 datagrams).
+  if (++kernel_drop_warnings_ <= 10 || dropped / 10000 != kernel_drops_said_ / 10000) {
+    spdlog::warn(
+        "{}: the kernel dropped {} datagrams on the udpm socket ({} in all): its buffer was full "
+        "while the sample thread was busy; the blocks lost show as gaps (a larger recv_buf_size "
+        "in lcm.url, within net.core.rmem_max, holds more)",
+        channel_, dropped - kernel_drops_said_, dropped);
+  }
+  kernel_drops_said_ = dropped;
 }
 
 void LcmSource::wait(std::chrono::milliseconds timeout) {

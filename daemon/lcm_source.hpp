@@ -68,11 +68,15 @@ class LcmSource {
   void on_message(const void* data, std::size_t size_bytes);
   /// A datagram of the batched receive: true if it was a message on the channel.
   bool on_datagram(const messaging::LcmDatagram& d);
+  /// Warns of datagrams the kernel dropped since the last warning.
+  void say_kernel_drops();
 
   lcm::LCM* lcm_ = nullptr;             // LCM's receive
   std::unique_ptr<UdpmReceiver> udpm_;  // or the batched one
   std::size_t datagrams_read_ = 0;      // by the last read_waiting()
   std::size_t datagrams_taken_ = 0;     // of those
+  std::uint64_t kernel_drops_said_ = 0;
+  int kernel_drop_warnings_ = 0;
   std::string channel_;
   lcm_subscription_t* subscription_ = nullptr;
   std::int64_t max_block_samples_;

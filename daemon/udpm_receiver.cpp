@@ -102,6 +102,10 @@ UdpmReceiver::UdpmReceiver(const UdpmEndpoint& endpoint) : buffers_(kBatch * kSl
   if (::setsockopt(fd_, IPPROTO_IP, IP_ADD_MEMBERSHIP, &membership, sizeof membership) < 0) {
     throw fail("cannot join the udpm multicast group");
   }
+  // The kernel's count of datagrams it dropped on this socket (its buffer full), on each
+  // datagram read: LCM's thread drained the socket into a queue of its own, and a socket left
+  // to fill must say when it overflowed. Without it (an old kernel) the losses show as gaps only.
+  counts_drops_ = ::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one) == 0;
   for (std::size_t i = 0; i < kBatch; ++i) {
     iov_[i] = {buffers_.data() + i * kSlotBytes, kSlotBytes};
     headers_[i].msg_hdr.msg_iov = &iov_[i];
@@ -115,8 +119,13 @@ UdpmReceiver::~UdpmReceiver() {
 
 std::size_t UdpmReceiver::read_waiting() {
   for (;;) {
+    for (std::size_t i = 0; i < kBatch; ++i) {  // the kernel shortens it to what it wrote
+      headers_[i].msg_hdr.msg_control = control_[i].data();
+      headers_[i].msg_hdr.msg_controllen = control_[i].size();
+    }
     const int n = ::recvmmsg(fd_, headers_.data(), kBatch, MSG_DONTWAIT, nullptr);
     if (n >= 0) {
+      note_drops(static_cast<std::size_t>(n));
       return static_cast<std::size_t>(n);
     }
     if (errno == EAGAIN || errno == EWOULDBLOCK) {
@@ -128,6 +137,23 @@ std::size_t UdpmReceiver::read_waiting() {
         spdlog::warn("reading the udpm group: {}", std::strerror(errno));
       }
       return 0;
+    }
+  }
+}
+
+void UdpmReceiver::note_drops(std::size_t read) {
+  // SO_RXQ_OVFL: a uint32 count, the socket's since it opened, as the datagram was queued
+  // (absent while it is 0); the latest datagram's is the latest count.
+  for (std::size_t i = 0; i < read; ++i) {
+    msghdr& h = headers_[i].msg_hdr;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(&h, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL &&
+          c->cmsg_len >= CMSG_LEN(sizeof(std::uint32_t))) {
+        std::uint32_t count = 0;
+        std::memcpy(&count, CMSG_DATA(c), sizeof count);
+        dropped_ += static_cast<std::uint32_t>(count - last_drop_count_);  // modulo 2³²
+        last_drop_count_ = count;
+      }
     }
   }
 }

@@ -62,15 +62,28 @@ class UdpmReceiver {
   bool wait(std::chrono::milliseconds timeout) const;
   /// The socket's receive buffer as the kernel set it.
   [[nodiscard]] int buffer_bytes() const;
+  /// Datagrams of any channel the kernel dropped on this socket, its buffer full (SO_RXQ_OVFL;
+  /// 0 where the kernel does not count them): the count rides on each datagram queued after a
+  /// drop, so drops are known once the next datagram that came after them is read.
+  [[nodiscard]] std::uint64_t dropped_datagrams() const { return dropped_; }
+  /// Whether the kernel counts them (SO_RXQ_OVFL was taken).
+  [[nodiscard]] bool counts_drops() const { return counts_drops_; }
 
  private:
   static constexpr std::size_t kSlotBytes = 65536;  // more than a UDP payload can be
+
+  void note_drops(std::size_t read);
 
   int fd_ = -1;
   int errors_ = 0;                     // reads that failed otherwise than empty
   std::vector<std::uint8_t> buffers_;  // kBatch slots of kSlotBytes
   std::array<iovec, kBatch> iov_{};
   std::array<mmsghdr, kBatch> headers_{};
+  struct alignas(cmsghdr) Control : std::array<char, CMSG_SPACE(sizeof(std::uint32_t))> {};
+  std::array<Control, kBatch> control_{};  // each datagram's drop count
+  bool counts_drops_ = false;
+  std::uint32_t last_drop_count_ = 0;
+  std::uint64_t dropped_ = 0;
 };
 
 }  // namespace millwatch::daemon

@@ -3,7 +3,8 @@
 // caller's thread: every block in order and to the bit, a burst larger than one read, other
 // channels passed over (one whose name begins with the source's, one's fragments), garbage
 // counted, a block LCM had to fragment dropped with its samples counted; the URL's buffer
-// applied; a round's wait ends when a block comes. The URL is read as LCM reads it.
+// applied, and what a full one lost counted by the kernel; a round's wait ends when a block
+// comes. The URL is read as LCM reads it.
 // The tests that send run alone in a private network namespace (unshare -n; skipped, saying
 // why, where that is not permitted), so that no packet leaves the machine.
 
@@ -173,6 +174,39 @@ TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
   EXPECT_EQ(counters.oversized.load(), 1);  // its 3,000 samples lost, as a block too long
   EXPECT_EQ(counters.samples_dropped.load(), 3000);
   EXPECT_EQ(counters.queue_full.load(), 0);
+}
+
+TEST(UdpmSource, AFullBufferSaysHowManyDatagramsTheKernelDropped) {
+  if (!in_private_network()) {
+    run_in_private_network("UdpmSource.AFullBuffer*");
+    return;
+  }
+  lcm::LCM sender(kUrl);
+  ASSERT_TRUE(sender.good());
+  // The kernel's smallest buffer (a few kB): one 8 kB block fills it.
+  UdpmReceiver receiver(*parse_udpm_url("udpm://239.255.76.67:7667?ttl=0&recv_buf_size=1"));
+  if (!receiver.counts_drops()) {
+    GTEST_SKIP() << "this kernel does not count a socket's drops (SO_RXQ_OVFL)";
+  }
+  const auto drain = [&receiver] {
+    std::size_t read = 0;
+    while (const std::size_t n = receiver.read_waiting()) {
+      read += n;
+    }
+    return read;
+  };
+  constexpr int kBlocks = 30;
+  for (int seq = 1; seq <= kBlocks; ++seq) {
+    publish(sender, "RAW", encoded(seq, 333));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  std::size_t read = drain();
+  // The count comes with the next datagram queued after the drops.
+  publish(sender, "RAW", encoded(kBlocks + 1, 333));
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  read += drain();
+  EXPECT_GE(receiver.dropped_datagrams(), 20u) << read << " read";
+  EXPECT_EQ(read + receiver.dropped_datagrams(), static_cast<std::size_t>(kBlocks + 1));
 }
 
 TEST(UdpmSource, AWaitEndsWhenABlockComes) {

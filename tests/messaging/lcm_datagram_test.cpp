@@ -72,7 +72,10 @@ TEST(LcmDatagram, AShortMessageGivesItsChannelSequenceAndPayload) {
 
 TEST(LcmDatagram, AFragmentGivesItsPlaceAndOnlyTheFirstItsChannel) {
   const std::vector<std::uint8_t> part(100, 9);
-  const LcmDatagram first = parse_lcm_datagram(fragment(0, 2, 70000, "RAW", part));
+  // The datagrams outlive their views.
+  const auto first_bytes = fragment(0, 2, 70000, "RAW", part);
+  const auto second_bytes = fragment(1, 2, 70000, "RAW", part);
+  const LcmDatagram first = parse_lcm_datagram(first_bytes);
   ASSERT_EQ(first.kind, LcmDatagram::Kind::kFragment);
   EXPECT_EQ(first.channel, "RAW");
   EXPECT_EQ(first.sequence, 42u);
@@ -80,7 +83,7 @@ TEST(LcmDatagram, AFragmentGivesItsPlaceAndOnlyTheFirstItsChannel) {
   EXPECT_EQ(first.fragment, 0);
   EXPECT_EQ(first.fragments, 2);
   EXPECT_EQ(first.payload.size(), part.size());
-  const LcmDatagram second = parse_lcm_datagram(fragment(1, 2, 70000, "RAW", part));
+  const LcmDatagram second = parse_lcm_datagram(second_bytes);
   ASSERT_EQ(second.kind, LcmDatagram::Kind::kFragment);
   EXPECT_TRUE(second.channel.empty());
   EXPECT_EQ(second.fragment, 1);
