@@ -1,5 +1,6 @@
 #include "msgs/lcm_datagram.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 namespace millwatch::messaging {

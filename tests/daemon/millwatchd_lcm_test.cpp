@@ -30,6 +30,7 @@
 #include "millwatch/tooth_periods2_t.hpp"
 #include "msgs/lcm_convert.hpp"
 #include "tests/support/force_log.hpp"
+#include "tests/support/private_network.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -42,14 +43,6 @@ const std::string kDaemon = MILLWATCH_DAEMON;
 
 nlohmann::json read_json(const fs::path& p) {
   return fs::exists(p) ? nlohmann::json::parse(std::ifstream(p)) : nlohmann::json();
-}
-
-/// Whether this machine lets us make a private network namespace with a multicast route.
-bool namespaces_work(std::string& why) {
-  const auto r = test::run_command(
-      "unshare -n sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo' 2>&1");
-  why = r.output;
-  return r.exit_code == 0;
 }
 
 /// Runs one lcm_session.sh mode in a private network namespace (bounded to 90 s; the script
@@ -121,7 +114,7 @@ class MillwatchdSession : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!namespaces_work(why)) {
+    if (!test::private_network_works(why)) {
       GTEST_SKIP() << "no private network namespace here (unshare -n): " << why;
     }
     dir_ = test::fresh_temp_dir();
@@ -705,7 +698,7 @@ TEST(Millwatchd, MissingComediDeviceIsAClearError) {
 // clear error at once, not a daemon that hears nothing.
 TEST(Millwatchd, UdpmWithoutAMulticastRouteFailsAtOnce) {
   std::string why;
-  if (!namespaces_work(why)) {
+  if (!test::private_network_works(why)) {
     GTEST_SKIP() << "no private network namespace here (unshare -n): " << why;
   }
   const fs::path dir = test::fresh_temp_dir();

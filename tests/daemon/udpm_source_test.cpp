@@ -12,8 +12,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
-#include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
@@ -24,35 +22,12 @@
 #include "daemon/lcm_source.hpp"
 #include "daemon/udpm_receiver.hpp"
 #include "msgs/lcm_convert.hpp"
-#include "tests/support/run_command.hpp"
-
-namespace fs = std::filesystem;
+#include "tests/support/private_network.hpp"
 
 namespace millwatch::daemon {
 namespace {
 
-constexpr const char* kPrivateNet = "MILLWATCH_TEST_IN_PRIVATE_NETWORK";
-constexpr const char* kNamespaceSetUp = "ip link set lo up && ip route add 239.0.0.0/8 dev lo";
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
-
-bool in_private_network() {
-  return std::getenv(kPrivateNet) != nullptr;
-}
-
-/// Runs test `name` again, alone, in a private network namespace and checks that it passed.
-void run_in_private_network(const std::string& name) {
-  const auto probe =
-      test::run_command(std::string("unshare -n sh -c '") + kNamespaceSetUp + "' 2>&1");
-  if (probe.exit_code != 0) {
-    GTEST_SKIP() << "no private network namespace here (unshare -n): " << probe.output;
-  }
-  const std::string self = fs::read_symlink("/proc/self/exe").string();
-  const auto r = test::run_command(std::string(kPrivateNet) +
-                                   "=1 timeout -k 5 60 unshare -n sh -c '" + kNamespaceSetUp +
-                                   " && exec " + self + " --gtest_filter=" + name + "' 2>&1");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("[  PASSED  ] 1 test"), std::string::npos) << r.output;
-}
 
 std::vector<std::uint8_t> encoded(std::int64_t seq, int n) {
   std::vector<double> fx(static_cast<std::size_t>(n)), fy(fx.size()), fz(fx.size());
@@ -111,8 +86,8 @@ TEST(UdpmUrl, OnlyAChannelNamedPlainlyIsTakenByName) {
 }
 
 TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
-  if (!in_private_network()) {
-    run_in_private_network("UdpmSource.TakesLcms*");
+  if (!test::in_private_network()) {
+    test::run_alone_in_private_network("UdpmSource.TakesLcms*");
     return;
   }
   lcm::LCM sender(kUrl);
@@ -177,8 +152,8 @@ TEST(UdpmSource, TakesLcmsDatagramsInRoundsAndCountsWhatIsNoBlock) {
 }
 
 TEST(UdpmSource, AFullBufferSaysHowManyDatagramsTheKernelDropped) {
-  if (!in_private_network()) {
-    run_in_private_network("UdpmSource.AFullBuffer*");
+  if (!test::in_private_network()) {
+    test::run_alone_in_private_network("UdpmSource.AFullBuffer*");
     return;
   }
   lcm::LCM sender(kUrl);
@@ -210,8 +185,8 @@ TEST(UdpmSource, AFullBufferSaysHowManyDatagramsTheKernelDropped) {
 }
 
 TEST(UdpmSource, AWaitEndsWhenABlockComes) {
-  if (!in_private_network()) {
-    run_in_private_network("UdpmSource.AWait*");
+  if (!test::in_private_network()) {
+    test::run_alone_in_private_network("UdpmSource.AWait*");
     return;
   }
   lcm::LCM sender(kUrl);

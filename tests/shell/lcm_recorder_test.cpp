@@ -10,7 +10,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <string>
@@ -19,7 +18,7 @@
 
 #include "msgs/lcm_convert.hpp"
 #include "shell/lcm_log_reader.hpp"
-#include "tests/support/run_command.hpp"
+#include "tests/support/private_network.hpp"
 #include "tests/support/test_paths.hpp"
 
 namespace millwatch::shell {
@@ -154,22 +153,9 @@ TEST(LcmRecorder, AFullDiskStopsItWithAnErrorNamingTheFileAndTheEvent) {
   EXPECT_NE(error.find("No space left on device"), std::string::npos) << error;
 }
 
-constexpr const char* kPrivateNet = "MILLWATCH_TEST_IN_PRIVATE_NETWORK";
-constexpr const char* kNamespaceSetUp = "ip link set lo up && ip route add 239.0.0.0/8 dev lo";
-
 TEST(LcmRecorder, OverUdpmItKeepsMoreThanLcmLoggersThirtyWaiting) {
-  if (std::getenv(kPrivateNet) == nullptr) {  // this test again, alone, in a private namespace
-    const auto probe =
-        test::run_command(std::string("unshare -n sh -c '") + kNamespaceSetUp + "' 2>&1");
-    if (probe.exit_code != 0) {
-      GTEST_SKIP() << "no private network namespace here (unshare -n): " << probe.output;
-    }
-    const std::string self = fs::read_symlink("/proc/self/exe").string();
-    const auto r = test::run_command(
-        std::string(kPrivateNet) + "=1 timeout -k 5 60 unshare -n sh -c '" + kNamespaceSetUp +
-        " && exec " + self + " --gtest_filter=LcmRecorder.OverUdpm*' 2>&1");
-    EXPECT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("[  PASSED  ] 1 test"), std::string::npos) << r.output;
+  if (!test::in_private_network()) {  // this test again, alone, in a private namespace
+    test::run_alone_in_private_network("LcmRecorder.OverUdpm*");
     return;
   }
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
