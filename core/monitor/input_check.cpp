@@ -7,6 +7,7 @@
 #include <limits>
 #include <span>
 
+#include "core/monitor/nearest_integer.hpp"
 #include "core/signal/sample_limit.hpp"
 
 #if defined(__SSE2__)
@@ -61,8 +62,8 @@ bool all_within(const std::array<std::span<const double>, 3>& v, std::size_t n,
 }  // namespace
 
 std::int64_t InputCheck::utime_of(std::int64_t sample) const {
-  return start_utime_us_ +
-         std::llround(static_cast<double>(sample - start_sample_) * 1e6 / config_.sample_rate_hz);
+  return start_utime_us_ + nearest_integer(static_cast<double>(sample - start_sample_) * 1e6 /
+                                           config_.sample_rate_hz);
 }
 
 double InputCheck::samples_late(std::int64_t utime_us, std::int64_t expected_utime_us) const {

@@ -10,6 +10,7 @@
 
 #include "core/monitor/extremum.hpp"
 #include "core/monitor/force_rows.hpp"
+#include "core/monitor/nearest_integer.hpp"
 
 namespace millwatch::monitor {
 namespace {
@@ -1021,7 +1022,7 @@ void Pipeline::on_revolution(const RevolutionEvents& ev) {
   }
   r.revolution = revolution_base_ + revolutions_++;
   valid_revolutions_ += r.measured.valid ? 1 : 0;
-  r.utime_us = utime_at(first) - static_cast<std::int64_t>(std::llround(tooth_delay_s_ * 1e6));
+  r.utime_us = utime_at(first) - nearest_integer(tooth_delay_s_ * 1e6);
   stats_.add(r);
   if (r.spindle_rpm > 0.0) {
     last_rpm_ = r.spindle_rpm;  // the last measured speed (one coasting revolution states none)

@@ -39,7 +39,7 @@ void RevolutionStats::add(RevolutionRecord& r) {
   if (r.measured.valid) {
     alpha_[static_cast<std::size_t>(next_)] = r.measured.alpha_deg;
     delta_fy_[static_cast<std::size_t>(next_)] = r.measured.delta_fy_N;
-    next_ = (next_ + 1) % w;
+    next_ = next_ + 1 < w ? next_ + 1 : 0;  // not `% w`: an integer division per revolution
     count_ = std::min(count_ + 1, w);
   }
   r.window_revolutions = count_;
@@ -49,22 +49,36 @@ void RevolutionStats::add(RevolutionRecord& r) {
   }
   // One pass, α shifted by a value of the window (its spread, ~1°, is far below its level,
   // ~150°: no cancellation in Σd² − (Σd)²/n), each sum in two chains that do not wait on each
-  // other: the three sums of 30 values had been a tenth of a 50 kHz revolution's statistics.
+  // other (even and odd values): the three sums of 30 values had been a tenth of a 50 kHz
+  // revolution's statistics. Six named sums, not arrays indexed by parity: those the compiler
+  // kept in memory, each addition waiting on the last one's store (a third of this function).
   const double shift = alpha_[0];
-  std::array<double, 2> sa{}, sd{}, ss{};
-  for (int i = 0; i < count_; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const double d = alpha_[k] - shift;
-    sa[k & 1U] += d;
-    ss[k & 1U] += d * d;
-    sd[k & 1U] += delta_fy_[k];
+  const double* const alpha = alpha_.data();
+  const double* const delta = delta_fy_.data();
+  double sa0 = 0.0, sa1 = 0.0, ss0 = 0.0, ss1 = 0.0, sd0 = 0.0, sd1 = 0.0;
+  const auto n_values = static_cast<std::size_t>(count_);
+  std::size_t k = 0;
+  for (; k + 2 <= n_values; k += 2) {
+    const double d0 = alpha[k] - shift, d1 = alpha[k + 1] - shift;
+    sa0 += d0;
+    sa1 += d1;
+    ss0 += d0 * d0;
+    ss1 += d1 * d1;
+    sd0 += delta[k];
+    sd1 += delta[k + 1];
+  }
+  if (k < n_values) {
+    const double d0 = alpha[k] - shift;
+    sa0 += d0;
+    ss0 += d0 * d0;
+    sd0 += delta[k];
   }
   const double n = count_;
-  const double sum = sa[0] + sa[1];
+  const double sum = sa0 + sa1;
   r.alpha_mean_deg = shift + sum / n;
   r.alpha_std_deg =
-      count_ > 1 ? std::sqrt(std::max(0.0, (ss[0] + ss[1] - sum * sum / n) / (n - 1.0))) : 0.0;
-  r.delta_fy_mean_N = (sd[0] + sd[1]) / n;
+      count_ > 1 ? std::sqrt(std::max(0.0, (ss0 + ss1 - sum * sum / n) / (n - 1.0))) : 0.0;
+  r.delta_fy_mean_N = (sd0 + sd1) / n;
 }
 
 void RevolutionStats::restart() {

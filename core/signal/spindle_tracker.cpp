@@ -1,6 +1,7 @@
 #include "core/signal/spindle_tracker.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <complex>
@@ -470,14 +471,20 @@ void SpindleTracker::update() {
   // The ring from the oldest sample's slot to its end, then from its start: two runs.
   const auto split = static_cast<std::size_t>(first % w);
   const std::size_t tail = window_ - split;
-  double mean = 0.0;
-  for (std::size_t i = split; i < window_; ++i) {
-    mean += ring_[i];
+  // The mean in the ring's own order (a sum does not care which sample is oldest), in four
+  // chains that do not wait on one another: one chain had been a tenth of this function.
+  std::array<double, 4> part{};
+  std::size_t slot = 0;
+  for (; slot + 4 <= window_; slot += 4) {
+    part[0] += ring_[slot];
+    part[1] += ring_[slot + 1];
+    part[2] += ring_[slot + 2];
+    part[3] += ring_[slot + 3];
   }
-  for (std::size_t i = 0; i < split; ++i) {
-    mean += ring_[i];
+  for (; slot < window_; ++slot) {
+    part[0] += ring_[slot];
   }
-  mean /= static_cast<double>(window_);
+  const double mean = ((part[0] + part[1]) + (part[2] + part[3])) / static_cast<double>(window_);
   for (std::size_t i = 0; i < tail; ++i) {
     fft_in_[i] = (ring_[split + i] - mean) * hann_[i];
   }

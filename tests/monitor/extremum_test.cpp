@@ -7,6 +7,8 @@
 #include <random>
 #include <vector>
 
+#include "core/monitor/nearest_integer.hpp"
+
 namespace millwatch::monitor {
 namespace {
 
@@ -48,9 +50,9 @@ TEST(Extremum, TheCubicAbsorbsAnAsymmetricValley) {
   }
 }
 
-// nearest_sample() is std::llround(): halves away from zero, the doubles next to a half, zeros
-// of either sign, positions far beyond any record (where the library call takes over), and a
-// million positions of a long record's range.
+// nearest_sample() and nearest_integer() (the input check's utimes) are std::llround(): halves
+// away from zero, the doubles next to a half, zeros of either sign, positions far beyond any
+// record (where the library call takes over), and a million positions of a long record's range.
 TEST(NearestSample, IsTheLibrarysRoundingEverywhere) {
   std::vector<double> positions = {0.0,  -0.0,      0.5,          -0.5,   1.5,     -1.5,  2.5,
                                    -2.5, 1e6 + 0.5, 0x1p52 - 0.5, 0x1p62, -0x1p62, 1e300, -1e300};
@@ -65,6 +67,7 @@ TEST(NearestSample, IsTheLibrarysRoundingEverywhere) {
   }
   for (const double p : positions) {
     ASSERT_EQ(nearest_sample(p), std::llround(p)) << p;
+    ASSERT_EQ(nearest_integer(p), std::llround(p)) << p;
   }
 }
 
