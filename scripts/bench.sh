@@ -168,10 +168,17 @@ print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['second
       f" samples dropped.")
 for path, how in ((sys.argv[2], "unpinned"), (sys.argv[3], "pinned to one core")):
     f = json.load(open(path))
-    print(f"With identification's fits, {how}, over {f['seconds']:g} s ({f['windows_fitted']}"
-          f" windows fitted, {f['windows_skipped_for_budget']} skipped for the budget): the process"
+    fitted = f['windows_fitted']
+    identify = share(f, 'mw-identify')
+    # The summary counts the fits of the whole run (warm-up and drain too); the CPU shares are
+    # those of the measured seconds alone, which may hold none (the budget's rest after a long
+    # fit can outlast them).
+    none_inside = " (no fit fell within the measured seconds)" if identify == 0 else ""
+    print(f"With identification's fits, {how}, over {f['seconds']:g} s ({fitted}"
+          f" window{'s' if fitted != 1 else ''} fitted in the whole run,"
+          f" {f['windows_skipped_for_budget']} skipped for the budget): the process"
           f" {f['process_percent_of_a_core']:.2f} % of a core (target < 5 %), identification"
-          f" {share(f, 'mw-identify'):.2f} % of it; {f['dropped_samples']} samples dropped.")
+          f" {identify:.2f} % of it{none_inside}; {f['dropped_samples']} samples dropped.")
 EOF
 else
   echo "== millwatchd over LCM: skipped (unshare -n needs root)" >&2
