@@ -162,7 +162,8 @@ print(f"\nmillwatchd at 333.3 kHz over LCM (`scripts/daemon_load.sh`, {r['second
       f" {len(runs)}): the process {r['process_percent_of_a_core']:.1f} % of a core between fits"
       f" (the other runs {others}): the sample thread {share(r, 'mw-sample'):.1f} %{receive},"
       f" the publisher {share(r, 'mw-publish'):.1f} %,"
-      f" identification {share(r, 'mw-identify'):.1f} % ({r['windows_fitted']} window fitted,"
+      f" identification {share(r, 'mw-identify'):.1f} % ({r['windows_fitted']}"
+      f" window{'s' if r['windows_fitted'] != 1 else ''} fitted,"
       f" {r['windows_skipped_for_budget']} skipped for the budget); identification's budget adds"
       f" about 0.5 % on average (cpu_budget 0.005); target < 5 % with it; {r['dropped_samples']}"
       f" samples dropped.")
