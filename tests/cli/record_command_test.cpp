@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "tests/support/private_network.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -16,8 +17,6 @@ namespace millwatch {
 namespace {
 
 namespace fs = std::filesystem;
-
-const std::string kSetUp = "ip link set lo up && ip route add 239.0.0.0/8 dev lo";
 
 nlohmann::json replay_json(const fs::path& input, const std::string& options = "") {
   // A subshell so that run_command's own 2>&1 does not bring the log into the JSON.
@@ -29,8 +28,8 @@ nlohmann::json replay_json(const fs::path& input, const std::string& options = "
 }
 
 TEST(RecordCommand, RecordsAPublishedCutThatReplaysAsTheCutsFile) {
-  if (test::run_command("unshare -n sh -c '" + kSetUp + "' 2>&1").exit_code != 0) {
-    GTEST_SKIP() << "no private network namespace here (unshare -n)";
+  if (std::string why; !test::private_network_works(why)) {
+    GTEST_SKIP() << "no private network namespace here (unshare -n): " << why;
   }
   const fs::path dir = test::fresh_temp_dir();
   const std::string cli = test::millwatch_cli();
@@ -45,7 +44,7 @@ TEST(RecordCommand, RecordsAPublishedCutThatReplaysAsTheCutsFile) {
   const std::string url = "'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'";
   std::ofstream(dir / "session.sh")
       << "set -e\ncd " << dir.string() << "\n"
-      << kSetUp << "\n"
+      << test::kPrivateNetworkSetUp << "\n"
       << cli << " record cut.lcmlog --url " << url
       << " --channels MILLWATCH_FORCE_RAW >record.out 2>&1 &\nrec=$!\n"
       << "for i in $(seq 100); do grep -q recording record.out && break; sleep 0.1; done\n"
