@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Checks the C++ sources' format (clang-format), then builds and runs the whole test suite: what
-# ships built optimised by GCC (Release: the programs, warning-free), its install and Debian
-# package checked and the vector kernels' tests run on it; every test built by clang under
-# AddressSanitizer and UndefinedBehaviorSanitizer; then every reader fuzzed for a while
-# (scripts/fuzz.sh, MILLWATCH_FUZZ_SECONDS per target, default 20). Needs the packages of
+# ships built optimised by GCC (Release: the programs and the benchmarks, warning-free), its
+# install and Debian package checked and the vector kernels' tests run on it; every test built
+# by clang under AddressSanitizer and UndefinedBehaviorSanitizer; then every reader fuzzed for a
+# while (scripts/fuzz.sh, MILLWATCH_FUZZ_SECONDS per target, default 20). Needs the packages of
 # scripts/install-deps.sh.
 #
 # The whole suite runs once, sanitized: running it in Release as well took 10 of the command's
@@ -47,8 +47,8 @@ echo "== Release build of what ships, its install and Debian package, the kernel
 gcc_tests='^(butterworth_lowpass|grid_lowpass|harmonic_floors|spindle_tracker|conditioner'
 gcc_tests+='|input_check|sample_ring|grid_line|sync_average|residual_sums|revolution_features'
 gcc_tests+='|lockstep|steady_state|decimal_number|decimal_row|pipeline)_test$'
-cmake -S . -B build/shipped -G Ninja -DCMAKE_BUILD_TYPE=Release -DMILLWATCH_BUILD_BENCHMARKS=OFF \
-  "-DMILLWATCH_TESTS=$gcc_tests" >/dev/null
+cmake -S . -B build/shipped -G Ninja -DCMAKE_BUILD_TYPE=Release "-DMILLWATCH_TESTS=$gcc_tests" \
+  >/dev/null
 cmake --build build/shipped -j "$jobs"
 ctest --test-dir build/shipped -j "$jobs" --output-on-failure --timeout 1200
 
