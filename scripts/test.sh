@@ -47,10 +47,12 @@ echo "== Release build of what ships, its install and Debian package, the kernel
 gcc_tests='^(butterworth_lowpass|grid_lowpass|harmonic_floors|spindle_tracker|conditioner'
 gcc_tests+='|input_check|sample_ring|grid_line|sync_average|residual_sums|revolution_features'
 gcc_tests+='|lockstep|steady_state|decimal_number|decimal_row|pipeline)_test$'
-cmake -S . -B build/shipped -G Ninja -DCMAKE_BUILD_TYPE=Release "-DMILLWATCH_TESTS=$gcc_tests" \
-  >/dev/null
+# (Tests on explicitly: a build/shipped of before, configured without them, would otherwise keep
+# that and run nothing, not even the package's check, which --no-tests=error also catches.)
+cmake -S . -B build/shipped -G Ninja -DCMAKE_BUILD_TYPE=Release -DMILLWATCH_BUILD_TESTS=ON \
+  "-DMILLWATCH_TESTS=$gcc_tests" >/dev/null
 cmake --build build/shipped -j "$jobs"
-ctest --test-dir build/shipped -j "$jobs" --output-on-failure --timeout 1200
+ctest --test-dir build/shipped -j "$jobs" --output-on-failure --timeout 1200 --no-tests=error
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # -O1 (what AddressSanitizer's authors advise) and line tables only (-g1: enough for symbolized
@@ -74,7 +76,7 @@ cmake --build build/asan-clang -j "$jobs"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
   MILLWATCH_OPTIMISED_CLI=$PWD/build/shipped/replay/millwatch \
-  ctest --test-dir build/asan-clang -j "$jobs" --output-on-failure --timeout 1200
+  ctest --test-dir build/asan-clang -j "$jobs" --output-on-failure --timeout 1200 --no-tests=error
 
 echo "== libFuzzer targets (clang, ASan + UBSan)"
 ./scripts/fuzz.sh "${MILLWATCH_FUZZ_SECONDS:-20}"
