@@ -56,8 +56,8 @@ ctest --test-dir build/shipped -j "$jobs" --output-on-failure --timeout 1200 --n
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # -O1 (what AddressSanitizer's authors advise) and line tables only (-g1: enough for symbolized
-# reports): the sanitized build compiles in about half the time of -O2 -g (Ceres' templates in
-# core/identify/window_fit.cpp: 117 s → 55 s), and the tests' own code at -O0
+# reports): the sanitized build compiles in about half the time of -O2 -g (GCC on Ceres' templates
+# in core/identify/window_fit.cpp: 117 s → 55 s), and the tests' own code at -O0
 # (cmake/MillwatchTargets.cmake). clang, as the fuzz targets are built (another folder: they
 # carry libFuzzer's coverage instrumentation, under which the suite ran 8.8 min instead of ~7).
 cmake -S . -B build/asan-clang -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
